@@ -1,0 +1,109 @@
+// mbsflow run MODEL.json: one simulation on this process.
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <optional>
+
+#include "commands.hpp"
+#include "mbsflow/graph/error.hpp"
+#include "mbsflow/graph/stable_step.hpp"
+#include "mbsflow/io/csv_sink.hpp"
+#include "mbsflow/io/model_reader.hpp"
+#include "mbsflow/runtime/simulation.hpp"
+
+namespace mbsflow::cli {
+namespace {
+
+struct RunArgs {
+  std::string model;
+  std::optional<double> t_end, step, rtol, atol;
+  std::string method;
+  std::optional<int> every;
+  std::string output;
+  bool quiet = false;
+};
+
+bool ends_with(const std::string& s, const std::string& suffix) {
+  return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+// Chooses the step: the given one (warning above the RK4 stability estimate) or the estimate.
+double choose_step(const Model& m, const RunArgs& a, bool quiet) {
+  const StableStep s = estimate_stable_step(m);
+  const std::optional<double> given = a.step ? a.step : m.simulation.step;
+  if (given) {
+    if (m.simulation.method == Method::rk4 && *given > s.step)
+      std::fprintf(stderr, "mbsflow: warning: step %.3g s is above the estimated RK4 stability limit %s\n", *given,
+                   s.describe(m).c_str());
+    return *given;
+  }
+  if (!std::isfinite(s.step)) throw InputError(a.model + ": no joints to estimate a step from; give --step");
+  if (!quiet) std::fprintf(stderr, "mbsflow: no step given; using the RK4 stability estimate %s\n", s.describe(m).c_str());
+  return s.step;
+}
+
+void print_summary(const Model& m, MultibodySystem& sys, const RunOptions& o, const RunSummary& r) {
+  const Energy e0 = sys.energy(o.t_start, sys.initial_state());
+  const Energy e1 = sys.energy(o.t_end, r.final_state);
+  const StateLayout& l = sys.layout();
+  std::printf("model %s: %zu bodies, %zu joints; %s, step %.4g s, t = %g..%g s\n", m.name.c_str(), m.bodies.size(),
+              m.joints.size(), method_name(o.method), o.step, o.t_start, o.t_end);
+  std::printf("energy (kinetic + gravity + elastic): initial %.10g J, final %.10g J\n", e0.total(), e1.total());
+  const std::size_t shown = std::min<std::size_t>(m.bodies.size(), 10);
+  std::printf("final state of %s%zu bodies:\n", shown < m.bodies.size() ? "the first " : "", shown);
+  std::printf("  %-16s %14s %14s %14s %14s %14s %14s\n", "body", "x", "y", "z", "vx", "vy", "vz");
+  for (std::size_t i = 0; i < shown; ++i) {
+    const auto k = static_cast<Eigen::Index>(i);
+    const auto& y = r.final_state;
+    std::printf("  %-16s %14.6g %14.6g %14.6g %14.6g %14.6g %14.6g\n", m.bodies[i].name.c_str(), y[l.position(k)],
+                y[l.position(k) + 1], y[l.position(k) + 2], y[l.velocity(k)], y[l.velocity(k) + 1], y[l.velocity(k) + 2]);
+  }
+}
+
+int run(const RunArgs& a) {
+  Model m = read_model_file(a.model);
+  if (a.t_end) {
+    if (!(*a.t_end > m.simulation.t_start)) throw InputError("--t-end: must be > t_start of the model");
+    m.simulation.t_end = *a.t_end;
+  }
+  if (!a.method.empty()) m.simulation.method = *parse_method(a.method);
+  if (a.every) m.simulation.output_every = *a.every;
+  if (a.rtol) m.simulation.rtol = *a.rtol;
+  if (a.atol) m.simulation.atol = *a.atol;
+  RunOptions o = options_from_model(m);
+  o.step = choose_step(m, a, a.quiet);
+  std::unique_ptr<ResultSink> sink;
+  if (!a.output.empty()) {
+    if (!ends_with(a.output, ".csv")) throw InputError("--output: only .csv results are written so far (got " + a.output + ")");
+    sink = std::make_unique<CsvSink>(a.output);
+  }
+  MultibodySystem sys(m);
+  const RunSummary r = run_simulation(sys, o, sink.get());
+  if (!a.quiet && !sink) print_summary(m, sys, o, r);
+  const double body_steps = static_cast<double>(r.steps) * static_cast<double>(m.bodies.size());
+  std::fprintf(stderr, "mbsflow: done: %ld steps (%ld rejected), %ld evaluations, %.3f s wall, %.3g body-steps/s%s%s\n",
+               r.steps, r.rejected, r.evaluations, r.wall_seconds, body_steps / std::max(r.wall_seconds, 1e-9),
+               sink ? ", results in " : "", sink ? a.output.c_str() : "");
+  return 0;
+}
+
+}  // namespace
+
+Action add_run(CLI::App& app) {
+  auto a = std::make_shared<RunArgs>();
+  CLI::App* sub = app.add_subcommand("run", "Simulate a model file and write its results");
+  sub->add_option("model", a->model, "Model file (JSON, see docs/model-format.md)")->required();
+  sub->add_option("--t-end", a->t_end, "End time in s (overrides simulation.t_end)");
+  sub->add_option("--step", a->step, "Step in s; RK4 default: the stability estimate from the stiffest joint")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--method", a->method, "Integration method")->check(CLI::IsMember({"rk4", "dopri5"}));
+  sub->add_option("--every", a->every, "Write every K-th step (overrides simulation.output_every)")
+      ->check(CLI::Range(1, 1 << 30));
+  sub->add_option("--rtol", a->rtol, "DOPRI5 relative tolerance")->check(CLI::PositiveNumber);
+  sub->add_option("--atol", a->atol, "DOPRI5 absolute tolerance")->check(CLI::PositiveNumber);
+  sub->add_option("-o,--output", a->output, "Results file (.csv); without it a final-state summary is printed");
+  sub->add_flag("-q,--quiet", a->quiet, "Print only warnings, errors and the closing line");
+  return [a] { return run(*a); };
+}
+
+}  // namespace mbsflow::cli

@@ -1,0 +1,40 @@
+// mbsflow command line. Exit codes: 0 done, 1 the run failed, 2 bad input or usage.
+#include <iostream>
+#include <vector>
+
+#include "commands.hpp"
+#include "mbsflow/graph/error.hpp"
+
+int main(int argc, char** argv) {
+  CLI::App app{"mbsflow: multibody dynamics and large ODE systems, in parallel"};
+  app.set_version_flag("--version", MBSFLOW_VERSION);
+  app.require_subcommand(1);
+  std::vector<std::pair<CLI::App*, mbsflow::cli::Action>> commands;
+  auto add = [&](auto adder) {
+    const std::size_t before = app.get_subcommands({}).size();
+    mbsflow::cli::Action action = adder(app);
+    commands.emplace_back(app.get_subcommands({})[before], std::move(action));
+  };
+  add(mbsflow::cli::add_run);
+  add(mbsflow::cli::add_generate);
+  add(mbsflow::cli::add_bench);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
+  }
+  try {
+    for (auto& [sub, action] : commands)
+      if (sub->parsed()) return action();
+  } catch (const mbsflow::InputError& e) {
+    std::cerr << e.what() << '\n';
+    return 2;
+  } catch (const mbsflow::RunError& e) {
+    std::cerr << "mbsflow: " << e.what() << '\n';
+    return 1;
+  } catch (const std::exception& e) {
+    std::cerr << "mbsflow: internal error: " << e.what() << '\n';
+    return 1;
+  }
+  return 2;
+}

@@ -1,0 +1,112 @@
+#pragma once
+// The model as plain data: bodies, joints, loads, drivers and run settings.
+// Readers (io/), generators and embedding programs fill it; MultibodySystem compiles it.
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "mbsflow/graph/force_table.hpp"
+#include "mbsflow/graph/time_function.hpp"
+
+namespace mbsflow {
+
+using Vec3 = std::array<double, 3>;
+using Quat = std::array<double, 4>;  // w, x, y, z
+using Vec6 = std::array<double, 6>;  // x, y, z, rx, ry, rz
+
+inline constexpr int ground = -1;  // body index of the fixed world frame
+
+struct Body {
+  std::string name;
+  double mass = 1.0;
+  // Inertia tensor about the centre of mass in the body frame:
+  // Ixx, Iyy, Izz, Ixy, Ixz, Iyz (tensor entries, i.e. Ixy = -integral of x*y dm).
+  Vec6 inertia{1.0, 1.0, 1.0, 0.0, 0.0, 0.0};
+  Vec3 position{};                     // world, centre of mass
+  Quat orientation{1.0, 0.0, 0.0, 0.0};  // body to world
+  Vec3 velocity{};                     // world
+  Vec3 angular_velocity{};             // body frame
+};
+
+enum class JointType { bushing, spring };
+
+// A compliant joint between body1 (or ground) and body2.
+// bushing: 6-axis spring-damper in the joint frame (frame1 on body1 at point1),
+//          force on body2 = -(K d + C d' - preload), rotations by the rotation vector
+//          of the relative orientation (valid for large rotations up to pi).
+// spring:  point-to-point spring-damper along the line between the two points.
+struct Joint {
+  std::string name;
+  JointType type = JointType::bushing;
+  int body1 = ground;
+  int body2 = 0;
+  Vec3 point1{};                    // in body1's frame (world frame for ground)
+  Vec3 point2{};                    // in body2's frame
+  Quat frame1{1.0, 0.0, 0.0, 0.0};  // joint frame relative to body1
+  Quat frame2{1.0, 0.0, 0.0, 0.0};  // joint frame relative to body2 (at rest)
+  Vec6 stiffness{};                 // bushing: per axis; spring: stiffness[0]
+  Vec6 damping{};                   // bushing: per axis; spring: damping[0]
+  std::array<ForceTable, 6> tables{};  // nonlinear force(deflection) per axis; empty = linear
+  Vec6 preload{};                   // force/torque on body2 at zero deflection, joint frame
+  double rest_length = 0.0;         // spring only
+};
+
+struct Load {
+  int body = 0;
+  Vec3 force{};     // scaled by function(t)
+  Vec3 torque{};    // scaled by function(t)
+  Vec3 point{};     // application point of the force, body frame
+  bool body_frame = false;  // force and torque given in the body frame
+  TimeFunction function{};  // constant 1 by default
+};
+
+// Kinematic excitation: the body's position follows
+// initial position + velocity * t + (x(t), y(t), z(t)); its orientation stays fixed.
+struct Driver {
+  int body = 0;
+  Vec3 velocity{};
+  std::array<TimeFunction, 3> displacement{TimeFunction::constant(0.0), TimeFunction::constant(0.0),
+                                           TimeFunction::constant(0.0)};
+};
+
+enum class Method { rk4, dopri5 };
+
+struct SimulationSettings {
+  double t_start = 0.0;
+  double t_end = 1.0;
+  std::optional<double> step;  // none: RK4 picks a stable step
+  Method method = Method::rk4;
+  int output_every = 1;        // write every k-th step (RK4) or every k*step (DOPRI5)
+  double rtol = 1e-6;
+  double atol = 1e-8;
+};
+
+struct Model {
+  std::string name = "model";
+  Vec3 gravity{};
+  std::vector<Body> bodies;
+  std::vector<Joint> joints;
+  std::vector<Load> loads;
+  std::vector<Driver> drivers;
+  SimulationSettings simulation;
+};
+
+// Index of the body called name, ground for "ground", nullopt if unknown.
+std::optional<int> find_body(const Model& model, const std::string& name);
+const char* method_name(Method m);
+std::optional<Method> parse_method(const std::string& name);
+
+// The seed's natural-frequency form of a bushing: stiffness m*Omega^2 and damping
+// 2*mu*Omega*m per axis, with m the reduced mass (translations) or the reduced
+// moment of inertia about that axis (rotations) of the two bodies it joins.
+void set_bushing_from_frequency(const Model& model, Joint& joint, double omega, double mu);
+
+}  // namespace mbsflow
+
+namespace mbsflow {
+// The joint frame on body2 that makes the joint's initial rotational deflection zero:
+// q1 (x) frame1 = q2 (x) frame2 in the initial configuration.
+Quat rest_frame2(const Model& model, const Joint& joint);
+}  // namespace mbsflow

@@ -1,0 +1,314 @@
+#include "mbsflow/graph/multibody_system.hpp"
+
+#include <algorithm>
+#include <Eigen/Geometry>
+#include <Eigen/LU>
+#include <cmath>
+
+#include "mbsflow/graph/error.hpp"
+#include "mbsflow/graph/rotation.hpp"
+
+namespace mbsflow {
+namespace {
+
+Eigen::Vector3d vec(const Vec3& a) { return {a[0], a[1], a[2]}; }
+Eigen::Vector4d quat(const Quat& a) { return {a[0], a[1], a[2], a[3]}; }
+
+Eigen::Matrix3d inertia_matrix(const Vec6& i) {
+  Eigen::Matrix3d m;
+  m << i[0], i[3], i[4], i[3], i[1], i[5], i[4], i[5], i[2];
+  return m;
+}
+
+// CSR lists of items per body, kept in item order.
+template <class BodyOf>
+void build_csr(int bodies, int items, BodyOf body_of, std::vector<int>& start, std::vector<int>& list) {
+  start.assign(static_cast<std::size_t>(bodies) + 1, 0);
+  std::vector<std::pair<int, int>> pairs;  // (body, item code)
+  for (int k = 0; k < items; ++k) body_of(k, pairs);
+  std::stable_sort(pairs.begin(), pairs.end(), [](auto& x, auto& y) { return x.first < y.first; });
+  list.resize(pairs.size());
+  for (std::size_t p = 0; p < pairs.size(); ++p) {
+    ++start[static_cast<std::size_t>(pairs[p].first) + 1];
+    list[p] = pairs[p].second;
+  }
+  for (std::size_t b = 0; b < static_cast<std::size_t>(bodies); ++b) start[b + 1] += start[b];
+}
+
+}  // namespace
+
+struct MultibodySystem::Deflection {
+  Eigen::Matrix3d frame;     // world orientation of the joint frame on body1
+  Eigen::Vector3d pb;        // world attachment point on body2
+  Eigen::Vector3d d, d_rate;  // translational deflection and its rate, joint frame
+  Eigen::Vector3d theta;     // rotation vector of the relative orientation, joint frame
+  Eigen::Vector3d omega_rel;  // relative angular velocity, joint frame
+};
+
+MultibodySystem::MultibodySystem(const Model& model) : model_(model) {
+  const int n = static_cast<int>(model.bodies.size());
+  layout_.bodies = n;
+  gravity_ = vec(model.gravity);
+  for (const Body& b : model.bodies) {
+    inv_mass_.push_back(1.0 / b.mass);
+    inertia_.push_back(inertia_matrix(b.inertia));
+    inv_inertia_.push_back(inertia_.back().inverse());
+    initial_position_.push_back(vec(b.position));
+  }
+  auto kin = [n](int body) { return body == ground ? n : body; };
+  for (const Joint& j : model.joints) {
+    CompiledJoint c;
+    c.a = kin(j.body1);
+    c.b = kin(j.body2);
+    c.spring = j.type == JointType::spring;
+    c.pa = vec(j.point1);
+    c.pb = vec(j.point2);
+    c.qfa = quat(j.frame1).normalized();
+    c.qfb = quat(j.frame2).normalized();
+    c.frame1_identity = j.frame1 == Quat{1.0, 0.0, 0.0, 0.0};
+    c.rfa = rotation_matrix(c.qfa);
+    c.kt = {j.stiffness[0], j.stiffness[1], j.stiffness[2]};
+    c.kr = {j.stiffness[3], j.stiffness[4], j.stiffness[5]};
+    c.ct = {j.damping[0], j.damping[1], j.damping[2]};
+    c.cr = {j.damping[3], j.damping[4], j.damping[5]};
+    c.preload_force = {j.preload[0], j.preload[1], j.preload[2]};
+    c.preload_torque = {j.preload[3], j.preload[4], j.preload[5]};
+    c.rest_length = j.rest_length;
+    if (std::any_of(j.tables.begin(), j.tables.end(), [](const ForceTable& t) { return !t.empty(); })) {
+      c.tables = static_cast<int>(tables_.size());
+      tables_.push_back(j.tables);
+    }
+    joints_.push_back(c);
+  }
+  const int nj = static_cast<int>(model.joints.size());
+  build_csr(n, nj, [&](int k, auto& out) {
+    const Joint& j = model.joints[static_cast<std::size_t>(k)];
+    if (j.body1 != ground) out.emplace_back(j.body1, 2 * k);
+    out.emplace_back(j.body2, 2 * k + 1);
+  }, incidence_start_, incidence_);
+  build_csr(n, static_cast<int>(model.loads.size()), [&](int k, auto& out) {
+    out.emplace_back(model.loads[static_cast<std::size_t>(k)].body, k);
+  }, load_start_, load_index_);
+  driver_of_body_.assign(static_cast<std::size_t>(n), -1);
+  for (std::size_t k = 0; k < model.drivers.size(); ++k)
+    driver_of_body_[static_cast<std::size_t>(model.drivers[k].body)] = static_cast<int>(k);
+
+  rot_.assign(static_cast<std::size_t>(n) + 1, Eigen::Matrix3d::Identity());
+  pos_ = Eigen::Matrix3Xd::Zero(3, n + 1);
+  vel_ = Eigen::Matrix3Xd::Zero(3, n + 1);
+  omega_ = Eigen::Matrix3Xd::Zero(3, n + 1);
+  quat_ = Eigen::Matrix4Xd::Zero(4, n + 1);
+  quat_(0, n) = 1.0;
+  joint_out_.setZero(9, nj);
+}
+
+Eigen::VectorXd MultibodySystem::initial_state() const {
+  Eigen::VectorXd y(dimension());
+  for (Eigen::Index i = 0; i < layout_.bodies; ++i) {
+    const Body& b = model_.bodies[static_cast<std::size_t>(i)];
+    y.segment<3>(layout_.position(i)) = vec(b.position);
+    y.segment<4>(layout_.orientation(i)) = quat(b.orientation).normalized();
+    y.segment<3>(layout_.velocity(i)) = vec(b.velocity);
+    y.segment<3>(layout_.angular_velocity(i)) = vec(b.angular_velocity);
+  }
+  after_step(model_.simulation.t_start, y);
+  return y;
+}
+
+void MultibodySystem::update_kinematics(double t, const Eigen::VectorXd& y) {
+  time_ = t;
+  const Eigen::Index n = layout_.bodies;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const Eigen::Vector4d q = y.segment<4>(layout_.orientation(i));
+    const Eigen::Matrix3d r = rotation_matrix(q);
+    rot_[static_cast<std::size_t>(i)] = r;
+    quat_.col(i) = q;
+    pos_.col(i) = y.segment<3>(layout_.position(i));
+    vel_.col(i) = y.segment<3>(layout_.velocity(i));
+    omega_.col(i) = r * y.segment<3>(layout_.angular_velocity(i));
+  }
+  for (const Driver& d : model_.drivers) {
+    const Eigen::Index i = d.body;
+    const Body& b = model_.bodies[static_cast<std::size_t>(i)];
+    for (int k = 0; k < 3; ++k) {
+      const FunctionValue f = evaluate(d.displacement[static_cast<std::size_t>(k)], t);
+      pos_(k, i) = b.position[static_cast<std::size_t>(k)] + d.velocity[static_cast<std::size_t>(k)] * t + f.value;
+      vel_(k, i) = d.velocity[static_cast<std::size_t>(k)] + f.rate;
+    }
+    quat_.col(i) = quat(b.orientation).normalized();
+    rot_[static_cast<std::size_t>(i)] = rotation_matrix(quat_.col(i));
+    omega_.col(i).setZero();
+  }
+}
+
+MultibodySystem::Deflection MultibodySystem::bushing_deflection(const CompiledJoint& j) const {
+  Deflection r;
+  const Eigen::Matrix3d& ra = rot_[static_cast<std::size_t>(j.a)];
+  const Eigen::Matrix3d& rb = rot_[static_cast<std::size_t>(j.b)];
+  r.frame = j.frame1_identity ? ra : Eigen::Matrix3d(ra * j.rfa);
+  const Eigen::Vector3d bw = rb * j.pb;
+  r.pb = pos_.col(j.b) + bw;
+  const Eigen::Vector3d pa = pos_.col(j.a) + ra * j.pa;
+  // Rate of the deflection seen from body1: velocity of the point on body2 minus the
+  // velocity of body1's material point that coincides with it.
+  const Eigen::Vector3d wa = omega_.col(j.a), wb = omega_.col(j.b);
+  const Eigen::Vector3d dv = vel_.col(j.b) + wb.cross(bw) - vel_.col(j.a) - wa.cross(r.pb - pos_.col(j.a));
+  r.d = r.frame.transpose() * (r.pb - pa);
+  r.d_rate = r.frame.transpose() * dv;
+  Eigen::Vector4d qa = quat_.col(j.a), qb = quat_.col(j.b);
+  if (!j.frame1_identity) qa = quat_multiply(qa, j.qfa);
+  qb = quat_multiply(qb, j.qfb);
+  r.theta = rotation_vector(quat_multiply(quat_conjugate(qa), qb));
+  r.omega_rel = r.frame.transpose() * (wb - wa);
+  return r;
+}
+
+// Spring forces per axis (K d, or the tables), for axes first_axis..first_axis+2.
+Eigen::Vector3d MultibodySystem::axis_forces(const CompiledJoint& j, const Eigen::Vector3d& d, int first_axis) const {
+  const Eigen::Vector3d& k = first_axis == 0 ? j.kt : j.kr;
+  Eigen::Vector3d f = k.cwiseProduct(d);
+  if (j.tables >= 0) {
+    const auto& t = tables_[static_cast<std::size_t>(j.tables)];
+    for (int i = 0; i < 3; ++i) {
+      const ForceTable& table = t[static_cast<std::size_t>(first_axis + i)];
+      if (!table.empty()) f[i] = table_force(table, d[i]);
+    }
+  }
+  return f;
+}
+
+void MultibodySystem::compute_joint_forces() {
+  for (std::size_t k = 0; k < joints_.size(); ++k) {
+    const CompiledJoint& j = joints_[k];
+    auto out = joint_out_.col(static_cast<Eigen::Index>(k));
+    const Eigen::Matrix3d& ra = rot_[static_cast<std::size_t>(j.a)];
+    const Eigen::Matrix3d& rb = rot_[static_cast<std::size_t>(j.b)];
+    if (j.spring) {
+      const Eigen::Vector3d aw = ra * j.pa, bw = rb * j.pb;
+      const Eigen::Vector3d delta = pos_.col(j.b) + bw - pos_.col(j.a) - aw;
+      const double length = delta.norm();
+      const Eigen::Vector3d u = length > 0.0 ? Eigen::Vector3d(delta / length) : Eigen::Vector3d::Zero();
+      const Eigen::Vector3d dv = vel_.col(j.b) + omega_.col(j.b).cross(bw) - vel_.col(j.a) - omega_.col(j.a).cross(aw);
+      const double f = j.kt[0] * (length - j.rest_length) + j.ct[0] * u.dot(dv);
+      const Eigen::Vector3d force = -f * u;  // on body2, at its attachment point
+      out.segment<3>(0) = force;
+      out.segment<3>(3) = aw.cross(-force);
+      out.segment<3>(6) = bw.cross(force);
+      continue;
+    }
+    const Deflection def = bushing_deflection(j);
+    const Eigen::Vector3d f = axis_forces(j, def.d, 0) + j.ct.cwiseProduct(def.d_rate) - j.preload_force;
+    const Eigen::Vector3d force = -(def.frame * f);  // on body2 at pb; on body1 (opposite) also at pb
+    const Eigen::Vector3d g = rotation_gradient_to_torque(def.theta, axis_forces(j, def.theta, 3) - j.preload_torque) +
+                              j.cr.cwiseProduct(def.omega_rel);
+    const Eigen::Vector3d couple = def.frame * g;  // on body1; body2 gets -couple
+    out.segment<3>(0) = force;
+    out.segment<3>(3) = (def.pb - pos_.col(j.a)).cross(-force) + couple;
+    out.segment<3>(6) = (def.pb - pos_.col(j.b)).cross(force) - couple;
+  }
+}
+
+void MultibodySystem::compute_derivatives(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const {
+  const Eigen::Index n = layout_.bodies;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const auto bi = static_cast<std::size_t>(i);
+    const Eigen::Matrix3d& r = rot_[bi];
+    Eigen::Vector3d force = model_.bodies[bi].mass * gravity_;
+    Eigen::Vector3d torque = Eigen::Vector3d::Zero();  // world frame, about the centre of mass
+    for (int p = load_start_[bi]; p < load_start_[bi + 1]; ++p) {
+      const Load& l = model_.loads[static_cast<std::size_t>(load_index_[static_cast<std::size_t>(p)])];
+      const double s = evaluate(l.function, t).value;
+      Eigen::Vector3d f = s * vec(l.force), m = s * vec(l.torque);
+      if (l.body_frame) {
+        f = r * f;
+        m = r * m;
+      }
+      force += f;
+      torque += m + (r * vec(l.point)).cross(f);
+    }
+    for (int p = incidence_start_[bi]; p < incidence_start_[bi + 1]; ++p) {
+      const int code = incidence_[static_cast<std::size_t>(p)];
+      const auto col = joint_out_.col(code / 2);
+      if (code & 1) {
+        force += col.segment<3>(0);
+        torque += col.segment<3>(6);
+      } else {
+        force -= col.segment<3>(0);
+        torque += col.segment<3>(3);
+      }
+    }
+    const int drv = driver_of_body_[bi];
+    if (drv >= 0) {
+      const Driver& d = model_.drivers[static_cast<std::size_t>(drv)];
+      for (int k = 0; k < 3; ++k) {
+        dydt[layout_.position(i) + k] = vel_(k, i);
+        dydt[layout_.velocity(i) + k] = evaluate(d.displacement[static_cast<std::size_t>(k)], t).accel;
+      }
+      dydt.segment<4>(layout_.orientation(i)).setZero();
+      dydt.segment<3>(layout_.angular_velocity(i)).setZero();
+      continue;
+    }
+    const Eigen::Vector3d w = y.segment<3>(layout_.angular_velocity(i));
+    const Eigen::Vector4d q = y.segment<4>(layout_.orientation(i));
+    dydt.segment<3>(layout_.position(i)) = y.segment<3>(layout_.velocity(i));
+    dydt.segment<3>(layout_.velocity(i)) = inv_mass_[bi] * force;
+    const Eigen::Vector3d tb = r.transpose() * torque;
+    dydt.segment<3>(layout_.angular_velocity(i)) = inv_inertia_[bi] * (tb - w.cross(inertia_[bi] * w));
+    dydt.segment<4>(layout_.orientation(i)) = 0.5 * quat_multiply(q, Eigen::Vector4d(0.0, w[0], w[1], w[2]));
+  }
+}
+
+void MultibodySystem::rhs(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) {
+  update_kinematics(t, y);
+  compute_joint_forces();
+  compute_derivatives(t, y, dydt);
+}
+
+void MultibodySystem::after_step(double t, Eigen::VectorXd& y) const {
+  for (Eigen::Index i = 0; i < layout_.bodies; ++i) y.segment<4>(layout_.orientation(i)).normalize();
+  for (const Driver& d : model_.drivers) {
+    const Eigen::Index i = d.body;
+    const Body& b = model_.bodies[static_cast<std::size_t>(i)];
+    for (int k = 0; k < 3; ++k) {
+      const FunctionValue f = evaluate(d.displacement[static_cast<std::size_t>(k)], t);
+      y[layout_.position(i) + k] = b.position[static_cast<std::size_t>(k)] + d.velocity[static_cast<std::size_t>(k)] * t + f.value;
+      y[layout_.velocity(i) + k] = d.velocity[static_cast<std::size_t>(k)] + f.rate;
+    }
+    y.segment<4>(layout_.orientation(i)) = quat(b.orientation).normalized();
+    y.segment<3>(layout_.angular_velocity(i)).setZero();
+  }
+}
+
+double MultibodySystem::elastic_energy(const CompiledJoint& j) const {
+  if (j.spring) {
+    const Eigen::Vector3d delta = pos_.col(j.b) + rot_[static_cast<std::size_t>(j.b)] * j.pb - pos_.col(j.a) -
+                                  rot_[static_cast<std::size_t>(j.a)] * j.pa;
+    const double e = delta.norm() - j.rest_length;
+    return 0.5 * j.kt[0] * e * e;
+  }
+  const Deflection def = bushing_deflection(j);
+  double e = -j.preload_force.dot(def.d) - j.preload_torque.dot(def.theta);
+  for (int axis = 0; axis < 6; ++axis) {
+    const double x = axis < 3 ? def.d[axis] : def.theta[axis - 3];
+    const double k = axis < 3 ? j.kt[axis] : j.kr[axis - 3];
+    const ForceTable* table = j.tables >= 0 ? &tables_[static_cast<std::size_t>(j.tables)][static_cast<std::size_t>(axis)] : nullptr;
+    e += (table && !table->empty()) ? table_energy(*table, x) : 0.5 * k * x * x;
+  }
+  return e;
+}
+
+Energy MultibodySystem::energy(double t, const Eigen::VectorXd& y) {
+  update_kinematics(t, y);
+  Energy e;
+  for (Eigen::Index i = 0; i < layout_.bodies; ++i) {
+    const auto bi = static_cast<std::size_t>(i);
+    const double m = model_.bodies[bi].mass;
+    const Eigen::Vector3d w = y.segment<3>(layout_.angular_velocity(i));
+    e.kinetic += 0.5 * m * vel_.col(i).squaredNorm() + 0.5 * w.dot(inertia_[bi] * w);
+    e.gravity -= m * gravity_.dot(pos_.col(i));
+  }
+  for (const CompiledJoint& j : joints_) e.elastic += elastic_energy(j);
+  return e;
+}
+
+}  // namespace mbsflow

@@ -1,0 +1,34 @@
+#pragma once
+// Line and column of every value in a JSON text, by field path ("bodies[3].mass"),
+// so that input errors can point into the file. nlohmann-json keeps no positions.
+#include <string>
+#include <string_view>
+#include <unordered_map>
+
+namespace mbsflow {
+
+struct SourceLocation {
+  int line = 0;    // 1-based; 0 = unknown
+  int column = 0;  // 1-based, in bytes
+};
+
+class JsonLocations {
+ public:
+  JsonLocations() = default;
+  // The text must be valid JSON (parse it with nlohmann first); nothing is validated here.
+  explicit JsonLocations(std::string_view text);
+  SourceLocation value(const std::string& path) const;
+  SourceLocation key(const std::string& path) const;  // the member's key; the value for array items
+
+ private:
+  struct Entry {
+    SourceLocation key, value;
+  };
+  std::unordered_map<std::string, Entry> map_;
+};
+
+// Field paths as used in messages: "bodies", "bodies[3]", "bodies[3].mass".
+std::string member_path(const std::string& parent, const std::string& key);
+std::string item_path(const std::string& parent, std::size_t index);
+
+}  // namespace mbsflow

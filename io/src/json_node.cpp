@@ -1,0 +1,108 @@
+#include "json_node.hpp"
+
+#include <cmath>
+#include <cstdio>
+
+#include "mbsflow/graph/error.hpp"
+
+namespace mbsflow {
+
+std::string number_text(double v) {
+  char buf[32];
+  for (int precision = 6; precision <= 17; ++precision) {
+    std::snprintf(buf, sizeof buf, "%.*g", precision, v);
+    if (std::strtod(buf, nullptr) == v) break;
+  }
+  return buf;
+}
+
+std::string format_input_error(const std::string& file, SourceLocation at, const std::string& path, const std::string& what) {
+  std::string s = file;
+  if (at.line > 0) s += ":" + std::to_string(at.line) + ":" + std::to_string(at.column);
+  s += ": ";
+  if (!path.empty()) s += path + ": ";
+  return s + what;
+}
+
+void JsonNode::fail(const std::string& what) const {
+  throw InputError(format_input_error(src_->file, src_->locations.value(path_), path_, what));
+}
+
+void JsonNode::fail_at_key(const std::string& what) const {
+  throw InputError(format_input_error(src_->file, src_->locations.key(path_), path_, what));
+}
+
+void JsonNode::expect_object() const {
+  if (!j_->is_object()) fail(std::string("must be an object (got ") + j_->type_name() + ")");
+}
+
+void JsonNode::allow_only(std::initializer_list<const char*> keys) const {
+  expect_object();
+  for (auto it = j_->begin(); it != j_->end(); ++it) {
+    bool known = false;
+    for (const char* k : keys) known = known || it.key() == k;
+    if (known) continue;
+    std::string list;
+    for (const char* k : keys) list += (list.empty() ? "" : ", ") + std::string(k);
+    JsonNode(it.value(), member_path(path_, it.key()), *src_).fail_at_key("unknown field (expected one of: " + list + ")");
+  }
+}
+
+JsonNode JsonNode::operator[](const char* key) const {
+  expect_object();
+  if (!j_->contains(key)) fail(std::string("missing field '") + key + "'");
+  return JsonNode(j_->at(key), member_path(path_, key), *src_);
+}
+
+std::optional<JsonNode> JsonNode::find(const char* key) const {
+  expect_object();
+  if (!j_->contains(key)) return std::nullopt;
+  return JsonNode(j_->at(key), member_path(path_, key), *src_);
+}
+
+std::size_t JsonNode::array_size() const {
+  if (!j_->is_array()) fail(std::string("must be an array (got ") + j_->type_name() + ")");
+  return j_->size();
+}
+
+JsonNode JsonNode::item(std::size_t i) const { return JsonNode(j_->at(i), item_path(path_, i), *src_); }
+
+double JsonNode::number() const {
+  if (!j_->is_number()) fail(std::string("must be a number (got ") + j_->type_name() + ")");
+  const double v = j_->get<double>();
+  if (!std::isfinite(v)) fail("must be a finite number");
+  return v;
+}
+
+double JsonNode::positive() const {
+  const double v = number();
+  if (!(v > 0.0)) fail("must be > 0 (got " + number_text(v) + ")");
+  return v;
+}
+
+double JsonNode::non_negative() const {
+  const double v = number();
+  if (v < 0.0) fail("must be >= 0 (got " + number_text(v) + ")");
+  return v;
+}
+
+long JsonNode::integer(long min) const {
+  const double v = number();
+  if (v != std::floor(v) || std::abs(v) > 9e15) fail("must be an integer (got " + number_text(v) + ")");
+  if (v < static_cast<double>(min)) fail("must be >= " + std::to_string(min) + " (got " + number_text(v) + ")");
+  return static_cast<long>(v);
+}
+
+std::string JsonNode::string() const {
+  if (!j_->is_string()) fail(std::string("must be a string (got ") + j_->type_name() + ")");
+  return j_->get<std::string>();
+}
+
+std::vector<double> JsonNode::numbers() const {
+  const std::size_t n = array_size();
+  std::vector<double> v(n);
+  for (std::size_t i = 0; i < n; ++i) v[i] = item(i).number();
+  return v;
+}
+
+}  // namespace mbsflow

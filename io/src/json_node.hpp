@@ -1,0 +1,68 @@
+#pragma once
+// A JSON value with its field path and the file it came from, with typed getters that
+// throw InputError("file:line:col: path: what is wrong") on bad input.
+#include <array>
+#include <initializer_list>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "mbsflow/io/json_locations.hpp"
+
+namespace mbsflow {
+
+struct JsonSource {
+  std::string file;
+  JsonLocations locations;
+};
+
+class JsonNode {
+ public:
+  JsonNode(const nlohmann::json& j, std::string path, const JsonSource& src) : j_(&j), path_(std::move(path)), src_(&src) {}
+
+  const nlohmann::json& json() const { return *j_; }
+  const std::string& path() const { return path_; }
+
+  [[noreturn]] void fail(const std::string& what) const;          // points at the value
+  [[noreturn]] void fail_at_key(const std::string& what) const;   // points at the member's key
+
+  // Objects.
+  void expect_object() const;
+  void allow_only(std::initializer_list<const char*> keys) const;  // unknown field -> error
+  bool has(const char* key) const { return j_->is_object() && j_->contains(key); }
+  JsonNode operator[](const char* key) const;                        // required member
+  std::optional<JsonNode> find(const char* key) const;               // optional member
+
+  // Arrays.
+  std::size_t array_size() const;  // fails unless an array
+  JsonNode item(std::size_t i) const;
+
+  // Scalars.
+  double number() const;  // finite
+  double positive() const;
+  double non_negative() const;
+  long integer(long min) const;
+  std::string string() const;
+  std::vector<double> numbers() const;  // array of finite numbers, any length
+  template <std::size_t N>
+  std::array<double, N> fixed() const {
+    const std::vector<double> v = numbers();
+    if (v.size() != N) fail("must have " + std::to_string(N) + " numbers (got " + std::to_string(v.size()) + ")");
+    std::array<double, N> a{};
+    for (std::size_t i = 0; i < N; ++i) a[i] = v[i];
+    return a;
+  }
+
+ private:
+  std::string prefix(SourceLocation at) const;
+  const nlohmann::json* j_;
+  std::string path_;
+  const JsonSource* src_;
+};
+
+// "file:line:col: path: what" with whatever of these is known.
+std::string format_input_error(const std::string& file, SourceLocation at, const std::string& path, const std::string& what);
+std::string number_text(double v);  // shortest text that reads back as v
+
+}  // namespace mbsflow

@@ -1,0 +1,326 @@
+#include "mbsflow/io/model_reader.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <regex>
+#include <sstream>
+
+#include "json_node.hpp"
+#include "mbsflow/graph/error.hpp"
+
+namespace mbsflow {
+namespace {
+
+constexpr double unit_tolerance = 1e-6;  // allowed |norm - 1| of given quaternions
+
+Vec3 vec3(const JsonNode& parent, const char* key, Vec3 fallback = {}) {
+  const auto n = parent.find(key);
+  return n ? n->fixed<3>() : fallback;
+}
+
+Quat unit_quat(const JsonNode& n) {
+  const auto q = n.fixed<4>();
+  const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+  if (std::abs(norm - 1.0) > unit_tolerance)
+    n.fail("must be a unit quaternion [w, x, y, z] (norm " + number_text(norm) + ", allowed deviation 1e-6)");
+  return {q[0] / norm, q[1] / norm, q[2] / norm, q[3] / norm};
+}
+
+// Inertia: 3 principal moments or the 6 tensor entries; positive definite, and the
+// principal moments must satisfy the triangle inequality (a real mass distribution).
+Vec6 inertia(const JsonNode& n) {
+  const std::vector<double> v = n.numbers();
+  if (v.size() != 3 && v.size() != 6) n.fail("must have 3 or 6 numbers (got " + std::to_string(v.size()) + ")");
+  Vec6 i{v[0], v[1], v[2], 0, 0, 0};
+  if (v.size() == 6) i = {v[0], v[1], v[2], v[3], v[4], v[5]};
+  Eigen::Matrix3d m;
+  m << i[0], i[3], i[4], i[3], i[1], i[5], i[4], i[5], i[2];
+  const Eigen::Vector3d e = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(m, Eigen::EigenvaluesOnly).eigenvalues();
+  if (!(e[0] > 0.0)) n.fail("must be positive definite (smallest principal moment " + number_text(e[0]) + ")");
+  if (e[0] + e[1] < e[2] * (1.0 - 1e-9))
+    n.fail("principal moments " + number_text(e[0]) + ", " + number_text(e[1]) + ", " + number_text(e[2]) +
+           " violate the triangle inequality");
+  return i;
+}
+
+TimeFunction time_function(const JsonNode& n) {
+  if (n.json().is_string()) {
+    if (n.string() != "constant") n.fail("must be \"constant\" or an object with a \"type\" (got '" + n.string() + "')");
+    return TimeFunction::constant(1.0);
+  }
+  n.expect_object();
+  const std::string type = n["type"].string();
+  TimeFunction f;
+  if (type == "constant") {
+    n.allow_only({"type", "value", "delay"});
+    f.value = n.find("value") ? n["value"].number() : 1.0;
+  } else if (type == "harmonic") {
+    n.allow_only({"type", "amplitude", "frequency", "phase", "offset", "delay"});
+    f.kind = TimeFunction::Kind::harmonic;
+    f.amplitude = n["amplitude"].number();
+    f.frequency = n["frequency"].non_negative();
+    f.phase = n.find("phase") ? n["phase"].number() : 0.0;
+    f.offset = n.find("offset") ? n["offset"].number() : 0.0;
+  } else if (type == "table") {
+    n.allow_only({"type", "t", "value", "delay"});
+    f.kind = TimeFunction::Kind::table;
+    f.times = n["t"].numbers();
+    f.values = n["value"].numbers();
+    if (f.times.empty()) n["t"].fail("must not be empty");
+    if (f.values.size() != f.times.size())
+      n["value"].fail("must have as many numbers as t (" + std::to_string(f.times.size()) + ", got " +
+                      std::to_string(f.values.size()) + ")");
+    for (std::size_t i = 1; i < f.times.size(); ++i)
+      if (!(f.times[i] > f.times[i - 1])) n["t"].item(i).fail("must be strictly increasing");
+  } else if (type == "random") {
+    n.allow_only({"type", "amplitude", "cutoff", "seed", "components", "delay"});
+    f.kind = TimeFunction::Kind::random;
+    f.amplitude = n["amplitude"].non_negative();
+    f.cutoff = n["cutoff"].positive();
+    f.seed = static_cast<std::uint64_t>(n.find("seed") ? n["seed"].integer(0) : 0);
+    f.components = static_cast<int>(n.find("components") ? n["components"].integer(1) : 32);
+  } else {
+    n["type"].fail("must be one of constant, harmonic, table, random (got '" + type + "')");
+  }
+  f.delay = n.find("delay") ? n["delay"].number() : 0.0;
+  return f;
+}
+
+ForceTable force_table(const JsonNode& n) {
+  n.allow_only({"deflection", "force"});
+  ForceTable t{n["deflection"].numbers(), n["force"].numbers()};
+  if (t.deflection.size() < 2) n["deflection"].fail("must have at least 2 points");
+  if (t.force.size() != t.deflection.size())
+    n["force"].fail("must have as many numbers as deflection (" + std::to_string(t.deflection.size()) + ", got " +
+                    std::to_string(t.force.size()) + ")");
+  for (std::size_t i = 1; i < t.deflection.size(); ++i)
+    if (!(t.deflection[i] > t.deflection[i - 1])) n["deflection"].item(i).fail("must be strictly increasing");
+  return t;
+}
+
+class Reader {
+ public:
+  Reader(const JsonNode& root) : root_(root) {}
+
+  Model read() {
+    root_.allow_only({"name", "description", "gravity", "bodies", "joints", "loads", "drivers", "simulation"});
+    if (auto n = root_.find("name")) m_.name = n->string();
+    if (auto n = root_.find("description")) n->string();
+    m_.gravity = vec3(root_, "gravity");
+    bodies(root_["bodies"]);
+    if (auto n = root_.find("joints")) for_items(*n, [&](const JsonNode& j) { joint(j); });
+    if (auto n = root_.find("loads")) for_items(*n, [&](const JsonNode& l) { load(l); });
+    if (auto n = root_.find("drivers")) for_items(*n, [&](const JsonNode& d) { driver(d); });
+    if (auto n = root_.find("simulation")) simulation(*n);
+    return std::move(m_);
+  }
+
+ private:
+  template <class F>
+  static void for_items(const JsonNode& array, F f) {
+    const std::size_t n = array.array_size();
+    for (std::size_t i = 0; i < n; ++i) f(array.item(i));
+  }
+
+  void bodies(const JsonNode& list) {
+    if (list.array_size() == 0) list.fail("must list at least one body");
+    std::map<std::string, std::string> seen;
+    for_items(list, [&](const JsonNode& n) {
+      n.allow_only({"name", "mass", "inertia", "position", "orientation", "velocity", "angular_velocity"});
+      Body b;
+      const JsonNode name = n["name"];
+      b.name = name.string();
+      if (b.name.empty()) name.fail("must not be empty");
+      if (b.name == "ground") name.fail("'ground' is reserved for the fixed world frame");
+      if (auto [it, fresh] = seen.emplace(b.name, n.path()); !fresh)
+        name.fail("duplicate body name '" + b.name + "' (first at " + it->second + ")");
+      b.mass = n["mass"].positive();
+      b.inertia = inertia(n["inertia"]);
+      b.position = vec3(n, "position");
+      if (auto q = n.find("orientation")) b.orientation = unit_quat(*q);
+      b.velocity = vec3(n, "velocity");
+      b.angular_velocity = vec3(n, "angular_velocity");
+      m_.bodies.push_back(b);
+    });
+  }
+
+  int body_ref(const JsonNode& n, bool ground_ok) {
+    const std::string name = n.string();
+    const auto b = find_body(m_, name);
+    if (!b) n.fail("unknown body '" + name + "'");
+    if (*b == ground && !ground_ok) n.fail("must name a body, not ground");
+    return *b;
+  }
+
+  void joint(const JsonNode& n) {
+    n.expect_object();
+    const JsonNode type = n["type"];
+    const std::string t = type.string();
+    Joint j;
+    if (t == "bushing") {
+      n.allow_only({"name", "type", "body1", "body2", "point1", "point2", "frame1", "frame2", "stiffness", "damping",
+                    "frequency", "damping_ratio", "tables", "preload"});
+    } else if (t == "spring") {
+      n.allow_only({"name", "type", "body1", "body2", "point1", "point2", "stiffness", "damping", "rest_length"});
+      j.type = JointType::spring;
+    } else {
+      type.fail("must be one of bushing, spring (got '" + t + "')");
+    }
+    const std::size_t index = m_.joints.size();
+    j.name = n.find("name") ? n["name"].string() : "j" + std::to_string(index);
+    if (auto [it, fresh] = joint_names_.emplace(j.name, n.path()); !fresh)
+      (n.find("name") ? n["name"] : n).fail("duplicate joint name '" + j.name + "' (first at " + it->second + ")");
+    j.body1 = body_ref(n["body1"], true);
+    j.body2 = body_ref(n["body2"], false);
+    if (j.body1 == j.body2) n["body2"].fail("joins body '" + m_.bodies[static_cast<std::size_t>(j.body2)].name + "' to itself");
+    j.point1 = vec3(n, "point1");
+    j.point2 = vec3(n, "point2");
+    if (j.type == JointType::spring)
+      spring(n, j);
+    else
+      bushing(n, j);
+    m_.joints.push_back(j);
+  }
+
+  void spring(const JsonNode& n, Joint& j) {
+    j.stiffness[0] = n["stiffness"].non_negative();
+    j.damping[0] = n.find("damping") ? n["damping"].non_negative() : 0.0;
+    if (auto l = n.find("rest_length")) {
+      j.rest_length = l->non_negative();
+    } else {  // default: the initial distance of the two points
+      const Body* b1 = j.body1 == ground ? nullptr : &m_.bodies[static_cast<std::size_t>(j.body1)];
+      const Body& b2 = m_.bodies[static_cast<std::size_t>(j.body2)];
+      Eigen::Vector3d p1(j.point1[0], j.point1[1], j.point1[2]);
+      if (b1) p1 = world_point(*b1, j.point1);
+      j.rest_length = (world_point(b2, j.point2) - p1).norm();
+    }
+  }
+
+  static Eigen::Vector3d world_point(const Body& b, const Vec3& p) {
+    const Eigen::Quaterniond q(b.orientation[0], b.orientation[1], b.orientation[2], b.orientation[3]);
+    return Eigen::Vector3d(b.position[0], b.position[1], b.position[2]) + q.normalized() * Eigen::Vector3d(p[0], p[1], p[2]);
+  }
+
+  void bushing(const JsonNode& n, Joint& j) {
+    const bool by_stiffness = n.has("stiffness"), by_frequency = n.has("frequency");
+    if (by_stiffness && by_frequency) n["frequency"].fail_at_key("give either stiffness/damping or frequency/damping_ratio, not both");
+    if (n.has("damping_ratio") && !by_frequency) n["damping_ratio"].fail_at_key("needs 'frequency'");
+    if (n.has("damping") && by_frequency) n["damping"].fail_at_key("give either stiffness/damping or frequency/damping_ratio, not both");
+    if (auto f = n.find("frame1")) j.frame1 = unit_quat(*f);
+    j.frame2 = n.find("frame2") ? unit_quat(n["frame2"]) : rest_frame2(m_, j);
+    if (by_frequency) {
+      const double mu = n.find("damping_ratio") ? n["damping_ratio"].non_negative() : 0.0;
+      set_bushing_from_frequency(m_, j, n["frequency"].positive(), mu);
+    } else if (by_stiffness) {
+      j.stiffness = six_non_negative(n["stiffness"]);
+      if (auto d = n.find("damping")) j.damping = six_non_negative(*d);
+    } else if (!n.has("tables")) {
+      n.fail("missing field 'stiffness' (or 'frequency', or 'tables')");
+    }
+    if (auto t = n.find("tables")) {
+      static const char* axes[6] = {"x", "y", "z", "rx", "ry", "rz"};
+      t->allow_only({"x", "y", "z", "rx", "ry", "rz"});
+      for (std::size_t a = 0; a < 6; ++a)
+        if (auto axis = t->find(axes[a])) j.tables[a] = force_table(*axis);
+    }
+    if (auto p = n.find("preload")) j.preload = p->fixed<6>();
+  }
+
+  static Vec6 six_non_negative(const JsonNode& n) {
+    const Vec6 v = n.fixed<6>();
+    for (std::size_t i = 0; i < 6; ++i) n.item(i).non_negative();
+    return v;
+  }
+
+  void load(const JsonNode& n) {
+    n.allow_only({"body", "force", "torque", "point", "frame", "function"});
+    Load l;
+    l.body = body_ref(n["body"], false);
+    l.force = vec3(n, "force");
+    l.torque = vec3(n, "torque");
+    l.point = vec3(n, "point");
+    if (auto f = n.find("frame")) {
+      const std::string frame = f->string();
+      if (frame != "world" && frame != "body") f->fail("must be \"world\" or \"body\" (got '" + frame + "')");
+      l.body_frame = frame == "body";
+    }
+    if (auto f = n.find("function")) l.function = time_function(*f);
+    m_.loads.push_back(l);
+  }
+
+  void driver(const JsonNode& n) {
+    n.allow_only({"body", "motion"});
+    Driver d;
+    const JsonNode body = n["body"];
+    d.body = body_ref(body, false);
+    for (const Driver& other : m_.drivers)
+      if (other.body == d.body) body.fail("body '" + body.string() + "' already has a driver");
+    const JsonNode motion = n["motion"];
+    motion.allow_only({"velocity", "x", "y", "z"});
+    d.velocity = vec3(motion, "velocity");
+    static const char* axes[3] = {"x", "y", "z"};
+    for (std::size_t a = 0; a < 3; ++a)
+      if (auto f = motion.find(axes[a])) d.displacement[a] = time_function(*f);
+    m_.drivers.push_back(d);
+  }
+
+  void simulation(const JsonNode& n) {
+    n.allow_only({"t_start", "t_end", "step", "method", "output_every", "rtol", "atol"});
+    SimulationSettings& s = m_.simulation;
+    if (auto v = n.find("t_start")) s.t_start = v->number();
+    if (auto v = n.find("t_end")) {
+      s.t_end = v->number();
+      if (!(s.t_end > s.t_start)) v->fail("must be > t_start (" + number_text(s.t_start) + ", got " + number_text(s.t_end) + ")");
+    }
+    if (auto v = n.find("step")) s.step = v->positive();
+    if (auto v = n.find("method")) {
+      const auto m = parse_method(v->string());
+      if (!m) v->fail("must be one of rk4, dopri5 (got '" + v->string() + "')");
+      s.method = *m;
+    }
+    if (auto v = n.find("output_every")) s.output_every = static_cast<int>(v->integer(1));
+    if (auto v = n.find("rtol")) s.rtol = v->positive();
+    if (auto v = n.find("atol")) s.atol = v->positive();
+  }
+
+  JsonNode root_;
+  Model m_;
+  std::map<std::string, std::string> joint_names_;
+};
+
+// nlohmann's message, less its "[json.exception...] parse error at line L, column C: " prefix.
+std::string syntax_error(const nlohmann::json::parse_error& e, const std::string& name) {
+  const std::string what = e.what();
+  std::smatch m;
+  static const std::regex re(R"(at line (\d+), column (\d+): (.*))");
+  if (std::regex_search(what, m, re))
+    return format_input_error(name, {std::stoi(m[1]), std::stoi(m[2])}, "", "invalid JSON: " + m[3].str());
+  return format_input_error(name, {}, "", "invalid JSON: " + what);
+}
+
+}  // namespace
+
+Model read_model_text(const std::string& text, const std::string& name) {
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(text);
+  } catch (const nlohmann::json::parse_error& e) {
+    throw InputError(syntax_error(e, name));
+  }
+  JsonSource src{name, JsonLocations(text)};
+  const JsonNode root(j, "", src);
+  return Reader(root).read();
+}
+
+Model read_model_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path + ": cannot open the model file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return read_model_text(text.str(), path);
+}
+
+}  // namespace mbsflow

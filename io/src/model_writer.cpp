@@ -1,0 +1,134 @@
+#include "mbsflow/io/model_writer.hpp"
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "mbsflow/graph/error.hpp"
+
+namespace mbsflow {
+namespace {
+
+using json = nlohmann::ordered_json;
+
+bool zero(const Vec3& v) { return v == Vec3{}; }
+bool identity(const Quat& q) { return q == Quat{1.0, 0.0, 0.0, 0.0}; }
+
+json function_json(const TimeFunction& f) {
+  json j;
+  switch (f.kind) {
+    case TimeFunction::Kind::constant:
+      j = {{"type", "constant"}, {"value", f.value}};
+      break;
+    case TimeFunction::Kind::harmonic:
+      j = {{"type", "harmonic"}, {"amplitude", f.amplitude}, {"frequency", f.frequency}};
+      if (f.phase != 0.0) j["phase"] = f.phase;
+      if (f.offset != 0.0) j["offset"] = f.offset;
+      break;
+    case TimeFunction::Kind::table:
+      j = {{"type", "table"}, {"t", f.times}, {"value", f.values}};
+      break;
+    case TimeFunction::Kind::random:
+      j = {{"type", "random"}, {"amplitude", f.amplitude}, {"cutoff", f.cutoff}, {"seed", f.seed},
+           {"components", f.components}};
+      break;
+  }
+  if (f.delay != 0.0) j["delay"] = f.delay;
+  return j;
+}
+
+bool is_zero_constant(const TimeFunction& f) { return f.kind == TimeFunction::Kind::constant && f.value == 0.0 && f.delay == 0.0; }
+
+json body_json(const Body& b) {
+  json j = {{"name", b.name}, {"mass", b.mass}};
+  const bool diagonal = b.inertia[3] == 0.0 && b.inertia[4] == 0.0 && b.inertia[5] == 0.0;
+  j["inertia"] = diagonal ? json{b.inertia[0], b.inertia[1], b.inertia[2]} : json(b.inertia);
+  j["position"] = b.position;
+  if (!identity(b.orientation)) j["orientation"] = b.orientation;
+  if (!zero(b.velocity)) j["velocity"] = b.velocity;
+  if (!zero(b.angular_velocity)) j["angular_velocity"] = b.angular_velocity;
+  return j;
+}
+
+json joint_json(const Model& m, const Joint& jt) {
+  auto name = [&](int b) { return b == ground ? std::string("ground") : m.bodies[static_cast<std::size_t>(b)].name; };
+  json j = {{"name", jt.name}, {"type", jt.type == JointType::spring ? "spring" : "bushing"},
+            {"body1", name(jt.body1)}, {"body2", name(jt.body2)}, {"point1", jt.point1}, {"point2", jt.point2}};
+  if (jt.type == JointType::spring) {
+    j["stiffness"] = jt.stiffness[0];
+    if (jt.damping[0] != 0.0) j["damping"] = jt.damping[0];
+    j["rest_length"] = jt.rest_length;
+    return j;
+  }
+  if (!identity(jt.frame1)) j["frame1"] = jt.frame1;
+  if (jt.frame2 != rest_frame2(m, jt)) j["frame2"] = jt.frame2;
+  j["stiffness"] = jt.stiffness;
+  if (jt.damping != Vec6{}) j["damping"] = jt.damping;
+  static const char* axes[6] = {"x", "y", "z", "rx", "ry", "rz"};
+  json tables = json::object();
+  for (std::size_t a = 0; a < 6; ++a)
+    if (!jt.tables[a].empty()) tables[axes[a]] = {{"deflection", jt.tables[a].deflection}, {"force", jt.tables[a].force}};
+  if (!tables.empty()) j["tables"] = tables;
+  if (jt.preload != Vec6{}) j["preload"] = jt.preload;
+  return j;
+}
+
+}  // namespace
+
+std::string model_to_json(const Model& m) {
+  json root = {{"name", m.name}, {"gravity", m.gravity}};
+  json& bodies = root["bodies"] = json::array();
+  for (const Body& b : m.bodies) bodies.push_back(body_json(b));
+  json& joints = root["joints"] = json::array();
+  for (const Joint& j : m.joints) joints.push_back(joint_json(m, j));
+  if (!m.loads.empty()) {
+    json& loads = root["loads"] = json::array();
+    for (const Load& l : m.loads) {
+      json j = {{"body", m.bodies[static_cast<std::size_t>(l.body)].name}, {"force", l.force}, {"torque", l.torque}};
+      if (!zero(l.point)) j["point"] = l.point;
+      if (l.body_frame) j["frame"] = "body";
+      j["function"] = function_json(l.function);
+      loads.push_back(j);
+    }
+  }
+  if (!m.drivers.empty()) {
+    json& drivers = root["drivers"] = json::array();
+    for (const Driver& d : m.drivers) {
+      json motion = json::object();
+      if (!zero(d.velocity)) motion["velocity"] = d.velocity;
+      static const char* axes[3] = {"x", "y", "z"};
+      for (std::size_t a = 0; a < 3; ++a)
+        if (!is_zero_constant(d.displacement[a])) motion[axes[a]] = function_json(d.displacement[a]);
+      drivers.push_back({{"body", m.bodies[static_cast<std::size_t>(d.body)].name}, {"motion", motion}});
+    }
+  }
+  const SimulationSettings& s = m.simulation;
+  json sim = {{"t_start", s.t_start}, {"t_end", s.t_end}, {"method", method_name(s.method)},
+              {"output_every", s.output_every}, {"rtol", s.rtol}, {"atol", s.atol}};
+  if (s.step) sim["step"] = *s.step;
+  root["simulation"] = sim;
+  // One body or joint per line: readable, and error line numbers stay meaningful.
+  std::string out = "{\n";
+  bool first = true;
+  for (auto it = root.begin(); it != root.end(); ++it) {
+    out += first ? "  " : ",\n  ";
+    first = false;
+    out += json(it.key()).dump() + ": ";
+    if (it->is_array() && !it->empty() && it->front().is_object()) {
+      out += "[\n";
+      for (std::size_t i = 0; i < it->size(); ++i) out += "    " + (*it)[i].dump() + (i + 1 < it->size() ? ",\n" : "\n");
+      out += "  ]";
+    } else {
+      out += it->dump();
+    }
+  }
+  return out + "\n}\n";
+}
+
+void write_model_file(const Model& model, const std::string& path) {
+  std::ofstream out(path, std::ios::binary);
+  if (!out) throw InputError(path + ": cannot write the model file");
+  out << model_to_json(model);
+  if (!out) throw InputError(path + ": error while writing the model file");
+}
+
+}  // namespace mbsflow

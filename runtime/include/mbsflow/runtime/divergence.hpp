@@ -1,0 +1,24 @@
+#pragma once
+// Detects a state that has become non-finite or has blown up.
+#include <optional>
+#include <string>
+
+#include "mbsflow/graph/multibody_system.hpp"
+
+namespace mbsflow {
+
+struct Divergence {
+  int body = -1;
+  std::string what;  // e.g. "state is not finite", "speed 3.1e+09 m/s"
+};
+
+// Speeds beyond these are taken as a blow-up: no machine part moves that fast.
+inline constexpr double divergence_speed = 1e6;          // m/s
+inline constexpr double divergence_angular_speed = 1e7;  // rad/s
+
+std::optional<Divergence> find_divergence(const StateLayout& layout, const Eigen::VectorXd& y);
+
+// The message of a diverged run: time, body, and a step that would work.
+std::string divergence_message(const Model& model, const Divergence& d, double t, Method method, double step);
+
+}  // namespace mbsflow

@@ -1,0 +1,140 @@
+#include "mbsflow/runtime/simulation.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+
+#include "mbsflow/graph/error.hpp"
+#include "mbsflow/graph/stable_step.hpp"
+#include "mbsflow/methods/dopri5.hpp"
+#include "mbsflow/methods/rk4.hpp"
+#include "mbsflow/runtime/divergence.hpp"
+
+namespace mbsflow {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+void check(const MultibodySystem& sys, const Eigen::VectorXd& y, double t, const RunOptions& o) {
+  if (auto d = find_divergence(sys.layout(), y)) throw RunError(divergence_message(sys.model(), *d, t, o.method, o.step));
+}
+
+// Number of steps of size h that cover [t0, t1]; the last one may be shorter.
+long step_count(double t0, double t1, double h) {
+  const double x = (t1 - t0) / h;
+  const double r = std::round(x);
+  return std::abs(x - r) <= 1e-9 * std::max(1.0, x) ? static_cast<long>(r) : static_cast<long>(std::ceil(x));
+}
+
+void run_rk4(MultibodySystem& sys, const RunOptions& o, ResultSink* sink, RunSummary& out, Eigen::VectorXd& y) {
+  Rk4 rk(sys.dimension());
+  const long n = step_count(o.t_start, o.t_end, o.step);
+  double t = o.t_start;
+  for (long k = 1; k <= n; ++k) {
+    const double t_next = k == n ? o.t_end : o.t_start + static_cast<double>(k) * o.step;
+    rk.step(sys, t, t_next - t, y);
+    sys.after_step(t_next, y);
+    t = t_next;
+    check(sys, y, t, o);
+    if (sink && (k % o.output_every == 0 || k == n)) {
+      sink->write(t, y);
+      ++out.snapshots;
+    }
+    if (o.progress && (k & 63) == 0) o.progress(t);
+  }
+  out.steps = n;
+  out.evaluations = n * Rk4::evaluations_per_step;
+}
+
+void run_dopri5(MultibodySystem& sys, const RunOptions& o, ResultSink* sink, RunSummary& out, Eigen::VectorXd& y) {
+  Dopri5Settings s;
+  s.rtol = o.rtol;
+  s.atol = o.atol;
+  Dopri5 dp(sys.dimension(), s);
+  const double dt_out = o.step * o.output_every;
+  long next_out = 1;
+  double t = o.t_start, h = o.step;
+  Eigen::VectorXd dense(sys.dimension());
+  while (t < o.t_end) {
+    h = std::min(h, o.t_end - t);
+    double taken = 0.0;
+    if (!dp.step(sys, t, h, y, taken)) {
+      char buf[256];
+      std::snprintf(buf, sizeof buf,
+                    "DOPRI5 step size fell to %.3g s at t = %.6g s: the model is too stiff for an explicit method "
+                    "at rtol %.3g; loosen --rtol or check the model",
+                    h, t, o.rtol);
+      throw RunError(buf);
+    }
+    const double t_new = (o.t_end - (t + taken)) <= 1e-12 * std::max(1.0, std::abs(o.t_end)) ? o.t_end : t + taken;
+    // Snapshots on the uniform output grid inside this step, from the dense output.
+    while (sink) {
+      const double t_out = o.t_start + static_cast<double>(next_out) * dt_out;
+      if (t_out > t_new || t_out >= o.t_end) break;
+      dp.dense(t_out, dense);
+      sys.after_step(t_out, dense);
+      sink->write(t_out, dense);
+      ++out.snapshots;
+      ++next_out;
+    }
+    sys.after_step(t_new, y);
+    dp.invalidate();
+    t = t_new;
+    check(sys, y, t, o);
+    if (o.progress && (dp.stats().accepted & 15) == 0) o.progress(t);
+  }
+  if (sink) {
+    sink->write(t, y);
+    ++out.snapshots;
+  }
+  out.steps = dp.stats().accepted;
+  out.rejected = dp.stats().rejected;
+  out.evaluations = dp.stats().evaluations;
+}
+
+}  // namespace
+
+RunOptions options_from_model(const Model& model) {
+  RunOptions o;
+  const SimulationSettings& s = model.simulation;
+  o.method = s.method;
+  o.t_start = s.t_start;
+  o.t_end = s.t_end;
+  o.step = s.step ? *s.step : estimate_stable_step(model).step;
+  o.output_every = s.output_every;
+  o.rtol = s.rtol;
+  o.atol = s.atol;
+  return o;
+}
+
+RunSummary run_simulation(MultibodySystem& sys, const RunOptions& o, ResultSink* sink) {
+  if (!(o.t_end > o.t_start)) throw InputError("t_end must be greater than t_start");
+  if (!(o.step > 0.0) || !std::isfinite(o.step)) throw InputError("the step must be a positive finite number");
+  if (o.output_every < 1) throw InputError("output_every must be >= 1");
+  RunSummary out;
+  const auto start = Clock::now();
+  Eigen::VectorXd y = sys.initial_state();
+  if (sink) {
+    sink->begin(sys);
+    sink->write(o.t_start, y);
+    ++out.snapshots;
+  }
+  struct EndSink {  // the sink is closed on every way out, so what was written stays readable
+    ResultSink* s;
+    ~EndSink() {
+      try {
+        if (s) s->end();
+      } catch (...) {  // an error on close must not replace the error that ended the run
+      }
+    }
+  } guard{sink};
+  if (o.method == Method::rk4)
+    run_rk4(sys, o, sink, out, y);
+  else
+    run_dopri5(sys, o, sink, out, y);
+  out.wall_seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  out.final_state = std::move(y);
+  return out;
+}
+
+}  // namespace mbsflow
