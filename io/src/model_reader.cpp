@@ -2,6 +2,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -296,9 +297,27 @@ std::string syntax_error(const nlohmann::json::parse_error& e, const std::string
   const std::string what = e.what();
   std::smatch m;
   static const std::regex re(R"(at line (\d+), column (\d+): (.*))");
-  if (std::regex_search(what, m, re))
-    return format_input_error(name, {std::stoi(m[1]), std::stoi(m[2])}, "", "invalid JSON: " + m[3].str());
-  return format_input_error(name, {}, "", "invalid JSON: " + what);
+  if (!std::regex_search(what, m, re)) return format_input_error(name, {}, "", "invalid JSON: " + what);
+  std::string detail = m[3].str();
+  if (detail.find("invalid literal") != std::string::npos) detail += " (NaN and Infinity are not JSON numbers)";
+  return format_input_error(name, {std::stoi(m[1]), std::stoi(m[2])}, "", "invalid JSON: " + detail);
+}
+
+// A number too large for a double ("1e999"): nlohmann names the literal but not its place.
+std::string overflow_error(const std::string& text, const std::string& name) {
+  static const std::regex literal(R"([-+]?[0-9.]+[eE][-+]?[0-9]{3,})");
+  std::smatch m;
+  SourceLocation at;
+  std::string number;
+  if (std::regex_search(text, m, literal)) {
+    number = m.str();
+    const auto offset = static_cast<std::size_t>(m.position());
+    at.line = 1 + static_cast<int>(std::count(text.begin(), text.begin() + static_cast<long>(offset), '\n'));
+    const std::size_t line_start = text.rfind('\n', offset);
+    at.column = static_cast<int>(offset - (line_start == std::string::npos ? 0 : line_start + 1)) + 1;
+  }
+  return format_input_error(name, at, "", "number out of range" + (number.empty() ? "" : " (" + number + ")") +
+                                              ": must be a finite number");
 }
 
 }  // namespace
@@ -309,6 +328,8 @@ Model read_model_text(const std::string& text, const std::string& name) {
     j = nlohmann::json::parse(text);
   } catch (const nlohmann::json::parse_error& e) {
     throw InputError(syntax_error(e, name));
+  } catch (const nlohmann::json::out_of_range&) {
+    throw InputError(overflow_error(text, name));
   }
   JsonSource src{name, JsonLocations(text)};
   const JsonNode root(j, "", src);

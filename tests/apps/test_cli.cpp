@@ -1,0 +1,127 @@
+// End-to-end tests of the mbsflow command line: exit codes and messages.
+#include <sys/wait.h>
+
+#include <algorithm>
+#include <array>
+#include <catch2/catch.hpp>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Result {
+  int code = -1;
+  std::string err;  // stderr (stdout is dropped)
+  std::string out;  // stdout, when asked for
+};
+
+// Runs `mbsflow ARGS` in directory dir; returns the exit code and stderr.
+Result run(const std::string& args, const std::string& dir = ".", bool want_stdout = false) {
+  const std::string tmp = (fs::temp_directory_path() / ("mbsflow_cli_" + std::to_string(::getpid()) + ".out")).string();
+  const std::string cmd = "cd '" + dir + "' && '" + MBSFLOW_EXE + "' " + args + " 2>&1 >'" + tmp + "'";
+  Result r;
+  FILE* p = ::popen(cmd.c_str(), "r");
+  REQUIRE(p != nullptr);
+  std::array<char, 4096> buf{};
+  std::size_t n;
+  while ((n = std::fread(buf.data(), 1, buf.size(), p)) > 0) r.err.append(buf.data(), n);
+  const int status = ::pclose(p);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  if (want_stdout) {
+    std::ifstream in(tmp);
+    std::stringstream s;
+    s << in.rdbuf();
+    r.out = s.str();
+  }
+  fs::remove(tmp);
+  return r;
+}
+
+std::string read_text(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+std::string trim(std::string s) {
+  while (!s.empty() && (s.back() == '\n' || s.back() == '\r')) s.pop_back();
+  return s;
+}
+
+fs::path scratch(const char* name) {
+  const fs::path d = fs::temp_directory_path() / ("mbsflow_test_" + std::to_string(::getpid())) / name;
+  fs::create_directories(d);
+  return d;
+}
+
+}  // namespace
+
+TEST_CASE("every bad model file gives its exact message and exit code 2", "[apps]") {
+  std::vector<fs::path> files;
+  for (const auto& e : fs::directory_iterator(MBSFLOW_BAD_MODELS))
+    if (e.path().extension() == ".json") files.push_back(e.path());
+  std::sort(files.begin(), files.end());
+  REQUIRE(files.size() >= 20);
+  for (const fs::path& f : files) {
+    fs::path expected = f;
+    expected.replace_extension(".expected");
+    REQUIRE(fs::exists(expected));
+    const Result r = run("run " + f.filename().string(), MBSFLOW_BAD_MODELS);
+    INFO(f.filename().string());
+    CHECK(r.code == 2);
+    CHECK(trim(r.err) == trim(read_text(expected)));
+  }
+}
+
+TEST_CASE("usage errors exit with 2, help with 0", "[apps]") {
+  CHECK(run("--help").code == 0);
+  CHECK(run("").code == 2);
+  CHECK(run("frobnicate").code == 2);
+  CHECK(run("run").code == 2);
+  CHECK(run("run model.json --method euler").code == 2);
+  CHECK(run("run model.json --step -1").code == 2);
+  const Result missing = run("run does-not-exist.json");
+  CHECK(missing.code == 2);
+  CHECK(trim(missing.err) == "does-not-exist.json: cannot open the model file");
+  CHECK(run("generate chain --bodies 0").code == 2);
+  CHECK(run("generate cube").code == 2);
+}
+
+TEST_CASE("generated chain, grid and train models run to the end", "[apps]") {
+  const fs::path d = scratch("generate");
+  const std::string dir = d.string();
+  REQUIRE(run("generate chain --bodies 30 -o chain.json", dir).code == 0);
+  REQUIRE(run("generate grid --rows 4 --cols 5 -o grid.json", dir).code == 0);
+  REQUIRE(run("generate train --wagons 2 -o train.json", dir).code == 0);
+  const Result chain = run("run chain.json --t-end 0.2", dir, true);
+  CHECK(chain.code == 0);
+  CHECK(chain.err.find("no step given; using the RK4 stability estimate") != std::string::npos);
+  CHECK(chain.out.find("model chain-30: 30 bodies, 30 joints") != std::string::npos);
+  CHECK(run("run grid.json --t-end 0.1 --method dopri5 --rtol 1e-5 --quiet", dir).code == 0);
+  const Result train = run("run train.json --t-end 0.5 --output train.csv", dir);
+  CHECK(train.code == 0);
+  CHECK(train.err.find("results in train.csv") != std::string::npos);
+  const std::string csv = read_text(d / "train.csv");
+  CHECK(csv.rfind("t,body,x,y,z,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz\n", 0) == 0);
+  fs::remove_all(d.parent_path());
+}
+
+TEST_CASE("a run that diverges exits with 1 and names time, body and a step that works", "[apps]") {
+  const fs::path d = scratch("diverge");
+  const std::string dir = d.string();
+  REQUIRE(run("generate chain --bodies 10 --step 0.01 -o chain.json", dir).code == 0);
+  const Result r = run("run chain.json --t-end 1", dir);
+  INFO(r.err);
+  CHECK(r.code == 1);
+  CHECK(r.err.find("warning: step 0.01 s is above the estimated RK4 stability limit") != std::string::npos);
+  CHECK(r.err.find("mbsflow: run diverged at t = ") != std::string::npos);
+  CHECK(r.err.find("body 'link") != std::string::npos);
+  CHECK(r.err.find("try --step ") != std::string::npos);
+  fs::remove_all(d.parent_path());
+}
