@@ -41,7 +41,7 @@ struct MultibodySystem::Deflection {
   Eigen::Matrix3d frame;     // world orientation of the joint frame on body1
   Eigen::Vector3d pb;        // world attachment point on body2
   Eigen::Vector3d d, d_rate;  // translational deflection and its rate, joint frame
-  Eigen::Vector3d theta;     // rotation vector of the relative orientation, joint frame
+  RotationLog rotation;      // of the relative orientation, joint frame
   Eigen::Vector3d omega_rel;  // relative angular velocity, joint frame
 };
 
@@ -50,6 +50,7 @@ MultibodySystem::MultibodySystem(const Model& model) : model_(model) {
   layout_.bodies = n;
   gravity_ = vec(model.gravity);
   for (const Body& b : model.bodies) {
+    mass_.push_back(b.mass);
     inv_mass_.push_back(1.0 / b.mass);
     inertia_.push_back(inertia_matrix(b.inertia));
     inv_inertia_.push_back(inertia_.back().inverse());
@@ -66,6 +67,7 @@ MultibodySystem::MultibodySystem(const Model& model) : model_(model) {
     c.qfa = quat(j.frame1).normalized();
     c.qfb = quat(j.frame2).normalized();
     c.frame1_identity = j.frame1 == Quat{1.0, 0.0, 0.0, 0.0};
+    c.frame2_identity = j.frame2 == Quat{1.0, 0.0, 0.0, 0.0};
     c.rfa = rotation_matrix(c.qfa);
     c.kt = {j.stiffness[0], j.stiffness[1], j.stiffness[2]};
     c.kr = {j.stiffness[3], j.stiffness[4], j.stiffness[5]};
@@ -157,8 +159,8 @@ MultibodySystem::Deflection MultibodySystem::bushing_deflection(const CompiledJo
   r.d_rate = r.frame.transpose() * dv;
   Eigen::Vector4d qa = quat_.col(j.a), qb = quat_.col(j.b);
   if (!j.frame1_identity) qa = quat_multiply(qa, j.qfa);
-  qb = quat_multiply(qb, j.qfb);
-  r.theta = rotation_vector(quat_multiply(quat_conjugate(qa), qb));
+  if (!j.frame2_identity) qb = quat_multiply(qb, j.qfb);
+  r.rotation = rotation_log(quat_multiply(quat_conjugate(qa), qb));
   r.omega_rel = r.frame.transpose() * (wb - wa);
   return r;
 }
@@ -199,7 +201,8 @@ void MultibodySystem::compute_joint_forces() {
     const Deflection def = bushing_deflection(j);
     const Eigen::Vector3d f = axis_forces(j, def.d, 0) + j.ct.cwiseProduct(def.d_rate) - j.preload_force;
     const Eigen::Vector3d force = -(def.frame * f);  // on body2 at pb; on body1 (opposite) also at pb
-    const Eigen::Vector3d g = rotation_gradient_to_torque(def.theta, axis_forces(j, def.theta, 3) - j.preload_torque) +
+    const Eigen::Vector3d& theta = def.rotation.theta;
+    const Eigen::Vector3d g = rotation_gradient_to_torque(def.rotation, axis_forces(j, theta, 3) - j.preload_torque) +
                               j.cr.cwiseProduct(def.omega_rel);
     const Eigen::Vector3d couple = def.frame * g;  // on body1; body2 gets -couple
     out.segment<3>(0) = force;
@@ -213,7 +216,7 @@ void MultibodySystem::compute_derivatives(double t, const Eigen::VectorXd& y, Ei
   for (Eigen::Index i = 0; i < n; ++i) {
     const auto bi = static_cast<std::size_t>(i);
     const Eigen::Matrix3d& r = rot_[bi];
-    Eigen::Vector3d force = model_.bodies[bi].mass * gravity_;
+    Eigen::Vector3d force = mass_[bi] * gravity_;
     Eigen::Vector3d torque = Eigen::Vector3d::Zero();  // world frame, about the centre of mass
     for (int p = load_start_[bi]; p < load_start_[bi + 1]; ++p) {
       const Load& l = model_.loads[static_cast<std::size_t>(load_index_[static_cast<std::size_t>(p)])];
@@ -287,9 +290,10 @@ double MultibodySystem::elastic_energy(const CompiledJoint& j) const {
     return 0.5 * j.kt[0] * e * e;
   }
   const Deflection def = bushing_deflection(j);
-  double e = -j.preload_force.dot(def.d) - j.preload_torque.dot(def.theta);
+  const Eigen::Vector3d& theta = def.rotation.theta;
+  double e = -j.preload_force.dot(def.d) - j.preload_torque.dot(theta);
   for (int axis = 0; axis < 6; ++axis) {
-    const double x = axis < 3 ? def.d[axis] : def.theta[axis - 3];
+    const double x = axis < 3 ? def.d[axis] : theta[axis - 3];
     const double k = axis < 3 ? j.kt[axis] : j.kr[axis - 3];
     const ForceTable* table = j.tables >= 0 ? &tables_[static_cast<std::size_t>(j.tables)][static_cast<std::size_t>(axis)] : nullptr;
     e += (table && !table->empty()) ? table_energy(*table, x) : 0.5 * k * x * x;

@@ -46,7 +46,7 @@ class MultibodySystem {
   struct CompiledJoint {
     int a = 0, b = 0;  // kinematics indices; ground is index n
     bool spring = false;
-    bool frame1_identity = true;
+    bool frame1_identity = true, frame2_identity = true;  // skip the frame products
     int tables = -1;   // index into tables_, -1: linear
     Eigen::Vector3d pa, pb;
     Eigen::Vector4d qfa, qfb;  // joint frame relative to each body
@@ -62,7 +62,7 @@ class MultibodySystem {
   Model model_;
   StateLayout layout_;
   Eigen::Vector3d gravity_;
-  std::vector<double> inv_mass_;
+  std::vector<double> mass_, inv_mass_;
   std::vector<Eigen::Matrix3d> inertia_, inv_inertia_;
   std::vector<CompiledJoint> joints_;
   std::vector<std::array<ForceTable, 6>> tables_;

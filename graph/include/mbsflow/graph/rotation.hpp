@@ -31,30 +31,46 @@ inline Eigen::Vector4d quat_multiply(const Eigen::Vector4d& a, const Eigen::Vect
 
 inline Eigen::Vector4d quat_conjugate(const Eigen::Vector4d& q) { return {q[0], -q[1], -q[2], -q[3]}; }
 
-// Rotation vector (axis * angle, angle in [0, pi]) of the rotation q: the logarithm map.
-inline Eigen::Vector3d rotation_vector(const Eigen::Vector4d& q) {
+// Logarithm of a rotation: its rotation vector theta (axis * angle, angle in [0, pi]) and
+// the coefficient c of the left Jacobian of SO(3),
+//   J_l(theta)^-T = I + [theta]/2 + c [theta]^2,  c = 1/angle^2 - cot(angle/2) / (2 angle),
+// with cot(angle/2) = w/|v| read off the quaternion, so no sine or cosine is evaluated.
+struct RotationLog {
+  Eigen::Vector3d theta;
+  double c;
+};
+
+inline RotationLog rotation_log(const Eigen::Vector4d& q) {
   const double sign = q[0] < 0.0 ? -1.0 : 1.0;  // shortest rotation
   const double w = sign * q[0];
   const Eigen::Vector3d v = sign * q.tail<3>();
   const double s = v.norm();
-  if (s < 1e-7 * w) return (2.0 / w) * v;  // angle/s = 2/w (1 - (s/w)^2/3 + ...)
-  return (2.0 * std::atan2(s, w) / s) * v;
+  RotationLog r;
+  double a2;
+  if (s < 1e-7 * w) {  // angle/s = 2/w (1 - (s/w)^2/3 + ...)
+    r.theta = (2.0 / w) * v;
+    a2 = r.theta.squaredNorm();
+  } else {
+    const double angle = 2.0 * std::atan2(s, w);
+    r.theta = (angle / s) * v;
+    a2 = angle * angle;
+    if (a2 >= 1e-2) {
+      r.c = 1.0 / a2 - w / (2.0 * angle * s);
+      return r;
+    }
+  }
+  r.c = 1.0 / 12.0 + a2 * (1.0 / 720.0 + a2 * (1.0 / 30240.0 + a2 / 1209600.0));  // series, error < 1e-16
+  return r;
 }
 
-// J_l(theta)^-T tau, with J_l the left Jacobian of SO(3): maps the gradient of an
-// energy in rotation-vector coordinates to the torque that this energy exerts,
-// so that a bushing's rotational spring is exactly conservative at any angle < pi.
-inline Eigen::Vector3d rotation_gradient_to_torque(const Eigen::Vector3d& theta, const Eigen::Vector3d& tau) {
-  const double a2 = theta.squaredNorm();
-  double c;
-  if (a2 < 1e-4) {
-    c = 1.0 / 12.0 + a2 * (1.0 / 720.0 + a2 / 30240.0);
-  } else {
-    const double a = std::sqrt(a2);
-    c = 1.0 / a2 - (1.0 + std::cos(a)) / (2.0 * a * std::sin(a));
-  }
-  const Eigen::Vector3d txt = theta.cross(tau);
-  return tau + 0.5 * txt + c * theta.cross(txt);
+inline Eigen::Vector3d rotation_vector(const Eigen::Vector4d& q) { return rotation_log(q).theta; }
+
+// J_l(theta)^-T tau: maps the gradient of an energy in rotation-vector coordinates to the
+// torque this energy exerts, so that a bushing's rotational spring is exactly
+// conservative at any angle below pi.
+inline Eigen::Vector3d rotation_gradient_to_torque(const RotationLog& r, const Eigen::Vector3d& tau) {
+  const Eigen::Vector3d txt = r.theta.cross(tau);
+  return tau + 0.5 * txt + r.c * r.theta.cross(txt);
 }
 
 }  // namespace mbsflow
