@@ -38,7 +38,9 @@ double choose_step(const Model& m, const RunArgs& a, bool quiet) {
     return *given;
   }
   if (!std::isfinite(s.step)) throw InputError(a.model + ": no joints to estimate a step from; give --step");
-  if (!quiet) std::fprintf(stderr, "mbsflow: no step given; using the RK4 stability estimate %s\n", s.describe(m).c_str());
+  if (!quiet)
+    std::fprintf(stderr, "mbsflow: no step given; using the RK4 stability estimate %s%s\n", s.describe(m).c_str(),
+                 m.simulation.method == Method::dopri5 ? " as DOPRI5's first step and output-grid unit" : "");
   return s.step;
 }
 
