@@ -1,15 +1,21 @@
 // mbsflow run MODEL.json: one simulation on this process.
+#include <cmath>
+#include <csignal>
 #include <cstdio>
-#include <iostream>
+#include <filesystem>
 #include <memory>
 #include <optional>
 
 #include "commands.hpp"
 #include "mbsflow/graph/error.hpp"
 #include "mbsflow/graph/stable_step.hpp"
-#include "mbsflow/io/csv_sink.hpp"
+#include "mbsflow/io/hdf5_sink.hpp"
 #include "mbsflow/io/model_reader.hpp"
+#include "mbsflow/io/model_writer.hpp"
+#include "mbsflow/runtime/async_sink.hpp"
 #include "mbsflow/runtime/simulation.hpp"
+#include "progress.hpp"
+#include "signals.hpp"
 
 namespace mbsflow::cli {
 namespace {
@@ -20,11 +26,20 @@ struct RunArgs {
   std::string method;
   std::optional<int> every;
   std::string output;
+  std::string fields = "position,orientation,velocity,angular_velocity,energy";
   bool quiet = false;
 };
 
-bool ends_with(const std::string& s, const std::string& suffix) {
-  return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+std::string human_bytes(double b) {
+  const char* unit[] = {"B", "KiB", "MiB", "GiB", "TiB"};
+  int u = 0;
+  while (b >= 1024.0 && u < 4) {
+    b /= 1024.0;
+    ++u;
+  }
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g %s", b, unit[u]);
+  return buf;
 }
 
 // Chooses the step: the given one (warning above the RK4 stability estimate) or the estimate.
@@ -74,18 +89,38 @@ int run(const RunArgs& a) {
   if (a.atol) m.simulation.atol = *a.atol;
   RunOptions o = options_from_model(m);
   o.step = choose_step(m, a, a.quiet);
-  std::unique_ptr<ResultSink> sink;
+  std::unique_ptr<AsyncSink> sink;
   if (!a.output.empty()) {
-    if (!ends_with(a.output, ".csv")) throw InputError("--output: only .csv results are written so far (got " + a.output + ")");
-    sink = std::make_unique<CsvSink>(a.output);
+    const FieldSet fields = parse_fields(a.fields);
+    RunInfo info{model_to_json(m), method_name(o.method), o.step, o.t_start, o.t_end, o.output_every, invocation()};
+    sink = std::make_unique<AsyncSink>(std::make_unique<Hdf5Sink>(a.output, fields, std::move(info)));
   }
   MultibodySystem sys(m);
-  const RunSummary r = run_simulation(sys, o, sink.get());
+  ProgressLine progress(o.t_start, o.t_end, !a.quiet);
+  o.progress = [&](double t, long steps) { progress.update(t, steps); };
+  o.stop = install_stop_handlers();
+  RunSummary r;
+  try {
+    r = run_simulation(sys, o, sink.get());
+  } catch (const RunError& e) {
+    progress.finish();
+    const int sig = stop_signal();
+    throw RunError(std::string(e.what()) + (sig == SIGTERM ? " (SIGTERM)" : sig == SIGINT ? " (SIGINT)" : "") +
+                   (sink ? " in " + a.output : ""));
+  }
+  progress.finish();
   if (!a.quiet && !sink) print_summary(m, sys, o, r);
   const double body_steps = static_cast<double>(r.steps) * static_cast<double>(m.bodies.size());
-  std::fprintf(stderr, "mbsflow: done: %ld steps (%ld rejected), %ld evaluations, %.3f s wall, %.3g body-steps/s%s%s\n",
+  std::string output;
+  if (sink) {
+    const double bytes = static_cast<double>(std::filesystem::file_size(a.output));
+    output = ", " + std::to_string(r.snapshots) + " snapshots, " + human_bytes(bytes) + " in " + a.output;
+    if (sink->stats().waits > 0)
+      output += " (the writer held the run back " + std::to_string(sink->stats().waits) + " times)";
+  }
+  std::fprintf(stderr, "mbsflow: done: %ld steps (%ld rejected), %ld evaluations, %.3f s wall, %.3g body-steps/s%s\n",
                r.steps, r.rejected, r.evaluations, r.wall_seconds, body_steps / std::max(r.wall_seconds, 1e-9),
-               sink ? ", results in " : "", sink ? a.output.c_str() : "");
+               output.c_str());
   return 0;
 }
 
@@ -103,7 +138,11 @@ Action add_run(CLI::App& app) {
       ->check(CLI::Range(1, 1 << 30));
   sub->add_option("--rtol", a->rtol, "DOPRI5 relative tolerance")->check(CLI::PositiveNumber);
   sub->add_option("--atol", a->atol, "DOPRI5 absolute tolerance")->check(CLI::PositiveNumber);
-  sub->add_option("-o,--output", a->output, "Results file (.csv); without it a final-state summary is printed");
+  sub->add_option("-o,--output", a->output,
+                  "Results file (HDF5, with an XDMF sidecar for ParaView); without it a final-state summary is printed");
+  sub->add_option("--fields", a->fields,
+                  "What to write: position, orientation, velocity, angular_velocity, energy, joint_force, or all")
+      ->capture_default_str();
   sub->add_flag("-q,--quiet", a->quiet, "Print only warnings, errors and the closing line");
   return [a] { return run(*a); };
 }

@@ -2,6 +2,7 @@
 // Each subcommand registers its options and returns what to do once parsing is done.
 #include <CLI/CLI.hpp>
 #include <functional>
+#include <string>
 
 namespace mbsflow::cli {
 
@@ -10,5 +11,11 @@ using Action = std::function<int()>;  // returns the exit code
 Action add_run(CLI::App& app);
 Action add_generate(CLI::App& app);
 Action add_bench(CLI::App& app);
+Action add_info(CLI::App& app);
+Action add_export(CLI::App& app);
+
+// The command line as typed, for the results file.
+const std::string& invocation();
+void set_invocation(int argc, char** argv);
 
 }  // namespace mbsflow::cli

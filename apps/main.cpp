@@ -4,6 +4,7 @@
 
 #include "commands.hpp"
 #include "mbsflow/graph/error.hpp"
+#include "mbsflow/version.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{"mbsflow: multibody dynamics and large ODE systems, in parallel"};
@@ -17,7 +18,10 @@ int main(int argc, char** argv) {
   };
   add(mbsflow::cli::add_run);
   add(mbsflow::cli::add_generate);
+  add(mbsflow::cli::add_info);
+  add(mbsflow::cli::add_export);
   add(mbsflow::cli::add_bench);
+  mbsflow::cli::set_invocation(argc, argv);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -38,3 +42,14 @@ int main(int argc, char** argv) {
   }
   return 2;
 }
+
+namespace mbsflow::cli {
+namespace {
+std::string command_line;
+}
+const std::string& invocation() { return command_line; }
+void set_invocation(int argc, char** argv) {
+  command_line.clear();
+  for (int i = 0; i < argc; ++i) command_line += (i ? " " : "") + std::string(argv[i]);
+}
+}  // namespace mbsflow::cli

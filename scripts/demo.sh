@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Installs what is missing, builds in Release and runs the default example simulation.
+# Installs what is missing, builds in Release, runs the default example simulation
+# and plots it.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/install-deps.sh
@@ -10,7 +11,10 @@ exe=build/release/apps/mbsflow
 out=results/demo
 mkdir -p "$out"
 "$exe" generate chain --bodies 200 -o "$out/chain.json"
-"$exe" run "$out/chain.json" --t-end 2 --output "$out/chain.csv"
+"$exe" run "$out/chain.json" --t-end 2 --output "$out/chain.h5"
+"$exe" info "$out/chain.h5"
+/usr/bin/python3 scripts/plot.py "$out/chain.h5" -o "$out/chain.png" >/dev/null
 echo
-echo "demo: model   $out/chain.json"
-echo "demo: results $out/chain.csv (one row per body per output instant)"
+echo "demo: model    $out/chain.json"
+echo "demo: results  $out/chain.h5 (open $out/chain.xdmf in ParaView; mbsflow export $out/chain.h5 --csv DIR for CSV)"
+echo "demo: plot     $out/chain.png"

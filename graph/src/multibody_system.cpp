@@ -91,6 +91,7 @@ MultibodySystem::MultibodySystem(const Model& model) : model_(model) {
   build_csr(n, static_cast<int>(model.loads.size()), [&](int k, auto& out) {
     out.emplace_back(model.loads[static_cast<std::size_t>(k)].body, k);
   }, load_start_, load_index_);
+  element_start_.assign(static_cast<std::size_t>(n) + 1, 0);
   driver_of_body_.assign(static_cast<std::size_t>(n), -1);
   for (std::size_t k = 0; k < model.drivers.size(); ++k)
     driver_of_body_[static_cast<std::size_t>(model.drivers[k].body)] = static_cast<int>(k);
@@ -209,6 +210,47 @@ void MultibodySystem::compute_joint_forces() {
     out.segment<3>(3) = (def.pb - pos_.col(j.a)).cross(-force) + couple;
     out.segment<3>(6) = (def.pb - pos_.col(j.b)).cross(force) - couple;
   }
+  if (elements_.empty()) return;
+  const Kinematics k = kinematics();
+  for (std::size_t e = 0; e < elements_.size(); ++e) {
+    const std::size_t first = element_first_[e], count = element_first_[e + 1] - first;
+    elements_[e]->evaluate(time_, k, std::span<Wrench>(element_out_.data() + first, count));
+  }
+}
+
+void MultibodySystem::add_force_element(std::shared_ptr<const ForceElement> element) {
+  const std::vector<int> bodies = element->bodies();
+  for (int b : bodies)
+    if (b < 0 || b >= layout_.bodies) throw InputError("force element: body index " + std::to_string(b) + " out of range");
+  if (element_first_.empty()) element_first_.push_back(0);
+  const std::size_t first = element_out_.size();
+  element_out_.resize(first + bodies.size());
+  element_first_.push_back(element_out_.size());
+  elements_.push_back(std::move(element));
+  // Rebuild the per-body slot lists, in element order.
+  const int n = static_cast<int>(layout_.bodies);
+  std::vector<int> body_of_slot(element_out_.size());
+  for (std::size_t e = 0; e < elements_.size(); ++e) {
+    const std::vector<int> b = elements_[e]->bodies();
+    for (std::size_t i = 0; i < b.size(); ++i) body_of_slot[element_first_[e] + i] = b[i];
+  }
+  build_csr(n, static_cast<int>(body_of_slot.size()), [&](int slot, auto& out) {
+    out.emplace_back(body_of_slot[static_cast<std::size_t>(slot)], slot);
+  }, element_start_, element_slot_);
+}
+
+void MultibodySystem::joint_wrenches(double t, const Eigen::VectorXd& y, Eigen::VectorXd& out) {
+  update_kinematics(t, y);
+  compute_joint_forces();
+  out.resize(6 * static_cast<Eigen::Index>(joints_.size()));
+  for (std::size_t k = 0; k < joints_.size(); ++k) {
+    const CompiledJoint& j = joints_[k];
+    const auto col = joint_out_.col(static_cast<Eigen::Index>(k));
+    const Eigen::Vector3d force = col.segment<3>(0);
+    const Eigen::Vector3d arm = rot_[static_cast<std::size_t>(j.b)] * j.pb;  // centre of body2 to its point
+    out.segment<3>(6 * static_cast<Eigen::Index>(k)) = force;
+    out.segment<3>(6 * static_cast<Eigen::Index>(k) + 3) = col.segment<3>(6) - arm.cross(force);
+  }
 }
 
 void MultibodySystem::compute_derivatives(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const {
@@ -239,6 +281,11 @@ void MultibodySystem::compute_derivatives(double t, const Eigen::VectorXd& y, Ei
         force -= col.segment<3>(0);
         torque += col.segment<3>(3);
       }
+    }
+    for (int p = element_start_[bi]; p < element_start_[bi + 1]; ++p) {
+      const Wrench& w = element_out_[static_cast<std::size_t>(element_slot_[static_cast<std::size_t>(p)])];
+      force += w.force;
+      torque += w.torque;
     }
     const int drv = driver_of_body_[bi];
     if (drv >= 0) {
@@ -312,6 +359,8 @@ Energy MultibodySystem::energy(double t, const Eigen::VectorXd& y) {
     e.gravity -= m * gravity_.dot(pos_.col(i));
   }
   for (const CompiledJoint& j : joints_) e.elastic += elastic_energy(j);
+  const Kinematics k = kinematics();
+  for (const auto& element : elements_) e.elastic += element->energy(t, k);
   return e;
 }
 

@@ -17,6 +17,24 @@ using Clock = std::chrono::steady_clock;
 
 void check(const MultibodySystem& sys, const Eigen::VectorXd& y, double t, const RunOptions& o) {
   if (auto d = find_divergence(sys.layout(), y)) throw RunError(divergence_message(sys.model(), *d, t, o.method, o.step));
+  if (o.stop && o.stop->load(std::memory_order_relaxed)) {
+    char buf[96];
+    std::snprintf(buf, sizeof buf, "interrupted at t = %.6g s", t);
+    throw RunError(buf);
+  }
+}
+
+// Hands the state at t to the sink, with what the sink asked for.
+void emit(MultibodySystem& sys, ResultSink* sink, double t, const Eigen::VectorXd& y, RunSummary& out) {
+  const SnapshotContent want = sink->content();
+  Snapshot s;
+  s.t = t;
+  s.state = y;
+  if (want.joint_wrench) sys.joint_wrenches(t, y, s.joint_wrench);
+  if (want.energy) s.energy = sys.energy(t, y);
+  sink->write(std::move(s));
+  ++out.snapshots;
+  out.t_last_snapshot = t;
 }
 
 // Number of steps of size h that cover [t0, t1]; the last one may be shorter.
@@ -36,11 +54,8 @@ void run_rk4(MultibodySystem& sys, const RunOptions& o, ResultSink* sink, RunSum
     sys.after_step(t_next, y);
     t = t_next;
     check(sys, y, t, o);
-    if (sink && (k % o.output_every == 0 || k == n)) {
-      sink->write(t, y);
-      ++out.snapshots;
-    }
-    if (o.progress && (k & 63) == 0) o.progress(t);
+    if (sink && (k % o.output_every == 0 || k == n)) emit(sys, sink, t, y, out);
+    if (o.progress && (k & 15) == 0) o.progress(t, k);
   }
   out.steps = n;
   out.evaluations = n * Rk4::evaluations_per_step;
@@ -73,20 +88,16 @@ void run_dopri5(MultibodySystem& sys, const RunOptions& o, ResultSink* sink, Run
       if (t_out > t_new || t_out >= o.t_end) break;
       dp.dense(t_out, dense);
       sys.after_step(t_out, dense);
-      sink->write(t_out, dense);
-      ++out.snapshots;
+      emit(sys, sink, t_out, dense, out);
       ++next_out;
     }
     sys.after_step(t_new, y);
     dp.invalidate();
     t = t_new;
     check(sys, y, t, o);
-    if (o.progress && (dp.stats().accepted & 15) == 0) o.progress(t);
+    if (o.progress && (dp.stats().accepted & 15) == 0) o.progress(t, dp.stats().accepted);
   }
-  if (sink) {
-    sink->write(t, y);
-    ++out.snapshots;
-  }
+  if (sink) emit(sys, sink, t, y, out);
   out.steps = dp.stats().accepted;
   out.rejected = dp.stats().rejected;
   out.evaluations = dp.stats().evaluations;
@@ -114,24 +125,31 @@ RunSummary run_simulation(MultibodySystem& sys, const RunOptions& o, ResultSink*
   RunSummary out;
   const auto start = Clock::now();
   Eigen::VectorXd y = sys.initial_state();
-  if (sink) {
-    sink->begin(sys);
-    sink->write(o.t_start, y);
-    ++out.snapshots;
-  }
-  struct EndSink {  // the sink is closed on every way out, so what was written stays readable
-    ResultSink* s;
-    ~EndSink() {
-      try {
-        if (s) s->end();
-      } catch (...) {  // an error on close must not replace the error that ended the run
-      }
+  if (sink) sink->begin(sys);
+  auto close_quietly = [sink] {
+    try {
+      if (sink) sink->end();
+    } catch (...) {  // an error on close must not replace the one that ended the run
     }
-  } guard{sink};
-  if (o.method == Method::rk4)
-    run_rk4(sys, o, sink, out, y);
-  else
-    run_dopri5(sys, o, sink, out, y);
+  };
+  try {
+    if (sink) emit(sys, sink, o.t_start, y, out);
+    if (o.method == Method::rk4)
+      run_rk4(sys, o, sink, out, y);
+    else
+      run_dopri5(sys, o, sink, out, y);
+  } catch (const RunError& e) {
+    // Close the sink so that what was written stays readable, and say how far it got.
+    close_quietly();
+    if (!sink) throw;
+    char buf[128];
+    std::snprintf(buf, sizeof buf, "; results keep %ld snapshots up to t = %.6g s", out.snapshots, out.t_last_snapshot);
+    throw RunError(e.what() + std::string(buf));
+  } catch (...) {
+    close_quietly();
+    throw;
+  }
+  if (sink) sink->end();
   out.wall_seconds = std::chrono::duration<double>(Clock::now() - start).count();
   out.final_state = std::move(y);
   return out;

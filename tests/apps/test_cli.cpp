@@ -1,66 +1,11 @@
 // End-to-end tests of the mbsflow command line: exit codes and messages.
-#include <sys/wait.h>
-
 #include <algorithm>
-#include <array>
 #include <catch2/catch.hpp>
-#include <cstdio>
-#include <filesystem>
-#include <fstream>
-#include <sstream>
-#include <string>
 
-namespace fs = std::filesystem;
+#include "cli_support.hpp"
 
-namespace {
+using namespace mbsflow::test;
 
-struct Result {
-  int code = -1;
-  std::string err;  // stderr (stdout is dropped)
-  std::string out;  // stdout, when asked for
-};
-
-// Runs `mbsflow ARGS` in directory dir; returns the exit code and stderr.
-Result run(const std::string& args, const std::string& dir = ".", bool want_stdout = false) {
-  const std::string tmp = (fs::temp_directory_path() / ("mbsflow_cli_" + std::to_string(::getpid()) + ".out")).string();
-  const std::string cmd = "cd '" + dir + "' && '" + MBSFLOW_EXE + "' " + args + " 2>&1 >'" + tmp + "'";
-  Result r;
-  FILE* p = ::popen(cmd.c_str(), "r");
-  REQUIRE(p != nullptr);
-  std::array<char, 4096> buf{};
-  std::size_t n;
-  while ((n = std::fread(buf.data(), 1, buf.size(), p)) > 0) r.err.append(buf.data(), n);
-  const int status = ::pclose(p);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  if (want_stdout) {
-    std::ifstream in(tmp);
-    std::stringstream s;
-    s << in.rdbuf();
-    r.out = s.str();
-  }
-  fs::remove(tmp);
-  return r;
-}
-
-std::string read_text(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-std::string trim(std::string s) {
-  while (!s.empty() && (s.back() == '\n' || s.back() == '\r')) s.pop_back();
-  return s;
-}
-
-fs::path scratch(const char* name) {
-  const fs::path d = fs::temp_directory_path() / ("mbsflow_test_" + std::to_string(::getpid())) / name;
-  fs::create_directories(d);
-  return d;
-}
-
-}  // namespace
 
 TEST_CASE("every bad model file gives its exact message and exit code 2", "[apps]") {
   std::vector<fs::path> files;
@@ -104,11 +49,10 @@ TEST_CASE("generated chain, grid and train models run to the end", "[apps]") {
   CHECK(chain.err.find("no step given; using the RK4 stability estimate") != std::string::npos);
   CHECK(chain.out.find("model chain-30: 30 bodies, 30 joints") != std::string::npos);
   CHECK(run("run grid.json --t-end 0.1 --method dopri5 --rtol 1e-5 --quiet", dir).code == 0);
-  const Result train = run("run train.json --t-end 0.5 --output train.csv", dir);
+  const Result train = run("run train.json --t-end 0.5 --every 5 --output train.h5", dir);
   CHECK(train.code == 0);
-  CHECK(train.err.find("results in train.csv") != std::string::npos);
-  const std::string csv = read_text(d / "train.csv");
-  CHECK(csv.rfind("t,body,x,y,z,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz\n", 0) == 0);
+  CHECK(train.err.find("in train.h5") != std::string::npos);
+  CHECK(fs::exists(d / "train.xdmf"));
   fs::remove_all(d.parent_path());
 }
 

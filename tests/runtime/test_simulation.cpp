@@ -6,24 +6,13 @@
 #include "mbsflow/graph/generators.hpp"
 #include "mbsflow/graph/stable_step.hpp"
 #include "mbsflow/runtime/simulation.hpp"
+#include "memory_sink.hpp"
 #include "test_support.hpp"
 
 using namespace mbsflow;
 using namespace mbsflow::test;
 
 namespace {
-struct MemorySink : ResultSink {
-  std::vector<double> times;
-  std::vector<Eigen::VectorXd> states;
-  bool ended = false;
-  void begin(const MultibodySystem&) override {}
-  void write(double t, const Eigen::VectorXd& y) override {
-    times.push_back(t);
-    states.push_back(y);
-  }
-  void end() override { ended = true; }
-};
-
 Model oscillator() {
   Model m;
   m.bodies.push_back(make_body("b", 2.0, {0.5, 0.5, 0.5}, {1.0, 0, 0}));

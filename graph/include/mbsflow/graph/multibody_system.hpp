@@ -3,11 +3,13 @@
 //   r' = v,  q' = q (x) (0, w) / 2,  m v' = F,  J w' = T - w x J w
 // as an ODE system for the generic methods (dimension(), rhs()).
 // Each body sums gravity, then its loads in global load order, then its joint
-// forces in global joint order, so a body's derivative does not depend on how
-// the model is later partitioned.
+// forces in global joint order, then user force elements in the order they were
+// added, so a body's derivative does not depend on how the model is later partitioned.
 #include <Eigen/Core>
+#include <memory>
 #include <vector>
 
+#include "mbsflow/graph/force_element.hpp"
 #include "mbsflow/graph/model.hpp"
 #include "mbsflow/graph/state_layout.hpp"
 
@@ -16,7 +18,7 @@ namespace mbsflow {
 struct Energy {
   double kinetic = 0.0;
   double gravity = 0.0;  // potential of gravity, -m g . r
-  double elastic = 0.0;  // springs and bushings (linear, tables, preload)
+  double elastic = 0.0;  // springs, bushings (linear, tables, preload) and force elements
   double total() const { return kinetic + gravity + elastic; }
 };
 
@@ -37,9 +39,16 @@ class MultibodySystem {
 
   Energy energy(double t, const Eigen::VectorXd& y);
 
+  // Adds a user-defined force element (see force_element.hpp).
+  void add_force_element(std::shared_ptr<const ForceElement> element);
+
+  // Per joint, 6 numbers: the force and the torque (about body2's attachment point) that
+  // the joint exerts on body2, world frame. out is resized to 6 * joints.
+  void joint_wrenches(double t, const Eigen::VectorXd& y, Eigen::VectorXd& out);
+
   // The three phases of rhs(), public so the benchmark can time them apart.
   void update_kinematics(double t, const Eigen::VectorXd& y);
-  void compute_joint_forces();
+  void compute_joint_forces();  // joints and force elements
   void compute_derivatives(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const;
 
  private:
@@ -70,6 +79,11 @@ class MultibodySystem {
   std::vector<int> incidence_start_, incidence_;
   std::vector<int> load_start_, load_index_;
   std::vector<int> driver_of_body_;  // -1 if free
+  // Force elements: their wrenches, and per body the slots into element_out_ in element order.
+  std::vector<std::shared_ptr<const ForceElement>> elements_;
+  std::vector<std::size_t> element_first_;  // first slot of each element
+  std::vector<Wrench> element_out_;
+  std::vector<int> element_start_, element_slot_;
   std::vector<Eigen::Vector3d> initial_position_;
 
   // Kinematics of the current evaluation, n bodies plus ground at index n.
@@ -78,6 +92,8 @@ class MultibodySystem {
   Eigen::Matrix4Xd quat_;
   Eigen::Matrix<double, 9, Eigen::Dynamic> joint_out_;  // force on body2, torque on body1, torque on body2
   double time_ = 0.0;
+
+  Kinematics kinematics() const { return Kinematics(rot_, pos_, vel_, omega_); }
 };
 
 }  // namespace mbsflow

@@ -1,0 +1,51 @@
+#pragma once
+// Results as one HDF5 file per run, in global body order, plus an XDMF sidecar:
+//   /time (T), /bodies/names (N), /bodies/{position,orientation,velocity,angular_velocity}
+//   (T x N x k), /energy (T x 3), /joints/names (J), /joints/force (T x J x 6);
+// chunked and extendible along time, run settings as attributes of the root group.
+// Snapshots are buffered into whole chunk rows, so HDF5 writes full chunks.
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "mbsflow/io/result_fields.hpp"
+#include "mbsflow/runtime/result_sink.hpp"
+
+namespace mbsflow {
+
+struct RunInfo {
+  std::string model_json;
+  std::string method;
+  double step = 0.0;
+  double t_start = 0.0, t_end = 0.0;
+  int output_every = 1;
+  std::string command_line;
+};
+
+class Hdf5Sink : public ResultSink {
+ public:
+  Hdf5Sink(std::string path, FieldSet fields, RunInfo info);
+  ~Hdf5Sink() override;
+  SnapshotContent content() const override { return {fields_.joint_force, fields_.energy}; }
+  void begin(const MultibodySystem& system) override;
+  void write(Snapshot&& snapshot) override;
+  void end() override;  // writes what is buffered and the XDMF sidecar, closes the file
+  const std::string& path() const { return path_; }
+  long snapshots_written() const { return rows_written_; }
+
+ private:
+  struct File;  // HDF5 handles, in the .cpp
+  void flush();
+
+  std::string path_;
+  FieldSet fields_;
+  RunInfo info_;
+  std::unique_ptr<File> file_;
+  const MultibodySystem* system_ = nullptr;
+  long rows_written_ = 0;
+};
+
+// Path of the XDMF sidecar of a results file: FILE.h5 -> FILE.xdmf.
+std::string xdmf_path(const std::string& h5_path);
+
+}  // namespace mbsflow

@@ -1,0 +1,40 @@
+#pragma once
+// The fields a results file can hold, shared by the HDF5 writer and reader, the XDMF
+// sidecar and the CSV export.
+#include <array>
+#include <string>
+#include <vector>
+
+#include "mbsflow/graph/state_layout.hpp"
+
+namespace mbsflow {
+
+struct BodyField {
+  const char* name;     // as in --fields
+  const char* dataset;  // HDF5 path, T x N x components
+  int components;
+  std::array<const char*, 4> columns;  // CSV column names
+  Eigen::Index (StateLayout::*offset)(Eigen::Index) const;  // where body i's values start in the state
+};
+
+inline constexpr std::array<BodyField, 4> body_fields{{
+    {"position", "/bodies/position", 3, {"x", "y", "z", ""}, &StateLayout::position},
+    {"orientation", "/bodies/orientation", 4, {"qw", "qx", "qy", "qz"}, &StateLayout::orientation},
+    {"velocity", "/bodies/velocity", 3, {"vx", "vy", "vz", ""}, &StateLayout::velocity},
+    {"angular_velocity", "/bodies/angular_velocity", 3, {"wx", "wy", "wz", ""}, &StateLayout::angular_velocity},
+}};
+
+inline constexpr const char* energy_dataset = "/energy";        // T x 3: kinetic, gravity, elastic
+inline constexpr const char* joint_force_dataset = "/joints/force";  // T x J x 6
+
+struct FieldSet {
+  std::array<bool, 4> body{true, true, true, true};  // in the order of body_fields
+  bool energy = true;
+  bool joint_force = false;
+};
+
+// "position,velocity,energy" -> FieldSet; "all" selects everything. Throws InputError.
+FieldSet parse_fields(const std::string& list);
+std::string fields_text(const FieldSet& f);
+
+}  // namespace mbsflow

@@ -1,0 +1,221 @@
+#include "mbsflow/io/hdf5_sink.hpp"
+
+#include <algorithm>
+#include <optional>
+#include <array>
+#include <vector>
+
+#include "hdf5_handle.hpp"
+#include "mbsflow/version.hpp"
+#include "xdmf_writer.hpp"
+
+namespace mbsflow {
+namespace {
+
+constexpr std::size_t buffer_bytes = std::size_t{32} << 20;  // bounds the chunk row kept in memory
+constexpr hsize_t chunk_samples = 4096;                       // time rows x bodies per chunk
+
+void write_string_attribute(hid_t obj, const char* name, const std::string& value) {
+  const h5::Handle type = h5::string_type();
+  const h5::Handle space(H5Screate(H5S_SCALAR), H5Sclose, "create a scalar space");
+  const h5::Handle attr(H5Acreate2(obj, name, type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose,
+                        std::string("create attribute ") + name);
+  const char* p = value.c_str();
+  h5::check(H5Awrite(attr.get(), type.get(), &p), std::string("write attribute ") + name);
+}
+
+void write_number_attribute(hid_t obj, const char* name, double value) {
+  const h5::Handle space(H5Screate(H5S_SCALAR), H5Sclose, "create a scalar space");
+  const h5::Handle attr(H5Acreate2(obj, name, H5T_IEEE_F64LE, space.get(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose,
+                        std::string("create attribute ") + name);
+  h5::check(H5Awrite(attr.get(), H5T_NATIVE_DOUBLE, &value), std::string("write attribute ") + name);
+}
+
+void write_names(hid_t parent, const char* name, const std::vector<std::string>& names) {
+  const h5::Handle type = h5::string_type();
+  const hsize_t n = names.size();
+  const h5::Handle space(H5Screate_simple(1, &n, nullptr), H5Sclose, "create a names space");
+  const h5::Handle set(H5Dcreate2(parent, name, type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
+                       H5Dclose, std::string("create ") + name);
+  std::vector<const char*> p;
+  for (const auto& s : names) p.push_back(s.c_str());
+  if (n > 0) h5::check(H5Dwrite(set.get(), type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, p.data()), "write names");
+}
+
+// An extendible float64 dataset of shape (0, dims...) chunked as (rows, chunk dims...).
+struct Series {
+  std::string path;
+  std::vector<hsize_t> item;   // shape of one time row
+  h5::Handle set;
+  std::vector<double> buffer;  // rows of this chunk row, row-major
+  std::size_t row_size() const {
+    std::size_t s = 1;
+    for (hsize_t d : item) s *= d;
+    return s;
+  }
+};
+
+Series make_series(hid_t file, const std::string& path, std::vector<hsize_t> item, hsize_t rows) {
+  Series s{path, std::move(item), {}, {}};
+  std::vector<hsize_t> dims{0}, max{H5S_UNLIMITED}, chunk{rows};
+  for (std::size_t i = 0; i < s.item.size(); ++i) {
+    dims.push_back(s.item[i]);
+    max.push_back(s.item[i]);
+    // Along bodies (or joints), as many as fit the chunk's sample budget with these rows.
+    chunk.push_back(i == 0 ? std::clamp<hsize_t>(chunk_samples / rows, 1, std::max<hsize_t>(1, s.item[i])) : s.item[i]);
+  }
+  const h5::Handle space(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), max.data()), H5Sclose,
+                         "create the space of " + path);
+  const h5::Handle plist(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, "create a dataset property list");
+  h5::check(H5Pset_chunk(plist.get(), static_cast<int>(chunk.size()), chunk.data()), "chunk " + path);
+  const h5::Handle lcpl(H5Pcreate(H5P_LINK_CREATE), H5Pclose, "create a link property list");
+  h5::check(H5Pset_create_intermediate_group(lcpl.get(), 1), "allow intermediate groups");
+  s.set = h5::Handle(H5Dcreate2(file, path.c_str(), H5T_IEEE_F64LE, space.get(), lcpl.get(), plist.get(), H5P_DEFAULT),
+                     H5Dclose, "create " + path);
+  return s;
+}
+
+// Appends the buffered rows to the dataset.
+void append(Series& s, hsize_t first_row) {
+  const std::size_t row = s.row_size();
+  if (row == 0 || s.buffer.empty()) return;
+  const hsize_t rows = s.buffer.size() / row;
+  std::vector<hsize_t> dims{first_row + rows}, start{first_row}, count{rows};
+  for (hsize_t d : s.item) {
+    dims.push_back(d);
+    start.push_back(0);
+    count.push_back(d);
+  }
+  h5::check(H5Dset_extent(s.set.get(), dims.data()), "extend " + s.path);
+  const h5::Handle file_space(H5Dget_space(s.set.get()), H5Sclose, "get the space of " + s.path);
+  h5::check(H5Sselect_hyperslab(file_space.get(), H5S_SELECT_SET, start.data(), nullptr, count.data(), nullptr),
+            "select rows of " + s.path);
+  const h5::Handle mem(H5Screate_simple(static_cast<int>(count.size()), count.data(), nullptr), H5Sclose,
+                       "create a memory space");
+  h5::check(H5Dwrite(s.set.get(), H5T_NATIVE_DOUBLE, mem.get(), file_space.get(), H5P_DEFAULT, s.buffer.data()),
+            "write " + s.path);
+  s.buffer.clear();
+}
+
+}  // namespace
+
+struct Hdf5Sink::File {
+  h5::Handle file;
+  Series time;
+  std::vector<std::pair<std::size_t, Series>> bodies;  // (index into body_fields, series)
+  std::optional<Series> energy, joint_force;
+  hsize_t rows_per_chunk = 1;
+  std::vector<double> times;  // every time written, for the XDMF sidecar
+};
+
+std::string xdmf_path(const std::string& h5) {
+  const auto dot = h5.find_last_of('.');
+  const auto slash = h5.find_last_of('/');
+  const bool has_ext = dot != std::string::npos && (slash == std::string::npos || dot > slash);
+  return (has_ext ? h5.substr(0, dot) : h5) + ".xdmf";
+}
+
+Hdf5Sink::Hdf5Sink(std::string path, FieldSet fields, RunInfo info)
+    : path_(std::move(path)), fields_(fields), info_(std::move(info)) {}
+
+Hdf5Sink::~Hdf5Sink() = default;
+
+void Hdf5Sink::begin(const MultibodySystem& system) {
+  system_ = &system;
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // errors become exceptions, not stack dumps
+  const Model& m = system.model();
+  const auto n = static_cast<hsize_t>(m.bodies.size()), joints = static_cast<hsize_t>(m.joints.size());
+  auto f = std::make_unique<File>();
+  // Dense attribute storage (file format 1.8+) so that large model texts fit as attributes.
+  const h5::Handle fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose, "create a file access list");
+  h5::check(H5Pset_libver_bounds(fapl.get(), H5F_LIBVER_V18, H5F_LIBVER_LATEST), "set the file format");
+  f->file = h5::Handle(H5Fcreate(path_.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get()), H5Fclose,
+                       "create the results file " + path_);
+  // Time rows per chunk: up to 32, fewer for very large models so the buffer stays bounded.
+  const std::size_t row_bytes = static_cast<std::size_t>(system.dimension() + 6 * static_cast<Eigen::Index>(joints) + 4) * 8;
+  f->rows_per_chunk = std::clamp<hsize_t>(buffer_bytes / std::max<std::size_t>(row_bytes, 1), 1, 32);
+  const hsize_t rows = f->rows_per_chunk;
+  f->time = make_series(f->file.get(), "/time", {}, 1024);
+  for (std::size_t i = 0; i < body_fields.size(); ++i)
+    if (fields_.body[i])
+      f->bodies.emplace_back(i, make_series(f->file.get(), body_fields[i].dataset,
+                                            {n, static_cast<hsize_t>(body_fields[i].components)}, rows));
+  if (fields_.energy) f->energy = make_series(f->file.get(), energy_dataset, {3}, 1024);
+  if (fields_.joint_force && joints > 0) f->joint_force = make_series(f->file.get(), joint_force_dataset, {joints, 6}, rows);
+  std::vector<std::string> names;
+  for (const Body& b : m.bodies) names.push_back(b.name);
+  const h5::Handle bodies(H5Gopen2(f->file.get(), "/bodies", H5P_DEFAULT), H5Gclose, "open /bodies");
+  write_names(bodies.get(), "names", names);
+  if (f->joint_force) {
+    names.clear();
+    for (const Joint& j : m.joints) names.push_back(j.name);
+    const h5::Handle group(H5Gopen2(f->file.get(), "/joints", H5P_DEFAULT), H5Gclose, "open /joints");
+    write_names(group.get(), "names", names);
+  }
+  const hid_t root = f->file.get();
+  write_string_attribute(root, "mbsflow_version", MBSFLOW_VERSION);
+  write_string_attribute(root, "model_name", m.name);
+  write_string_attribute(root, "model", info_.model_json);
+  write_string_attribute(root, "method", info_.method);
+  write_number_attribute(root, "step", info_.step);
+  write_number_attribute(root, "t_start", info_.t_start);
+  write_number_attribute(root, "t_end", info_.t_end);
+  write_number_attribute(root, "output_every", info_.output_every);
+  write_string_attribute(root, "command_line", info_.command_line);
+  write_string_attribute(root, "fields", fields_text(fields_));
+  file_ = std::move(f);
+}
+
+void Hdf5Sink::write(Snapshot&& s) {
+  File& f = *file_;
+  const StateLayout& l = system_->layout();
+  f.time.buffer.push_back(s.t);
+  f.times.push_back(s.t);
+  for (auto& [i, series] : f.bodies) {
+    const BodyField& field = body_fields[i];
+    for (Eigen::Index b = 0; b < l.bodies; ++b) {
+      const double* p = s.state.data() + (l.*field.offset)(b);
+      series.buffer.insert(series.buffer.end(), p, p + field.components);
+    }
+  }
+  if (f.energy) {
+    const Energy e = s.energy.value_or(Energy{});
+    f.energy->buffer.insert(f.energy->buffer.end(), {e.kinetic, e.gravity, e.elastic});
+  }
+  if (f.joint_force) f.joint_force->buffer.insert(f.joint_force->buffer.end(), s.joint_wrench.data(), s.joint_wrench.data() + s.joint_wrench.size());
+  if (static_cast<hsize_t>(f.time.buffer.size()) >= f.rows_per_chunk) flush();
+}
+
+void Hdf5Sink::flush() {
+  File& f = *file_;
+  const auto first = static_cast<hsize_t>(rows_written_);
+  const long rows = static_cast<long>(f.time.buffer.size());
+  if (rows == 0) return;
+  for (auto& [i, series] : f.bodies) append(series, first);
+  if (f.energy) append(*f.energy, first);
+  if (f.joint_force) append(*f.joint_force, first);
+  append(f.time, first);  // last: a reader never sees a time without its data
+  rows_written_ += rows;
+  h5::check(H5Fflush(f.file.get(), H5F_SCOPE_GLOBAL), "flush " + path_);
+}
+
+void Hdf5Sink::end() {
+  if (!file_) return;
+  std::unique_ptr<File> f;
+  try {
+    flush();
+  } catch (...) {
+    file_.reset();  // close what can be closed
+    throw;
+  }
+  std::swap(f, file_);
+  const bool position = fields_.body[0];
+  std::vector<std::string> attributes;
+  for (std::size_t i = 1; i < body_fields.size(); ++i)
+    if (fields_.body[i]) attributes.push_back(body_fields[i].name);
+  const std::vector<double> times = std::move(f->times);
+  f.reset();  // closes the file before the sidecar points at it
+  if (position) write_xdmf(xdmf_path(path_), path_, times, system_->model().bodies.size(), attributes);
+}
+
+}  // namespace mbsflow

@@ -1,0 +1,42 @@
+#include "mbsflow/io/result_fields.hpp"
+
+#include <sstream>
+
+#include "mbsflow/graph/error.hpp"
+
+namespace mbsflow {
+
+FieldSet parse_fields(const std::string& list) {
+  FieldSet f;
+  f.body.fill(false);
+  f.energy = false;
+  std::stringstream in(list);
+  std::string name;
+  bool any = false;
+  while (std::getline(in, name, ',')) {
+    if (name.empty()) continue;
+    any = true;
+    bool known = false;
+    for (std::size_t i = 0; i < body_fields.size(); ++i)
+      if (name == body_fields[i].name || name == "all") f.body[i] = known = true;
+    if (name == "energy" || name == "all") f.energy = known = true;
+    if (name == "joint_force" || name == "all") f.joint_force = known = true;
+    if (!known)
+      throw InputError("--fields: unknown field '" + name +
+                       "' (expected position, orientation, velocity, angular_velocity, energy, joint_force or all)");
+  }
+  if (!any) throw InputError("--fields: name at least one field");
+  return f;
+}
+
+std::string fields_text(const FieldSet& f) {
+  std::string s;
+  auto add = [&](const char* n) { s += (s.empty() ? "" : ",") + std::string(n); };
+  for (std::size_t i = 0; i < body_fields.size(); ++i)
+    if (f.body[i]) add(body_fields[i].name);
+  if (f.energy) add("energy");
+  if (f.joint_force) add("joint_force");
+  return s;
+}
+
+}  // namespace mbsflow

@@ -1,0 +1,177 @@
+#include "mbsflow/io/results_file.hpp"
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <type_traits>
+
+#include "hdf5_handle.hpp"
+#include "mbsflow/graph/error.hpp"
+#include "mbsflow/io/result_fields.hpp"
+
+namespace mbsflow {
+
+static_assert(std::is_same_v<hid_t, std::int64_t>, "hid_t is stored as int64_t");
+
+ResultsFile::ResultsFile(const std::string& path) : path_(path) {
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  if (!std::filesystem::exists(path)) throw InputError(path + ": no such results file");
+  if (H5Fis_hdf5(path.c_str()) <= 0) throw InputError(path + ": not an HDF5 file");
+  file_ = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  if (file_ < 0) throw InputError(path + ": cannot open the results file");
+  if (!has("/time")) {
+    H5Fclose(file_);
+    file_ = -1;
+    throw InputError(path + ": not an mbsflow results file (no /time)");
+  }
+}
+
+ResultsFile::~ResultsFile() {
+  if (file_ >= 0) H5Fclose(file_);
+}
+
+ResultsFile::ResultsFile(ResultsFile&& o) noexcept : path_(std::move(o.path_)), file_(std::exchange(o.file_, -1)) {}
+ResultsFile& ResultsFile::operator=(ResultsFile&& o) noexcept {
+  std::swap(path_, o.path_);
+  std::swap(file_, o.file_);
+  return *this;
+}
+
+bool ResultsFile::has(const std::string& dataset) const {
+  // Check each level, since H5Lexists fails on a missing intermediate group.
+  std::string sofar;
+  std::size_t pos = 1;
+  while (pos <= dataset.size()) {
+    const std::size_t next = dataset.find('/', pos);
+    sofar = dataset.substr(0, next);
+    if (H5Lexists(file_, sofar.c_str(), H5P_DEFAULT) <= 0) return false;
+    if (next == std::string::npos) break;
+    pos = next + 1;
+  }
+  return true;
+}
+
+std::vector<std::uint64_t> ResultsFile::shape(const std::string& dataset) const {
+  if (!has(dataset)) return {};
+  const h5::Handle set(H5Dopen2(file_, dataset.c_str(), H5P_DEFAULT), H5Dclose, "open " + dataset);
+  const h5::Handle space(H5Dget_space(set.get()), H5Sclose, "get the space of " + dataset);
+  const int rank = H5Sget_simple_extent_ndims(space.get());
+  std::vector<hsize_t> dims(static_cast<std::size_t>(std::max(rank, 0)));
+  H5Sget_simple_extent_dims(space.get(), dims.data(), nullptr);
+  return {dims.begin(), dims.end()};
+}
+
+std::optional<std::string> ResultsFile::string_attribute(const std::string& name) const {
+  if (H5Aexists(file_, name.c_str()) <= 0) return std::nullopt;
+  const h5::Handle attr(H5Aopen(file_, name.c_str(), H5P_DEFAULT), H5Aclose, "open attribute " + name);
+  const h5::Handle type = h5::string_type();
+  char* value = nullptr;
+  h5::check(H5Aread(attr.get(), type.get(), &value), "read attribute " + name);
+  std::string s = value ? value : "";
+  H5free_memory(value);
+  return s;
+}
+
+std::optional<double> ResultsFile::number_attribute(const std::string& name) const {
+  if (H5Aexists(file_, name.c_str()) <= 0) return std::nullopt;
+  const h5::Handle attr(H5Aopen(file_, name.c_str(), H5P_DEFAULT), H5Aclose, "open attribute " + name);
+  double v = 0.0;
+  h5::check(H5Aread(attr.get(), H5T_NATIVE_DOUBLE, &v), "read attribute " + name);
+  return v;
+}
+
+std::vector<double> ResultsFile::read(const std::string& dataset) const {
+  const std::vector<std::uint64_t> dims = shape(dataset);
+  if (dims.empty()) throw InputError(path_ + ": no dataset " + dataset);
+  std::size_t n = 1;
+  for (auto d : dims) n *= d;
+  std::vector<double> out(n);
+  const h5::Handle set(H5Dopen2(file_, dataset.c_str(), H5P_DEFAULT), H5Dclose, "open " + dataset);
+  if (n > 0) h5::check(H5Dread(set.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, out.data()), "read " + dataset);
+  return out;
+}
+
+std::vector<double> ResultsFile::read_item(const std::string& dataset, std::size_t index) const {
+  const std::vector<std::uint64_t> dims = shape(dataset);
+  if (dims.size() != 3) throw InputError(path_ + ": " + dataset + " is not a T x N x k dataset");
+  if (index >= dims[1]) throw InputError(path_ + ": index " + std::to_string(index) + " out of range in " + dataset);
+  const hsize_t start[3] = {0, index, 0}, count[3] = {dims[0], 1, dims[2]};
+  std::vector<double> out(dims[0] * dims[2]);
+  const h5::Handle set(H5Dopen2(file_, dataset.c_str(), H5P_DEFAULT), H5Dclose, "open " + dataset);
+  const h5::Handle space(H5Dget_space(set.get()), H5Sclose, "get the space of " + dataset);
+  h5::check(H5Sselect_hyperslab(space.get(), H5S_SELECT_SET, start, nullptr, count, nullptr), "select in " + dataset);
+  const h5::Handle mem(H5Screate_simple(3, count, nullptr), H5Sclose, "create a memory space");
+  if (!out.empty()) h5::check(H5Dread(set.get(), H5T_NATIVE_DOUBLE, mem.get(), space.get(), H5P_DEFAULT, out.data()), "read " + dataset);
+  return out;
+}
+
+std::vector<double> ResultsFile::time() const { return read("/time"); }
+
+std::vector<std::string> ResultsFile::names(const char* dataset) const {
+  if (!has(dataset)) return {};
+  const h5::Handle set(H5Dopen2(file_, dataset, H5P_DEFAULT), H5Dclose, std::string("open ") + dataset);
+  const std::size_t n = shape(dataset).at(0);
+  std::vector<char*> p(n, nullptr);
+  const h5::Handle type = h5::string_type();
+  if (n > 0) h5::check(H5Dread(set.get(), type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, p.data()), std::string("read ") + dataset);
+  std::vector<std::string> out;
+  for (char* s : p) {
+    out.emplace_back(s ? s : "");
+    H5free_memory(s);
+  }
+  return out;
+}
+
+std::vector<std::string> ResultsFile::body_names() const { return names("/bodies/names"); }
+std::vector<std::string> ResultsFile::joint_names() const { return names("/joints/names"); }
+
+std::uintmax_t ResultsFile::size_bytes() const { return std::filesystem::file_size(path_); }
+
+std::vector<std::string> export_csv(const ResultsFile& r, const std::string& dir, const std::vector<std::string>& wanted) {
+  const std::vector<std::string> names = r.body_names();
+  std::vector<std::size_t> bodies;
+  if (wanted.empty()) {
+    for (std::size_t i = 0; i < names.size(); ++i) bodies.push_back(i);
+  } else {
+    for (const std::string& w : wanted) {
+      const auto it = std::find(names.begin(), names.end(), w);
+      if (it == names.end()) throw InputError("--bodies: no body '" + w + "' in " + r.path());
+      bodies.push_back(static_cast<std::size_t>(it - names.begin()));
+    }
+  }
+  std::filesystem::create_directories(dir);
+  const std::vector<double> t = r.time();
+  std::vector<const BodyField*> fields;
+  for (const BodyField& f : body_fields)
+    if (r.has(f.dataset)) fields.push_back(&f);
+  std::vector<std::string> written;
+  for (std::size_t b : bodies) {
+    const std::string file = (std::filesystem::path(dir) / (names[b] + ".csv")).string();
+    std::ofstream out(file);
+    if (!out) throw InputError(file + ": cannot write");
+    out << "t";
+    std::vector<std::vector<double>> data;
+    for (const BodyField* f : fields) {
+      for (int c = 0; c < f->components; ++c) out << ',' << f->columns[static_cast<std::size_t>(c)];
+      data.push_back(r.read_item(f->dataset, b));
+    }
+    out << '\n';
+    char buf[32];
+    for (std::size_t i = 0; i < t.size(); ++i) {
+      std::snprintf(buf, sizeof buf, "%.17g", t[i]);
+      out << buf;
+      for (std::size_t k = 0; k < fields.size(); ++k)
+        for (int c = 0; c < fields[k]->components; ++c) {
+          std::snprintf(buf, sizeof buf, ",%.17g", data[k][i * static_cast<std::size_t>(fields[k]->components) + static_cast<std::size_t>(c)]);
+          out << buf;
+        }
+      out << '\n';
+    }
+    if (!out) throw InputError(file + ": error while writing");
+    written.push_back(file);
+  }
+  return written;
+}
+
+}  // namespace mbsflow

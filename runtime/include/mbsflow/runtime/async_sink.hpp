@@ -1,0 +1,50 @@
+#pragma once
+// Runs another sink on its own thread behind a bounded queue, so that writing results
+// never holds the computation back unless the queue is full.
+#include <condition_variable>
+#include <cstddef>
+#include <deque>
+#include <exception>
+#include <memory>
+#include <mutex>
+#include <thread>
+
+#include "mbsflow/runtime/result_sink.hpp"
+
+namespace mbsflow {
+
+struct AsyncSinkStats {
+  long snapshots = 0;
+  long waits = 0;             // times the computation found the queue full
+  double wait_seconds = 0.0;  // and how long it waited in all
+};
+
+class AsyncSink : public ResultSink {
+ public:
+  // capacity_bytes bounds the memory the queued snapshots take (at least 2 are queued).
+  explicit AsyncSink(std::unique_ptr<ResultSink> inner, std::size_t capacity_bytes = std::size_t{256} << 20);
+  ~AsyncSink() override;
+
+  SnapshotContent content() const override { return inner_->content(); }
+  void begin(const MultibodySystem& system) override;
+  void write(Snapshot&& snapshot) override;
+  void end() override;
+  const AsyncSinkStats& stats() const { return stats_; }
+
+ private:
+  void run();
+  void rethrow_writer_error();
+
+  std::unique_ptr<ResultSink> inner_;
+  std::size_t capacity_bytes_;
+  std::size_t capacity_ = 2;
+  std::mutex mutex_;
+  std::condition_variable not_empty_, not_full_;
+  std::deque<Snapshot> queue_;
+  bool closing_ = false;
+  std::exception_ptr error_;
+  std::thread writer_;
+  AsyncSinkStats stats_;
+};
+
+}  // namespace mbsflow

@@ -1,0 +1,88 @@
+#include "mbsflow/runtime/async_sink.hpp"
+
+#include <algorithm>
+#include <chrono>
+
+namespace mbsflow {
+
+AsyncSink::AsyncSink(std::unique_ptr<ResultSink> inner, std::size_t capacity_bytes)
+    : inner_(std::move(inner)), capacity_bytes_(capacity_bytes) {}
+
+AsyncSink::~AsyncSink() {
+  try {
+    end();
+  } catch (...) {  // a destructor must not throw; end() was the place to see the error
+  }
+}
+
+void AsyncSink::begin(const MultibodySystem& system) {
+  inner_->begin(system);
+  const std::size_t bytes = static_cast<std::size_t>(system.dimension()) * sizeof(double) + 64;
+  capacity_ = std::max<std::size_t>(2, capacity_bytes_ / bytes);
+  writer_ = std::thread([this] { run(); });
+}
+
+void AsyncSink::write(Snapshot&& snapshot) {
+  std::unique_lock lock(mutex_);
+  if (queue_.size() >= capacity_ && !error_) {
+    const auto start = std::chrono::steady_clock::now();
+    ++stats_.waits;
+    not_full_.wait(lock, [&] { return queue_.size() < capacity_ || error_; });
+    stats_.wait_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  }
+  if (error_) {
+    lock.unlock();
+    rethrow_writer_error();
+  }
+  queue_.push_back(std::move(snapshot));
+  ++stats_.snapshots;
+  lock.unlock();
+  not_empty_.notify_one();
+}
+
+void AsyncSink::end() {
+  if (writer_.joinable()) {
+    {
+      std::lock_guard lock(mutex_);
+      closing_ = true;
+    }
+    not_empty_.notify_one();
+    writer_.join();
+    inner_->end();
+  }
+  rethrow_writer_error();
+}
+
+void AsyncSink::rethrow_writer_error() {
+  std::exception_ptr e;
+  {
+    std::lock_guard lock(mutex_);
+    std::swap(e, error_);
+  }
+  if (e) std::rethrow_exception(e);
+}
+
+void AsyncSink::run() {
+  while (true) {
+    Snapshot s;
+    {
+      std::unique_lock lock(mutex_);
+      not_empty_.wait(lock, [&] { return !queue_.empty() || closing_; });
+      if (queue_.empty()) return;  // closing and drained
+      s = std::move(queue_.front());
+      queue_.pop_front();
+    }
+    not_full_.notify_one();
+    try {
+      inner_->write(std::move(s));
+    } catch (...) {
+      std::lock_guard lock(mutex_);
+      error_ = std::current_exception();
+      queue_.clear();
+      not_full_.notify_all();
+      return;
+    }
+  }
+}
+
+}  // namespace mbsflow

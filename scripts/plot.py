@@ -1,0 +1,74 @@
+#!/usr/bin/python3
+"""Plot an mbsflow results file: body trajectories and energies.
+
+usage: scripts/plot.py FILE.h5 [--bodies a,b,...] [-o plot.png]
+
+Uses Debian's python3-h5py and python3-matplotlib (run it with /usr/bin/python3).
+"""
+import argparse
+import sys
+
+import h5py
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+
+def pick_bodies(names, wanted):
+    if wanted:
+        missing = [w for w in wanted if w not in names]
+        if missing:
+            sys.exit(f"plot.py: no body {', '.join(missing)} in the file")
+        return [names.index(w) for w in wanted]
+    n = len(names)
+    count = min(n, 5)
+    return sorted({round(i * (n - 1) / max(count - 1, 1)) for i in range(count)})
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("file")
+    parser.add_argument("--bodies", default="", help="comma-separated body names (default: up to 5 spread over the model)")
+    parser.add_argument("-o", "--output", default="", help="PNG to write (default: FILE.png)")
+    args = parser.parse_args()
+    out = args.output or (args.file.rsplit(".", 1)[0] + ".png")
+    with h5py.File(args.file, "r") as f:
+        t = f["time"][:]
+        names = [n.decode() if isinstance(n, bytes) else n for n in f["bodies/names"][:]]
+        chosen = pick_bodies(names, [b for b in args.bodies.split(",") if b])
+        has_pos = "bodies/position" in f
+        has_energy = "energy" in f
+        if not has_pos and not has_energy:
+            sys.exit("plot.py: the file holds neither positions nor energies")
+        panels = int(has_pos) * 2 + int(has_energy)
+        fig, axes = plt.subplots(1, panels, figsize=(5.5 * panels, 4.5), squeeze=False)
+        axes = list(axes[0])
+        title = f.attrs.get("model_name", "")
+        if has_pos:
+            pos = f["bodies/position"]
+            ax_xy, ax_t = axes.pop(0), axes.pop(0)
+            for i in chosen:
+                p = pos[:, i, :]
+                ax_xy.plot(p[:, 0], p[:, 1], label=names[i])
+                ax_t.plot(t, p[:, 1], label=names[i])
+            ax_xy.set(xlabel="x [m]", ylabel="y [m]", title="trajectories")
+            ax_xy.axis("equal")
+            ax_t.set(xlabel="t [s]", ylabel="y [m]", title="height over time")
+            ax_xy.legend(fontsize="small")
+        if has_energy:
+            e = f["energy"][:]
+            ax = axes.pop(0)
+            for k, label in enumerate(["kinetic", "gravity", "elastic"]):
+                ax.plot(t, e[:, k], label=label)
+            ax.plot(t, e.sum(axis=1), "k--", label="total")
+            ax.set(xlabel="t [s]", ylabel="energy [J]", title="energy")
+            ax.legend(fontsize="small")
+        fig.suptitle(f"{title}  ({args.file})")
+        fig.tight_layout()
+        fig.savefig(out, dpi=110)
+    print(out)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,86 @@
+// End-to-end tests of results files: SIGTERM mid-run, XDMF sidecar, info, export, plot.
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <catch2/catch.hpp>
+#include <chrono>
+#include <regex>
+#include <thread>
+
+#include "cli_support.hpp"
+#include "mbsflow/io/results_file.hpp"
+
+using namespace mbsflow::test;
+
+TEST_CASE("a run stopped by SIGTERM exits with 1 and keeps every completed snapshot", "[apps]") {
+  const fs::path d = scratch("sigterm");
+  REQUIRE(run("generate chain --bodies 2000 -o chain.json", d.string()).code == 0);
+  const fs::path err = d / "stderr.txt", h5 = d / "run.h5";
+  const pid_t pid = ::fork();
+  REQUIRE(pid >= 0);
+  if (pid == 0) {
+    if (::chdir(d.c_str()) != 0) ::_exit(99);
+    if (!std::freopen(err.c_str(), "w", stderr)) ::_exit(99);
+    ::execl(MBSFLOW_EXE, "mbsflow", "run", "chain.json", "--t-end", "1000", "--every", "5", "-o", "run.h5", nullptr);
+    ::_exit(98);
+  }
+  // Let it write a few chunk rows, then ask it to stop.
+  const auto start = std::chrono::steady_clock::now();
+  while ((!fs::exists(h5) || fs::file_size(h5) < 200000) && std::chrono::steady_clock::now() - start < std::chrono::seconds(60))
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  REQUIRE(::kill(pid, SIGTERM) == 0);
+  int status = 0;
+  pid_t done = 0;
+  for (int i = 0; i < 200 && done == 0; ++i) {  // must end within 10 s
+    done = ::waitpid(pid, &status, WNOHANG);
+    if (done == 0) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  if (done == 0) {
+    ::kill(pid, SIGKILL);
+    ::waitpid(pid, &status, 0);
+    FAIL("the run did not stop within 10 s of SIGTERM");
+  }
+  REQUIRE(WIFEXITED(status));
+  CHECK(WEXITSTATUS(status) == 1);
+  const std::string message = read_text(err);
+  INFO(message);
+  std::smatch m;
+  REQUIRE(std::regex_search(message, m, std::regex(R"(interrupted at t = \S+ s; results keep (\d+) snapshots up to t = (\S+) s \(SIGTERM\))")));
+  const std::size_t kept = std::stoul(m[1]);
+  const mbsflow::ResultsFile r(h5.string());
+  const std::vector<double> t = r.time();
+  CHECK(t.size() == kept);
+  CHECK(kept > 32);
+  CHECK(t.back() == Approx(std::stod(m[2])).epsilon(1e-5));
+  CHECK(r.shape("/bodies/position") == std::vector<std::uint64_t>{kept, 2000, 3});
+  for (std::size_t i = 1; i < t.size(); ++i) CHECK(t[i] > t[i - 1]);
+  if (std::system("command -v h5dump >/dev/null 2>&1") == 0)
+    CHECK(std::system(("h5dump -H '" + h5.string() + "' >/dev/null 2>&1").c_str()) == 0);
+  CHECK(fs::exists(d / "run.xdmf"));
+  fs::remove_all(d.parent_path());
+}
+
+TEST_CASE("results: info, CSV export, a consistent XDMF sidecar and a plot", "[apps]") {
+  const fs::path d = scratch("results");
+  const std::string dir = d.string();
+  REQUIRE(run("generate grid --rows 3 --cols 4 -o grid.json", dir).code == 0);
+  REQUIRE(run("run grid.json --t-end 0.2 --every 20 --fields all -o grid.h5", dir).code == 0);
+  const Result info = run("info grid.h5", dir, true);
+  CHECK(info.code == 0);
+  CHECK(info.out.find("model         grid-3x4: 12 bodies, 20 joints with forces") != std::string::npos);
+  CHECK(info.out.find("/bodies/position         ") != std::string::npos);
+  CHECK(run("info grid.json", dir).code == 2);
+  const Result exported = run("export grid.h5 --csv csv --bodies p0_0,p2_3", dir);
+  CHECK(exported.code == 0);
+  CHECK(fs::exists(d / "csv" / "p2_3.csv"));
+  CHECK(run("export grid.h5 --csv csv --bodies nobody", dir).code == 2);
+  const std::string python = MBSFLOW_PYTHON;
+  const Result xdmf_check{std::system((python + " '" + MBSFLOW_TESTS + "/io/check_xdmf.py' '" + dir + "/grid.xdmf'").c_str()), "", ""};
+  CHECK(xdmf_check.code == 0);
+  const int plot = std::system((python + " '" + MBSFLOW_SOURCE + "/scripts/plot.py' '" + dir + "/grid.h5' -o '" + dir + "/grid.png' >/dev/null").c_str());
+  CHECK(plot == 0);
+  CHECK(fs::exists(d / "grid.png"));
+  fs::remove_all(d.parent_path());
+}

@@ -1,0 +1,137 @@
+#include <catch2/catch.hpp>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "mbsflow/graph/error.hpp"
+#include "mbsflow/graph/generators.hpp"
+#include "mbsflow/io/hdf5_sink.hpp"
+#include "mbsflow/io/results_file.hpp"
+#include "mbsflow/runtime/async_sink.hpp"
+#include "mbsflow/runtime/simulation.hpp"
+#include "memory_sink.hpp"
+
+using namespace mbsflow;
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path temp_file(const std::string& name) {
+  const fs::path d = fs::temp_directory_path() / ("mbsflow_io_" + std::to_string(::getpid()));
+  fs::create_directories(d);
+  return d / name;
+}
+
+Model small_train() {
+  TrainParams p;
+  p.wagons = 2;
+  Model m = make_train(p);
+  m.simulation.t_end = 0.5;
+  m.simulation.step = 0.005;
+  m.simulation.output_every = 1;  // 101 snapshots: several chunk rows of 32
+  return m;
+}
+
+// Runs the model into an HDF5 file (through the asynchronous writer) and into memory.
+std::pair<test::MemorySink, fs::path> run_both(const Model& m, const FieldSet& fields) {
+  const fs::path file = temp_file(m.name + ".h5");
+  const RunOptions o = options_from_model(m);
+  {
+    MultibodySystem sys(m);
+    AsyncSink sink(std::make_unique<Hdf5Sink>(file.string(), fields, RunInfo{"{}", "rk4", o.step, o.t_start, o.t_end, 1, "test"}),
+                   1 << 16);  // a small queue, so the writer really runs behind
+    run_simulation(sys, o, &sink);
+  }
+  test::MemorySink memory;
+  memory.wanted = {fields.joint_force, fields.energy};
+  MultibodySystem sys(m);
+  run_simulation(sys, o, &memory);
+  return {std::move(memory), file};
+}
+
+}  // namespace
+
+TEST_CASE("HDF5 results read back bitwise equal to what was simulated", "[io]") {
+  const Model m = small_train();
+  const FieldSet all = parse_fields("all");
+  auto [memory, file] = run_both(m, all);
+  const ResultsFile r(file.string());
+  const std::vector<double> t = r.time();
+  REQUIRE(t.size() == memory.times.size());
+  REQUIRE(t.size() == 101);
+  CHECK(t == memory.times);
+  CHECK(r.body_names().size() == m.bodies.size());
+  CHECK(r.body_names()[0] == "car0");
+  CHECK(r.joint_names().size() == m.joints.size());
+  const StateLayout layout{static_cast<Eigen::Index>(m.bodies.size())};
+  for (const BodyField& f : body_fields) {
+    const std::vector<double> data = r.read(f.dataset);
+    REQUIRE(data.size() == t.size() * m.bodies.size() * static_cast<std::size_t>(f.components));
+    std::size_t k = 0;
+    bool equal = true;
+    for (const Eigen::VectorXd& y : memory.states)
+      for (Eigen::Index b = 0; b < layout.bodies; ++b)
+        for (int c = 0; c < f.components; ++c) equal = equal && data[k++] == y[(layout.*f.offset)(b) + c];
+    INFO(f.dataset);
+    CHECK(equal);
+  }
+  const std::vector<double> energy = r.read(energy_dataset), forces = r.read(joint_force_dataset);
+  bool equal = true;
+  for (std::size_t i = 0; i < t.size(); ++i) {
+    const Energy& e = *memory.snapshots[i].energy;
+    equal = equal && energy[3 * i] == e.kinetic && energy[3 * i + 1] == e.gravity && energy[3 * i + 2] == e.elastic;
+    const Eigen::VectorXd& w = memory.snapshots[i].joint_wrench;
+    for (Eigen::Index k = 0; k < w.size(); ++k) equal = equal && forces[i * static_cast<std::size_t>(w.size()) + static_cast<std::size_t>(k)] == w[k];
+  }
+  CHECK(equal);
+  CHECK(r.string_attribute("method").value() == "rk4");
+  CHECK(r.number_attribute("step").value() == 0.005);
+  CHECK(r.read_item("/bodies/position", 3).size() == 3 * t.size());
+  fs::remove_all(file.parent_path());
+}
+
+TEST_CASE("CSV export matches the HDF5 file exactly", "[io]") {
+  const Model m = small_train();
+  auto [memory, file] = run_both(m, parse_fields("position,velocity"));
+  const ResultsFile r(file.string());
+  const fs::path dir = file.parent_path() / "csv";
+  const auto files = export_csv(r, dir.string(), {"bogie0f", "car1"});
+  REQUIRE(files.size() == 2);
+  std::ifstream in(dir / "bogie0f.csv");
+  std::string header;
+  std::getline(in, header);
+  CHECK(header == "t,x,y,z,vx,vy,vz");
+  const std::vector<double> pos = r.read_item("/bodies/position", 1), vel = r.read_item("/bodies/velocity", 1);
+  const std::vector<double> t = r.time();
+  std::string line;
+  std::size_t row = 0;
+  bool equal = true;
+  while (std::getline(in, line)) {
+    std::stringstream s(line);
+    std::string cell;
+    std::vector<double> v;
+    while (std::getline(s, cell, ',')) v.push_back(std::stod(cell));
+    REQUIRE(v.size() == 7);
+    equal = equal && v[0] == t[row];
+    for (int c = 0; c < 3; ++c) equal = equal && v[1 + c] == pos[3 * row + c] && v[4 + c] == vel[3 * row + c];
+    ++row;
+  }
+  CHECK(equal);
+  CHECK(row == t.size());
+  CHECK_THROWS_AS(export_csv(r, dir.string(), {"nobody"}), InputError);
+  fs::remove_all(file.parent_path());
+}
+
+TEST_CASE("opening something that is not a results file is an input error", "[io]") {
+  const fs::path p = temp_file("not.h5");
+  std::ofstream(p) << "hello";
+  CHECK_THROWS_WITH(ResultsFile(p.string()), Catch::Contains("not an HDF5 file"));
+  CHECK_THROWS_WITH(ResultsFile((p.parent_path() / "missing.h5").string()), Catch::Contains("no such results file"));
+  fs::remove_all(p.parent_path());
+}
+
+TEST_CASE("field lists parse and reject unknown names", "[io]") {
+  CHECK(fields_text(parse_fields("velocity,position")) == "position,velocity");
+  CHECK(fields_text(parse_fields("all")) == "position,orientation,velocity,angular_velocity,energy,joint_force");
+  CHECK_THROWS_WITH(parse_fields("position,acceleration"), Catch::Contains("unknown field 'acceleration'"));
+}

@@ -1,0 +1,62 @@
+#include <catch2/catch.hpp>
+#include <chrono>
+#include <thread>
+
+#include "mbsflow/graph/error.hpp"
+#include "mbsflow/runtime/async_sink.hpp"
+#include "mbsflow/runtime/simulation.hpp"
+#include "memory_sink.hpp"
+#include "test_support.hpp"
+
+using namespace mbsflow;
+
+namespace {
+
+struct SlowSink : test::MemorySink {
+  int fail_at = -1;
+  void write(Snapshot&& s) override {
+    std::this_thread::sleep_for(std::chrono::microseconds(200));
+    if (static_cast<int>(times.size()) == fail_at) throw Error("disk full");
+    test::MemorySink::write(std::move(s));
+  }
+};
+
+Model falling_body() {
+  Model m;
+  m.gravity = {0, -9.81, 0};
+  m.bodies.push_back(test::make_body("b", 1.0, {1, 1, 1}));
+  return m;
+}
+
+// One second of free fall in 200 steps: 201 snapshots.
+void run_free_fall(AsyncSink& sink) {
+  MultibodySystem sys(falling_body());
+  RunOptions o;
+  o.t_end = 1.0;
+  o.step = 0.005;
+  run_simulation(sys, o, &sink);
+}
+
+}  // namespace
+
+TEST_CASE("asynchronous sink keeps every snapshot in order and waits only when full", "[runtime]") {
+  auto inner = std::make_unique<SlowSink>();
+  SlowSink* seen = inner.get();
+  AsyncSink sink(std::move(inner), 1);  // room for 2 snapshots only
+  run_free_fall(sink);
+  REQUIRE(seen->times.size() == 201);
+  for (std::size_t i = 0; i < seen->times.size(); ++i) CHECK(seen->times[i] == Approx(0.005 * static_cast<double>(i)));
+  CHECK(seen->ended);
+  CHECK(sink.stats().snapshots == 201);
+  CHECK(sink.stats().waits > 0);  // the slow writer held the run back
+}
+
+TEST_CASE("an error in the writer thread ends the run with that error", "[runtime]") {
+  auto inner = std::make_unique<SlowSink>();
+  inner->fail_at = 10;
+  SlowSink* seen = inner.get();
+  AsyncSink sink(std::move(inner), 1);
+  CHECK_THROWS_WITH(run_free_fall(sink), "disk full");
+  CHECK(seen->times.size() == 10);
+  CHECK(seen->ended);  // closed all the same
+}
