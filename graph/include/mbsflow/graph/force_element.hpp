@@ -2,6 +2,7 @@
 // User-defined force elements: the extension point of the mechanics for forces that the
 // model format does not describe (tyres, contact, aerodynamics, controllers...).
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <span>
 #include <vector>
 
