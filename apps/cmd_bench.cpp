@@ -1,96 +1,25 @@
-// mbsflow bench rhs: nanoseconds per body per right-hand-side evaluation on chain models,
-// one thread, with the time split into the three phases of the evaluation.
-#include <chrono>
-#include <cmath>
-#include <cstdio>
-#include <fstream>
+// mbsflow bench rhs|output: benchmarks that print a table and write CSV.
 #include <memory>
-#include <vector>
 
+#include "bench.hpp"
 #include "commands.hpp"
-#include "mbsflow/graph/error.hpp"
-#include "mbsflow/graph/generators.hpp"
-#include "mbsflow/graph/multibody_system.hpp"
 
 namespace mbsflow::cli {
-namespace {
-
-struct BenchArgs {
-  std::string what = "rhs";
-  std::vector<int> bodies{2000, 6500, 100000};
-  double seconds = 1.0;
-  std::string csv = "bench_rhs.csv";
-};
-
-using Clock = std::chrono::steady_clock;
-
-// Repeats f until `seconds` have passed; returns seconds per call.
-template <class F>
-double time_per_call(double seconds, F f) {
-  long calls = 0;
-  const auto start = Clock::now();
-  double elapsed = 0.0;
-  do {
-    for (int i = 0; i < 4; ++i) f();
-    calls += 4;
-    elapsed = std::chrono::duration<double>(Clock::now() - start).count();
-  } while (elapsed < seconds);
-  return elapsed / static_cast<double>(calls);
-}
-
-// A state with links bent and moving (deterministic), so that the rotation code takes its
-// general branch rather than the small-angle one of the straight initial chain.
-Eigen::VectorXd perturbed_state(const MultibodySystem& sys) {
-  Eigen::VectorXd y = sys.initial_state();
-  const StateLayout& l = sys.layout();
-  for (Eigen::Index i = 0; i < l.bodies; ++i) {
-    const double a = 0.3 * std::sin(0.7 * static_cast<double>(i));
-    y.segment<4>(l.orientation(i)) = Eigen::Vector4d(std::cos(a / 2), 0.3 * std::sin(a / 2), 0.0, std::sin(a / 2)).normalized();
-    y.segment<3>(l.velocity(i)) = Eigen::Vector3d(0.1, std::cos(0.3 * static_cast<double>(i)), 0.0);
-    y.segment<3>(l.angular_velocity(i)) = Eigen::Vector3d(0.2, -0.1, std::sin(0.5 * static_cast<double>(i)));
-  }
-  return y;
-}
-
-int bench(const BenchArgs& a) {
-  std::ofstream csv(a.csv);
-  if (!csv) throw InputError("--csv: cannot write " + a.csv);
-  csv << "bodies,evaluations_per_s,ns_per_body_eval,ns_kinematics,ns_joints,ns_bodies\n";
-  std::printf("right-hand side of generate chain, one thread (ns per body per evaluation)\n");
-  std::printf("%10s %12s %10s %12s %10s %10s\n", "bodies", "evals/s", "total", "kinematics", "joints", "bodies");
-  for (const int n : a.bodies) {
-    ChainParams p;
-    p.bodies = n;
-    MultibodySystem sys(make_chain(p));
-    const Eigen::VectorXd y = perturbed_state(sys);
-    Eigen::VectorXd dy(sys.dimension());
-    const double s = a.seconds;
-    const double total = time_per_call(s, [&] { sys.rhs(0.1, y, dy); });
-    const double kin = time_per_call(s / 3, [&] { sys.update_kinematics(0.1, y); });
-    const double joints = time_per_call(s / 3, [&] { sys.compute_joint_forces(); });
-    const double bodies = time_per_call(s / 3, [&] { sys.compute_derivatives(0.1, y, dy); });
-    const double per = 1e9 / n;
-    std::printf("%10d %12.1f %10.1f %12.1f %10.1f %10.1f\n", n, 1.0 / total, total * per, kin * per, joints * per,
-                bodies * per);
-    csv << n << ',' << 1.0 / total << ',' << total * per << ',' << kin * per << ',' << joints * per << ','
-        << bodies * per << '\n';
-    if (!dy.allFinite()) throw RunError("benchmark state produced non-finite derivatives");
-  }
-  std::printf("written to %s\n", a.csv.c_str());
-  return 0;
-}
-
-}  // namespace
 
 Action add_bench(CLI::App& app) {
   auto a = std::make_shared<BenchArgs>();
   CLI::App* sub = app.add_subcommand("bench", "Benchmarks that print a table and write CSV");
-  sub->add_option("what", a->what, "rhs: cost of one right-hand-side evaluation per body")
-      ->check(CLI::IsMember({"rhs"}));
-  sub->add_option("--bodies", a->bodies, "Chain sizes")->delimiter(',');
-  sub->add_option("--seconds", a->seconds, "Time per measurement")->check(CLI::PositiveNumber);
-  sub->add_option("--csv", a->csv, "CSV file to write");
-  return [a] { return bench(*a); };
+  sub->add_option("what", a->what,
+                  "rhs: cost of one right-hand-side evaluation per body; "
+                  "output: cost of writing results (6500-body chain, none / every 10 steps / every step)")
+      ->check(CLI::IsMember({"rhs", "output"}));
+  sub->add_option("--bodies", a->bodies, "Chain sizes (rhs: 2000,6500,100000; output: 6500)")->delimiter(',');
+  sub->add_option("--seconds", a->seconds, "rhs: time per measurement")->check(CLI::PositiveNumber);
+  sub->add_option("--steps", a->steps, "output: steps per run")->check(CLI::PositiveNumber);
+  sub->add_option("--repeats", a->repeats, "output: runs per case; the fastest counts")->check(CLI::PositiveNumber);
+  sub->add_option("--dir", a->dir, "output: folder for the results files (the disk being measured)");
+  sub->add_option("--csv", a->csv, "CSV file to write (default bench_WHAT.csv)");
+  return [a] { return a->what == "rhs" ? bench_rhs(*a) : bench_output(*a); };
 }
 
 }  // namespace mbsflow::cli

@@ -131,9 +131,10 @@ void Hdf5Sink::begin(const MultibodySystem& system) {
   h5::check(H5Pset_libver_bounds(fapl.get(), H5F_LIBVER_V18, H5F_LIBVER_LATEST), "set the file format");
   f->file = h5::Handle(H5Fcreate(path_.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get()), H5Fclose,
                        "create the results file " + path_);
-  // Time rows per chunk: up to 32, fewer for very large models so the buffer stays bounded.
+  // Time rows per chunk: up to 16, fewer for very large models so the buffer stays bounded;
+  // few rows also keep short what is left to write when a run ends.
   const std::size_t row_bytes = static_cast<std::size_t>(system.dimension() + 6 * static_cast<Eigen::Index>(joints) + 4) * 8;
-  f->rows_per_chunk = std::clamp<hsize_t>(buffer_bytes / std::max<std::size_t>(row_bytes, 1), 1, 32);
+  f->rows_per_chunk = std::clamp<hsize_t>(buffer_bytes / std::max<std::size_t>(row_bytes, 1), 1, 16);
   const hsize_t rows = f->rows_per_chunk;
   f->time = make_series(f->file.get(), "/time", {}, 1024);
   for (std::size_t i = 0; i < body_fields.size(); ++i)

@@ -17,6 +17,8 @@ AsyncSink::~AsyncSink() {
 
 void AsyncSink::begin(const MultibodySystem& system) {
   inner_->begin(system);
+  const SnapshotContent want = inner_->content();
+  if (want.energy || want.joint_wrench) system_ = std::make_unique<MultibodySystem>(system);
   const std::size_t bytes = static_cast<std::size_t>(system.dimension()) * sizeof(double) + 64;
   capacity_ = std::max<std::size_t>(2, capacity_bytes_ / bytes);
   writer_ = std::thread([this] { run(); });
@@ -74,7 +76,14 @@ void AsyncSink::run() {
     }
     not_full_.notify_one();
     try {
+      const auto start = std::chrono::steady_clock::now();
+      const SnapshotContent want = inner_->content();
+      if (want.energy) s.energy = system_->energy(s.t, s.state);
+      if (want.joint_wrench) system_->joint_wrenches(s.t, s.state, s.joint_wrench);
       inner_->write(std::move(s));
+      const double spent = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      std::lock_guard lock(mutex_);
+      stats_.writer_seconds += spent;
     } catch (...) {
       std::lock_guard lock(mutex_);
       error_ = std::current_exception();

@@ -28,7 +28,7 @@ Model small_train() {
   Model m = make_train(p);
   m.simulation.t_end = 0.5;
   m.simulation.step = 0.005;
-  m.simulation.output_every = 1;  // 101 snapshots: several chunk rows of 32
+  m.simulation.output_every = 1;  // 101 snapshots: several chunk rows of 16
   return m;
 }
 

@@ -1,6 +1,8 @@
 #pragma once
 // Runs another sink on its own thread behind a bounded queue, so that writing results
-// never holds the computation back unless the queue is full.
+// never holds the computation back unless the queue is full. What the inner sink wants
+// besides the state (energies, joint wrenches) is computed on the writer thread too,
+// from the writer's own copy of the system.
 #include <condition_variable>
 #include <cstddef>
 #include <deque>
@@ -17,6 +19,7 @@ struct AsyncSinkStats {
   long snapshots = 0;
   long waits = 0;             // times the computation found the queue full
   double wait_seconds = 0.0;  // and how long it waited in all
+  double writer_seconds = 0.0;  // time the writer thread spent in the inner sink's write()
 };
 
 class AsyncSink : public ResultSink {
@@ -25,7 +28,7 @@ class AsyncSink : public ResultSink {
   explicit AsyncSink(std::unique_ptr<ResultSink> inner, std::size_t capacity_bytes = std::size_t{256} << 20);
   ~AsyncSink() override;
 
-  SnapshotContent content() const override { return inner_->content(); }
+  SnapshotContent content() const override { return {}; }  // the writer computes the rest
   void begin(const MultibodySystem& system) override;
   void write(Snapshot&& snapshot) override;
   void end() override;
@@ -36,6 +39,7 @@ class AsyncSink : public ResultSink {
   void rethrow_writer_error();
 
   std::unique_ptr<ResultSink> inner_;
+  std::unique_ptr<MultibodySystem> system_;  // the writer's copy, for energies and joint wrenches
   std::size_t capacity_bytes_;
   std::size_t capacity_ = 2;
   std::mutex mutex_;

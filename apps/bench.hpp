@@ -1,0 +1,27 @@
+#pragma once
+// The benchmarks of `mbsflow bench`: each prints a table and writes a CSV file.
+#include <chrono>
+#include <string>
+#include <vector>
+
+namespace mbsflow::cli {
+
+struct BenchArgs {
+  std::string what = "rhs";
+  std::vector<int> bodies;  // default per benchmark
+  double seconds = 1.0;     // rhs: time per measurement
+  int steps = 1000;         // output: steps per run
+  int repeats = 3;          // output: runs per case, the fastest counts
+  std::string dir = ".";    // output: where the results files go
+  std::string csv;          // default: bench_WHAT.csv
+};
+
+int bench_rhs(const BenchArgs& a);
+int bench_output(const BenchArgs& a);
+
+using BenchClock = std::chrono::steady_clock;
+inline double seconds_since(BenchClock::time_point start) {
+  return std::chrono::duration<double>(BenchClock::now() - start).count();
+}
+
+}  // namespace mbsflow::cli
