@@ -60,9 +60,10 @@ TEST_CASE("a run that diverges exits with 1 and names time, body and a step that
   const fs::path d = scratch("diverge");
   const std::string dir = d.string();
   REQUIRE(run("generate chain --bodies 10 --step 0.01 -o chain.json", dir).code == 0);
-  const Result r = run("run chain.json --t-end 1", dir);
+  const Result r = run("run chain.json --t-end 1 -o diverged.h5", dir);
   INFO(r.err);
   CHECK(r.code == 1);
+  CHECK(r.err.find("in diverged.h5") != std::string::npos);
   CHECK(r.err.find("warning: step 0.01 s is above the estimated RK4 stability limit") != std::string::npos);
   CHECK(r.err.find("mbsflow: run diverged at t = ") != std::string::npos);
   CHECK(r.err.find("body 'link") != std::string::npos);

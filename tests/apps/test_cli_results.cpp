@@ -84,3 +84,38 @@ TEST_CASE("results: info, CSV export, a consistent XDMF sidecar and a plot", "[a
   CHECK(fs::exists(d / "grid.png"));
   fs::remove_all(d.parent_path());
 }
+
+TEST_CASE("a diverged run leaves a readable results file with what it computed", "[apps]") {
+  const fs::path d = scratch("diverged");
+  REQUIRE(run("generate chain --bodies 10 --step 0.01 -o chain.json", d.string()).code == 0);
+  const Result r = run("run chain.json --t-end 1 -o out.h5", d.string());
+  REQUIRE(r.code == 1);
+  std::smatch m;
+  REQUIRE(std::regex_search(r.err, m, std::regex(R"(results keep (\d+) snapshots)")));
+  const mbsflow::ResultsFile results((d / "out.h5").string());
+  CHECK(results.time().size() == std::stoul(m[1]));
+  CHECK(results.time().size() >= 1);
+  fs::remove_all(d.parent_path());
+}
+
+TEST_CASE("the progress line shows on a terminal only", "[apps]") {
+  const fs::path d = scratch("progress");
+  REQUIRE(run("generate chain --bodies 2000 -o chain.json", d.string()).code == 0);
+  const std::string args = "run chain.json --t-end 0.6";
+  const Result piped = run(args, d.string());
+  CHECK(piped.code == 0);
+  CHECK(piped.err.find("ETA") == std::string::npos);
+  CHECK(piped.err.find("mbsflow: done: ") != std::string::npos);
+  if (std::system("command -v script >/dev/null 2>&1") == 0) {
+    // script(1) runs the command on a pseudo-terminal and copies what it shows to stdout.
+    const std::string cmd = "cd '" + d.string() + "' && script -qec \"'" + std::string(MBSFLOW_EXE) + "' " + args +
+                            "\" /dev/null > tty.txt 2>&1";
+    REQUIRE(std::system(cmd.c_str()) == 0);
+    const std::string shown = read_text(d / "tty.txt");
+    CHECK(shown.find("ETA") != std::string::npos);
+    CHECK(shown.find("steps/s") != std::string::npos);
+    const Result quiet = run(args + " --quiet", d.string());
+    CHECK(quiet.err.find("ETA") == std::string::npos);
+  }
+  fs::remove_all(d.parent_path());
+}
