@@ -14,7 +14,7 @@ namespace {
 
 class Scanner {
  public:
-  Scanner(std::string_view text, std::unordered_map<std::string, std::pair<SourceLocation, SourceLocation>>& out)
+  Scanner(std::string_view text, std::unordered_map<std::string, JsonLocations::Entry>& out)
       : s_(text), out_(out) {}
 
   void value(const std::string& path, SourceLocation key) {
@@ -88,19 +88,14 @@ class Scanner {
   }
 
   std::string_view s_;
-  std::unordered_map<std::string, std::pair<SourceLocation, SourceLocation>>& out_;
+  std::unordered_map<std::string, JsonLocations::Entry>& out_;
   std::size_t pos_ = 0;
   int line_ = 1, col_ = 1;
 };
 
 }  // namespace
 
-JsonLocations::JsonLocations(std::string_view text) {
-  std::unordered_map<std::string, std::pair<SourceLocation, SourceLocation>> raw;
-  Scanner(text, raw).value("", {1, 1});
-  map_.reserve(raw.size());
-  for (auto& [path, loc] : raw) map_[path] = {loc.first, loc.second};
-}
+JsonLocations::JsonLocations(std::string_view text) { Scanner(text, map_).value("", {1, 1}); }
 
 SourceLocation JsonLocations::value(const std::string& path) const {
   const auto it = map_.find(path);

@@ -14,6 +14,10 @@ struct SourceLocation {
 
 class JsonLocations {
  public:
+  struct Entry {
+    SourceLocation key, value;
+  };
+
   JsonLocations() = default;
   // The text must be valid JSON (parse it with nlohmann first); nothing is validated here.
   explicit JsonLocations(std::string_view text);
@@ -21,9 +25,6 @@ class JsonLocations {
   SourceLocation key(const std::string& path) const;  // the member's key; the value for array items
 
  private:
-  struct Entry {
-    SourceLocation key, value;
-  };
   std::unordered_map<std::string, Entry> map_;
 };
 
