@@ -15,7 +15,7 @@ using namespace mbsflow::test;
 
 TEST_CASE("a run stopped by SIGTERM exits with 1 and keeps every completed snapshot", "[apps]") {
   const fs::path d = scratch("sigterm");
-  REQUIRE(run("generate chain --bodies 2000 -o chain.json", d.string()).code == 0);
+  REQUIRE(run("generate chain --bodies 200 -o chain.json", d.string()).code == 0);
   const fs::path err = d / "stderr.txt", h5 = d / "run.h5";
   const pid_t pid = ::fork();
   REQUIRE(pid >= 0);
@@ -25,9 +25,10 @@ TEST_CASE("a run stopped by SIGTERM exits with 1 and keeps every completed snaps
     ::execl(MBSFLOW_EXE, "mbsflow", "run", "chain.json", "--t-end", "1000", "--every", "5", "-o", "run.h5", nullptr);
     ::_exit(98);
   }
-  // Let it write a few chunk rows, then ask it to stop.
+  // Wait until the first chunk row (16 snapshots of 200 bodies, 333 kB) is on disk, however
+  // slow this build is, then ask the run to stop.
   const auto start = std::chrono::steady_clock::now();
-  while ((!fs::exists(h5) || fs::file_size(h5) < 200000) && std::chrono::steady_clock::now() - start < std::chrono::seconds(60))
+  while ((!fs::exists(h5) || fs::file_size(h5) < 400000) && std::chrono::steady_clock::now() - start < std::chrono::seconds(300))
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
   REQUIRE(::kill(pid, SIGTERM) == 0);
@@ -52,9 +53,9 @@ TEST_CASE("a run stopped by SIGTERM exits with 1 and keeps every completed snaps
   const mbsflow::ResultsFile r(h5.string());
   const std::vector<double> t = r.time();
   CHECK(t.size() == kept);
-  CHECK(kept > 16);
+  CHECK(kept >= 16);
   CHECK(t.back() == Approx(std::stod(m[2])).epsilon(1e-5));
-  CHECK(r.shape("/bodies/position") == std::vector<std::uint64_t>{kept, 2000, 3});
+  CHECK(r.shape("/bodies/position") == std::vector<std::uint64_t>{kept, 200, 3});
   for (std::size_t i = 1; i < t.size(); ++i) CHECK(t[i] > t[i - 1]);
   if (std::system("command -v h5dump >/dev/null 2>&1") == 0)
     CHECK(std::system(("h5dump -H '" + h5.string() + "' >/dev/null 2>&1").c_str()) == 0);
