@@ -1,6 +1,7 @@
 #include "mbsflow/graph/generators.hpp"
 
 #include <cmath>
+#include <random>
 #include <string>
 
 #include "mbsflow/graph/error.hpp"
@@ -147,6 +148,50 @@ Model make_train(const TrainParams& p) {
   }
   m.simulation.t_end = 2.0;
   m.simulation.output_every = 10;
+  return m;
+}
+
+Model make_random_tree(const RandomTreeParams& p) {
+  require(p.bodies >= 1, "random: --bodies must be >= 1");
+  require(p.cycles >= 0, "random: --cycles must be >= 0");
+  Model m;
+  m.name = "random-" + std::to_string(p.bodies) + "-" + std::to_string(p.cycles);
+  m.gravity = {0.0, -9.81, 0.0};
+  std::mt19937_64 rng(p.seed);  // its raw output is the same everywhere
+  auto uniform = [&] { return static_cast<double>(rng() >> 11) * 0x1.0p-53; };
+  auto index = [&](int n) { return static_cast<int>(rng() % static_cast<std::uint64_t>(n)); };
+  const double mass = 1.0, len = 0.2;
+  const Vec6 inertia = box_inertia(mass, 0.1, 0.1, 0.1);
+  const Vec6 k{1e5, 1e5, 1e5, 50, 50, 50};
+  // A joint at the midpoint of two bodies, unstressed in the initial configuration.
+  auto join = [&](std::string name, int a, int b) {
+    const Vec3& ra = m.bodies[static_cast<std::size_t>(a)].position;
+    const Vec3& rb = m.bodies[static_cast<std::size_t>(b)].position;
+    const Vec3 mid{0.5 * (ra[0] + rb[0]), 0.5 * (ra[1] + rb[1]), 0.5 * (ra[2] + rb[2])};
+    m.joints.push_back(bushing(m, std::move(name), a, b, {mid[0] - ra[0], mid[1] - ra[1], mid[2] - ra[2]},
+                               {mid[0] - rb[0], mid[1] - rb[1], mid[2] - rb[2]}, k, 0.05));
+  };
+  for (int i = 0; i < p.bodies; ++i) {
+    Vec3 at{0.0, -len, 0.0};
+    const int parent = i == 0 ? ground : index(i);
+    if (parent != ground) {
+      const Vec3& pp = m.bodies[static_cast<std::size_t>(parent)].position;
+      const double a = 2.0 * M_PI * uniform(), z = 0.6 * uniform() - 0.3;
+      at = {pp[0] + len * std::cos(a), pp[1] - len * (0.5 + 0.5 * uniform()), pp[2] + len * z};
+    }
+    m.bodies.push_back(body("r" + std::to_string(i), mass, inertia, at));
+    if (parent == ground)
+      m.joints.push_back(bushing(m, "root", ground, 0, {0, 0, 0}, {0, len, 0}, k, 0.05));
+    else
+      join("t" + std::to_string(i), parent, i);
+  }
+  for (int c = 0; c < p.cycles && p.bodies > 2; ++c) {
+    int a = index(p.bodies), b = index(p.bodies);
+    if (a == b) b = (a + 1) % p.bodies;
+    join("c" + std::to_string(c), std::min(a, b), std::max(a, b));
+  }
+  m.simulation.t_end = 1.0;
+  m.simulation.output_every = 50;
   return m;
 }
 

@@ -45,9 +45,12 @@ struct MultibodySystem::Deflection {
   Eigen::Vector3d omega_rel;  // relative angular velocity, joint frame
 };
 
-MultibodySystem::MultibodySystem(const Model& model) : model_(model) {
+MultibodySystem::MultibodySystem(const Model& model) : MultibodySystem(model, static_cast<int>(model.bodies.size())) {}
+
+MultibodySystem::MultibodySystem(const Model& model, int active) : model_(model) {
   const int n = static_cast<int>(model.bodies.size());
   layout_.bodies = n;
+  active_ = std::clamp(active, 0, n);
   gravity_ = vec(model.gravity);
   for (const Body& b : model.bodies) {
     mass_.push_back(b.mass);
@@ -254,8 +257,7 @@ void MultibodySystem::joint_wrenches(double t, const Eigen::VectorXd& y, Eigen::
 }
 
 void MultibodySystem::compute_derivatives(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const {
-  const Eigen::Index n = layout_.bodies;
-  for (Eigen::Index i = 0; i < n; ++i) {
+  for (Eigen::Index i = 0; i < active_; ++i) {
     const auto bi = static_cast<std::size_t>(i);
     const Eigen::Matrix3d& r = rot_[bi];
     Eigen::Vector3d force = mass_[bi] * gravity_;

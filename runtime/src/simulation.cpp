@@ -9,6 +9,8 @@
 #include "mbsflow/methods/dopri5.hpp"
 #include "mbsflow/methods/rk4.hpp"
 #include "mbsflow/runtime/divergence.hpp"
+#include "sink_runner.hpp"
+#include "step_grid.hpp"
 
 namespace mbsflow {
 namespace {
@@ -17,39 +19,16 @@ using Clock = std::chrono::steady_clock;
 
 void check(const MultibodySystem& sys, const Eigen::VectorXd& y, double t, const RunOptions& o) {
   if (auto d = find_divergence(sys.layout(), y)) throw RunError(divergence_message(sys.model(), *d, t, o.method, o.step));
-  if (o.stop && o.stop->load(std::memory_order_relaxed)) {
-    char buf[96];
-    std::snprintf(buf, sizeof buf, "interrupted at t = %.6g s", t);
-    throw RunError(buf);
-  }
-}
-
-// Hands the state at t to the sink, with what the sink asked for.
-void emit(MultibodySystem& sys, ResultSink* sink, double t, const Eigen::VectorXd& y, RunSummary& out) {
-  const SnapshotContent want = sink->content();
-  Snapshot s;
-  s.t = t;
-  s.state = y;
-  if (want.joint_wrench) sys.joint_wrenches(t, y, s.joint_wrench);
-  if (want.energy) s.energy = sys.energy(t, y);
-  sink->write(std::move(s));
-  ++out.snapshots;
-  out.t_last_snapshot = t;
-}
-
-// Number of steps of size h that cover [t0, t1]; the last one may be shorter.
-long step_count(double t0, double t1, double h) {
-  const double x = (t1 - t0) / h;
-  const double r = std::round(x);
-  return std::abs(x - r) <= 1e-9 * std::max(1.0, x) ? static_cast<long>(r) : static_cast<long>(std::ceil(x));
+  check_stop(o, t);
 }
 
 void run_rk4(MultibodySystem& sys, const RunOptions& o, ResultSink* sink, RunSummary& out, Eigen::VectorXd& y) {
   Rk4 rk(sys.dimension());
-  const long n = step_count(o.t_start, o.t_end, o.step);
+  const StepGrid grid = step_grid(o.t_start, o.t_end, o.step);
+  const long n = grid.steps;
   double t = o.t_start;
   for (long k = 1; k <= n; ++k) {
-    const double t_next = k == n ? o.t_end : o.t_start + static_cast<double>(k) * o.step;
+    const double t_next = grid.time(k);
     rk.step(sys, t, t_next - t, y);
     sys.after_step(t_next, y);
     t = t_next;
@@ -126,30 +105,13 @@ RunSummary run_simulation(MultibodySystem& sys, const RunOptions& o, ResultSink*
   const auto start = Clock::now();
   Eigen::VectorXd y = sys.initial_state();
   if (sink) sink->begin(sys);
-  auto close_quietly = [sink] {
-    try {
-      if (sink) sink->end();
-    } catch (...) {  // an error on close must not replace the one that ended the run
-    }
-  };
-  try {
+  run_with_sink(sink, out, [&] {
     if (sink) emit(sys, sink, o.t_start, y, out);
     if (o.method == Method::rk4)
       run_rk4(sys, o, sink, out, y);
     else
       run_dopri5(sys, o, sink, out, y);
-  } catch (const RunError& e) {
-    // Close the sink so that what was written stays readable, and say how far it got.
-    close_quietly();
-    if (!sink) throw;
-    char buf[128];
-    std::snprintf(buf, sizeof buf, "; results keep %ld snapshots up to t = %.6g s", out.snapshots, out.t_last_snapshot);
-    throw RunError(e.what() + std::string(buf));
-  } catch (...) {
-    close_quietly();
-    throw;
-  }
-  if (sink) sink->end();
+  });
   out.wall_seconds = std::chrono::duration<double>(Clock::now() - start).count();
   out.final_state = std::move(y);
   return out;

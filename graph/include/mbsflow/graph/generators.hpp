@@ -41,4 +41,13 @@ struct TrainParams {
 };
 Model make_train(const TrainParams& p);
 
+// A random tree of bodies hanging from the ground (each body joined by a bushing to a
+// random earlier one) with extra joints closing cycles; the same seed gives the same model.
+struct RandomTreeParams {
+  int bodies = 100;
+  int cycles = 10;
+  unsigned seed = 1;
+};
+Model make_random_tree(const RandomTreeParams& p);
+
 }  // namespace mbsflow

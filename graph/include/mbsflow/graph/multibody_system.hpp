@@ -25,6 +25,9 @@ struct Energy {
 class MultibodySystem {
  public:
   explicit MultibodySystem(const Model& model);
+  // Derivatives only for the first `active` bodies (a submodel's own bodies; the rest are
+  // ghosts whose state comes from their owners); their values are those of the full model.
+  MultibodySystem(const Model& model, int active);
 
   Eigen::Index dimension() const { return layout_.size(); }
   const StateLayout& layout() const { return layout_; }
@@ -70,6 +73,7 @@ class MultibodySystem {
 
   Model model_;
   StateLayout layout_;
+  Eigen::Index active_ = 0;
   Eigen::Vector3d gravity_;
   std::vector<double> mass_, inv_mass_;
   std::vector<Eigen::Matrix3d> inertia_, inv_inertia_;

@@ -4,29 +4,45 @@
 
 namespace mbsflow {
 
+// The arithmetic of RK4, element by element, shared by the sequential stepper below and
+// the partitioned executors: whoever computes a part of the state with these gets bit for
+// bit the numbers of the whole-state computation.
+namespace rk4 {
+inline constexpr double stage_fraction[4] = {0.0, 0.5, 0.5, 1.0};  // c_i
+
+// Input of stage s+1 (s = 0, 1, 2): y + c_{s+1} h k_s.
+template <class Y, class K, class Out>
+void stage_input(const Y& y, const K& k, double h, int s, Out&& out) {
+  out = y + (stage_fraction[s + 1] * h) * k;
+}
+
+// y_{n+1} = y_n + h/6 (k1 + 2 (k2 + k3) + k4), in place.
+template <class Y, class K>
+void combine(Y&& y, const K& k1, const K& k2, const K& k3, const K& k4, double h) {
+  y += (h / 6.0) * (k1 + 2.0 * (k2 + k3) + k4);
+}
+}  // namespace rk4
+
 class Rk4 {
  public:
-  explicit Rk4(Eigen::Index n) : k1_(n), k2_(n), k3_(n), k4_(n), tmp_(n) {}
+  explicit Rk4(Eigen::Index n) : k_{Eigen::VectorXd(n), Eigen::VectorXd(n), Eigen::VectorXd(n), Eigen::VectorXd(n)}, tmp_(n) {}
 
   // Advances y from t to t + h. Four evaluations of f.
   template <OdeSystem S>
   void step(S& sys, double t, double h, Eigen::VectorXd& y) {
-    const double h2 = 0.5 * h;
-    sys.rhs(t, y, k1_);
-    tmp_ = y + h2 * k1_;
-    sys.rhs(t + h2, tmp_, k2_);
-    tmp_ = y + h2 * k2_;
-    sys.rhs(t + h2, tmp_, k3_);
-    tmp_ = y + h * k3_;
-    sys.rhs(t + h, tmp_, k4_);
-    y += (h / 6.0) * (k1_ + 2.0 * (k2_ + k3_) + k4_);
+    sys.rhs(t, y, k_[0]);
+    for (int s = 0; s < 3; ++s) {
+      rk4::stage_input(y, k_[s], h, s, tmp_);
+      sys.rhs(t + rk4::stage_fraction[s + 1] * h, tmp_, k_[s + 1]);
+    }
+    rk4::combine(y, k_[0], k_[1], k_[2], k_[3], h);
   }
 
   static constexpr int evaluations_per_step = 4;
   static constexpr int order = 4;
 
  private:
-  Eigen::VectorXd k1_, k2_, k3_, k4_, tmp_;
+  Eigen::VectorXd k_[4], tmp_;
 };
 
 }  // namespace mbsflow

@@ -1,0 +1,57 @@
+#pragma once
+// Cutting a model into weakly coupled submodels, as the seed did: the body/joint graph is
+// put in a bandwidth-reducing order (reverse Cuthill-McKee, per connected part), the band
+// is cut into K contiguous pieces of equal cost, and each piece gets its boundary (ghost)
+// bodies and an exchange plan.
+#include <string>
+#include <vector>
+
+#include "mbsflow/graph/model.hpp"
+
+namespace mbsflow {
+
+// Bandwidth-reducing order of the bodies (reverse Cuthill-McKee on the joint graph; the
+// connected parts one after another).
+std::vector<int> cuthill_mckee_order(const Model& model);
+
+// Relative cost of computing a body (its own equations plus half of each joint).
+std::vector<double> body_costs(const Model& model);
+
+struct Submodel {
+  std::vector<int> own;     // global body indices, ascending
+  std::vector<int> ghosts;  // bodies of other submodels joined to own bodies, ascending
+  std::vector<int> joints;  // joints with at least one own body, ascending global index
+  int cut_joints = 0;       // of those, the ones that reach a ghost
+  double cost = 0.0;
+  // Per neighbour that owns some of this submodel's ghosts: which of its bodies (its local
+  // indices) fill which ghost slots here (local indices), in ascending global order.
+  struct Exchange {
+    int neighbour = 0;
+    std::vector<int> from;  // the neighbour's local indices
+    std::vector<int> to;    // this submodel's local ghost slots
+  };
+  std::vector<Exchange> exchanges;
+  int local_index(int global) const;  // own bodies first, then ghosts; -1 if neither
+};
+
+struct Decomposition {
+  std::vector<int> part_of_body;
+  std::vector<Submodel> submodels;
+  int cut_joints = 0;
+  double imbalance = 0.0;  // max cost / mean cost - 1
+};
+
+// K-way decomposition; InputError if k < 1 or k > bodies.
+Decomposition decompose(const Model& model, int k);
+// Decomposition from a given assignment of bodies to parts 0..k-1 (every part non-empty).
+Decomposition decompose(const Model& model, const std::vector<int>& part_of_body, int k);
+
+// The local model of a submodel: own bodies, then ghosts; its joints, loads of own bodies
+// and drivers of local bodies, in global order, so that every own body's derivative is
+// bit for bit the one of the whole model.
+Model submodel_model(const Model& model, const Submodel& sub);
+
+// The partitioned body/joint graph in Graphviz dot.
+std::string decomposition_dot(const Model& model, const Decomposition& d);
+
+}  // namespace mbsflow

@@ -1,0 +1,35 @@
+#pragma once
+// Runs a decomposed model on threads: every submodel integrates its own bodies with RK4
+// and pulls its ghost bodies' values from their owners at every stage. Each own body's
+// numbers are bit for bit those of the single-partition run (run_simulation), whatever
+// the partition and thread count: the local models sum forces in global order and the
+// stage arithmetic is rk4::stage_input / rk4::combine, element by element.
+#include "mbsflow/graph/decomposition.hpp"
+#include "mbsflow/runtime/simulation.hpp"
+
+namespace mbsflow {
+
+enum class Executor {
+  flow_graph,  // oneTBB flow graph: a submodel's stage starts when its neighbours' values are in
+  barrier,     // the seed's scheme: all submodels compute a stage, barrier, all exchange
+};
+
+struct ParallelOptions {
+  int threads = 0;  // 0: all cores
+  Executor executor = Executor::flow_graph;
+};
+
+struct ParallelStats {
+  int threads = 0;
+  double busy_seconds = 0.0;   // summed over threads: time in submodel stage work
+  double wait_fraction = 0.0;  // 1 - busy / (wall x threads): waiting for neighbours or the barrier
+};
+
+// RK4 only (InputError otherwise). Snapshots in global body order go to the sink.
+RunSummary run_partitioned(const Model& model, const Decomposition& d, const RunOptions& options,
+                           const ParallelOptions& parallel, ResultSink* sink, ParallelStats* stats = nullptr);
+
+// Partitions for a thread count: one submodel per thread, fewer for small models.
+int default_partitions(const Model& model, int threads);
+
+}  // namespace mbsflow

@@ -1,0 +1,57 @@
+#pragma once
+// What every run loop does with its sink: snapshots with what the sink asked for, and
+// closing the sink on every way out so that what was written stays readable.
+#include <cstdio>
+#include <string>
+
+#include "mbsflow/graph/error.hpp"
+#include "mbsflow/runtime/simulation.hpp"
+
+namespace mbsflow {
+
+inline void emit(MultibodySystem& sys, ResultSink* sink, double t, const Eigen::VectorXd& y, RunSummary& out) {
+  const SnapshotContent want = sink->content();
+  Snapshot s;
+  s.t = t;
+  s.state = y;
+  if (want.joint_wrench) sys.joint_wrenches(t, y, s.joint_wrench);
+  if (want.energy) s.energy = sys.energy(t, y);
+  sink->write(std::move(s));
+  ++out.snapshots;
+  out.t_last_snapshot = t;
+}
+
+// Runs body(); closes the sink whatever happens; a RunError gets told how far the
+// results go.
+template <class F>
+void run_with_sink(ResultSink* sink, RunSummary& out, F body) {
+  auto close_quietly = [sink] {
+    try {
+      if (sink) sink->end();
+    } catch (...) {  // an error on close must not replace the one that ended the run
+    }
+  };
+  try {
+    body();
+  } catch (const RunError& e) {
+    close_quietly();
+    if (!sink) throw;
+    char buf[128];
+    std::snprintf(buf, sizeof buf, "; results keep %ld snapshots up to t = %.6g s", out.snapshots, out.t_last_snapshot);
+    throw RunError(e.what() + std::string(buf));
+  } catch (...) {
+    close_quietly();
+    throw;
+  }
+  if (sink) sink->end();
+}
+
+inline void check_stop(const RunOptions& o, double t) {
+  if (o.stop && o.stop->load(std::memory_order_relaxed)) {
+    char buf[96];
+    std::snprintf(buf, sizeof buf, "interrupted at t = %.6g s", t);
+    throw RunError(buf);
+  }
+}
+
+}  // namespace mbsflow

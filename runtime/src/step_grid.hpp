@@ -1,0 +1,23 @@
+#pragma once
+// The fixed-step time grid of an RK4 run, shared by the sequential and partitioned loops so
+// that both step through bit-identical times.
+#include <algorithm>
+#include <cmath>
+
+namespace mbsflow {
+
+struct StepGrid {
+  double t_start = 0.0, t_end = 0.0, h = 0.0;
+  long steps = 0;  // steps of h that cover [t_start, t_end]; the last one may be shorter
+  double time(long n) const { return n >= steps ? t_end : t_start + static_cast<double>(n) * h; }
+};
+
+inline StepGrid step_grid(double t_start, double t_end, double h) {
+  StepGrid g{t_start, t_end, h, 0};
+  const double x = (t_end - t_start) / h;
+  const double r = std::round(x);
+  g.steps = std::abs(x - r) <= 1e-9 * std::max(1.0, x) ? static_cast<long>(r) : static_cast<long>(std::ceil(x));
+  return g;
+}
+
+}  // namespace mbsflow
