@@ -12,7 +12,8 @@ namespace {
 
 struct GenerateArgs {
   std::string kind;
-  int bodies = 100, rows = 10, cols = 10, wagons = 3;
+  int bodies = 100, rows = 10, cols = 10, wagons = 3, cycles = 10;
+  unsigned seed = 1;
   std::optional<double> t_end, step;
   std::string output;
 };
@@ -28,10 +29,16 @@ int generate(const GenerateArgs& a) {
     p.rows = a.rows;
     p.cols = a.cols;
     m = make_grid(p);
-  } else {
+  } else if (a.kind == "train") {
     TrainParams p;
     p.wagons = a.wagons;
     m = make_train(p);
+  } else {
+    RandomTreeParams p;
+    p.bodies = a.bodies;
+    p.cycles = a.cycles;
+    p.seed = a.seed;
+    m = make_random_tree(p);
   }
   if (a.t_end) m.simulation.t_end = *a.t_end;
   if (a.step) m.simulation.step = *a.step;
@@ -46,11 +53,15 @@ int generate(const GenerateArgs& a) {
 
 Action add_generate(CLI::App& app) {
   auto a = std::make_shared<GenerateArgs>();
-  CLI::App* sub = app.add_subcommand("generate", "Write a benchmark model: chain, grid or train");
-  sub->add_option("kind", a->kind, "chain: hanging chain of N links; grid: R x C plate; train: W wagons on a rough track")
+  CLI::App* sub = app.add_subcommand("generate", "Write a benchmark model: chain, grid, train or random");
+  sub->add_option("kind", a->kind,
+                  "chain: hanging chain of N links; grid: R x C plate; train: W wagons on a rough track; "
+                  "random: a random tree of N bodies with extra joints closing cycles")
       ->required()
-      ->check(CLI::IsMember({"chain", "grid", "train"}));
-  sub->add_option("--bodies", a->bodies, "chain: number of links")->check(CLI::Range(1, 100000000));
+      ->check(CLI::IsMember({"chain", "grid", "train", "random"}));
+  sub->add_option("--bodies", a->bodies, "chain, random: number of bodies")->check(CLI::Range(1, 100000000));
+  sub->add_option("--cycles", a->cycles, "random: extra joints closing cycles")->check(CLI::Range(0, 100000000));
+  sub->add_option("--seed", a->seed, "random: seed");
   sub->add_option("--rows", a->rows, "grid: rows")->check(CLI::Range(1, 100000));
   sub->add_option("--cols", a->cols, "grid: columns")->check(CLI::Range(1, 100000));
   sub->add_option("--wagons", a->wagons, "train: wagons (7 bodies each)")->check(CLI::Range(1, 10000000));

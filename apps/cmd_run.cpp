@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <memory>
 #include <optional>
+#include <thread>
 
 #include "commands.hpp"
 #include "mbsflow/graph/error.hpp"
@@ -12,7 +13,9 @@
 #include "mbsflow/io/hdf5_sink.hpp"
 #include "mbsflow/io/model_reader.hpp"
 #include "mbsflow/io/model_writer.hpp"
+#include "mbsflow/io/partition_file.hpp"
 #include "mbsflow/runtime/async_sink.hpp"
+#include "mbsflow/runtime/partitioned_run.hpp"
 #include "mbsflow/runtime/simulation.hpp"
 #include "progress.hpp"
 #include "signals.hpp"
@@ -28,7 +31,23 @@ struct RunArgs {
   std::string output;
   std::string fields = "position,orientation,velocity,angular_velocity,energy";
   bool quiet = false;
+  int threads = 0;  // 0: all cores
+  std::optional<int> partitions;
+  std::string executor = "flow";
+  std::string partition_file;
 };
+
+// How the run is cut: a partition file, --partitions, or one submodel per thread.
+std::optional<Decomposition> choose_decomposition(const Model& m, const RunArgs& a, int threads) {
+  if (!a.partition_file.empty()) return read_partition_file(m, a.partition_file);
+  const int k = a.partitions ? *a.partitions : default_partitions(m, threads);
+  if (k == 1 && !a.partitions) return std::nullopt;
+  if (m.simulation.method != Method::rk4) {
+    if (!a.partitions) return std::nullopt;  // DOPRI5 runs on one thread so far
+    throw InputError("--partitions: partitioned runs integrate with RK4 so far; DOPRI5 runs with one partition");
+  }
+  return decompose(m, k);
+}
 
 std::string human_bytes(double b) {
   const char* unit[] = {"B", "KiB", "MiB", "GiB", "TiB"};
@@ -96,12 +115,21 @@ int run(const RunArgs& a) {
     sink = std::make_unique<AsyncSink>(std::make_unique<Hdf5Sink>(a.output, fields, std::move(info)));
   }
   MultibodySystem sys(m);
+  const int threads = a.threads > 0 ? a.threads : static_cast<int>(std::thread::hardware_concurrency());
+  const std::optional<Decomposition> d = choose_decomposition(m, a, threads);
+  if (d && !a.quiet)
+    std::fprintf(stderr, "mbsflow: %zu submodels on %d threads (%s), %d cut joints, load imbalance %.1f %%\n",
+                 d->submodels.size(), threads, a.executor == "flow" ? "flow graph" : "barrier per stage", d->cut_joints,
+                 100.0 * d->imbalance);
   ProgressLine progress(o.t_start, o.t_end, !a.quiet);
   o.progress = [&](double t, long steps) { progress.update(t, steps); };
   o.stop = install_stop_handlers();
   RunSummary r;
   try {
-    r = run_simulation(sys, o, sink.get());
+    if (d)
+      r = run_partitioned(m, *d, o, {threads, a.executor == "flow" ? Executor::flow_graph : Executor::barrier}, sink.get());
+    else
+      r = run_simulation(sys, o, sink.get());
   } catch (const RunError& e) {
     progress.finish();
     const int sig = stop_signal();
@@ -144,6 +172,14 @@ Action add_run(CLI::App& app) {
                   "What to write: position, orientation, velocity, angular_velocity, energy, joint_force, or all")
       ->capture_default_str();
   sub->add_flag("-q,--quiet", a->quiet, "Print only warnings, errors and the closing line");
+  sub->add_option("--threads", a->threads, "Threads (default: all cores)")->check(CLI::Range(1, 4096));
+  sub->add_option("--partitions", a->partitions,
+                  "Submodels (default: one per thread, fewer for small models); results are the same bit for bit")
+      ->check(CLI::Range(1, 1 << 30));
+  sub->add_option("--executor", a->executor, "flow: oneTBB flow graph, neighbours only; barrier: the seed's barrier per stage")
+      ->check(CLI::IsMember({"flow", "barrier"}))
+      ->capture_default_str();
+  sub->add_option("--partition-file", a->partition_file, "Use the assignment written by mbsflow partition -o");
   return [a] { return run(*a); };
 }
 

@@ -10,6 +10,7 @@ using Action = std::function<int()>;  // returns the exit code
 
 Action add_run(CLI::App& app);
 Action add_generate(CLI::App& app);
+Action add_partition(CLI::App& app);
 Action add_bench(CLI::App& app);
 Action add_info(CLI::App& app);
 Action add_export(CLI::App& app);

@@ -20,6 +20,35 @@ Model with_short_run(Model m) {
   return m;
 }
 
+// A chain and a plate side by side plus a free body: three disconnected parts.
+Model disconnected() {
+  ChainParams c;
+  c.bodies = 12;
+  GridParams g;
+  g.rows = 3;
+  g.cols = 4;
+  Model a = make_chain(c);
+  const Model b = make_grid(g);
+  const int offset = static_cast<int>(a.bodies.size());
+  for (Body body : b.bodies) {
+    body.position[2] += 5.0;
+    a.bodies.push_back(body);
+  }
+  for (Joint j : b.joints) {
+    if (j.body1 != ground) j.body1 += offset;
+    j.body2 += offset;
+    if (j.body1 == ground) j.point1[2] += 5.0;
+    a.joints.push_back(j);
+  }
+  Body free_body = b.bodies[0];
+  free_body.name = "free";
+  free_body.position = {0, 3, 0};
+  free_body.angular_velocity = {1, 2, 3};
+  a.bodies.push_back(free_body);
+  a.name = "disconnected";
+  return a;
+}
+
 std::vector<Model> models() {
   TrainParams train;
   train.wagons = 3;  // 21 bodies
@@ -32,7 +61,7 @@ std::vector<Model> models() {
   tree.bodies = 50;
   tree.cycles = 12;
   return {with_short_run(make_chain(chain)), with_short_run(make_grid(grid)), with_short_run(make_train(train)),
-          with_short_run(make_random_tree(tree))};
+          with_short_run(make_random_tree(tree)), with_short_run(disconnected())};
 }
 
 }  // namespace
@@ -60,4 +89,25 @@ TEST_CASE("partitioned runs equal the single-partition run bit for bit", "[runti
         }
     }
   }
+}
+
+TEST_CASE("decomposition: balanced band cuts, symmetric exchange plans, errors", "[runtime]") {
+  ChainParams c;
+  c.bodies = 1000;
+  const Model m = make_chain(c);
+  const Decomposition d = decompose(m, 4);
+  CHECK(d.cut_joints == 3);  // a chain cut into 4 pieces
+  CHECK(d.imbalance < 0.01);
+  for (std::size_t p = 0; p < d.submodels.size(); ++p)
+    for (const auto& e : d.submodels[p].exchanges) {
+      // Whoever p takes ghosts from takes ghosts from p.
+      bool back = false;
+      for (const auto& f : d.submodels[static_cast<std::size_t>(e.neighbour)].exchanges) back = back || f.neighbour == static_cast<int>(p);
+      CHECK(back);
+      CHECK(e.from.size() == e.to.size());
+    }
+  CHECK_THROWS_WITH(decompose(m, 0), "partitions: must be >= 1 (got 0)");
+  CHECK_THROWS_WITH(decompose(m, 1001), "partitions: 1001 is more than the model's 1000 bodies");
+  std::vector<int> part(1000, 0);
+  CHECK_THROWS_WITH(decompose(m, part, 2), "partition: part 1 has no bodies");
 }
