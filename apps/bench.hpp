@@ -14,10 +14,12 @@ struct BenchArgs {
   int repeats = 3;          // output: runs per case, the fastest counts
   std::string dir = ".";    // output: where the results files go
   std::string csv;          // default: bench_WHAT.csv
+  int threads = 0;          // parallel: up to this many threads (default: all cores)
 };
 
 int bench_rhs(const BenchArgs& a);
 int bench_output(const BenchArgs& a);
+int bench_parallel(const BenchArgs& a);
 
 using BenchClock = std::chrono::steady_clock;
 inline double seconds_since(BenchClock::time_point start) {

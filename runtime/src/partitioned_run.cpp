@@ -62,16 +62,23 @@ class FlowGraphSchedule {
     auto node = [&](int c, std::size_t p, int s) -> flow::continue_node<flow::continue_msg>& {
       return *nodes_[(static_cast<std::size_t>(c) * k + p) * 4 + static_cast<std::size_t>(s)];
     };
-    for (int c = 0; c < chunk; ++c)
-      for (std::size_t p = 0; p < k; ++p) {
-        std::vector<std::size_t> inputs{p};
-        for (const auto& e : parts[p].sub->exchanges) inputs.push_back(static_cast<std::size_t>(e.neighbour));
-        for (std::size_t q : inputs) {
+    // A finishing node runs the last of its successors that became ready itself and leaves
+    // the others to be stolen. Registering each submodel's own next stage last keeps a
+    // thread on its submodel (its data stays in that core's cache) while neighbours' next
+    // stages go to their own threads.
+    for (int c = 0; c < chunk; ++c) {
+      for (std::size_t p = 0; p < k; ++p)
+        for (const auto& e : parts[p].sub->exchanges) {
+          const auto q = static_cast<std::size_t>(e.neighbour);
           for (int s = 1; s < 4; ++s) flow::make_edge(node(c, q, s - 1), node(c, p, s));
           if (c > 0) flow::make_edge(node(c - 1, q, 3), node(c, p, 0));
         }
+      for (std::size_t p = 0; p < k; ++p) {
+        for (int s = 1; s < 4; ++s) flow::make_edge(node(c, p, s - 1), node(c, p, s));
+        if (c > 0) flow::make_edge(node(c - 1, p, 3), node(c, p, 0));
         if (c == 0) flow::make_edge(start_, node(0, p, 0));
       }
+    }
   }
 
   void run(const StepGrid& grid, long first, int steps) {
