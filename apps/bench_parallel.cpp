@@ -32,7 +32,7 @@ int bench_parallel(const BenchArgs& a) {
     const Model m = make_chain(p);
     RunOptions o = options_from_model(m);
     // About half a second of single-thread work per run.
-    const long steps = std::max<long>(3, std::lround(1.2e6 / n));
+    const long steps = std::max<long>(10, std::lround(1.2e6 / n));
     o.t_end = o.t_start + static_cast<double>(steps) * o.step;
     const double simulated = o.t_end - o.t_start;
     auto fastest = [&](auto run) {
