@@ -42,10 +42,6 @@ std::optional<Decomposition> choose_decomposition(const Model& m, const RunArgs&
   if (!a.partition_file.empty()) return read_partition_file(m, a.partition_file);
   const int k = a.partitions ? *a.partitions : default_partitions(m, threads);
   if (k == 1 && !a.partitions) return std::nullopt;
-  if (m.simulation.method != Method::rk4) {
-    if (!a.partitions) return std::nullopt;  // DOPRI5 runs on one thread so far
-    throw InputError("--partitions: partitioned runs integrate with RK4 so far; DOPRI5 runs with one partition");
-  }
   return decompose(m, k);
 }
 

@@ -1,17 +1,19 @@
 #include "mbsflow/runtime/partitioned_run.hpp"
 
 #include <oneapi/tbb/enumerable_thread_specific.h>
-#include <oneapi/tbb/flow_graph.h>
 #include <oneapi/tbb/info.h>
 #include <oneapi/tbb/parallel_for.h>
 #include <oneapi/tbb/task_arena.h>
 
 #include <chrono>
+#include <cstdio>
 #include <memory>
 #include <numeric>
 
 #include "mbsflow/graph/error.hpp"
+#include "mbsflow/methods/dopri5.hpp"
 #include "partitioned_state.hpp"
+#include "schedules.hpp"
 #include "sink_runner.hpp"
 #include "step_grid.hpp"
 
@@ -20,7 +22,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 using partitioned::Part;
-namespace flow = tbb::flow;
 
 // Time spent in stage work, per thread.
 class BusyClock {
@@ -37,81 +38,141 @@ class BusyClock {
   tbb::enumerable_thread_specific<double> busy_{0.0};
 };
 
-// The work of submodel p at stage s of step n.
-void stage_work(std::vector<Part>& parts, std::size_t p, int s, const StepGrid& grid, long n) {
-  partitioned::pull_ghosts(parts, p, s);
-  partitioned::stage(parts[p], s, grid.time(n), grid.time(n + 1));
-}
-
-// Steps of a chunk between snapshots: the graph is unrolled over these and built once.
-// Node (c, p, s) is submodel p's stage s of the chunk's step c; it waits for stage s-1 of
-// itself and of the neighbours it takes ghosts from (stage 3 of the previous step for s = 0).
-class FlowGraphSchedule {
+// Runs `steps` steps of `stages` stages each with the chosen executor.
+class Scheduler {
  public:
-  FlowGraphSchedule(std::vector<Part>& parts, int chunk, BusyClock& clock) : start_(graph_) {
-    const std::size_t k = parts.size();
-    nodes_.reserve(static_cast<std::size_t>(chunk) * k * 4);
-    for (int c = 0; c < chunk; ++c)
-      for (std::size_t p = 0; p < k; ++p)
-        for (int s = 0; s < 4; ++s)
-          nodes_.push_back(std::make_unique<flow::continue_node<flow::continue_msg>>(
-              graph_, [this, &parts, &clock, c, p, s](const flow::continue_msg&) {
-                if (c < steps_) clock.time([&] { stage_work(parts, p, s, *grid_, first_ + c); });
-                return flow::continue_msg();
-              }));
-    auto node = [&](int c, std::size_t p, int s) -> flow::continue_node<flow::continue_msg>& {
-      return *nodes_[(static_cast<std::size_t>(c) * k + p) * 4 + static_cast<std::size_t>(s)];
-    };
-    // A finishing node runs the last of its successors that became ready itself and leaves
-    // the others to be stolen. Registering each submodel's own next stage last keeps a
-    // thread on its submodel (its data stays in that core's cache) while neighbours' next
-    // stages go to their own threads.
-    for (int c = 0; c < chunk; ++c) {
-      for (std::size_t p = 0; p < k; ++p)
-        for (const auto& e : parts[p].sub->exchanges) {
-          const auto q = static_cast<std::size_t>(e.neighbour);
-          for (int s = 1; s < 4; ++s) flow::make_edge(node(c, q, s - 1), node(c, p, s));
-          if (c > 0) flow::make_edge(node(c - 1, q, 3), node(c, p, 0));
-        }
-      for (std::size_t p = 0; p < k; ++p) {
-        for (int s = 1; s < 4; ++s) flow::make_edge(node(c, p, s - 1), node(c, p, s));
-        if (c > 0) flow::make_edge(node(c - 1, p, 3), node(c, p, 0));
-        if (c == 0) flow::make_edge(start_, node(0, p, 0));
-      }
-    }
+  Scheduler(Executor ex, const Decomposition& d, int chunk, int stages, StageWork work)
+      : stages_(stages), parts_(d.submodels.size()), work_(std::move(work)) {
+    if (ex == Executor::flow_graph) graph_ = std::make_unique<FlowGraphSchedule>(d.submodels, chunk, stages, work_);
   }
-
-  void run(const StepGrid& grid, long first, int steps) {
-    grid_ = &grid;
-    first_ = first;
-    steps_ = steps;
-    start_.try_put(flow::continue_msg());
-    graph_.wait_for_all();
+  void run(int steps) {
+    if (graph_)
+      graph_->run(steps);
+    else
+      run_with_barriers(parts_, steps, stages_, work_);
   }
 
  private:
-  flow::graph graph_;
-  flow::broadcast_node<flow::continue_msg> start_;
-  std::vector<std::unique_ptr<flow::continue_node<flow::continue_msg>>> nodes_;
-  const StepGrid* grid_ = nullptr;
-  long first_ = 0;
-  int steps_ = 0;
+  int stages_;
+  std::size_t parts_;
+  StageWork work_;
+  std::unique_ptr<FlowGraphSchedule> graph_;
 };
 
-// The seed's scheme: every stage, all submodels compute, then all exchange (a barrier).
-void run_barrier(std::vector<Part>& parts, BusyClock& clock, const StepGrid& grid, long first, int steps) {
-  for (int c = 0; c < steps; ++c)
-    for (int s = 0; s < 4; ++s)
-      tbb::parallel_for(std::size_t{0}, parts.size(), [&](std::size_t p) {
-        clock.time([&] { stage_work(parts, p, s, grid, first + c); });
-      }, tbb::simple_partitioner());
-}
-
-// Steps per chunk: snapshots fall on chunk ends; at most 64 steps unrolled.
+// Steps per chunk of RK4: snapshots fall on chunk ends; at most 64 steps unrolled.
 int chunk_length(int output_every) {
   for (int c = std::min(output_every, 64); c > 1; --c)
     if (output_every % c == 0) return c;
   return 1;
+}
+
+struct Context {
+  const Model& model;
+  const RunOptions& o;
+  std::vector<Part>& parts;
+  MultibodySystem& whole;
+  ResultSink* sink;
+  RunSummary& out;
+  BusyClock& clock;
+  Executor executor;
+  const Decomposition& d;
+};
+
+void check_parts(const Context& c, double t) {
+  if (auto dv = partitioned::check(c.parts)) throw RunError(divergence_message(c.model, *dv, t, c.o.method, c.o.step));
+  check_stop(c.o, t);
+}
+
+void run_rk4(Context& c, Eigen::VectorXd& y) {
+  const StepGrid grid = step_grid(c.o.t_start, c.o.t_end, c.o.step);
+  const int chunk = chunk_length(c.o.output_every);
+  long first = 0;
+  Scheduler schedule(c.executor, c.d, chunk, 4, [&](std::size_t p, int s, int step) {
+    c.clock.time([&] {
+      partitioned::pull_ghosts(c.parts, p, s);
+      const long n = first + step;
+      partitioned::rk4_stage(c.parts[p], s, grid.time(n), grid.time(n + 1));
+    });
+  });
+  while (first < grid.steps) {
+    const int steps = static_cast<int>(std::min<long>(chunk, grid.steps - first));
+    schedule.run(steps);
+    first += steps;
+    const double t = grid.time(first);
+    check_parts(c, t);
+    if (c.sink && (first % c.o.output_every == 0 || first == grid.steps)) {
+      partitioned::gather(c.parts, c.whole.layout(), y);
+      emit(c.whole, c.sink, t, y, c.out);
+    }
+    if (c.o.progress) c.o.progress(t, first);
+  }
+  c.out.steps = grid.steps;
+  c.out.evaluations = grid.steps * 4;
+}
+
+// The loop of run_simulation's DOPRI5, with the stages spread over submodels and the
+// error norm the one global reduction per attempt.
+void run_dopri5(Context& c, Eigen::VectorXd& y) {
+  const RunOptions& o = c.o;
+  Dopri5Settings settings;
+  settings.rtol = o.rtol;
+  settings.atol = o.atol;
+  dopri5::Controller control(settings);
+  Eigen::VectorXd squares(c.whole.dimension()), dense(c.whole.dimension());
+  double t = o.t_start, h = o.step;
+  bool need_k0 = true;
+  Scheduler schedule(c.executor, c.d, 1, 7, [&](std::size_t p, int s, int) {
+    c.clock.time([&] {
+      if (s > 0 || need_k0) partitioned::pull_ghosts(c.parts, p, s);
+      partitioned::dopri5_stage(c.parts[p], s, t, h, need_k0, o.atol, o.rtol, squares);
+    });
+  });
+  const double dt_out = o.step * o.output_every;
+  long next_out = 1;
+  while (t < o.t_end) {
+    h = std::min(h, o.t_end - t);
+    while (true) {  // attempts until one is accepted
+      if (h < control.h_min(t)) {
+        char buf[256];
+        std::snprintf(buf, sizeof buf,
+                      "DOPRI5 step size fell to %.3g s at t = %.6g s: the model is too stiff for an explicit method "
+                      "at rtol %.3g; loosen --rtol or check the model",
+                      h, t, o.rtol);
+        throw RunError(buf);
+      }
+      schedule.run(1);
+      c.out.evaluations += need_k0 ? 7 : 6;
+      need_k0 = false;
+      const double err = std::sqrt(dopri5::ordered_sum(squares) / static_cast<double>(squares.size()));
+      const dopri5::Controller::Decision decision = control.decide(err, h);
+      if (decision.accept) {
+        const double taken = h;
+        const double t_new = (o.t_end - (t + taken)) <= 1e-12 * std::max(1.0, std::abs(o.t_end)) ? o.t_end : t + taken;
+        tbb::parallel_for(std::size_t{0}, c.parts.size(), [&](std::size_t p) { partitioned::dopri5_accept(c.parts[p], taken, t_new); });
+        while (c.sink) {
+          const double t_out = o.t_start + static_cast<double>(next_out) * dt_out;
+          if (t_out > t_new || t_out >= o.t_end) break;
+          for (const Part& p : c.parts) partitioned::dopri5_dense(p, (t_out - t) / taken, dense);
+          c.whole.after_step(t_out, dense);
+          emit(c.whole, c.sink, t_out, dense, c.out);
+          ++next_out;
+        }
+        ++c.out.steps;
+        t = t_new;
+        h = decision.h;
+        need_k0 = true;
+        break;
+      }
+      ++c.out.rejected;
+      h = decision.h;
+    }
+    check_parts(c, t);
+    if (o.progress) o.progress(t, c.out.steps);
+  }
+  if (c.sink) {
+    partitioned::gather(c.parts, c.whole.layout(), y);
+    emit(c.whole, c.sink, t, y, c.out);
+  }
 }
 
 }  // namespace
@@ -122,50 +183,33 @@ int default_partitions(const Model& model, int threads) {
 
 RunSummary run_partitioned(const Model& model, const Decomposition& d, const RunOptions& o, const ParallelOptions& par,
                            ResultSink* sink, ParallelStats* stats) {
-  if (o.method != Method::rk4) throw InputError("partitioned runs integrate with RK4 so far (use --method rk4 or --partitions 1)");
   if (!(o.t_end > o.t_start)) throw InputError("t_end must be greater than t_start");
   if (!(o.step > 0.0) || !std::isfinite(o.step)) throw InputError("the step must be a positive finite number");
+  if (o.output_every < 1) throw InputError("output_every must be >= 1");
   const int threads = par.threads > 0 ? par.threads : tbb::info::default_concurrency();
   tbb::task_arena arena(threads);
   RunSummary out;
   BusyClock clock;
+  const int stages = o.method == Method::rk4 ? 4 : 7;
   std::vector<Part> parts;
   parts.reserve(d.submodels.size());
-  for (const Submodel& s : d.submodels) parts.emplace_back(model, s);
+  for (const Submodel& s : d.submodels) parts.emplace_back(model, s, stages);
   MultibodySystem whole(model);  // for the sink: layout, names, energies
-  const StateLayout& layout = whole.layout();
-  const StepGrid grid = step_grid(o.t_start, o.t_end, o.step);
-  const int chunk = chunk_length(o.output_every);
   // Like run_simulation, which gets its system built: the clock starts with the run.
   const auto start = Clock::now();
   Eigen::VectorXd y = whole.initial_state();
   if (sink) sink->begin(whole);
+  Context c{model, o, parts, whole, sink, out, clock, par.executor, d};
   run_with_sink(sink, out, [&] {
     if (sink) emit(whole, sink, o.t_start, y, out);
     arena.execute([&] {
-      std::unique_ptr<FlowGraphSchedule> graph;
-      if (par.executor == Executor::flow_graph) graph = std::make_unique<FlowGraphSchedule>(parts, chunk, clock);
-      for (long done = 0; done < grid.steps;) {
-        const int steps = static_cast<int>(std::min<long>(chunk, grid.steps - done));
-        if (graph)
-          graph->run(grid, done, steps);
-        else
-          run_barrier(parts, clock, grid, done, steps);
-        done += steps;
-        const double t = grid.time(done);
-        if (auto dv = partitioned::check(parts)) throw RunError(divergence_message(model, *dv, t, o.method, o.step));
-        check_stop(o, t);
-        if (sink && (done % o.output_every == 0 || done == grid.steps)) {
-          partitioned::gather(parts, layout, y);
-          emit(whole, sink, t, y, out);
-        }
-        if (o.progress) o.progress(t, done);
-      }
+      if (o.method == Method::rk4)
+        run_rk4(c, y);
+      else
+        run_dopri5(c, y);
     });
   });
-  partitioned::gather(parts, layout, y);
-  out.steps = grid.steps;
-  out.evaluations = grid.steps * 4;
+  partitioned::gather(parts, whole.layout(), y);
   out.wall_seconds = std::chrono::duration<double>(Clock::now() - start).count();
   out.final_state = std::move(y);
   if (stats) {

@@ -2,20 +2,11 @@
 
 #include <cmath>
 
+#include "mbsflow/methods/dopri5.hpp"
 #include "mbsflow/methods/rk4.hpp"
 
 namespace mbsflow::partitioned {
 namespace {
-
-// The four field blocks (position, orientation, velocity, angular velocity) of a layout:
-// own bodies are the first `own` entries of each block.
-template <class F>
-void for_own_blocks(const StateLayout& l, Eigen::Index own, F f) {
-  f(l.position(0), 3 * own);
-  f(l.orientation(0), 4 * own);
-  f(l.velocity(0), 3 * own);
-  f(l.angular_velocity(0), 3 * own);
-}
 
 void copy_body(const StateLayout& from_layout, const Eigen::VectorXd& from, Eigen::Index i, const StateLayout& to_layout,
                Eigen::VectorXd& to, Eigen::Index j) {
@@ -27,37 +18,86 @@ void copy_body(const StateLayout& from_layout, const Eigen::VectorXd& from, Eige
 
 }  // namespace
 
-Part::Part(const Model& model, const Submodel& s)
+Part::Part(const Model& model, const Submodel& s, int stages)
     : sub(&s), system(submodel_model(model, s), static_cast<int>(s.own.size())), own(static_cast<Eigen::Index>(s.own.size())) {
-  x[0] = system.initial_state();
-  for (int i = 1; i < 4; ++i) x[i] = x[0];
-  for (auto& v : k) v = Eigen::VectorXd::Zero(system.dimension());
+  x.assign(static_cast<std::size_t>(stages), system.initial_state());
+  k.assign(static_cast<std::size_t>(stages), Eigen::VectorXd::Zero(system.dimension()));
+  // Global places of own elements, in the order for_own_blocks visits them.
+  const StateLayout global{static_cast<Eigen::Index>(model.bodies.size())};
+  const struct {
+    Eigen::Index (StateLayout::*offset)(Eigen::Index) const;
+    int n;
+  } fields[4] = {{&StateLayout::position, 3}, {&StateLayout::orientation, 4}, {&StateLayout::velocity, 3},
+                 {&StateLayout::angular_velocity, 3}};
+  for (const auto& f : fields)
+    for (Eigen::Index i = 0; i < own; ++i)
+      for (int c = 0; c < f.n; ++c) global_element.push_back((global.*f.offset)(s.own[static_cast<std::size_t>(i)]) + c);
 }
 
 void pull_ghosts(std::vector<Part>& parts, std::size_t p, int s) {
   Part& me = parts[p];
+  const auto stage = static_cast<std::size_t>(s);
   for (const Submodel::Exchange& e : me.sub->exchanges) {
     const Part& owner = parts[static_cast<std::size_t>(e.neighbour)];
     for (std::size_t i = 0; i < e.from.size(); ++i)
-      copy_body(owner.system.layout(), owner.x[s], e.from[i], me.system.layout(), me.x[s], e.to[i]);
+      copy_body(owner.system.layout(), owner.x[stage], e.from[i], me.system.layout(), me.x[stage], e.to[i]);
   }
 }
 
-void stage(Part& part, int s, double t, double t_next) {
+void rk4_stage(Part& part, int s, double t, double t_next) {
   const double h = t_next - t;
-  part.system.rhs(t + rk4::stage_fraction[s] * h, part.x[s], part.k[s]);
-  const StateLayout& l = part.system.layout();
+  const auto i = static_cast<std::size_t>(s);
+  part.system.rhs(t + rk4::stage_fraction[s] * h, part.x[i], part.k[i]);
   if (s < 3) {
-    for_own_blocks(l, part.own, [&](Eigen::Index at, Eigen::Index n) {
-      rk4::stage_input(part.x[0].segment(at, n), part.k[s].segment(at, n), h, s, part.x[s + 1].segment(at, n));
+    for_own_blocks(part, [&](Eigen::Index at, Eigen::Index n) {
+      rk4::stage_input(part.x[0].segment(at, n), part.k[i].segment(at, n), h, s, part.x[i + 1].segment(at, n));
     });
     return;
   }
-  for_own_blocks(l, part.own, [&](Eigen::Index at, Eigen::Index n) {
+  for_own_blocks(part, [&](Eigen::Index at, Eigen::Index n) {
     rk4::combine(part.x[0].segment(at, n), part.k[0].segment(at, n), part.k[1].segment(at, n), part.k[2].segment(at, n),
                  part.k[3].segment(at, n), h);
   });
   part.system.after_step(t_next, part.x[0]);
+}
+
+void dopri5_stage(Part& part, int s, double t, double h, bool need_k0, double atol, double rtol,
+                  Eigen::VectorXd& squares) {
+  const auto i = static_cast<std::size_t>(s);
+  if (s > 0 || need_k0) part.system.rhs(t + dopri5::c[s] * h, part.x[i], part.k[i]);
+  Eigen::Index done = 0;
+  for_own_blocks(part, [&](Eigen::Index at, Eigen::Index n) {
+    auto k = [&](int j) { return part.k[static_cast<std::size_t>(j)].segment(at, n); };
+    if (s < 6) {
+      dopri5::stage_input(s + 1, part.x[0].segment(at, n), k, h, part.x[i + 1].segment(at, n));
+      return;
+    }
+    Eigen::VectorXd sq(n);
+    dopri5::error_squares(part.x[0].segment(at, n), part.x[6].segment(at, n), k, h, atol, rtol, sq);
+    for (Eigen::Index e = 0; e < n; ++e) squares[part.global_element[static_cast<std::size_t>(done + e)]] = sq[e];
+    done += n;
+  });
+}
+
+void dopri5_accept(Part& part, double h, double t_new) {
+  part.r.resize(5, Eigen::VectorXd::Zero(part.system.dimension()));
+  for_own_blocks(part, [&](Eigen::Index at, Eigen::Index n) {
+    auto k = [&](int j) { return part.k[static_cast<std::size_t>(j)].segment(at, n); };
+    auto r = [&](int j) { return part.r[static_cast<std::size_t>(j)].segment(at, n); };
+    dopri5::dense_setup(part.x[0].segment(at, n), part.x[6].segment(at, n), k, h, r);
+    part.x[0].segment(at, n) = part.x[6].segment(at, n);
+  });
+  part.system.after_step(t_new, part.x[0]);
+}
+
+void dopri5_dense(const Part& part, double theta, Eigen::VectorXd& out) {
+  Eigen::Index done = 0;
+  for_own_blocks(part, [&](Eigen::Index at, Eigen::Index n) {
+    Eigen::VectorXd v(n);
+    dopri5::dense_eval([&](int j) { return part.r[static_cast<std::size_t>(j)].segment(at, n); }, theta, v);
+    for (Eigen::Index e = 0; e < n; ++e) out[part.global_element[static_cast<std::size_t>(done + e)]] = v[e];
+    done += n;
+  });
 }
 
 void gather(const std::vector<Part>& parts, const StateLayout& global, Eigen::VectorXd& y) {

@@ -1,30 +1,54 @@
 #pragma once
-// The state of one submodel in a partitioned RK4 run and the work of one of its stages.
+// The state of one submodel in a partitioned run and the work of one of its stages, for
+// RK4 and DOPRI5. Own bodies are computed here; ghosts are pulled from their owners.
 #include <vector>
 
 #include "mbsflow/graph/decomposition.hpp"
 #include "mbsflow/graph/multibody_system.hpp"
 #include "mbsflow/runtime/divergence.hpp"
-#include "step_grid.hpp"
 
 namespace mbsflow::partitioned {
 
 struct Part {
-  Part(const Model& model, const Submodel& sub);
+  Part(const Model& model, const Submodel& sub, int stages);
   const Submodel* sub;
   MultibodySystem system;  // the local model: own bodies first, then ghosts
   Eigen::Index own = 0;    // own body count
-  // x[0] is the state y; x[1..3] the stage inputs. k[s] the stage derivatives.
-  Eigen::VectorXd x[4], k[4];
+  // x[0] is the state y, x[s] the input of stage s; k[s] the stage derivatives;
+  // r the DOPRI5 dense-output coefficients of the last accepted step.
+  std::vector<Eigen::VectorXd> x, k, r;
+  std::vector<Eigen::Index> global_element;  // own elements' places in the global state
 };
 
 // Copies the ghost bodies' values of stage input s from their owners.
 void pull_ghosts(std::vector<Part>& parts, std::size_t p, int s);
-// Stage s of the step from t to t_next: k_s = f(x_s); then x_{s+1} = y + c h k_s for own
-// bodies, or after stage 3 the new y for own bodies (renormalised, drivers imposed).
+
+// Calls f(offset, length) for the own entries of each field block of the local state.
+template <class F>
+void for_own_blocks(const Part& part, F f) {
+  const StateLayout& l = part.system.layout();
+  f(l.position(0), 3 * part.own);
+  f(l.orientation(0), 4 * part.own);
+  f(l.velocity(0), 3 * part.own);
+  f(l.angular_velocity(0), 3 * part.own);
+}
+
+// RK4 stage s of the step from t to t_next: k_s = f(x_s); then x_{s+1} = y + c h k_s for
+// own bodies, or after stage 3 the new y for own bodies (renormalised, drivers imposed).
 // h = t_next - t and the times are those of the sequential loop, to the bit.
-void stage(Part& part, int s, double t, double t_next);
-// Own bodies' states into the global state vector (global body order).
+void rk4_stage(Part& part, int s, double t, double t_next);
+
+// DOPRI5 stage s (0..6) of an attempt of step h from t: k_s = f(x_s) (k_0 only if
+// need_k0), then x_{s+1} for own bodies; after stage 6 the squared scaled errors of own
+// elements go to their global places in squares.
+void dopri5_stage(Part& part, int s, double t, double h, bool need_k0, double atol, double rtol,
+                  Eigen::VectorXd& squares);
+// After an accepted DOPRI5 step to t_new: dense coefficients, y = x_6, renormalise.
+void dopri5_accept(Part& part, double h, double t_new);
+// Own bodies' dense output at fraction theta of the last accepted step, into out (global).
+void dopri5_dense(const Part& part, double theta, Eigen::VectorXd& out);
+
+// Own bodies' states (x[0]) into the global state vector.
 void gather(const std::vector<Part>& parts, const StateLayout& global, Eigen::VectorXd& y);
 std::optional<Divergence> check(const std::vector<Part>& parts);  // body index is global
 

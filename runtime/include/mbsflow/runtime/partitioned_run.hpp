@@ -1,9 +1,10 @@
 #pragma once
-// Runs a decomposed model on threads: every submodel integrates its own bodies with RK4
-// and pulls its ghost bodies' values from their owners at every stage. Each own body's
-// numbers are bit for bit those of the single-partition run (run_simulation), whatever
-// the partition and thread count: the local models sum forces in global order and the
-// stage arithmetic is rk4::stage_input / rk4::combine, element by element.
+// Runs a decomposed model on threads: every submodel integrates its own bodies and pulls
+// its ghost bodies' values from their owners at every stage. Each own body's numbers are
+// bit for bit those of the single-partition run (run_simulation), whatever the partition
+// and thread count: the local models sum forces in global order, the stage arithmetic is
+// the methods' own (rk4::, dopri5::), element by element, and DOPRI5's error norm adds
+// the elements' terms in global order (the one global reduction per step attempt).
 #include "mbsflow/graph/decomposition.hpp"
 #include "mbsflow/runtime/simulation.hpp"
 
@@ -25,7 +26,7 @@ struct ParallelStats {
   double wait_fraction = 0.0;  // 1 - busy / (wall x threads): waiting for neighbours or the barrier
 };
 
-// RK4 only (InputError otherwise). Snapshots in global body order go to the sink.
+// RK4 or DOPRI5. Snapshots in global body order go to the sink.
 RunSummary run_partitioned(const Model& model, const Decomposition& d, const RunOptions& options,
                            const ParallelOptions& parallel, ResultSink* sink, ParallelStats* stats = nullptr);
 
