@@ -15,16 +15,21 @@ namespace {
 struct PartitionArgs {
   std::string model, dot, output;
   int k = 2;
+  std::string partitioner = "best";
 };
+
+Partitioner parse_partitioner(const std::string& s) {
+  return s == "band" ? Partitioner::band : s == "metis" ? Partitioner::metis : Partitioner::best;
+}
 
 // Bytes a submodel receives per stage: 13 doubles per ghost body.
 std::size_t stage_bytes(const Submodel& s) { return s.ghosts.size() * 13 * sizeof(double); }
 
 int partition(const PartitionArgs& a) {
   const Model m = read_model_file(a.model);
-  const Decomposition d = decompose(m, a.k);
-  std::printf("model %s: %zu bodies, %zu joints, %d submodels (reverse Cuthill-McKee order, cost-balanced cuts)\n",
-              m.name.c_str(), m.bodies.size(), m.joints.size(), a.k);
+  const Decomposition d = decompose(m, a.k, parse_partitioner(a.partitioner));
+  std::printf("model %s: %zu bodies, %zu joints, %d submodels by %s\n", m.name.c_str(), m.bodies.size(), m.joints.size(),
+              a.k, d.partitioner == Partitioner::metis ? "METIS k-way" : "band cuts of the reverse Cuthill-McKee order");
   std::printf("%9s %8s %8s %8s %10s %11s %10s %12s\n", "submodel", "bodies", "joints", "ghosts", "cut joints", "neighbours",
               "cost", "bytes/stage");
   std::size_t bytes = 0;
@@ -34,8 +39,9 @@ int partition(const PartitionArgs& a) {
                 s.cut_joints, s.exchanges.size(), s.cost, stage_bytes(s));
     bytes += stage_bytes(s);
   }
-  std::printf("cut joints %d, bytes exchanged per stage %zu, load imbalance %.2f %% (max cost / mean cost - 1)\n",
-              d.cut_joints, bytes, 100.0 * d.imbalance);
+  std::printf("cut joints %d, bytes exchanged per stage %zu, load imbalance %.2f %% (max cost / mean cost - 1), "
+              "slowest submodel ~%.0f us per stage\n",
+              d.cut_joints, bytes, 100.0 * d.imbalance, d.estimated_time() / 1000.0);
   if (!a.dot.empty()) {
     std::ofstream out(a.dot);
     if (!out) throw InputError("--dot: cannot write " + a.dot);
@@ -57,6 +63,11 @@ Action add_partition(CLI::App& app) {
   CLI::App* sub = app.add_subcommand("partition", "Cut a model into submodels and report balance, cut joints and exchange");
   sub->add_option("model", a->model, "Model file (JSON)")->required();
   sub->add_option("-k,--partitions", a->k, "Number of submodels")->required();
+  sub->add_option("--partitioner", a->partitioner,
+                  "best: whichever of band and metis gives the faster slowest submodel; band: the seed's band cuts; "
+                  "metis: METIS k-way")
+      ->check(CLI::IsMember({"best", "band", "metis"}))
+      ->capture_default_str();
   sub->add_option("--dot", a->dot, "Write the partitioned body/joint graph as Graphviz dot");
   sub->add_option("-o,--output", a->output, "Write the assignment as a partition file for mbsflow run --partition-file");
   return [a] { return partition(*a); };

@@ -35,6 +35,7 @@ struct RunArgs {
   std::optional<int> partitions;
   std::string executor = "flow";
   std::string partition_file;
+  std::string partitioner = "best";
 };
 
 // How the run is cut: a partition file, --partitions, or one submodel per thread.
@@ -42,7 +43,8 @@ std::optional<Decomposition> choose_decomposition(const Model& m, const RunArgs&
   if (!a.partition_file.empty()) return read_partition_file(m, a.partition_file);
   const int k = a.partitions ? *a.partitions : default_partitions(m, threads);
   if (k == 1 && !a.partitions) return std::nullopt;
-  return decompose(m, k);
+  const Partitioner p = a.partitioner == "band" ? Partitioner::band : a.partitioner == "metis" ? Partitioner::metis : Partitioner::best;
+  return decompose(m, k, p);
 }
 
 std::string human_bytes(double b) {
@@ -176,6 +178,9 @@ Action add_run(CLI::App& app) {
       ->check(CLI::IsMember({"flow", "barrier"}))
       ->capture_default_str();
   sub->add_option("--partition-file", a->partition_file, "Use the assignment written by mbsflow partition -o");
+  sub->add_option("--partitioner", a->partitioner, "best, band (the seed's band cuts) or metis; see mbsflow partition")
+      ->check(CLI::IsMember({"best", "band", "metis"}))
+      ->capture_default_str();
   return [a] { return run(*a); };
 }
 

@@ -5,10 +5,12 @@
 #include <boost/graph/cuthill_mckee_ordering.hpp>
 #include <map>
 #include <numeric>
+#include <optional>
 #include <set>
 #include <sstream>
 
 #include "mbsflow/graph/error.hpp"
+#include "metis_partition.hpp"
 
 namespace mbsflow {
 namespace {
@@ -57,13 +59,15 @@ int Submodel::local_index(int global) const {
   return -1;
 }
 
-Decomposition decompose(const Model& m, int k) {
+const char* partitioner_name(Partitioner p) {
+  return p == Partitioner::band ? "band" : p == Partitioner::metis ? "metis" : "best";
+}
+
+namespace {
+
+std::vector<int> band_partition(const Model& m, const std::vector<double>& cost, int k) {
   const int n = static_cast<int>(m.bodies.size());
-  if (k < 1) throw InputError("partitions: must be >= 1 (got " + std::to_string(k) + ")");
-  if (k > n)
-    throw InputError("partitions: " + std::to_string(k) + " is more than the model's " + std::to_string(n) + " bodies");
   const std::vector<int> order = cuthill_mckee_order(m);
-  const std::vector<double> cost = body_costs(m);
   const double total = std::accumulate(cost.begin(), cost.end(), 0.0);
   // Cut the band into k pieces of equal cost: piece p ends where the running cost
   // passes (p+1)/k of the total, leaving at least one body for each later piece.
@@ -77,7 +81,33 @@ Decomposition decompose(const Model& m, int k) {
     const int left = n - 1 - i;  // bodies after this one
     if (p < k - 1 && (running >= total * (p + 1) / k || left == k - 1 - p)) ++p;
   }
-  return decompose(m, part, k);
+  return part;
+}
+
+}  // namespace
+
+Decomposition decompose(const Model& m, int k, Partitioner partitioner) {
+  const int n = static_cast<int>(m.bodies.size());
+  if (k < 1) throw InputError("partitions: must be >= 1 (got " + std::to_string(k) + ")");
+  if (k > n)
+    throw InputError("partitions: " + std::to_string(k) + " is more than the model's " + std::to_string(n) + " bodies");
+  const std::vector<double> cost = body_costs(m);
+  std::optional<Decomposition> band, metis;
+  if (partitioner != Partitioner::metis || k == 1) band = decompose(m, band_partition(m, cost, k), k);
+  if (partitioner != Partitioner::band && k > 1)
+    if (const auto part = metis_partition(m, cost, k)) {
+      metis = decompose(m, *part, k);
+      metis->partitioner = Partitioner::metis;
+    }
+  if (!metis) return band ? *band : decompose(m, band_partition(m, cost, k), k);
+  if (!band || metis->estimated_time() < band->estimated_time()) return *metis;
+  return *band;
+}
+
+double Decomposition::estimated_time() const {
+  double t = 0.0;
+  for (const Submodel& s : submodels) t = std::max(t, s.estimated_time());
+  return t;
 }
 
 Decomposition decompose(const Model& m, const std::vector<int>& part, int k) {

@@ -77,13 +77,14 @@ TEST_CASE("partitioned runs equal the single-partition run bit for bit", "[runti
     REQUIRE(reference.states.size() == 9);  // DOPRI5 writes on the same grid, from its dense output
     // The model really moved, so equality means something.
     REQUIRE(reference.states.back() != reference.states.front());
-    for (int k : {1, 2, 3, 7, 16}) {
-      const Decomposition d = decompose(m, k);
+    for (int k : {1, 2, 3, 7, 16})
+      for (Partitioner partitioner : {Partitioner::band, Partitioner::metis}) {
+      const Decomposition d = decompose(m, k, partitioner);
       for (int threads : {1, 2, 4})
         for (Executor ex : {Executor::flow_graph, Executor::barrier}) {
           test::MemorySink sink;
           run_partitioned(m, d, options_from_model(m), {threads, ex}, &sink);
-          INFO(m.name << ", " << method_name(method) << ", " << k << " partitions, " << threads << " threads, "
+          INFO(m.name << ", " << method_name(method) << ", " << k << " partitions by " << partitioner_name(partitioner) << ", " << threads << " threads, "
                       << (ex == Executor::flow_graph ? "flow graph" : "barrier"));
           REQUIRE(sink.states.size() == reference.states.size());
           bool identical = sink.times == reference.times;
@@ -113,4 +114,21 @@ TEST_CASE("decomposition: balanced band cuts, symmetric exchange plans, errors",
   CHECK_THROWS_WITH(decompose(m, 1001), "partitions: 1001 is more than the model's 1000 bodies");
   std::vector<int> part(1000, 0);
   CHECK_THROWS_WITH(decompose(m, part, 2), "partition: part 1 has no bodies");
+}
+
+TEST_CASE("METIS cuts a bushy tree far better than band cuts; best keeps the faster one", "[runtime]") {
+  RandomTreeParams p;
+  p.bodies = 2000;
+  p.cycles = 100;
+  const Model m = make_random_tree(p);
+  const Decomposition band = decompose(m, 4, Partitioner::band), metis = decompose(m, 4, Partitioner::metis);
+  INFO("cut joints: band " << band.cut_joints << ", metis " << metis.cut_joints);
+  CHECK(metis.partitioner == Partitioner::metis);
+  CHECK(metis.cut_joints * 4 < band.cut_joints);
+  CHECK(metis.imbalance < 0.05);
+  const Decomposition best = decompose(m, 4);
+  CHECK(best.estimated_time() == std::min(band.estimated_time(), metis.estimated_time()));
+  ChainParams c;
+  c.bodies = 500;
+  CHECK(decompose(make_chain(c), 5).cut_joints == 4);  // a chain: k - 1 cuts
 }

@@ -1,8 +1,8 @@
 #pragma once
-// Cutting a model into weakly coupled submodels, as the seed did: the body/joint graph is
-// put in a bandwidth-reducing order (reverse Cuthill-McKee, per connected part), the band
-// is cut into K contiguous pieces of equal cost, and each piece gets its boundary (ghost)
-// bodies and an exchange plan.
+// Cutting a model into weakly coupled submodels. Two partitioners: the seed's (the
+// body/joint graph in a bandwidth-reducing order, reverse Cuthill-McKee per connected
+// part, cut into K contiguous pieces of equal cost) and METIS k-way (balanced cost, fewest
+// cut joints). Each piece gets its boundary (ghost) bodies and an exchange plan.
 #include <string>
 #include <vector>
 
@@ -16,6 +16,13 @@ std::vector<int> cuthill_mckee_order(const Model& model);
 
 // Relative cost of computing a body (its own equations plus half of each joint).
 std::vector<double> body_costs(const Model& model);
+
+enum class Partitioner {
+  best,   // both, keep the one whose slowest submodel is estimated fastest
+  band,   // reverse Cuthill-McKee band cut into pieces of equal cost (the seed's)
+  metis,  // METIS k-way
+};
+const char* partitioner_name(Partitioner p);
 
 struct Submodel {
   std::vector<int> own;     // global body indices, ascending
@@ -32,6 +39,9 @@ struct Submodel {
   };
   std::vector<Exchange> exchanges;
   int local_index(int global) const;  // own bodies first, then ghosts; -1 if neither
+  // Estimated stage time (ns): its cost, plus the other half of each cut joint (computed
+  // on both sides) and the copying of ghosts.
+  double estimated_time() const { return cost + 39.0 * cut_joints + 10.0 * static_cast<double>(ghosts.size()); }
 };
 
 struct Decomposition {
@@ -39,10 +49,13 @@ struct Decomposition {
   std::vector<Submodel> submodels;
   int cut_joints = 0;
   double imbalance = 0.0;  // max cost / mean cost - 1
+  Partitioner partitioner = Partitioner::band;  // which one made it
+  double estimated_time() const;  // of the slowest submodel
 };
 
+
 // K-way decomposition; InputError if k < 1 or k > bodies.
-Decomposition decompose(const Model& model, int k);
+Decomposition decompose(const Model& model, int k, Partitioner partitioner = Partitioner::best);
 // Decomposition from a given assignment of bodies to parts 0..k-1 (every part non-empty).
 Decomposition decompose(const Model& model, const std::vector<int>& part_of_body, int k);
 
