@@ -16,10 +16,11 @@ using StageWork = std::function<void(std::size_t p, int s, int c)>;
 // A oneTBB flow graph built once and run for every chunk: node (c, p, s) waits for stage
 // s-1 of submodel p and of the neighbours it takes ghosts from (for s = 0: the last stage
 // of the previous step), so a submodel's stage starts as soon as its neighbours' values
-// are in; no barrier but the end of the chunk.
+// are in; no barrier but the end of the chunk. With barriers, every node waits for the
+// previous stage of all submodels instead: the seed's scheme, a barrier per stage.
 class FlowGraphSchedule {
  public:
-  FlowGraphSchedule(const std::vector<Submodel>& subs, int chunk, int stages, StageWork work);
+  FlowGraphSchedule(const std::vector<Submodel>& subs, int chunk, int stages, StageWork work, bool barriers = false);
   void run(int steps);  // steps <= chunk; later steps' nodes do nothing
 
  private:
@@ -29,9 +30,5 @@ class FlowGraphSchedule {
   StageWork work_;
   int steps_ = 0;
 };
-
-// The seed's scheme: every stage, all submodels compute; a barrier; then the next stage
-// pulls what the others computed.
-void run_with_barriers(std::size_t parts, int steps, int stages, const StageWork& work);
 
 }  // namespace mbsflow

@@ -1,0 +1,28 @@
+#pragma once
+// ThreadSanitizer cannot see the synchronisation inside oneTBB when libtbb is not built
+// with it (Debian's is not): a flow-graph node's reads of what its predecessors wrote, or
+// the main thread's reads after wait_for_all(), look like races. These annotations state
+// the happens-before edges that TBB guarantees; they compile to nothing without TSan.
+#if defined(__SANITIZE_THREAD__)
+#include <sanitizer/tsan_interface.h>
+#endif
+
+namespace mbsflow {
+
+inline void happens_before(const void* token) {
+#if defined(__SANITIZE_THREAD__)
+  __tsan_release(const_cast<void*>(token));
+#else
+  (void)token;
+#endif
+}
+
+inline void happens_after(const void* token) {
+#if defined(__SANITIZE_THREAD__)
+  __tsan_acquire(const_cast<void*>(token));
+#else
+  (void)token;
+#endif
+}
+
+}  // namespace mbsflow
