@@ -140,14 +140,7 @@ void run_dopri5(Context& c, Eigen::VectorXd& y) {
   while (t < o.t_end) {
     h = std::min(h, o.t_end - t);
     while (true) {  // attempts until one is accepted
-      if (h < control.h_min(t)) {
-        char buf[256];
-        std::snprintf(buf, sizeof buf,
-                      "DOPRI5 step size fell to %.3g s at t = %.6g s: the model is too stiff for an explicit method "
-                      "at rtol %.3g; loosen --rtol or check the model",
-                      h, t, o.rtol);
-        throw RunError(buf);
-      }
+      if (h < control.h_min(t)) throw RunError(step_collapsed_message(h, t, o.rtol));
       schedule.run(1);
       c.out.evaluations += need_k0 ? 7 : 6;
       need_k0 = false;
@@ -155,7 +148,7 @@ void run_dopri5(Context& c, Eigen::VectorXd& y) {
       const dopri5::Controller::Decision decision = control.decide(err, h);
       if (decision.accept) {
         const double taken = h;
-        const double t_new = (o.t_end - (t + taken)) <= 1e-12 * std::max(1.0, std::abs(o.t_end)) ? o.t_end : t + taken;
+        const double t_new = landed_time(t, taken, o.t_end);
         for (Part& p : c.parts) partitioned::dopri5_accept(p, taken, t_new);  // element-wise, cheap
         while (c.sink) {
           const double t_out = o.t_start + static_cast<double>(next_out) * dt_out;

@@ -52,15 +52,8 @@ void run_dopri5(MultibodySystem& sys, const RunOptions& o, ResultSink* sink, Run
   while (t < o.t_end) {
     h = std::min(h, o.t_end - t);
     double taken = 0.0;
-    if (!dp.step(sys, t, h, y, taken)) {
-      char buf[256];
-      std::snprintf(buf, sizeof buf,
-                    "DOPRI5 step size fell to %.3g s at t = %.6g s: the model is too stiff for an explicit method "
-                    "at rtol %.3g; loosen --rtol or check the model",
-                    h, t, o.rtol);
-      throw RunError(buf);
-    }
-    const double t_new = (o.t_end - (t + taken)) <= 1e-12 * std::max(1.0, std::abs(o.t_end)) ? o.t_end : t + taken;
+    if (!dp.step(sys, t, h, y, taken)) throw RunError(step_collapsed_message(h, t, o.rtol));
+    const double t_new = landed_time(t, taken, o.t_end);
     // Snapshots on the uniform output grid inside this step, from the dense output.
     while (sink) {
       const double t_out = o.t_start + static_cast<double>(next_out) * dt_out;

@@ -20,4 +20,9 @@ inline StepGrid step_grid(double t_start, double t_end, double h) {
   return g;
 }
 
+// Where an adaptive step of `taken` from t lands: exactly on t_end when within rounding.
+inline double landed_time(double t, double taken, double t_end) {
+  return (t_end - (t + taken)) <= 1e-12 * std::max(1.0, std::abs(t_end)) ? t_end : t + taken;
+}
+
 }  // namespace mbsflow

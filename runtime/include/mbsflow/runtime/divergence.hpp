@@ -20,5 +20,7 @@ std::optional<Divergence> find_divergence(const StateLayout& layout, const Eigen
 
 // The message of a diverged run: time, body, and a step that would work.
 std::string divergence_message(const Model& model, const Divergence& d, double t, Method method, double step);
+// The message of a DOPRI5 run whose step size fell below its minimum.
+std::string step_collapsed_message(double h, double t, double rtol);
 
 }  // namespace mbsflow
