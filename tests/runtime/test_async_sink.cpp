@@ -12,10 +12,12 @@ using namespace mbsflow;
 
 namespace {
 
+// Its first write holds the writer thread for 300 ms: long enough, in any build, for the
+// computation to fill the queue behind it.
 struct SlowSink : test::MemorySink {
   int fail_at = -1;
   void write(Snapshot&& s) override {
-    std::this_thread::sleep_for(std::chrono::microseconds(200));
+    if (times.empty()) std::this_thread::sleep_for(std::chrono::milliseconds(300));
     if (static_cast<int>(times.size()) == fail_at) throw Error("disk full");
     test::MemorySink::write(std::move(s));
   }
