@@ -147,7 +147,8 @@ void MultibodySystem::update_kinematics(double t, const Eigen::VectorXd& y) {
   }
 }
 
-MultibodySystem::Deflection MultibodySystem::bushing_deflection(const CompiledJoint& j) const {
+// Inlined into the joint loop: it runs once per joint per evaluation.
+[[gnu::always_inline]] inline MultibodySystem::Deflection MultibodySystem::bushing_deflection(const CompiledJoint& j) const {
   Deflection r;
   const Eigen::Matrix3d& ra = rot_[static_cast<std::size_t>(j.a)];
   const Eigen::Matrix3d& rb = rot_[static_cast<std::size_t>(j.b)];
@@ -170,7 +171,8 @@ MultibodySystem::Deflection MultibodySystem::bushing_deflection(const CompiledJo
 }
 
 // Spring forces per axis (K d, or the tables), for axes first_axis..first_axis+2.
-Eigen::Vector3d MultibodySystem::axis_forces(const CompiledJoint& j, const Eigen::Vector3d& d, int first_axis) const {
+[[gnu::always_inline]] inline Eigen::Vector3d MultibodySystem::axis_forces(const CompiledJoint& j, const Eigen::Vector3d& d,
+                                                                           int first_axis) const {
   const Eigen::Vector3d& k = first_axis == 0 ? j.kt : j.kr;
   Eigen::Vector3d f = k.cwiseProduct(d);
   if (j.tables >= 0) {
