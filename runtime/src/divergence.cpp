@@ -7,30 +7,28 @@
 
 namespace mbsflow {
 
-std::optional<Divergence> find_divergence(const StateLayout& layout, const Eigen::VectorXd& y) {
-  if (y.allFinite()) {
-    for (Eigen::Index i = 0; i < layout.bodies; ++i) {
-      const double v = y.segment<3>(layout.velocity(i)).norm();
-      const double w = y.segment<3>(layout.angular_velocity(i)).norm();
-      char buf[96];
-      if (v > divergence_speed) {
-        std::snprintf(buf, sizeof buf, "speed %.3g m/s", v);
-        return Divergence{static_cast<int>(i), buf};
-      }
-      if (w > divergence_angular_speed) {
-        std::snprintf(buf, sizeof buf, "angular speed %.3g rad/s", w);
-        return Divergence{static_cast<int>(i), buf};
-      }
-    }
-    return std::nullopt;
-  }
-  for (Eigen::Index i = 0; i < layout.bodies; ++i) {
+std::optional<Divergence> find_divergence(const StateLayout& layout, const Eigen::VectorXd& y, Eigen::Index bodies) {
+  const Eigen::Index n = bodies < 0 ? layout.bodies : bodies;
+  for (Eigen::Index i = 0; i < n; ++i) {
     const bool finite = y.segment<3>(layout.position(i)).allFinite() && y.segment<4>(layout.orientation(i)).allFinite() &&
                         y.segment<3>(layout.velocity(i)).allFinite() &&
                         y.segment<3>(layout.angular_velocity(i)).allFinite();
     if (!finite) return Divergence{static_cast<int>(i), "state is not finite"};
   }
-  return Divergence{0, "state is not finite"};
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const double v = y.segment<3>(layout.velocity(i)).norm();
+    const double w = y.segment<3>(layout.angular_velocity(i)).norm();
+    char buf[96];
+    if (v > divergence_speed) {
+      std::snprintf(buf, sizeof buf, "speed %.3g m/s", v);
+      return Divergence{static_cast<int>(i), buf};
+    }
+    if (w > divergence_angular_speed) {
+      std::snprintf(buf, sizeof buf, "angular speed %.3g rad/s", w);
+      return Divergence{static_cast<int>(i), buf};
+    }
+  }
+  return std::nullopt;
 }
 
 std::string divergence_message(const Model& model, const Divergence& d, double t, Method method, double step) {

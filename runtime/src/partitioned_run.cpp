@@ -184,9 +184,7 @@ int default_partitions(const Model& model, int threads) {
 
 RunSummary run_partitioned(const Model& model, const Decomposition& d, const RunOptions& o, const ParallelOptions& par,
                            ResultSink* sink, ParallelStats* stats) {
-  if (!(o.t_end > o.t_start)) throw InputError("t_end must be greater than t_start");
-  if (!(o.step > 0.0) || !std::isfinite(o.step)) throw InputError("the step must be a positive finite number");
-  if (o.output_every < 1) throw InputError("output_every must be >= 1");
+  check_options(o);
   const int threads = par.threads > 0 ? par.threads : tbb::info::default_concurrency();
   tbb::task_arena arena(threads);
   RunSummary out;

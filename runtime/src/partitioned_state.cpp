@@ -110,10 +110,7 @@ void gather(const std::vector<Part>& parts, const StateLayout& global, Eigen::Ve
 std::optional<Divergence> check(const std::vector<Part>& parts) {
   std::optional<Divergence> first;
   for (const Part& p : parts) {
-    Eigen::VectorXd own(13 * p.own);
-    const StateLayout local{p.own};
-    for (Eigen::Index i = 0; i < p.own; ++i) copy_body(p.system.layout(), p.x[0], i, local, own, i);
-    if (auto d = find_divergence(local, own)) {
+    if (auto d = find_divergence(p.system.layout(), p.x[0], p.own)) {  // own bodies come first
       d->body = p.sub->own[static_cast<std::size_t>(d->body)];
       if (!first || d->body < first->body) first = d;
     }

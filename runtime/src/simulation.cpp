@@ -91,9 +91,7 @@ RunOptions options_from_model(const Model& model) {
 }
 
 RunSummary run_simulation(MultibodySystem& sys, const RunOptions& o, ResultSink* sink) {
-  if (!(o.t_end > o.t_start)) throw InputError("t_end must be greater than t_start");
-  if (!(o.step > 0.0) || !std::isfinite(o.step)) throw InputError("the step must be a positive finite number");
-  if (o.output_every < 1) throw InputError("output_every must be >= 1");
+  check_options(o);
   RunSummary out;
   const auto start = Clock::now();
   Eigen::VectorXd y = sys.initial_state();

@@ -1,6 +1,7 @@
 #pragma once
 // What every run loop does with its sink: snapshots with what the sink asked for, and
 // closing the sink on every way out so that what was written stays readable.
+#include <cmath>
 #include <cstdio>
 #include <string>
 
@@ -44,6 +45,13 @@ void run_with_sink(ResultSink* sink, RunSummary& out, F body) {
     throw;
   }
   if (sink) sink->end();
+}
+
+// The checks every run loop makes of its options before it starts.
+inline void check_options(const RunOptions& o) {
+  if (!(o.t_end > o.t_start)) throw InputError("t_end must be greater than t_start");
+  if (!(o.step > 0.0) || !std::isfinite(o.step)) throw InputError("the step must be a positive finite number");
+  if (o.output_every < 1) throw InputError("output_every must be >= 1");
 }
 
 inline void check_stop(const RunOptions& o, double t) {

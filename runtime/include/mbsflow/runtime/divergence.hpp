@@ -16,7 +16,9 @@ struct Divergence {
 inline constexpr double divergence_speed = 1e6;          // m/s
 inline constexpr double divergence_angular_speed = 1e7;  // rad/s
 
-std::optional<Divergence> find_divergence(const StateLayout& layout, const Eigen::VectorXd& y);
+// Looks at the first `bodies` bodies of the layout (-1: all), e.g. a submodel's own bodies:
+// first for a non-finite value, then for a blow-up.
+std::optional<Divergence> find_divergence(const StateLayout& layout, const Eigen::VectorXd& y, Eigen::Index bodies = -1);
 
 // The message of a diverged run: time, body, and a step that would work.
 std::string divergence_message(const Model& model, const Divergence& d, double t, Method method, double step);
