@@ -10,11 +10,14 @@
 #include "commands.hpp"
 #include "mbsflow/graph/error.hpp"
 #include "mbsflow/graph/stable_step.hpp"
+#include "local_workers.hpp"
+#include "mbsflow/io/cluster_file.hpp"
 #include "mbsflow/io/hdf5_sink.hpp"
 #include "mbsflow/io/model_reader.hpp"
 #include "mbsflow/io/model_writer.hpp"
 #include "mbsflow/io/partition_file.hpp"
 #include "mbsflow/runtime/async_sink.hpp"
+#include "mbsflow/runtime/cluster.hpp"
 #include "mbsflow/runtime/partitioned_run.hpp"
 #include "mbsflow/runtime/simulation.hpp"
 #include "progress.hpp"
@@ -36,13 +39,17 @@ struct RunArgs {
   std::string executor = "flow";
   std::string partition_file;
   std::string partitioner = "best";
+  std::string cluster;  // cluster file
+  int processes = 0;    // local worker processes
+  std::string transport = "tcp";
 };
 
-// How the run is cut: a partition file, --partitions, or one submodel per thread.
-std::optional<Decomposition> choose_decomposition(const Model& m, const RunArgs& a, int threads) {
+// How the run is cut: a partition file, --partitions, or default_k submodels (none when
+// that is 1 and the run is in one process).
+std::optional<Decomposition> choose_decomposition(const Model& m, const RunArgs& a, int default_k, bool one_process = true) {
   if (!a.partition_file.empty()) return read_partition_file(m, a.partition_file);
-  const int k = a.partitions ? *a.partitions : default_partitions(m, threads);
-  if (k == 1 && !a.partitions) return std::nullopt;
+  const int k = a.partitions ? *a.partitions : default_k;
+  if (k == 1 && !a.partitions && one_process) return std::nullopt;
   const Partitioner p = a.partitioner == "band" ? Partitioner::band : a.partitioner == "metis" ? Partitioner::metis : Partitioner::best;
   return decompose(m, k, p);
 }
@@ -114,8 +121,21 @@ int run(const RunArgs& a) {
   }
   MultibodySystem sys(m);
   const int threads = a.threads > 0 ? a.threads : static_cast<int>(std::thread::hardware_concurrency());
-  const std::optional<Decomposition> d = choose_decomposition(m, a, threads);
-  if (d && !a.quiet)
+  const bool cluster = !a.cluster.empty() || a.processes > 0;
+  std::optional<LocalWorkers> local;
+  ClusterConfig cc;
+  if (!a.cluster.empty()) cc = read_cluster_file(a.cluster);
+  if (a.processes > 0) {
+    // Each worker gets its share of the cores unless --threads says how many.
+    local.emplace(a.processes, a.transport, a.threads > 0 ? a.threads : std::max(1, threads / a.processes));
+    cc = local->cluster();
+  }
+  const std::optional<Decomposition> d =
+      choose_decomposition(m, a, cluster ? cluster_submodels(cc) : default_partitions(m, threads), !cluster);
+  if (cluster && !a.quiet)
+    std::fprintf(stderr, "mbsflow: %zu submodels on %zu worker processes (%s), %d cut joints, load imbalance %.1f %%\n",
+                 d->submodels.size(), cc.workers.size(), cc.transport.c_str(), d->cut_joints, 100.0 * d->imbalance);
+  else if (d && !a.quiet)
     std::fprintf(stderr, "mbsflow: %zu submodels on %d threads (%s), %d cut joints, load imbalance %.1f %%\n",
                  d->submodels.size(), threads, a.executor == "flow" ? "flow graph" : "barrier per stage", d->cut_joints,
                  100.0 * d->imbalance);
@@ -124,7 +144,9 @@ int run(const RunArgs& a) {
   o.stop = install_stop_handlers();
   RunSummary r;
   try {
-    if (d)
+    if (cluster)
+      r = run_cluster(m, model_to_json(m), *d, cc, o, sink.get());
+    else if (d)
       r = run_partitioned(m, *d, o, {threads, a.executor == "flow" ? Executor::flow_graph : Executor::barrier}, sink.get());
     else
       r = run_simulation(sys, o, sink.get());
@@ -181,6 +203,15 @@ Action add_run(CLI::App& app) {
   sub->add_option("--partitioner", a->partitioner, "best, band (the seed's band cuts) or metis; see mbsflow partition")
       ->check(CLI::IsMember({"best", "band", "metis"}))
       ->capture_default_str();
+  sub->add_option("--cluster", a->cluster,
+                  "Run on the workers of this cluster file (docs/cluster.md); this process coordinates and writes the results");
+  sub->add_option("--processes", a->processes,
+                  "Run on N worker processes on this host, started and stopped here (one submodel each unless --partitions)")
+      ->check(CLI::Range(1, 1024));
+  sub->add_option("--transport", a->transport, "With --processes: tcp (loopback) or ipc")
+      ->check(CLI::IsMember({"tcp", "ipc"}))
+      ->capture_default_str();
+  sub->get_option("--cluster")->excludes(sub->get_option("--processes"));
   return [a] { return run(*a); };
 }
 

@@ -1,11 +1,54 @@
 #include "json_node.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
 #include "mbsflow/graph/error.hpp"
 
 namespace mbsflow {
+namespace {
+
+// nlohmann's message, less its "[json.exception...] parse error at line L, column C: " prefix.
+std::string syntax_error(const nlohmann::json::parse_error& e, const std::string& name) {
+  const std::string what = e.what();
+  const std::size_t at = what.find("at line ");
+  int line = 0, column = 0;
+  if (at == std::string::npos || std::sscanf(what.c_str() + at, "at line %d, column %d", &line, &column) != 2)
+    return format_input_error(name, {}, "", "invalid JSON: " + what);
+  const std::size_t colon = what.find(": ", at);
+  std::string detail = colon == std::string::npos ? what : what.substr(colon + 2);
+  if (detail.find("invalid literal") != std::string::npos) detail += " (NaN and Infinity are not JSON numbers)";
+  return format_input_error(name, {line, column}, "", "invalid JSON: " + detail);
+}
+
+// A number too large for a double ("1e999"): nlohmann names the literal, in quotes, but
+// not its place; the first occurrence in the text gives line and column.
+std::string overflow_error(const nlohmann::json::out_of_range& e, const std::string& text, const std::string& name) {
+  const std::string what = e.what();
+  const std::size_t open = what.find('\''), close = what.rfind('\'');
+  const std::string number = open != std::string::npos && close > open ? what.substr(open + 1, close - open - 1) : "";
+  SourceLocation at;
+  if (const std::size_t offset = number.empty() ? std::string::npos : text.find(number); offset != std::string::npos) {
+    at.line = 1 + static_cast<int>(std::count(text.begin(), text.begin() + static_cast<long>(offset), '\n'));
+    const std::size_t line_start = text.rfind('\n', offset);
+    at.column = static_cast<int>(offset - (line_start == std::string::npos ? 0 : line_start + 1)) + 1;
+  }
+  return format_input_error(name, at, "", "number out of range" + (number.empty() ? "" : " (" + number + ")") +
+                                              ": must be a finite number");
+}
+
+}  // namespace
+
+nlohmann::json parse_json_document(const std::string& text, const std::string& name) {
+  try {
+    return nlohmann::json::parse(text);
+  } catch (const nlohmann::json::parse_error& e) {
+    throw InputError(syntax_error(e, name));
+  } catch (const nlohmann::json::out_of_range& e) {
+    throw InputError(overflow_error(e, text, name));
+  }
+}
 
 std::string number_text(double v) {
   char buf[32];

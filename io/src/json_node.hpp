@@ -64,5 +64,7 @@ class JsonNode {
 // "file:line:col: path: what" with whatever of these is known.
 std::string format_input_error(const std::string& file, SourceLocation at, const std::string& path, const std::string& what);
 std::string number_text(double v);  // shortest text that reads back as v
+// Parses a JSON document; InputError("name:line:col: invalid JSON: ...") if it is not one.
+nlohmann::json parse_json_document(const std::string& text, const std::string& name);
 
 }  // namespace mbsflow

@@ -15,7 +15,6 @@
 #include "schedules.hpp"
 #include "sink_runner.hpp"
 #include "step_grid.hpp"
-#include "tsan_annotations.hpp"
 
 namespace mbsflow {
 namespace {
@@ -38,42 +37,6 @@ class BusyClock {
   tbb::enumerable_thread_specific<double> busy_{0.0};
 };
 
-// Runs `steps` steps of `stages` stages each with the chosen executor. A stage of
-// submodel p reads what p and its neighbours wrote before and what the calling thread set
-// up; the annotations tell ThreadSanitizer so (see tsan_annotations.hpp).
-class Scheduler {
- public:
-  Scheduler(Executor ex, const Decomposition& d, int chunk, int stages, StageWork work)
-      : subs_(d.submodels), tokens_(d.submodels.size()), work_([this, work](std::size_t p, int s, int c) {
-          happens_after(&caller_);
-          happens_after(&tokens_[p]);
-          for (const auto& e : subs_[p].exchanges) happens_after(&tokens_[static_cast<std::size_t>(e.neighbour)]);
-          work(p, s, c);
-          happens_before(&tokens_[p]);
-        }) {
-    graph_ = std::make_unique<FlowGraphSchedule>(d.submodels, chunk, stages, work_, ex == Executor::barrier);
-  }
-  void run(int steps) {
-    happens_before(&caller_);
-    graph_->run(steps);
-    for (const long& t : tokens_) happens_after(&t);
-  }
-
- private:
-  const std::vector<Submodel>& subs_;
-  std::vector<long> tokens_;  // one synchronisation token per submodel
-  long caller_ = 0;
-  StageWork work_;
-  std::unique_ptr<FlowGraphSchedule> graph_;
-};
-
-// Steps per chunk of RK4: snapshots fall on chunk ends; at most 64 steps unrolled.
-int chunk_length(int output_every) {
-  for (int c = std::min(output_every, 64); c > 1; --c)
-    if (output_every % c == 0) return c;
-  return 1;
-}
-
 struct Context {
   const Model& model;
   const RunOptions& o;
@@ -93,27 +56,29 @@ void check_parts(const Context& c, double t) {
 
 void run_rk4(Context& c, Eigen::VectorXd& y) {
   const StepGrid grid = step_grid(c.o.t_start, c.o.t_end, c.o.step);
-  const int chunk = chunk_length(c.o.output_every);
   long first = 0;
-  Scheduler schedule(c.executor, c.d, chunk, 4, [&](std::size_t p, int s, int step) {
+  Scheduler schedule(c.d, chunk_length(c.o.output_every), 4, [&](std::size_t p, int s, int step) {
     c.clock.time([&] {
       partitioned::pull_ghosts(c.parts, p, s);
       const long n = first + step;
       partitioned::rk4_stage(c.parts[p], s, grid.time(n), grid.time(n + 1));
     });
-  });
-  while (first < grid.steps) {
-    const int steps = static_cast<int>(std::min<long>(chunk, grid.steps - first));
-    schedule.run(steps);
-    first += steps;
-    const double t = grid.time(first);
-    check_parts(c, t);
-    if (c.sink && (first % c.o.output_every == 0 || first == grid.steps)) {
-      partitioned::gather(c.parts, c.whole.layout(), y);
-      emit(c.whole, c.sink, t, y, c.out);
-    }
-    if (c.o.progress) c.o.progress(t, first);
-  }
+  }, c.executor == Executor::barrier);
+  step_in_chunks(
+      grid, chunk_length(c.o.output_every), 0,
+      [&](long from, int steps) {
+        first = from;
+        schedule.run(steps);
+      },
+      [&](long done) {
+        const double t = grid.time(done);
+        check_parts(c, t);
+        if (c.sink && (done % c.o.output_every == 0 || done == grid.steps)) {
+          partitioned::gather(c.parts, c.whole.layout(), y);
+          emit(c.whole, c.sink, t, y, c.out);
+        }
+        if (c.o.progress) c.o.progress(t, done);
+      });
   c.out.steps = grid.steps;
   c.out.evaluations = grid.steps * 4;
 }
@@ -129,12 +94,12 @@ void run_dopri5(Context& c, Eigen::VectorXd& y) {
   Eigen::VectorXd squares(c.whole.dimension()), dense(c.whole.dimension());
   double t = o.t_start, h = o.step;
   bool need_k0 = true;
-  Scheduler schedule(c.executor, c.d, 1, 7, [&](std::size_t p, int s, int) {
+  Scheduler schedule(c.d, 1, 7, [&](std::size_t p, int s, int) {
     c.clock.time([&] {
       if (s > 0 || need_k0) partitioned::pull_ghosts(c.parts, p, s);
       partitioned::dopri5_stage(c.parts[p], s, t, h, need_k0, o.atol, o.rtol, squares);
     });
-  });
+  }, c.executor == Executor::barrier);
   const double dt_out = o.step * o.output_every;
   long next_out = 1;
   while (t < o.t_end) {

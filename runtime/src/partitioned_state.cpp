@@ -34,13 +34,34 @@ Part::Part(const Model& model, const Submodel& s, int stages)
       for (int c = 0; c < f.n; ++c) global_element.push_back((global.*f.offset)(s.own[static_cast<std::size_t>(i)]) + c);
 }
 
-void pull_ghosts(std::vector<Part>& parts, std::size_t p, int s) {
-  Part& me = parts[p];
+void copy_ghosts(const Part& owner, const Submodel::Exchange& e, Part& me, int s) {
   const auto stage = static_cast<std::size_t>(s);
-  for (const Submodel::Exchange& e : me.sub->exchanges) {
-    const Part& owner = parts[static_cast<std::size_t>(e.neighbour)];
-    for (std::size_t i = 0; i < e.from.size(); ++i)
-      copy_body(owner.system.layout(), owner.x[stage], e.from[i], me.system.layout(), me.x[stage], e.to[i]);
+  for (std::size_t i = 0; i < e.from.size(); ++i)
+    copy_body(owner.system.layout(), owner.x[stage], e.from[i], me.system.layout(), me.x[stage], e.to[i]);
+}
+
+void pull_ghosts(std::vector<Part>& parts, std::size_t p, int s) {
+  for (const Submodel::Exchange& e : parts[p].sub->exchanges)
+    copy_ghosts(parts[static_cast<std::size_t>(e.neighbour)], e, parts[p], s);
+}
+
+void pack_bodies(const StateLayout& l, const Eigen::VectorXd& x, const std::vector<int>& bodies, double* out) {
+  for (int i : bodies) {
+    Eigen::Map<Eigen::VectorXd>(out, 3) = x.segment<3>(l.position(i));
+    Eigen::Map<Eigen::VectorXd>(out + 3, 4) = x.segment<4>(l.orientation(i));
+    Eigen::Map<Eigen::VectorXd>(out + 7, 3) = x.segment<3>(l.velocity(i));
+    Eigen::Map<Eigen::VectorXd>(out + 10, 3) = x.segment<3>(l.angular_velocity(i));
+    out += body_numbers;
+  }
+}
+
+void unpack_bodies(const StateLayout& l, Eigen::VectorXd& x, const std::vector<int>& bodies, const double* in) {
+  for (int i : bodies) {
+    x.segment<3>(l.position(i)) = Eigen::Map<const Eigen::VectorXd>(in, 3);
+    x.segment<4>(l.orientation(i)) = Eigen::Map<const Eigen::VectorXd>(in + 3, 4);
+    x.segment<3>(l.velocity(i)) = Eigen::Map<const Eigen::VectorXd>(in + 7, 3);
+    x.segment<3>(l.angular_velocity(i)) = Eigen::Map<const Eigen::VectorXd>(in + 10, 3);
+    in += body_numbers;
   }
 }
 

@@ -13,21 +13,41 @@ long start_token = 0;
 }  // namespace
 
 FlowGraphSchedule::FlowGraphSchedule(const std::vector<Submodel>& subs, int chunk, int stages, StageWork work,
-                                     bool barriers)
+                                     bool barriers, const RemoteInputs* remote)
     : start_(graph_), work_(std::move(work)) {
   const std::size_t k = subs.size();
   const auto n_stages = static_cast<std::size_t>(stages);
+  auto is_local = [&](std::size_t p) { return !remote || remote->local[p]; };
   nodes_.reserve(static_cast<std::size_t>(chunk) * k * n_stages);
   for (int c = 0; c < chunk; ++c)
     for (std::size_t p = 0; p < k; ++p)
       for (int s = 0; s < stages; ++s)
-        nodes_.push_back(std::make_unique<flow::continue_node<flow::continue_msg>>(graph_, [this, c, p, s](const flow::continue_msg&) {
+        nodes_.push_back(!is_local(p) ? nullptr : std::make_unique<Node>(graph_, [this, c, p, s](const flow::continue_msg&) {
           happens_after(&start_token);
           if (c < steps_) work_(p, s, c);
           return flow::continue_msg();
         }));
-  auto node = [&](int c, std::size_t p, int s) -> flow::continue_node<flow::continue_msg>& {
+  auto node = [&](int c, std::size_t p, int s) -> Node& {
     return *nodes_[(static_cast<std::size_t>(c) * k + p) * n_stages + static_cast<std::size_t>(s)];
+  };
+  // Values of remote q for local p's stage s of step c: a proxy started with the chunk that
+  // passes a message on when they have arrived.
+  auto proxy = [&](int c, std::size_t q, std::size_t p, int s) -> Proxy& {
+    proxies_.push_back(std::make_unique<Proxy>(
+        graph_, flow::unlimited, [this, remote, c, q, p, s](const flow::continue_msg&, Proxy::gateway_type& gate) {
+          happens_after(&start_token);
+          gate.reserve_wait();
+          auto ready = [&gate] {
+            gate.try_put(flow::continue_msg());
+            gate.release_wait();
+          };
+          if (c < steps_)
+            remote->await(c, q, p, s, ready);
+          else
+            ready();
+        }));
+    flow::make_edge(start_, *proxies_.back());
+    return *proxies_.back();
   };
   // A finishing node runs the last of its successors that became ready itself and leaves
   // the others to be stolen. Registering each submodel's own next stage last keeps a
@@ -44,12 +64,19 @@ FlowGraphSchedule::FlowGraphSchedule(const std::vector<Submodel>& subs, int chun
     return q;
   };
   for (int c = 0; c < chunk; ++c) {
-    for (std::size_t p = 0; p < k; ++p)
+    for (std::size_t p = 0; p < k; ++p) {
+      if (!is_local(p)) continue;
       for (std::size_t q : inputs(p)) {
+        if (!is_local(q)) {
+          for (int s = 0; s < stages; ++s) flow::make_edge(proxy(c, q, p, s), node(c, p, s));
+          continue;
+        }
         for (int s = 1; s < stages; ++s) flow::make_edge(node(c, q, s - 1), node(c, p, s));
         if (c > 0) flow::make_edge(node(c - 1, q, stages - 1), node(c, p, 0));
       }
+    }
     for (std::size_t p = 0; p < k; ++p) {
+      if (!is_local(p)) continue;
       for (int s = 1; s < stages; ++s) flow::make_edge(node(c, p, s - 1), node(c, p, s));
       if (c > 0) flow::make_edge(node(c - 1, p, stages - 1), node(c, p, 0));
       if (c == 0) flow::make_edge(start_, node(0, p, 0));
@@ -62,6 +89,24 @@ void FlowGraphSchedule::run(int steps) {
   happens_before(&start_token);
   start_.try_put(flow::continue_msg());
   graph_.wait_for_all();
+}
+
+Scheduler::Scheduler(const Decomposition& d, int chunk, int stages, StageWork work, bool barriers,
+                     const RemoteInputs* remote)
+    : subs_(d.submodels), tokens_(d.submodels.size()), work_([this, work](std::size_t p, int s, int c) {
+        happens_after(&caller_);
+        happens_after(&tokens_[p]);
+        for (const auto& e : subs_[p].exchanges) happens_after(&tokens_[static_cast<std::size_t>(e.neighbour)]);
+        work(p, s, c);
+        happens_before(&tokens_[p]);
+      }) {
+  graph_ = std::make_unique<FlowGraphSchedule>(d.submodels, chunk, stages, work_, barriers, remote);
+}
+
+void Scheduler::run(int steps) {
+  happens_before(&caller_);
+  graph_->run(steps);
+  for (const long& t : tokens_) happens_after(&t);
 }
 
 }  // namespace mbsflow

@@ -13,22 +13,53 @@ namespace mbsflow {
 
 using StageWork = std::function<void(std::size_t p, int s, int c)>;
 
+// Submodels that run in other processes. A local stage that needs a remote neighbour's
+// values waits on a proxy node; await(c, q, p, s, ready) is called when the proxy for
+// remote q's values of stage input s of chunk step c, for local p, starts waiting, and
+// must call ready() once, from any thread, when they are in.
+struct RemoteInputs {
+  std::vector<char> local;  // per submodel: 1 if its stages run here
+  std::function<void(int c, std::size_t q, std::size_t p, int s, std::function<void()> ready)> await;
+};
+
 // A oneTBB flow graph built once and run for every chunk: node (c, p, s) waits for stage
 // s-1 of submodel p and of the neighbours it takes ghosts from (for s = 0: the last stage
 // of the previous step), so a submodel's stage starts as soon as its neighbours' values
 // are in; no barrier but the end of the chunk. With barriers, every node waits for the
-// previous stage of all submodels instead: the seed's scheme, a barrier per stage.
+// previous stage of all submodels instead: the seed's scheme, a barrier per stage. With
+// remote inputs, only local submodels get nodes, and a remote neighbour is a proxy node.
 class FlowGraphSchedule {
  public:
-  FlowGraphSchedule(const std::vector<Submodel>& subs, int chunk, int stages, StageWork work, bool barriers = false);
+  FlowGraphSchedule(const std::vector<Submodel>& subs, int chunk, int stages, StageWork work, bool barriers = false,
+                    const RemoteInputs* remote = nullptr);
   void run(int steps);  // steps <= chunk; later steps' nodes do nothing
 
  private:
+  using Node = tbb::flow::continue_node<tbb::flow::continue_msg>;
+  using Proxy = tbb::flow::async_node<tbb::flow::continue_msg, tbb::flow::continue_msg>;
   tbb::flow::graph graph_;
   tbb::flow::broadcast_node<tbb::flow::continue_msg> start_;
-  std::vector<std::unique_ptr<tbb::flow::continue_node<tbb::flow::continue_msg>>> nodes_;
+  std::vector<std::unique_ptr<Node>> nodes_;  // null for remote submodels
+  std::vector<std::unique_ptr<Proxy>> proxies_;
   StageWork work_;
   int steps_ = 0;
+};
+
+// A FlowGraphSchedule whose stages tell ThreadSanitizer what they wait for: a stage of
+// submodel p reads what p and its neighbours wrote before and what the calling thread set
+// up (see tsan_annotations.hpp).
+class Scheduler {
+ public:
+  Scheduler(const Decomposition& d, int chunk, int stages, StageWork work, bool barriers = false,
+            const RemoteInputs* remote = nullptr);
+  void run(int steps);
+
+ private:
+  const std::vector<Submodel>& subs_;
+  std::vector<long> tokens_;  // one synchronisation token per submodel
+  long caller_ = 0;
+  StageWork work_;
+  std::unique_ptr<FlowGraphSchedule> graph_;
 };
 
 }  // namespace mbsflow

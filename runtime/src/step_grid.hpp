@@ -25,4 +25,23 @@ inline double landed_time(double t, double taken, double t_end) {
   return (t_end - (t + taken)) <= 1e-12 * std::max(1.0, std::abs(t_end)) ? t_end : t + taken;
 }
 
+// Steps per chunk of RK4: snapshots fall on chunk ends; at most 64 steps unrolled.
+inline int chunk_length(int output_every) {
+  for (int c = std::min(output_every, 64); c > 1; --c)
+    if (output_every % c == 0) return c;
+  return 1;
+}
+
+// Walks the grid from step `first` in chunks of at most `chunk` steps: run(steps) takes
+// them, then after(first) sees the steps done so far.
+template <class Run, class After>
+void step_in_chunks(const StepGrid& g, int chunk, long first, Run run, After after) {
+  while (first < g.steps) {
+    const int steps = static_cast<int>(std::min<long>(chunk, g.steps - first));
+    run(first, steps);
+    first += steps;
+    after(first);
+  }
+}
+
 }  // namespace mbsflow

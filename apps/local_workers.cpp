@@ -1,0 +1,114 @@
+#include "local_workers.hpp"
+
+#include <poll.h>
+#include <signal.h>
+#include <sys/prctl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <thread>
+
+#include "mbsflow/graph/error.hpp"
+
+namespace mbsflow::cli {
+namespace {
+
+// Starts `mbsflow worker ARGS` with its stdout on a pipe; returns the pid and the read end.
+std::pair<pid_t, int> spawn_worker(const std::vector<std::string>& args) {
+  int out[2];
+  if (::pipe(out) != 0) throw RunError("cannot start a worker: no pipe");
+  const pid_t parent = ::getpid();
+  const pid_t pid = ::fork();
+  if (pid < 0) throw RunError("cannot start a worker: fork failed");
+  if (pid == 0) {
+    // The worker dies with the coordinator, whatever kills it.
+    ::prctl(PR_SET_PDEATHSIG, SIGKILL);
+    if (::getppid() != parent) ::_exit(1);
+    ::dup2(out[1], STDOUT_FILENO);
+    ::close(out[0]);
+    ::close(out[1]);
+    std::vector<char*> argv;
+    static char self[] = "/proc/self/exe";
+    argv.push_back(self);
+    for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    ::execv("/proc/self/exe", argv.data());
+    ::_exit(127);
+  }
+  ::close(out[1]);
+  return {pid, out[0]};
+}
+
+// The endpoint a worker announces on its first line of output ("... listening on E").
+std::string read_announcement(int fd, double timeout_s) {
+  std::string line;
+  const auto start = std::chrono::steady_clock::now();
+  while (line.find('\n') == std::string::npos) {
+    const double left = timeout_s - std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    pollfd p{fd, POLLIN, 0};
+    if (left <= 0 || ::poll(&p, 1, static_cast<int>(left * 1000)) <= 0) return "";
+    char buf[256];
+    const ssize_t n = ::read(fd, buf, sizeof buf);
+    if (n <= 0) return "";
+    line.append(buf, static_cast<std::size_t>(n));
+  }
+  line.resize(line.find('\n'));
+  const std::size_t at = line.rfind(' ');
+  return at == std::string::npos ? "" : line.substr(at + 1);
+}
+
+}  // namespace
+
+LocalWorkers::LocalWorkers(int n, const std::string& transport, int threads) {
+  cluster_.transport = transport;
+  cluster_.coordinator_name = "local";
+  if (transport == "ipc") {
+    char dir[] = "/tmp/mbsflow-XXXXXX";
+    if (!::mkdtemp(dir)) throw RunError("cannot make a directory for ipc endpoints in /tmp");
+    ipc_dir_ = dir;
+    cluster_.results_bind = "ipc://" + ipc_dir_ + "/results";
+  } else {
+    cluster_.results_bind = "tcp://127.0.0.1:*";
+  }
+  for (int i = 0; i < n; ++i) {
+    const std::string name = "local" + std::to_string(i);
+    const std::string listen = transport == "ipc" ? "ipc://" + ipc_dir_ + "/" + name + ".control" : "tcp://127.0.0.1:*";
+    std::vector<std::string> args = {"worker", "--listen", listen, "--threads", std::to_string(threads),
+                                     "--idle-timeout", "60", "--quiet"};
+    auto [pid, fd] = spawn_worker(args);
+    pids_.push_back(pid);
+    const std::string endpoint = read_announcement(fd, 30.0);
+    ::close(fd);
+    if (endpoint.empty()) throw RunError("local worker " + std::to_string(i) + " did not start (see its message above)");
+    ClusterWorker w;
+    w.name = name;
+    w.address = endpoint;
+    w.data_bind = transport == "ipc" ? "ipc://" + ipc_dir_ + "/" + name + ".data" : "tcp://127.0.0.1:*";
+    cluster_.workers.push_back(w);
+  }
+}
+
+LocalWorkers::~LocalWorkers() {
+  // Finished or aborted workers exit by themselves within a few seconds; anything still
+  // there after that is killed, so that no process is left behind.
+  const auto start = std::chrono::steady_clock::now();
+  for (pid_t pid : pids_) {
+    while (::waitpid(pid, nullptr, WNOHANG) == 0) {
+      if (std::chrono::steady_clock::now() - start > std::chrono::seconds(5)) {
+        ::kill(pid, SIGKILL);
+        ::waitpid(pid, nullptr, 0);
+        break;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+  }
+  if (!ipc_dir_.empty()) {
+    std::error_code ignored;
+    std::filesystem::remove_all(ipc_dir_, ignored);
+  }
+}
+
+}  // namespace mbsflow::cli

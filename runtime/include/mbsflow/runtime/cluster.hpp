@@ -1,0 +1,80 @@
+#pragma once
+// Runs across processes and hosts over ZeroMQ. A coordinator (run_cluster) hands the model
+// and the assignment of submodels to workers (serve_worker), which exchange boundary values
+// peer to peer at every RK4 stage and stream their bodies' snapshots back; the results are
+// bitwise those of the one-process run. See docs/cluster.md for the cluster file and the
+// protocol.
+#include <atomic>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "mbsflow/graph/decomposition.hpp"
+#include "mbsflow/runtime/simulation.hpp"
+
+namespace mbsflow {
+
+// Raised with every incompatible change of the messages between processes.
+constexpr int cluster_protocol_version = 1;
+
+struct ClusterTimeouts {
+  double connect_s = 10.0;   // every worker must answer the coordinator's hello within this
+  double heartbeat_s = 0.5;  // both directions
+  double lost_s = 3.0;       // silence after which a peer counts as lost
+};
+
+struct ClusterWorker {
+  std::string name;
+  std::string address;       // where the coordinator reaches its control socket (`mbsflow worker --listen`)
+  std::string data_bind;     // where it binds its inbox for boundary values
+  std::string data_address;  // where its peers reach that inbox; empty: what data_bind bound
+  int weight = 1;            // takes `weight` submodels when no explicit list is given
+  std::vector<int> submodels;  // explicit submodel numbers; all workers or none have them
+  int threads = 0;           // 0: the worker's own --threads (default all cores)
+};
+
+struct ClusterConfig {
+  std::string transport = "tcp";  // tcp or ipc
+  std::string coordinator_name = "coordinator";
+  std::string results_bind;     // where the coordinator binds the inbox for the workers' results
+  std::string results_address;  // where the workers reach it; empty: what results_bind bound
+  std::vector<ClusterWorker> workers;
+  ClusterTimeouts timeouts;
+};
+
+// Submodels a cluster run is cut into when the user does not say: the explicit lists'
+// length, or the sum of the weights.
+int cluster_submodels(const ClusterConfig& c);
+// The worker of each of k submodels: the explicit lists, or contiguous runs of submodels
+// in proportion to the weights. InputError if a list is wrong for k.
+std::vector<int> assign_submodels(const ClusterConfig& c, int k);
+
+struct ClusterStats {
+  long messages = 0;             // boundary messages between workers in the run
+  double bytes_per_stage = 0.0;  // boundary payload sent by all workers per stage
+};
+
+// The coordinator. model_json is the model as written by model_to_json, which every worker
+// reads back to the same Model. RK4 only. Throws RunError naming the worker when one is
+// lost or fails; InputError for bad settings.
+RunSummary run_cluster(const Model& model, const std::string& model_json, const Decomposition& d,
+                       const ClusterConfig& cluster, const RunOptions& options, ResultSink* sink,
+                       ClusterStats* stats = nullptr);
+
+struct WorkerOptions {
+  std::string listen;  // control endpoint to bind; a tcp port of * picks a free one
+  int threads = 0;     // 0: all cores (the coordinator's cluster file may set it)
+  double idle_timeout_s = 0.0;  // give up when no coordinator calls within this; 0: wait forever
+  int protocol_version = cluster_protocol_version;  // tests pretend another
+  std::function<Model(const std::string& json)> read_model;
+  std::function<void(const std::string& endpoint)> listening;  // told the bound endpoint
+  std::function<void(const std::string& line)> log;             // what the worker does, for its log
+  const std::atomic<bool>* stop = nullptr;
+};
+
+// One worker session: waits for a coordinator, runs its part of one run and returns when
+// the coordinator finishes it. RunError when the run fails or the coordinator is lost;
+// InputError when the endpoint cannot be bound.
+void serve_worker(const WorkerOptions& options);
+
+}  // namespace mbsflow

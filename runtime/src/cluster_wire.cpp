@@ -1,0 +1,47 @@
+#include "cluster_wire.hpp"
+
+#include "mbsflow/graph/error.hpp"
+
+namespace mbsflow::wire {
+
+zmq::socket_t make_socket(zmq::context_t& ctx, zmq::socket_type type) {
+  zmq::socket_t s(ctx, type);
+  s.set(zmq::sockopt::linger, 0);
+  return s;
+}
+
+void bind(zmq::socket_t& s, const std::string& endpoint, const std::string& what) {
+  try {
+    s.bind(endpoint);
+  } catch (const zmq::error_t& e) {
+    throw InputError("cannot bind " + what + " at " + endpoint + ": " + e.what());
+  }
+}
+
+void connect(zmq::socket_t& s, const std::string& endpoint, const std::string& what) {
+  try {
+    s.connect(endpoint);
+  } catch (const zmq::error_t& e) {
+    throw InputError("cannot connect to " + what + " at " + endpoint + ": " + e.what());
+  }
+}
+
+std::string reachable_address(zmq::socket_t& bound, const std::string& configured, const std::string& what) {
+  if (!configured.empty()) return configured;
+  const std::string got = bound.get(zmq::sockopt::last_endpoint);
+  if (got.find("0.0.0.0") != std::string::npos || got.find("[::]") != std::string::npos)
+    throw InputError(what + " binds every interface (" + got + "); give the address its peers use to reach it");
+  return got;
+}
+
+bool send_json(zmq::socket_t& s, const nlohmann::json& j, zmq::send_flags flags) {
+  const std::string text = j.dump();
+  return s.send(zmq::buffer(text), flags).has_value();
+}
+
+nlohmann::json parse_json(const zmq::message_t& m) {
+  return nlohmann::json::parse(static_cast<const char*>(m.data()), static_cast<const char*>(m.data()) + m.size(),
+                               nullptr, false);
+}
+
+}  // namespace mbsflow::wire

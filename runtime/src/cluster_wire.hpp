@@ -1,0 +1,69 @@
+#pragma once
+// What goes over the wire between coordinator and workers, and the ZeroMQ socket set-up
+// both sides share. Control messages are JSON; boundary values and snapshots are a small
+// binary header frame followed by a frame of doubles (all hosts must share the byte order
+// and double format; the magic number catches a mismatch).
+#include <chrono>
+#include <cstdint>
+#include <cstring>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <zmq.hpp>
+
+namespace mbsflow::wire {
+
+constexpr std::uint32_t magic = 0x4d42'5346;  // "MBSF"
+
+// Boundary values of submodel `from` for stage input `stage` of step `step`, for `to`.
+struct ExchangeHeader {
+  std::uint32_t magic = wire::magic;
+  std::int32_t from = 0, to = 0, stage = 0;
+  std::int64_t step = 0;
+};
+
+enum class ResultKind : std::uint32_t { snapshot = 1, progress = 2, done = 3, failed = 4 };
+
+// Worker -> coordinator on the results channel; a snapshot carries the own bodies of the
+// worker's submodels (ascending), a failure its message.
+struct ResultHeader {
+  std::uint32_t magic = wire::magic;
+  ResultKind kind = ResultKind::progress;
+  std::int32_t worker = 0;
+  std::int32_t pad = 0;
+  std::int64_t step = 0;  // steps completed
+};
+
+using Clock = std::chrono::steady_clock;
+inline double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+// A socket that never holds the process at close (linger 0).
+zmq::socket_t make_socket(zmq::context_t& ctx, zmq::socket_type type);
+// Binds; InputError naming what the endpoint is for when it cannot.
+void bind(zmq::socket_t& s, const std::string& endpoint, const std::string& what);
+void connect(zmq::socket_t& s, const std::string& endpoint, const std::string& what);
+// The address peers use: `configured` if given, else the bound endpoint, which must not be a
+// wildcard address.
+std::string reachable_address(zmq::socket_t& bound, const std::string& configured, const std::string& what);
+
+// JSON control messages.
+// False when it would have to wait (the peer is gone or far behind).
+bool send_json(zmq::socket_t& s, const nlohmann::json& j, zmq::send_flags flags = zmq::send_flags::dontwait);
+nlohmann::json parse_json(const zmq::message_t& m);
+
+// Header frame + payload frame.
+template <class Header>
+bool send_framed(zmq::socket_t& s, const Header& h, const void* data, std::size_t bytes) {
+  if (!s.send(zmq::const_buffer(&h, sizeof h), zmq::send_flags::sndmore)) return false;
+  return s.send(zmq::const_buffer(data, bytes), zmq::send_flags::none).has_value();
+}
+template <class Header>
+std::optional<Header> read_header(const zmq::message_t& m) {
+  if (m.size() != sizeof(Header)) return std::nullopt;
+  Header h;
+  std::memcpy(&h, m.data(), sizeof h);
+  if (h.magic != magic) return std::nullopt;
+  return h;
+}
+
+}  // namespace mbsflow::wire

@@ -1,0 +1,267 @@
+// mbsflow run --cluster / --processes: the coordinator (see cluster.hpp, docs/cluster.md).
+#include <cstdio>
+#include <map>
+
+#include "cluster_wire.hpp"
+#include "mbsflow/graph/error.hpp"
+#include "mbsflow/runtime/cluster.hpp"
+#include "partitioned_state.hpp"
+#include "sink_runner.hpp"
+#include "step_grid.hpp"
+
+namespace mbsflow {
+namespace {
+
+using nlohmann::json;
+using wire::Clock;
+
+struct Peer {
+  const ClusterWorker* config;
+  zmq::socket_t control;  // DEALER connected to the worker's --listen endpoint
+  Clock::time_point heard;
+  std::string data_address;
+  std::vector<int> bodies;  // global indices of its own bodies, in the order it sends them
+  long completed = 0;       // steps it has reported done
+  bool answered = false, done = false;
+};
+
+class Coordinator {
+ public:
+  Coordinator(const ClusterConfig& c, const RunOptions& o) : c_(c), o_(o), results_(wire::make_socket(ctx_, zmq::socket_type::pull)) {
+    wire::bind(results_, c.results_bind, "the coordinator's results inbox");
+    results_address_ = wire::reachable_address(results_, c.results_address, "the coordinator's results inbox " + c.results_bind);
+    for (const ClusterWorker& w : c.workers) {
+      Peer p{&w, wire::make_socket(ctx_, zmq::socket_type::dealer), Clock::now(), {}, {}, 0, false, false};
+      wire::connect(p.control, w.address, "worker " + w.name);
+      peers_.push_back(std::move(p));
+    }
+  }
+
+  std::string who(std::size_t w) const { return "worker " + peers_[w].config->name + " (" + peers_[w].config->address + ")"; }
+
+  void send(std::size_t w, const json& j) {
+    // A full queue means the worker has not taken anything for a long time; the heartbeat
+    // check reports it.
+    (void)wire::send_json(peers_[w].control, j);
+  }
+  void send_all(const json& j) {
+    for (std::size_t w = 0; w < peers_.size(); ++w) send(w, j);
+  }
+
+  // Waits until every worker has answered with `want` (after reset_answers), sending
+  // heartbeats; RunError on an error reply, a lost worker or, with a deadline, silence.
+  void gather(const std::string& want, double deadline_s, const std::function<void(std::size_t, const json&)>& take) {
+    for (Peer& p : peers_) p.answered = false;
+    const auto start = Clock::now();
+    while (std::any_of(peers_.begin(), peers_.end(), [](const Peer& p) { return !p.answered; })) {
+      pump(
+          [&](std::size_t w, const json& j) {
+            const std::string type = j.value("type", "");
+            if (type == want) {
+              peers_[w].answered = true;
+              take(w, j);
+            } else if (type == "error") {
+              throw RunError(who(w) + ": " + j.value("message", std::string("failed")));
+            }
+          },
+          nullptr);
+      if (deadline_s > 0.0 && wire::seconds_since(start) > deadline_s)
+        for (std::size_t w = 0; w < peers_.size(); ++w)
+          if (!peers_[w].answered) {
+            char buf[96];
+            std::snprintf(buf, sizeof buf, " did not answer within %.3g s", deadline_s);
+            throw RunError(who(w) + buf + "; is `mbsflow worker --listen` running there, and reachable from here?");
+          }
+      if (deadline_s <= 0.0) check_alive("");
+    }
+  }
+
+  // One round of waiting (at most a heartbeat interval): control messages to on_control,
+  // results to on_result; sends heartbeats when due.
+  void pump(const std::function<void(std::size_t, const json&)>& on_control,
+            const std::function<void(const wire::ResultHeader&, zmq::message_t&)>& on_result) {
+    std::vector<zmq::pollitem_t> items;
+    for (Peer& p : peers_) items.push_back({p.control.handle(), 0, ZMQ_POLLIN, 0});
+    items.push_back({results_.handle(), 0, ZMQ_POLLIN, 0});
+    const double wait = std::max(0.0, c_.timeouts.heartbeat_s - wire::seconds_since(beat_));
+    zmq::poll(items.data(), items.size(), std::chrono::milliseconds(static_cast<long>(wait * 1000.0) + 1));
+    for (std::size_t w = 0; w < peers_.size(); ++w) {
+      if (!(items[w].revents & ZMQ_POLLIN)) continue;
+      zmq::message_t m;
+      while (peers_[w].control.recv(m, zmq::recv_flags::dontwait)) {
+        peers_[w].heard = Clock::now();
+        const json j = wire::parse_json(m);
+        if (j.is_object() && j.value("type", "") != "heartbeat") on_control(w, j);
+      }
+    }
+    if (items.back().revents & ZMQ_POLLIN) {
+      zmq::message_t header, payload;
+      while (results_.recv(header, zmq::recv_flags::dontwait)) {
+        if (header.more()) (void)results_.recv(payload);
+        const auto h = wire::read_header<wire::ResultHeader>(header);
+        if (!h || h->worker < 0 || h->worker >= static_cast<int>(peers_.size()))
+          throw RunError("a malformed result message arrived at the coordinator");
+        peers_[static_cast<std::size_t>(h->worker)].heard = Clock::now();
+        if (on_result) on_result(*h, payload);
+      }
+    }
+    if (wire::seconds_since(beat_) >= c_.timeouts.heartbeat_s) {
+      beat_ = Clock::now();
+      send_all({{"type", "heartbeat"}});
+    }
+  }
+
+  void check_alive(const std::string& progress) {
+    for (std::size_t w = 0; w < peers_.size(); ++w)
+      if (wire::seconds_since(peers_[w].heard) > c_.timeouts.lost_s) {
+        char buf[96];
+        std::snprintf(buf, sizeof buf, " was lost: nothing heard from it for %.1f s", c_.timeouts.lost_s);
+        throw RunError(who(w) + buf + progress);
+      }
+  }
+
+  void finish() { send_all({{"type", "finish"}}); }
+  void abort(const std::string& reason) { send_all({{"type", "abort"}, {"reason", reason}}); }
+
+  std::vector<Peer>& peers() { return peers_; }
+  const std::string& results_address() const { return results_address_; }
+
+ private:
+  const ClusterConfig& c_;
+  const RunOptions& o_;
+  zmq::context_t ctx_;
+  zmq::socket_t results_;
+  std::string results_address_;
+  std::vector<Peer> peers_;
+  Clock::time_point beat_ = Clock::now();
+};
+
+json setup_message(const std::string& model_json, const Decomposition& d, const std::vector<int>& worker_of, std::size_t w,
+                   const ClusterWorker& cw, const RunOptions& o, const std::string& results_address) {
+  return {{"type", "setup"},
+          {"model", model_json},
+          {"part_of_body", d.part_of_body},
+          {"submodels", d.submodels.size()},
+          {"worker_of", worker_of},
+          {"worker", w},
+          {"options", {{"t_start", o.t_start}, {"t_end", o.t_end}, {"step", o.step}, {"output_every", o.output_every}}},
+          {"data_bind", cw.data_bind},
+          {"data_address", cw.data_address},
+          {"results_address", results_address},
+          {"threads", cw.threads}};
+}
+
+}  // namespace
+
+RunSummary run_cluster(const Model& model, const std::string& model_json, const Decomposition& d,
+                       const ClusterConfig& cluster, const RunOptions& o, ResultSink* sink, ClusterStats* stats) {
+  check_options(o);
+  if (o.method != Method::rk4)
+    throw InputError(std::string("runs across processes use RK4 for now (") + method_name(o.method) +
+                     " needs a global error norm at every step attempt)");
+  const std::vector<int> worker_of = assign_submodels(cluster, static_cast<int>(d.submodels.size()));
+  Coordinator co(cluster, o);
+  auto& peers = co.peers();
+  for (std::size_t q = 0; q < d.submodels.size(); ++q) {
+    auto& b = peers[static_cast<std::size_t>(worker_of[q])].bodies;
+    b.insert(b.end(), d.submodels[q].own.begin(), d.submodels[q].own.end());
+  }
+  RunSummary out;
+  MultibodySystem whole(model);  // for the sink: layout, energies, joint forces
+  const auto start_clock = Clock::now();
+  Eigen::VectorXd y = whole.initial_state();
+  if (sink) sink->begin(whole);
+  const StepGrid grid = step_grid(o.t_start, o.t_end, o.step);
+  run_with_sink(sink, out, [&] {
+    try {
+      for (std::size_t w = 0; w < peers.size(); ++w)
+        co.send(w, {{"type", "hello"},
+                    {"program", MBSFLOW_PROGRAM_VERSION},
+                    {"protocol", cluster_protocol_version},
+                    {"coordinator", cluster.coordinator_name},
+                    {"name", cluster.workers[w].name},
+                    {"timeouts",
+                     {{"connect_s", cluster.timeouts.connect_s},
+                      {"heartbeat_s", cluster.timeouts.heartbeat_s},
+                      {"lost_s", cluster.timeouts.lost_s}}}});
+      co.gather("hello_ok", cluster.timeouts.connect_s, [](std::size_t, const json&) {});
+      for (std::size_t w = 0; w < peers.size(); ++w)
+        co.send(w, setup_message(model_json, d, worker_of, w, cluster.workers[w], o, co.results_address()));
+      co.gather("ready", 0.0, [&](std::size_t w, const json& j) { peers[w].data_address = j.value("data_address", ""); });
+      json names = json::array(), addresses = json::array();
+      for (const Peer& p : peers) {
+        names.push_back(p.config->name);
+        addresses.push_back(p.data_address);
+      }
+      co.send_all({{"type", "start"}, {"names", names}, {"data_addresses", addresses}});
+      if (sink) emit(whole, sink, o.t_start, y, out);
+
+      struct Pending {
+        Eigen::VectorXd y;
+        std::size_t parts = 0;
+      };
+      std::map<long, Pending> pending;  // snapshots still missing some workers' bodies
+      long reported = 0;                // steps every worker has completed
+      const StateLayout& layout = whole.layout();
+      auto on_result = [&](const wire::ResultHeader& h, zmq::message_t& payload) {
+        const auto w = static_cast<std::size_t>(h.worker);
+        Peer& p = peers[w];
+        switch (h.kind) {
+          case wire::ResultKind::failed:
+            throw RunError(co.who(w) + ": " + payload.to_string());
+          case wire::ResultKind::done:
+            p.done = true;
+            if (stats && payload.size() == 2 * sizeof(double)) {
+              stats->messages += static_cast<long>(payload.data<double>()[0]);
+              stats->bytes_per_stage += payload.data<double>()[1];
+            }
+            break;
+          case wire::ResultKind::snapshot: {
+            if (payload.size() != p.bodies.size() * partitioned::body_numbers * sizeof(double))
+              throw RunError(co.who(w) + " sent a snapshot of the wrong size");
+            Pending& s = pending[h.step];
+            if (s.y.size() == 0) s.y = y;
+            partitioned::unpack_bodies(layout, s.y, p.bodies, payload.data<double>());
+            if (++s.parts == peers.size()) {
+              y = std::move(s.y);
+              pending.erase(h.step);
+              if (sink) emit(whole, sink, grid.time(h.step), y, out);
+            }
+            break;
+          }
+          case wire::ResultKind::progress:
+            break;
+        }
+        p.completed = std::max(p.completed, static_cast<long>(h.step));
+      };
+      char where[96] = "";
+      while (std::any_of(peers.begin(), peers.end(), [](const Peer& p) { return !p.done; })) {
+        co.pump(
+            [&](std::size_t w, const json& j) {
+              if (j.value("type", "") == "error") throw RunError(co.who(w) + ": " + j.value("message", std::string()));
+            },
+            on_result);
+        long all = grid.steps;
+        for (const Peer& p : peers) all = std::min(all, p.completed);
+        if (all > reported) {
+          reported = all;
+          std::snprintf(where, sizeof where, "; every worker had completed t = %.6g s", grid.time(all));
+          if (o.progress) o.progress(grid.time(all), all);
+        }
+        co.check_alive(where);
+        check_stop(o, grid.time(reported));
+      }
+      co.finish();
+    } catch (const std::exception& e) {
+      co.abort(e.what());
+      throw;
+    }
+  });
+  out.steps = grid.steps;
+  out.evaluations = grid.steps * 4;
+  out.wall_seconds = std::chrono::duration<double>(Clock::now() - start_clock).count();
+  out.final_state = std::move(y);
+  return out;
+}
+
+}  // namespace mbsflow

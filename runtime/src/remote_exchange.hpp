@@ -1,0 +1,75 @@
+#pragma once
+// A worker's side of the boundary exchange with submodels in other processes: one inbox
+// (PULL, read by the worker's I/O thread) and one sender (PUSH) per local submodel and
+// remote worker, used only by that submodel's stages, which the flow graph runs one after
+// another. Messages name sender, receiver, step and stage; a received message waits in its
+// slot until the receiving stage takes it, so none is dropped or taken for another stage.
+#include <atomic>
+#include <deque>
+#include <functional>
+#include <map>
+#include <mutex>
+#include <string>
+#include <tuple>
+#include <vector>
+#include <zmq.hpp>
+
+#include "mbsflow/graph/decomposition.hpp"
+#include "partitioned_state.hpp"
+
+namespace mbsflow {
+
+class RemoteExchange {
+ public:
+  // parts[q]: local submodel q's state, null where q runs elsewhere; worker_of[q] its worker.
+  RemoteExchange(zmq::context_t& ctx, const Decomposition& d, std::vector<partitioned::Part*> parts,
+                 std::vector<int> worker_of, const std::vector<std::string>& worker_names,
+                 const std::vector<std::string>& data_addresses, int stages, double send_timeout_s);
+
+  // From the I/O thread: a two-frame message from the inbox. False if it is malformed.
+  bool deliver(zmq::message_t& header, zmq::message_t& payload);
+  // From a proxy node: ready() once remote q's values of stage input s of step n for local
+  // p are in (at once if they are, or if the exchange was aborted).
+  void await(long n, int s, int q, int p, std::function<void()> ready);
+  // From local p's stage: its remote ghosts of stage input s of step n, from their slots.
+  void receive(int p, long n, int s);
+  // From local p's stage: its bodies of stage input s of step n to the remote submodels
+  // that hold them as ghosts.
+  void send(int p, long n, int s);
+
+  // Stops the exchange: waiting proxies are released and stages skip their work.
+  void abort(const std::string& why);
+  bool aborted() const;
+  std::string why() const;
+  long messages_sent() const;
+  double bytes_per_stage() const;  // payload this worker sends per stage
+
+ private:
+  struct Message {
+    long step;
+    zmq::message_t payload;
+  };
+  struct Outgoing {
+    int to;                  // remote submodel
+    const std::vector<int>* bodies;  // local indices of the bodies it needs
+    zmq::socket_t* socket;
+  };
+  using Slot = std::tuple<int, int, int>;  // to (local), from (remote), stage
+
+  const Decomposition& d_;
+  std::vector<partitioned::Part*> parts_;
+  std::vector<int> worker_of_;
+  std::vector<std::string> worker_names_;
+  int stages_;
+  std::map<std::pair<int, int>, zmq::socket_t> senders_;  // (local submodel, remote worker)
+  std::vector<std::vector<Outgoing>> outgoing_;            // per local submodel
+
+  mutable std::mutex mutex_;
+  std::map<Slot, std::deque<Message>> inbox_;
+  std::map<std::pair<Slot, long>, std::function<void()>> waiting_;  // proxies of a chunk, by step
+  bool aborted_ = false;
+  std::string why_;
+  std::atomic<long> sent_{0};
+};
+
+}  // namespace mbsflow

@@ -1,0 +1,175 @@
+#include "worker_io.hpp"
+
+#include "cluster_wire.hpp"
+#include "mbsflow/graph/error.hpp"
+#include "remote_exchange.hpp"
+
+namespace mbsflow {
+
+WorkerIo::WorkerIo(zmq::context_t& ctx, const std::string& listen)
+    : ctx_(ctx), control_(wire::make_socket(ctx, zmq::socket_type::router)) {
+  control_.set(zmq::sockopt::router_mandatory, 1);  // a reply to a vanished coordinator fails, never drops
+  wire::bind(control_, listen, "the worker's control socket");
+  endpoint_ = control_.get(zmq::sockopt::last_endpoint);
+  thread_ = std::thread([this] { loop(); });
+}
+
+WorkerIo::~WorkerIo() {
+  {
+    std::lock_guard lock(mutex_);
+    stopping_ = true;
+  }
+  thread_.join();
+}
+
+std::optional<nlohmann::json> WorkerIo::next_command(double timeout_s) {
+  std::unique_lock lock(mutex_);
+  auto have = [&] { return !commands_.empty(); };
+  if (timeout_s > 0.0) {
+    if (!changed_.wait_for(lock, std::chrono::duration<double>(timeout_s), have)) return std::nullopt;
+  } else {
+    changed_.wait(lock, have);
+  }
+  nlohmann::json j = std::move(commands_.front());
+  commands_.pop_front();
+  return j;
+}
+
+void WorkerIo::send(nlohmann::json message) {
+  std::lock_guard lock(mutex_);
+  posted_.push_back([this, m = std::move(message)] {
+    if (coordinator_.empty()) return;
+    try {
+      control_.send(zmq::buffer(coordinator_), zmq::send_flags::sndmore);
+      wire::send_json(control_, m);
+    } catch (const zmq::error_t& e) {
+      lose(std::string("the coordinator cannot be reached (") + e.what() + ")");
+    }
+  });
+}
+
+std::string WorkerIo::bind_inbox(const std::string& bind, const std::string& address) {
+  std::promise<std::string> bound;
+  std::future<std::string> result = bound.get_future();
+  {
+    std::lock_guard lock(mutex_);
+    posted_.push_back([&] {
+      try {
+        inbox_.emplace(wire::make_socket(ctx_, zmq::socket_type::pull));
+        wire::bind(*inbox_, bind, "the worker's inbox for boundary values");
+        bound.set_value(wire::reachable_address(*inbox_, address, "the worker's inbox " + bind));
+      } catch (...) {
+        inbox_.reset();
+        bound.set_exception(std::current_exception());
+      }
+    });
+  }
+  return result.get();
+}
+
+void WorkerIo::attach(RemoteExchange* exchange) {
+  std::lock_guard lock(mutex_);
+  exchange_ = exchange;
+  if (exchange_ && lost_) exchange_->abort("the coordinator was lost");
+}
+
+ClusterTimeouts WorkerIo::timeouts() const {
+  std::lock_guard lock(mutex_);
+  return timeouts_;
+}
+
+// Called with mutex_ not held, on the I/O thread.
+void WorkerIo::command(nlohmann::json j) {
+  const std::string type = j.value("type", "");
+  std::lock_guard lock(mutex_);
+  if (type == "hello" && j.contains("timeouts")) {
+    const auto& t = j["timeouts"];
+    timeouts_ = {t.value("connect_s", 10.0), t.value("heartbeat_s", 0.5), t.value("lost_s", 3.0)};
+  }
+  if (type == "abort" && exchange_) exchange_->abort("stopped by the coordinator: " + j.value("reason", std::string()));
+  commands_.push_back(std::move(j));
+  changed_.notify_all();
+}
+
+void WorkerIo::lose(const std::string& why) {
+  std::lock_guard lock(mutex_);
+  if (lost_) return;
+  lost_ = true;
+  if (exchange_) exchange_->abort(why);
+  commands_.push_back({{"type", "lost"}, {"reason", why}});
+  changed_.notify_all();
+}
+
+void WorkerIo::loop() {
+  using wire::Clock;
+  heard_ = beat_ = Clock::now();
+  while (true) {
+    std::deque<std::function<void()>> todo;
+    RemoteExchange* exchange;
+    ClusterTimeouts t;
+    bool lost;
+    {
+      std::lock_guard lock(mutex_);
+      if (stopping_) return;
+      todo.swap(posted_);
+      exchange = exchange_;
+      t = timeouts_;
+      lost = lost_;
+    }
+    for (auto& f : todo) f();
+    // Boundary values stay queued in the inbox until an exchange takes them; then they wake
+    // the thread at once. Posted work waits at most 5 ms.
+    const bool read_inbox = inbox_ && exchange;
+    zmq::pollitem_t items[2] = {{control_.handle(), 0, ZMQ_POLLIN, 0},
+                                {read_inbox ? inbox_->handle() : nullptr, 0, ZMQ_POLLIN, 0}};
+    zmq::poll(items, read_inbox ? 2 : 1, std::chrono::milliseconds(5));
+    if (items[0].revents & ZMQ_POLLIN) {
+      zmq::message_t id, body;
+      (void)control_.recv(id);
+      if (id.more()) (void)control_.recv(body);
+      const std::string from = id.to_string();
+      nlohmann::json j = wire::parse_json(body);
+      if (!j.is_object()) j = {{"type", "garbage"}};
+      if (coordinator_.empty() && j.value("type", "") == "hello") coordinator_ = from;
+      if (from != coordinator_) {
+        // Another coordinator while this one is busy: tell it so, once.
+        try {
+          control_.send(zmq::buffer(from), zmq::send_flags::sndmore);
+          wire::send_json(control_, {{"type", "error"}, {"message", "this worker is busy with another run"}});
+        } catch (const zmq::error_t&) {
+        }
+      } else {
+        heard_ = Clock::now();
+        if (j.value("type", "") != "heartbeat") command(std::move(j));
+      }
+    }
+    if (read_inbox && (items[1].revents & ZMQ_POLLIN)) {
+      // Under the lock: the main thread may detach and destroy the exchange meanwhile.
+      std::lock_guard lock(mutex_);
+      if (exchange_) {
+        zmq::message_t header, payload;
+        (void)inbox_->recv(header);
+        if (header.more()) (void)inbox_->recv(payload);
+        if (!exchange_->deliver(header, payload)) exchange_->abort("a malformed boundary message arrived");
+      }
+    }
+    if (!coordinator_.empty() && !lost) {
+      if (wire::seconds_since(beat_) >= t.heartbeat_s) {
+        beat_ = Clock::now();
+        try {
+          control_.send(zmq::buffer(coordinator_), zmq::send_flags::sndmore);
+          wire::send_json(control_, {{"type", "heartbeat"}});
+        } catch (const zmq::error_t& e) {
+          lose(std::string("the coordinator cannot be reached (") + e.what() + ")");
+        }
+      }
+      if (wire::seconds_since(heard_) > t.lost_s) {
+        char buf[128];
+        std::snprintf(buf, sizeof buf, "the coordinator was lost: nothing heard from it for %.1f s", t.lost_s);
+        lose(buf);
+      }
+    }
+  }
+}
+
+}  // namespace mbsflow

@@ -1,0 +1,65 @@
+#pragma once
+// A worker's I/O thread: owns the control socket (ROUTER, bound at --listen) and the inbox
+// for boundary values, answers and sends heartbeats, notices a silent coordinator, hands
+// commands to the worker's main thread and boundary values to the RemoteExchange.
+#include <condition_variable>
+#include <deque>
+#include <functional>
+#include <future>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <thread>
+#include <zmq.hpp>
+
+#include "mbsflow/runtime/cluster.hpp"
+
+namespace mbsflow {
+
+class RemoteExchange;
+
+class WorkerIo {
+ public:
+  // Binds the control socket (InputError if it cannot) and starts the thread.
+  WorkerIo(zmq::context_t& ctx, const std::string& listen);
+  ~WorkerIo();
+  WorkerIo(const WorkerIo&) = delete;
+  WorkerIo& operator=(const WorkerIo&) = delete;
+
+  const std::string& endpoint() const { return endpoint_; }
+  // The next command from the coordinator, {"type": "lost"} once it is lost; nullopt
+  // after timeout_s (<= 0: wait as long as it takes).
+  std::optional<nlohmann::json> next_command(double timeout_s);
+  // Sends a control message to the coordinator (on the I/O thread).
+  void send(nlohmann::json message);
+  // Binds the inbox and returns the address peers reach it at.
+  std::string bind_inbox(const std::string& bind, const std::string& address);
+  void attach(RemoteExchange* exchange);  // where inbox messages go; aborted when the coordinator is lost
+  ClusterTimeouts timeouts() const;
+
+ private:
+  void loop();
+  void command(nlohmann::json j);
+  void lose(const std::string& why);
+
+  zmq::context_t& ctx_;
+  zmq::socket_t control_;
+  std::optional<zmq::socket_t> inbox_;
+  std::string endpoint_;
+  std::thread thread_;
+
+  mutable std::mutex mutex_;
+  std::condition_variable changed_;
+  std::deque<nlohmann::json> commands_;
+  std::deque<std::function<void()>> posted_;  // run on the I/O thread
+  RemoteExchange* exchange_ = nullptr;
+  ClusterTimeouts timeouts_;
+  bool stopping_ = false;
+  bool lost_ = false;
+  // I/O thread only.
+  std::string coordinator_;  // its routing id
+  std::chrono::steady_clock::time_point heard_, beat_;
+};
+
+}  // namespace mbsflow

@@ -1,0 +1,154 @@
+// Runs across processes, with the workers as threads of the test: the coordinator and
+// workers talk over real ZeroMQ sockets (tcp on 127.0.0.1 and ipc), and the results equal
+// the one-process run bit for bit. Process-level faults are tested in tests/apps.
+#include <unistd.h>
+
+#include <catch2/catch.hpp>
+#include <filesystem>
+#include <future>
+#include <thread>
+
+#include "mbsflow/graph/error.hpp"
+#include "mbsflow/graph/generators.hpp"
+#include "mbsflow/graph/stable_step.hpp"
+#include "mbsflow/io/model_reader.hpp"
+#include "mbsflow/io/model_writer.hpp"
+#include "mbsflow/runtime/cluster.hpp"
+#include "mbsflow/runtime/simulation.hpp"
+#include "memory_sink.hpp"
+
+using namespace mbsflow;
+
+namespace {
+
+Model short_run(Model m, int steps) {
+  m.simulation.step = 0.5 * estimate_stable_step(m).step;
+  m.simulation.t_end = m.simulation.t_start + steps * *m.simulation.step;
+  m.simulation.output_every = 7;  // chunks of 7 steps; the last snapshot falls off the grid of 7
+  return m;
+}
+
+// Workers on threads of this process; each serves one run.
+struct ThreadWorkers {
+  std::vector<std::thread> threads;
+  std::vector<std::string> endpoints;
+  std::vector<std::string> errors;
+
+  ThreadWorkers(const std::vector<std::string>& listen) : errors(listen.size()) {
+    for (std::size_t i = 0; i < listen.size(); ++i) {
+      auto bound = std::make_shared<std::promise<std::string>>();
+      auto got = bound->get_future();
+      threads.emplace_back([this, i, l = listen[i], bound] {
+        WorkerOptions o;
+        o.listen = l;
+        o.threads = 1;
+        o.idle_timeout_s = 30.0;
+        o.read_model = [](const std::string& text) { return read_model_text(text, "model from the coordinator"); };
+        o.listening = [bound](const std::string& e) { bound->set_value(e); };
+        try {
+          serve_worker(o);
+        } catch (const std::exception& e) {
+          errors[i] = e.what();
+        }
+      });
+      endpoints.push_back(got.get());
+    }
+  }
+  ~ThreadWorkers() {
+    for (auto& t : threads) t.join();
+  }
+};
+
+ClusterConfig cluster_of(const std::vector<std::string>& controls, const std::string& data_bind,
+                         const std::string& results_bind) {
+  ClusterConfig c;
+  c.results_bind = results_bind;
+  for (std::size_t i = 0; i < controls.size(); ++i) {
+    ClusterWorker w;
+    w.name = "w" + std::to_string(i);
+    w.address = controls[i];
+    w.data_bind = data_bind.empty() ? "" : data_bind + std::to_string(i);
+    c.workers.push_back(w);
+  }
+  return c;
+}
+
+}  // namespace
+
+TEST_CASE("cluster runs over tcp and ipc equal the one-process run bit for bit", "[runtime][cluster]") {
+  ChainParams chain;
+  chain.bodies = 30;
+  GridParams grid;
+  grid.rows = 4;
+  grid.cols = 5;
+  for (const Model& m : {short_run(make_chain(chain), 45), short_run(make_grid(grid), 30)}) {
+    MultibodySystem sys(m);
+    test::MemorySink reference;
+    const RunOptions o = options_from_model(m);
+    run_simulation(sys, o, &reference);
+    REQUIRE(reference.states.back() != reference.states.front());
+    const std::string json = model_to_json(m);
+    const std::filesystem::path dir =
+        std::filesystem::temp_directory_path() / ("mbsflow_cluster_" + std::to_string(::getpid()));
+    std::filesystem::create_directories(dir);
+    for (const std::string transport : {"tcp", "ipc"})
+      for (int workers : {2, 3}) {
+        std::vector<std::string> listen;
+        for (int i = 0; i < workers; ++i)
+          listen.push_back(transport == "tcp" ? "tcp://127.0.0.1:*" : "ipc://" + (dir / ("ctl" + std::to_string(i))).string());
+        ThreadWorkers pool(listen);
+        ClusterConfig c = transport == "tcp" ? cluster_of(pool.endpoints, "", "tcp://127.0.0.1:*")
+                                             : cluster_of(pool.endpoints, "ipc://" + (dir / "data").string(),
+                                                          "ipc://" + (dir / "results").string());
+        if (transport == "tcp")
+          for (auto& w : c.workers) w.data_bind = "tcp://127.0.0.1:*";
+        c.workers[0].weight = 2;  // uneven: the first worker runs two submodels
+        const Decomposition d = decompose(m, cluster_submodels(c));
+        test::MemorySink sink;
+        ClusterStats stats;
+        const RunSummary r = run_cluster(m, json, d, c, o, &sink, &stats);
+        INFO(m.name << " on " << workers << " workers over " << transport);
+        CHECK(r.steps == static_cast<long>(std::round((o.t_end - o.t_start) / o.step)));
+        REQUIRE(sink.states.size() == reference.states.size());
+        CHECK(sink.times == reference.times);
+        bool identical = true;
+        for (std::size_t i = 0; i < sink.states.size(); ++i) identical = identical && sink.states[i] == reference.states[i];
+        CHECK(identical);
+        CHECK(r.final_state == reference.states.back());
+        CHECK(stats.messages > 0);
+        CHECK(stats.bytes_per_stage > 0.0);
+        for (const std::string& e : pool.errors) CHECK(e.empty());
+      }
+    std::filesystem::remove_all(dir);
+  }
+}
+
+TEST_CASE("cluster: submodels by weight or by list", "[runtime][cluster]") {
+  ClusterConfig c;
+  c.workers.resize(3);
+  c.workers[0].weight = 2;
+  CHECK(cluster_submodels(c) == 4);
+  CHECK(assign_submodels(c, 4) == std::vector<int>{0, 0, 1, 2});
+  CHECK(assign_submodels(c, 8) == std::vector<int>{0, 0, 0, 0, 1, 1, 2, 2});
+  CHECK_THROWS_AS(assign_submodels(c, 2), InputError);
+  c.workers[0].submodels = {2};
+  c.workers[1].submodels = {0};
+  c.workers[2].submodels = {1, 3};
+  CHECK(cluster_submodels(c) == 4);
+  CHECK(assign_submodels(c, 4) == std::vector<int>{1, 2, 0, 2});
+  CHECK_THROWS_WITH(assign_submodels(c, 5), "submodel 4 is listed by no worker");
+  c.workers[1].submodels = {2};
+  CHECK_THROWS_WITH(assign_submodels(c, 4), "submodel 2 is listed by two workers");
+}
+
+TEST_CASE("cluster: an unreachable worker is an error within the connect timeout", "[runtime][cluster]") {
+  ChainParams chain;
+  chain.bodies = 8;
+  const Model m = short_run(make_chain(chain), 10);
+  ClusterConfig c = cluster_of({"tcp://127.0.0.1:1"}, "", "tcp://127.0.0.1:*");
+  c.timeouts.connect_s = 0.5;
+  const auto start = std::chrono::steady_clock::now();
+  CHECK_THROWS_WITH(run_cluster(m, model_to_json(m), decompose(m, 1), c, options_from_model(m), nullptr),
+                    Catch::Contains("worker w0 (tcp://127.0.0.1:1) did not answer within 0.5 s"));
+  CHECK(std::chrono::steady_clock::now() - start < std::chrono::seconds(3));
+}
