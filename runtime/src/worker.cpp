@@ -19,15 +19,32 @@ using nlohmann::json;
 using partitioned::Part;
 
 // The next command, which must be of type `want`; RunError for an abort, a lost
-// coordinator or anything else.
-json expect(WorkerIo& io, const std::string& want, double timeout_s) {
-  const std::optional<json> j = io.next_command(timeout_s);
-  if (!j) throw RunError("the coordinator sent nothing for " + std::to_string(timeout_s) + " s");
+// coordinator, a stop request, silence beyond timeout_s (> 0) or anything else.
+json expect(WorkerIo& io, const std::string& want, double timeout_s, const std::atomic<bool>* stop) {
+  const auto start = wire::Clock::now();
+  std::optional<json> j;
+  while (!j) {
+    if (stop && stop->load()) throw RunError("interrupted while waiting for the coordinator");
+    if (timeout_s > 0.0 && wire::seconds_since(start) > timeout_s) {
+      char buf[96];
+      std::snprintf(buf, sizeof buf, "no coordinator called within %.3g s", timeout_s);
+      throw RunError(buf);
+    }
+    j = io.next_command(0.1);
+  }
   const std::string type = j->value("type", "");
   if (type == want) return *j;
   if (type == "lost") throw RunError(j->value("reason", "the coordinator was lost"));
   if (type == "abort") throw RunError("stopped by the coordinator: " + j->value("reason", std::string()));
   throw RunError("the coordinator sent '" + type + "' where '" + want + "' was due");
+}
+
+// Tells the coordinator why this worker cannot go on, and waits (a second at most) for
+// its abort, so that the message is out before the socket closes (linger 0).
+[[noreturn]] void refuse(WorkerIo& io, const std::string& why) {
+  io.send({{"type", "error"}, {"message", why}});
+  (void)io.next_command(1.0);
+  throw RunError(why);
 }
 
 // What the coordinator told this worker to run.
@@ -181,41 +198,35 @@ void serve_worker(const WorkerOptions& wo) {
     if (wo.log) wo.log(line);
   };
   if (wo.listening) wo.listening(io.endpoint());
-  const json hello = expect(io, "hello", wo.idle_timeout_s);
+  const json hello = expect(io, "hello", wo.idle_timeout_s, wo.stop);
   const std::string program = hello.value("program", "?");
   const int protocol = hello.value("protocol", -1);
   if (program != MBSFLOW_PROGRAM_VERSION || protocol != wo.protocol_version) {
     char buf[256];
     std::snprintf(buf, sizeof buf, "version mismatch: coordinator runs mbsflow %s (protocol %d), this worker %s (protocol %d)",
                   program.c_str(), protocol, MBSFLOW_PROGRAM_VERSION, wo.protocol_version);
-    io.send({{"type", "error"}, {"message", buf}});
-    io.next_command(0.5);  // lets the I/O thread send it before the socket closes
-    throw RunError(buf);
+    refuse(io, buf);
   }
   io.send({{"type", "hello_ok"}, {"program", MBSFLOW_PROGRAM_VERSION}, {"protocol", wo.protocol_version}});
   log("coordinator " + hello.value("coordinator", std::string("?")) + " connected; this is worker " +
       hello.value("name", std::string("?")));
   const double lost_s = io.timeouts().lost_s;
   // Setup: the model can be large; the coordinator's heartbeats tell it is still there.
-  const json setup = expect(io, "setup", 0.0);
+  const json setup = expect(io, "setup", 0.0, wo.stop);
   Session s;
   try {
     s = read_setup(wo, setup);
   } catch (const std::exception& e) {
-    io.send({{"type", "error"}, {"message", std::string("cannot set up: ") + e.what()}});
-    io.next_command(0.5);
-    throw RunError(std::string("cannot set up the run: ") + e.what());
+    refuse(io, std::string("cannot set up the run: ") + e.what());
   }
   std::string data_address;
   try {
     data_address = io.bind_inbox(setup.at("data_bind").get<std::string>(), setup.value("data_address", std::string()));
   } catch (const std::exception& e) {
-    io.send({{"type", "error"}, {"message", e.what()}});
-    io.next_command(0.5);
-    throw;
+    refuse(io, e.what());
   }
   io.send({{"type", "ready"}, {"data_address", data_address}});
-  const json start = expect(io, "start", 0.0);
+  const json start = expect(io, "start", 0.0, wo.stop);
   int own = 0;
   std::string list;
   for (std::size_t q = 0; q < s.worker_of.size(); ++q)

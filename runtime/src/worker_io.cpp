@@ -43,7 +43,7 @@ void WorkerIo::send(nlohmann::json message) {
       control_.send(zmq::buffer(coordinator_), zmq::send_flags::sndmore);
       wire::send_json(control_, m);
     } catch (const zmq::error_t& e) {
-      lose(std::string("the coordinator cannot be reached (") + e.what() + ")");
+      lose(std::string("the coordinator was lost: its connection is gone (") + e.what() + ")");
     }
   });
 }
@@ -160,7 +160,7 @@ void WorkerIo::loop() {
           control_.send(zmq::buffer(coordinator_), zmq::send_flags::sndmore);
           wire::send_json(control_, {{"type", "heartbeat"}});
         } catch (const zmq::error_t& e) {
-          lose(std::string("the coordinator cannot be reached (") + e.what() + ")");
+          lose(std::string("the coordinator was lost: its connection is gone (") + e.what() + ")");
         }
       }
       if (wire::seconds_since(heard_) > t.lost_s) {
