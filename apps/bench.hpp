@@ -20,6 +20,7 @@ struct BenchArgs {
 int bench_rhs(const BenchArgs& a);
 int bench_output(const BenchArgs& a);
 int bench_parallel(const BenchArgs& a);
+int bench_cluster(const BenchArgs& a);
 
 using BenchClock = std::chrono::steady_clock;
 inline double seconds_since(BenchClock::time_point start) {

@@ -12,19 +12,21 @@ Action add_bench(CLI::App& app) {
   sub->add_option("what", a->what,
                   "rhs: cost of one right-hand-side evaluation per body; "
                   "output: cost of writing results (6500-body chain, none / every 10 steps / every step); "
-                  "parallel: scaling of partitioned runs over threads, flow graph vs barrier")
-      ->check(CLI::IsMember({"rhs", "output", "parallel"}));
-  sub->add_option("--bodies", a->bodies, "Chain sizes (rhs: 2000,6500,100000; output: 6500; parallel: 2000,4000,6500)")
+                  "parallel: scaling of partitioned runs over threads, flow graph vs barrier; "
+                  "cluster: 2 threads vs 2 processes over tcp and ipc, exchange cost, predicted speedup on a cluster")
+      ->check(CLI::IsMember({"rhs", "output", "parallel", "cluster"}));
+  sub->add_option("--bodies", a->bodies, "Chain sizes (rhs: 2000,6500,100000; output: 6500; parallel, cluster: 2000,4000,6500)")
       ->delimiter(',');
   sub->add_option("--threads", a->threads, "parallel: up to this many threads (default: all cores)")->check(CLI::PositiveNumber);
   sub->add_option("--seconds", a->seconds, "rhs: time per measurement")->check(CLI::PositiveNumber);
   sub->add_option("--steps", a->steps, "output: steps per run")->check(CLI::PositiveNumber);
-  sub->add_option("--repeats", a->repeats, "output, parallel: runs per case; the fastest counts")->check(CLI::PositiveNumber);
+  sub->add_option("--repeats", a->repeats, "output, parallel, cluster: runs per case; the fastest counts")->check(CLI::PositiveNumber);
   sub->add_option("--dir", a->dir, "output: folder for the results files (the disk being measured)");
   sub->add_option("--csv", a->csv, "CSV file to write (default bench_WHAT.csv)");
   return [a] {
     if (a->what == "rhs") return bench_rhs(*a);
     if (a->what == "output") return bench_output(*a);
+    if (a->what == "cluster") return bench_cluster(*a);
     return bench_parallel(*a);
   };
 }

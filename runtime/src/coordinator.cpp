@@ -120,8 +120,21 @@ class Coordinator {
       }
   }
 
-  void finish() { send_all({{"type", "finish"}}); }
-  void abort(const std::string& reason) { send_all({{"type", "abort"}, {"reason", reason}}); }
+  // Ends the run and waits (lost_s at most) for every worker's goodbye, so that no socket
+  // closes (linger 0) before the finish has reached its worker.
+  void finish() {
+    send_all({{"type", "finish"}});
+    std::size_t left = peers_.size();
+    const auto start = Clock::now();
+    while (left > 0 && wire::seconds_since(start) < c_.timeouts.lost_s)
+      pump([&](std::size_t, const json& j) { left -= j.value("type", "") == "bye"; }, nullptr);
+  }
+  // Stops every worker. The sockets then close with a linger of one second instead of
+  // none: bounded, and long enough for the abort to go out.
+  void abort(const std::string& reason) {
+    send_all({{"type", "abort"}, {"reason", reason}});
+    for (Peer& p : peers_) p.control.set(zmq::sockopt::linger, 1000);
+  }
 
   std::vector<Peer>& peers() { return peers_; }
   const std::string& results_address() const { return results_address_; }
@@ -168,7 +181,7 @@ RunSummary run_cluster(const Model& model, const std::string& model_json, const 
   }
   RunSummary out;
   MultibodySystem whole(model);  // for the sink: layout, energies, joint forces
-  const auto start_clock = Clock::now();
+  auto start_clock = Clock::now();
   Eigen::VectorXd y = whole.initial_state();
   if (sink) sink->begin(whole);
   const StepGrid grid = step_grid(o.t_start, o.t_end, o.step);
@@ -194,6 +207,9 @@ RunSummary run_cluster(const Model& model, const std::string& model_json, const 
         addresses.push_back(p.data_address);
       }
       co.send_all({{"type", "start"}, {"names", names}, {"data_addresses", addresses}});
+      // Like run_partitioned's, the run's clock starts when the parts are set up.
+      if (stats) stats->setup_seconds = std::chrono::duration<double>(Clock::now() - start_clock).count();
+      start_clock = Clock::now();
       if (sink) emit(whole, sink, o.t_start, y, out);
 
       struct Pending {

@@ -182,8 +182,10 @@ std::string run_part(Session& s, WorkerIo& io, zmq::context_t& ctx, const json& 
   });
   if (failure.empty() && exchange.aborted()) failure = exchange.why();
   const double counts[2] = {static_cast<double>(exchange.messages_sent()), exchange.bytes_per_stage()};
-  if (failure.empty()) report(wire::ResultKind::done, grid.steps, counts, sizeof counts);
-  else if (failure.rfind("stopped by the coordinator", 0) != 0 && failure.rfind("the coordinator", 0) != 0)
+  if (failure.empty()) {
+    report(wire::ResultKind::done, grid.steps, counts, sizeof counts);
+    if (exchange.aborted()) failure = exchange.why();
+  } else if (failure.rfind("stopped by the coordinator", 0) != 0 && failure.rfind("the coordinator", 0) != 0)
     report(wire::ResultKind::failed, first, failure.data(), failure.size());
   io.attach(nullptr);
   return failure;
@@ -242,6 +244,7 @@ void serve_worker(const WorkerOptions& wo) {
   // drop the last results, and peers may still need this worker's last values.
   const std::optional<json> last = io.next_command(lost_s + 1.0);
   if (!failure.empty()) throw RunError(failure);
+  if (last && last->value("type", "") == "finish") io.goodbye();
   if (!last || last->value("type", "") != "finish")
     throw RunError(last ? "the run ended with '" + last->value("type", std::string()) + "' from the coordinator: " +
                               last->value("reason", std::string())

@@ -48,6 +48,12 @@ void WorkerIo::send(nlohmann::json message) {
   });
 }
 
+void WorkerIo::goodbye() {
+  send({{"type", "bye"}});
+  std::lock_guard lock(mutex_);
+  posted_.push_back([this] { control_.set(zmq::sockopt::linger, 1000); });
+}
+
 std::string WorkerIo::bind_inbox(const std::string& bind, const std::string& address) {
   std::promise<std::string> bound;
   std::future<std::string> result = bound.get_future();

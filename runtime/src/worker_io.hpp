@@ -33,6 +33,9 @@ class WorkerIo {
   std::optional<nlohmann::json> next_command(double timeout_s);
   // Sends a control message to the coordinator (on the I/O thread).
   void send(nlohmann::json message);
+  // Says goodbye to the coordinator; the control socket then closes with a linger of one
+  // second instead of none, so that the goodbye goes out.
+  void goodbye();
   // Binds the inbox and returns the address peers reach it at.
   std::string bind_inbox(const std::string& bind, const std::string& address);
   void attach(RemoteExchange* exchange);  // where inbox messages go; aborted when the coordinator is lost

@@ -52,6 +52,7 @@ std::vector<int> assign_submodels(const ClusterConfig& c, int k);
 struct ClusterStats {
   long messages = 0;             // boundary messages between workers in the run
   double bytes_per_stage = 0.0;  // boundary payload sent by all workers per stage
+  double setup_seconds = 0.0;    // hello to start: versions, model, sockets (not in RunSummary::wall_seconds)
 };
 
 // The coordinator. model_json is the model as written by model_to_json, which every worker
@@ -76,5 +77,27 @@ struct WorkerOptions {
 // the coordinator finishes it. RunError when the run fails or the coordinator is lost;
 // InputError when the endpoint cannot be bound.
 void serve_worker(const WorkerOptions& options);
+
+}  // namespace mbsflow
+
+namespace mbsflow {
+
+// The cost of the boundary exchange on this host: one-way time of messages of each size
+// between two threads over tcp on 127.0.0.1 or ipc, with the sockets the exchange uses
+// (PUSH to PULL), from `round_trips` round trips each (the median).
+struct ExchangeSample {
+  std::size_t bytes = 0;
+  double seconds = 0.0;
+};
+std::vector<ExchangeSample> measure_exchange(const std::string& transport, const std::vector<std::size_t>& sizes,
+                                             int round_trips);
+
+// Hockney's model t(m) = alpha + m / beta, fitted by least squares.
+struct Hockney {
+  double alpha = 0.0;  // s
+  double beta = 0.0;   // bytes/s
+  double time(double bytes) const { return alpha + bytes / beta; }
+};
+Hockney fit_hockney(const std::vector<ExchangeSample>& samples);
 
 }  // namespace mbsflow

@@ -1,0 +1,66 @@
+// Measuring what one boundary message costs (for mbsflow bench cluster).
+#include <algorithm>
+#include <filesystem>
+#include <thread>
+#include <unistd.h>
+
+#include "cluster_wire.hpp"
+#include "mbsflow/graph/error.hpp"
+#include "mbsflow/runtime/cluster.hpp"
+
+namespace mbsflow {
+
+std::vector<ExchangeSample> measure_exchange(const std::string& transport, const std::vector<std::size_t>& sizes,
+                                             int round_trips) {
+  zmq::context_t ctx;
+  const std::string dir = (std::filesystem::temp_directory_path() / ("mbsflow-ping-" + std::to_string(::getpid()))).string();
+  if (transport == "ipc") std::filesystem::create_directories(dir);
+  auto endpoint = [&](const char* name) { return transport == "ipc" ? "ipc://" + dir + "/" + name : std::string("tcp://127.0.0.1:*"); };
+  zmq::socket_t here_in = wire::make_socket(ctx, zmq::socket_type::pull), there_in = wire::make_socket(ctx, zmq::socket_type::pull);
+  wire::bind(here_in, endpoint("a"), "the ping inbox");
+  wire::bind(there_in, endpoint("b"), "the echo inbox");
+  const std::string here = here_in.get(zmq::sockopt::last_endpoint), there = there_in.get(zmq::sockopt::last_endpoint);
+  const long total = static_cast<long>(sizes.size()) * (round_trips + 10);
+  // The echo side: sends every message back.
+  std::thread echo([&ctx, &there_in, here, total] {
+    zmq::socket_t out = wire::make_socket(ctx, zmq::socket_type::push);
+    out.connect(here);
+    for (long i = 0; i < total; ++i) {
+      zmq::message_t m;
+      if (!there_in.recv(m)) return;
+      out.send(m, zmq::send_flags::none);
+    }
+  });
+  zmq::socket_t out = wire::make_socket(ctx, zmq::socket_type::push);
+  out.connect(there);
+  std::vector<ExchangeSample> result;
+  for (std::size_t bytes : sizes) {
+    std::vector<double> times;
+    for (int i = 0; i < round_trips + 10; ++i) {  // the first 10 warm up
+      zmq::message_t m(bytes), back;
+      const auto start = wire::Clock::now();
+      out.send(m, zmq::send_flags::none);
+      (void)here_in.recv(back);
+      if (i >= 10) times.push_back(wire::seconds_since(start) / 2.0);
+    }
+    std::nth_element(times.begin(), times.begin() + static_cast<long>(times.size() / 2), times.end());
+    result.push_back({bytes, times[times.size() / 2]});
+  }
+  echo.join();
+  if (transport == "ipc") std::filesystem::remove_all(dir);
+  return result;
+}
+
+Hockney fit_hockney(const std::vector<ExchangeSample>& s) {
+  if (s.size() < 2) throw InputError("a Hockney fit needs two message sizes at least");
+  double sx = 0, sy = 0, sxx = 0, sxy = 0;
+  for (const ExchangeSample& e : s) {
+    const auto x = static_cast<double>(e.bytes);
+    sx += x, sy += e.seconds, sxx += x * x, sxy += x * e.seconds;
+  }
+  const auto n = static_cast<double>(s.size());
+  const double slope = (n * sxy - sx * sy) / (n * sxx - sx * sx);
+  return {(sy - slope * sx) / n, 1.0 / slope};
+}
+
+}  // namespace mbsflow
