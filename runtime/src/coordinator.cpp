@@ -228,8 +228,10 @@ RunSummary run_cluster(const Model& model, const std::string& model_json, const 
           case wire::ResultKind::done:
             p.done = true;
             if (stats && payload.size() == 2 * sizeof(double)) {
-              stats->messages += static_cast<long>(payload.data<double>()[0]);
-              stats->bytes_per_stage += payload.data<double>()[1];
+              double counts[2];
+              std::memcpy(counts, payload.data(), sizeof counts);
+              stats->messages += static_cast<long>(counts[0]);
+              stats->bytes_per_stage += counts[1];
             }
             break;
           case wire::ResultKind::snapshot: {
@@ -237,7 +239,7 @@ RunSummary run_cluster(const Model& model, const std::string& model_json, const 
               throw RunError(co.who(w) + " sent a snapshot of the wrong size");
             Pending& s = pending[h.step];
             if (s.y.size() == 0) s.y = y;
-            partitioned::unpack_bodies(layout, s.y, p.bodies, payload.data<double>());
+            partitioned::unpack_bodies(layout, s.y, p.bodies, payload.data());
             if (++s.parts == peers.size()) {
               y = std::move(s.y);
               pending.erase(h.step);

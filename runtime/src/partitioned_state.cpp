@@ -1,6 +1,7 @@
 #include "partitioned_state.hpp"
 
 #include <cmath>
+#include <cstring>
 
 #include "mbsflow/methods/dopri5.hpp"
 #include "mbsflow/methods/rk4.hpp"
@@ -45,23 +46,32 @@ void pull_ghosts(std::vector<Part>& parts, std::size_t p, int s) {
     copy_ghosts(parts[static_cast<std::size_t>(e.neighbour)], e, parts[p], s);
 }
 
-void pack_bodies(const StateLayout& l, const Eigen::VectorXd& x, const std::vector<int>& bodies, double* out) {
+// Through memcpy: a message buffer need not be aligned for doubles.
+void pack_bodies(const StateLayout& l, const Eigen::VectorXd& x, const std::vector<int>& bodies, void* buffer) {
+  auto* out = static_cast<unsigned char*>(buffer);
+  auto put = [&](Eigen::Index at, int n, int to) {
+    std::memcpy(out + to * sizeof(double), x.data() + at, sizeof(double) * static_cast<std::size_t>(n));
+  };
   for (int i : bodies) {
-    Eigen::Map<Eigen::VectorXd>(out, 3) = x.segment<3>(l.position(i));
-    Eigen::Map<Eigen::VectorXd>(out + 3, 4) = x.segment<4>(l.orientation(i));
-    Eigen::Map<Eigen::VectorXd>(out + 7, 3) = x.segment<3>(l.velocity(i));
-    Eigen::Map<Eigen::VectorXd>(out + 10, 3) = x.segment<3>(l.angular_velocity(i));
-    out += body_numbers;
+    put(l.position(i), 3, 0);
+    put(l.orientation(i), 4, 3);
+    put(l.velocity(i), 3, 7);
+    put(l.angular_velocity(i), 3, 10);
+    out += body_numbers * sizeof(double);
   }
 }
 
-void unpack_bodies(const StateLayout& l, Eigen::VectorXd& x, const std::vector<int>& bodies, const double* in) {
+void unpack_bodies(const StateLayout& l, Eigen::VectorXd& x, const std::vector<int>& bodies, const void* buffer) {
+  const auto* in = static_cast<const unsigned char*>(buffer);
+  auto get = [&](Eigen::Index at, int n, int from) {
+    std::memcpy(x.data() + at, in + from * sizeof(double), sizeof(double) * static_cast<std::size_t>(n));
+  };
   for (int i : bodies) {
-    x.segment<3>(l.position(i)) = Eigen::Map<const Eigen::VectorXd>(in, 3);
-    x.segment<4>(l.orientation(i)) = Eigen::Map<const Eigen::VectorXd>(in + 3, 4);
-    x.segment<3>(l.velocity(i)) = Eigen::Map<const Eigen::VectorXd>(in + 7, 3);
-    x.segment<3>(l.angular_velocity(i)) = Eigen::Map<const Eigen::VectorXd>(in + 10, 3);
-    in += body_numbers;
+    get(l.position(i), 3, 0);
+    get(l.orientation(i), 4, 3);
+    get(l.velocity(i), 3, 7);
+    get(l.angular_velocity(i), 3, 10);
+    in += body_numbers * sizeof(double);
   }
 }
 

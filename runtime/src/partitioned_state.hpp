@@ -26,10 +26,11 @@ void pull_ghosts(std::vector<Part>& parts, std::size_t p, int s);
 void copy_ghosts(const Part& owner, const Submodel::Exchange& e, Part& me, int s);
 
 // Bodies' values as 13 numbers each (position, orientation, velocity, angular velocity),
-// for another process or the coordinator, and back. Bit for bit.
+// for another process or the coordinator, and back. Bit for bit; the buffer need not be
+// aligned for doubles (a message's often is not).
 constexpr int body_numbers = 13;
-void pack_bodies(const StateLayout& l, const Eigen::VectorXd& x, const std::vector<int>& bodies, double* out);
-void unpack_bodies(const StateLayout& l, Eigen::VectorXd& x, const std::vector<int>& bodies, const double* in);
+void pack_bodies(const StateLayout& l, const Eigen::VectorXd& x, const std::vector<int>& bodies, void* out);
+void unpack_bodies(const StateLayout& l, Eigen::VectorXd& x, const std::vector<int>& bodies, const void* in);
 
 // Calls f(offset, length) for the own entries of each field block of the local state.
 template <class F>

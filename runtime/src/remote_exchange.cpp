@@ -87,7 +87,7 @@ void RemoteExchange::receive(int p, long n, int s) {
       m = std::move(queue.front().payload);
       queue.pop_front();
     }
-    partitioned::unpack_bodies(me.system.layout(), me.x[static_cast<std::size_t>(s)], e.to, m.data<double>());
+    partitioned::unpack_bodies(me.system.layout(), me.x[static_cast<std::size_t>(s)], e.to, m.data());
   }
 }
 
@@ -95,7 +95,7 @@ void RemoteExchange::send(int p, long n, int s) {
   const partitioned::Part& me = *parts_[static_cast<std::size_t>(p)];
   for (const Outgoing& o : outgoing_[static_cast<std::size_t>(p)]) {
     zmq::message_t payload(o.bodies->size() * partitioned::body_numbers * sizeof(double));
-    partitioned::pack_bodies(me.system.layout(), me.x[static_cast<std::size_t>(s)], *o.bodies, payload.data<double>());
+    partitioned::pack_bodies(me.system.layout(), me.x[static_cast<std::size_t>(s)], *o.bodies, payload.data());
     wire::ExchangeHeader h;
     h.from = p;
     h.to = o.to;
