@@ -269,6 +269,7 @@ RunSummary run_cluster(const Model& model, const std::string& model_json, const 
         co.check_alive(where);
         check_stop(o, grid.time(reported));
       }
+      out.wall_seconds = std::chrono::duration<double>(Clock::now() - start_clock).count();
       co.finish();
     } catch (const std::exception& e) {
       co.abort(e.what());
@@ -277,7 +278,6 @@ RunSummary run_cluster(const Model& model, const std::string& model_json, const 
   });
   out.steps = grid.steps;
   out.evaluations = grid.steps * 4;
-  out.wall_seconds = std::chrono::duration<double>(Clock::now() - start_clock).count();
   out.final_state = std::move(y);
   return out;
 }

@@ -7,10 +7,10 @@
 
 namespace mbsflow {
 
-RemoteExchange::RemoteExchange(zmq::context_t& ctx, const Decomposition& d, std::vector<partitioned::Part*> parts,
+RemoteExchange::RemoteExchange(zmq::context_t& ctx, zmq::socket_t& inbox, const Decomposition& d, std::vector<partitioned::Part*> parts,
                                std::vector<int> worker_of, const std::vector<std::string>& worker_names,
                                const std::vector<std::string>& data_addresses, int stages, double send_timeout_s)
-    : d_(d), parts_(std::move(parts)), worker_of_(std::move(worker_of)), worker_names_(worker_names), stages_(stages),
+    : inbox_socket_(inbox), d_(d), parts_(std::move(parts)), worker_of_(std::move(worker_of)), worker_names_(worker_names), stages_(stages),
       outgoing_(d.submodels.size()) {
   // Remote submodel r takes the bodies e.from of its neighbour p: p sends them to r.
   for (std::size_t r = 0; r < d.submodels.size(); ++r) {
@@ -29,7 +29,7 @@ RemoteExchange::RemoteExchange(zmq::context_t& ctx, const Decomposition& d, std:
   }
 }
 
-bool RemoteExchange::deliver(zmq::message_t& header, zmq::message_t& payload) {
+bool RemoteExchange::store(zmq::message_t& header, zmq::message_t& payload) {
   const auto h = wire::read_header<wire::ExchangeHeader>(header);
   const auto k = static_cast<int>(d_.submodels.size());
   if (!h || h->to < 0 || h->to >= k || h->from < 0 || h->from >= k || h->stage < 0 || h->stage >= stages_ ||
@@ -41,35 +41,46 @@ bool RemoteExchange::deliver(zmq::message_t& header, zmq::message_t& payload) {
   for (const Submodel::Exchange& e : to.exchanges)
     if (e.neighbour == h->from) bodies = e.from.size(), known = true;
   if (!known || payload.size() != bodies * partitioned::body_numbers * sizeof(double)) return false;
-  std::function<void()> ready;
-  {
-    std::lock_guard lock(mutex_);
-    const Slot slot{h->to, h->from, h->stage};
-    inbox_[slot].push_back({h->step, std::move(payload)});
-    auto w = waiting_.find({slot, h->step});
-    if (w != waiting_.end()) {
-      ready = std::move(w->second);
-      waiting_.erase(w);
-    }
-  }
-  if (ready) ready();
+  std::lock_guard lock(mutex_);
+  inbox_[{h->to, h->from, h->stage}].push_back({h->step, std::move(payload)});
   return true;
 }
 
-void RemoteExchange::await(long n, int s, int q, int p, std::function<void()> ready) {
-  if (n == 0 && s == 0) return ready();  // the initial state: every process has it
-  {
-    std::lock_guard lock(mutex_);
-    const Slot slot{p, q, s};
-    auto in = inbox_.find(slot);
-    const bool here = in != inbox_.end() && std::any_of(in->second.begin(), in->second.end(),
-                                                        [n](const Message& m) { return m.step == n; });
-    if (!aborted_ && !here) {
-      waiting_[{slot, n}] = std::move(ready);
-      return;
-    }
+bool RemoteExchange::read_inbox(int ms) {
+  zmq::pollitem_t item{inbox_socket_.handle(), 0, ZMQ_POLLIN, 0};
+  if (zmq::poll(&item, 1, std::chrono::milliseconds(ms)) <= 0) return true;
+  zmq::message_t header, payload;
+  while (inbox_socket_.recv(header, zmq::recv_flags::dontwait)) {
+    if (!header.more() || !inbox_socket_.recv(payload) || payload.more() || !store(header, payload)) return false;
   }
-  ready();
+  return true;
+}
+
+void RemoteExchange::wait(long n, int s, int q, int p) {
+  if (n == 0 && s == 0) return;  // the initial state: every process has it
+  std::unique_lock lock(mutex_);
+  const auto& queue = inbox_[{p, q, s}];
+  auto here = [&] { return std::any_of(queue.begin(), queue.end(), [n](const Message& m) { return m.step == n; }); };
+  while (!aborted_ && !here()) {
+    if (reading_) {  // another proxy reads the inbox and tells when it has stored something
+      arrived_.wait_for(lock, std::chrono::milliseconds(50));
+      continue;
+    }
+    reading_ = true;
+    lock.unlock();
+    bool ok = false;
+    try {
+      ok = read_inbox(50);  // short, so that an abort is seen in time
+    } catch (const zmq::error_t&) {
+    }
+    lock.lock();
+    reading_ = false;
+    if (!ok && !aborted_) {
+      aborted_ = true;
+      why_ = "a malformed boundary message arrived, or the inbox failed";
+    }
+    arrived_.notify_all();
+  }
 }
 
 void RemoteExchange::receive(int p, long n, int s) {
@@ -117,15 +128,13 @@ void RemoteExchange::send(int p, long n, int s) {
 }
 
 void RemoteExchange::abort(const std::string& why) {
-  std::map<std::pair<Slot, long>, std::function<void()>> waiting;
   {
     std::lock_guard lock(mutex_);
     if (aborted_) return;
     aborted_ = true;
     why_ = why;
-    waiting.swap(waiting_);
   }
-  for (auto& [slot, ready] : waiting) ready();
+  arrived_.notify_all();
 }
 
 bool RemoteExchange::aborted() const {

@@ -1,12 +1,14 @@
 #pragma once
 // A worker's side of the boundary exchange with submodels in other processes: one inbox
-// (PULL, read by the worker's I/O thread) and one sender (PUSH) per local submodel and
-// remote worker, used only by that submodel's stages, which the flow graph runs one after
-// another. Messages name sender, receiver, step and stage; a received message waits in its
-// slot until the receiving stage takes it, so none is dropped or taken for another stage.
+// (PULL) and one sender (PUSH) per local submodel and remote worker, used only by that
+// submodel's stages, which the flow graph runs one after another. Messages name sender,
+// receiver, step and stage; a received message waits in its slot until the receiving
+// stage takes it, so none is dropped or taken for another stage. The inbox is read by
+// whichever waiting proxy gets to it first (one at a time): no thread between the socket
+// and the stage that needs the values.
 #include <atomic>
+#include <condition_variable>
 #include <deque>
-#include <functional>
 #include <map>
 #include <mutex>
 #include <string>
@@ -22,22 +24,20 @@ namespace mbsflow {
 class RemoteExchange {
  public:
   // parts[q]: local submodel q's state, null where q runs elsewhere; worker_of[q] its worker.
-  RemoteExchange(zmq::context_t& ctx, const Decomposition& d, std::vector<partitioned::Part*> parts,
+  RemoteExchange(zmq::context_t& ctx, zmq::socket_t& inbox, const Decomposition& d, std::vector<partitioned::Part*> parts,
                  std::vector<int> worker_of, const std::vector<std::string>& worker_names,
                  const std::vector<std::string>& data_addresses, int stages, double send_timeout_s);
 
-  // From the I/O thread: a two-frame message from the inbox. False if it is malformed.
-  bool deliver(zmq::message_t& header, zmq::message_t& payload);
-  // From a proxy node: ready() once remote q's values of stage input s of step n for local
-  // p are in (at once if they are, or if the exchange was aborted).
-  void await(long n, int s, int q, int p, std::function<void()> ready);
+  // From a proxy node: returns once remote q's values of stage input s of step n for local
+  // p are in, or the exchange was aborted.
+  void wait(long n, int s, int q, int p);
   // From local p's stage: its remote ghosts of stage input s of step n, from their slots.
   void receive(int p, long n, int s);
   // From local p's stage: its bodies of stage input s of step n to the remote submodels
   // that hold them as ghosts.
   void send(int p, long n, int s);
 
-  // Stops the exchange: waiting proxies are released and stages skip their work.
+  // Stops the exchange: waiting proxies return and stages skip their work.
   void abort(const std::string& why);
   bool aborted() const;
   std::string why() const;
@@ -55,6 +55,12 @@ class RemoteExchange {
     zmq::socket_t* socket;
   };
   using Slot = std::tuple<int, int, int>;  // to (local), from (remote), stage
+  // Stores a two-frame message from the inbox; false if it is malformed.
+  bool store(zmq::message_t& header, zmq::message_t& payload);
+  // Waits up to `ms` for the inbox, then stores everything in it; false on a malformed message.
+  bool read_inbox(int ms);
+
+  zmq::socket_t& inbox_socket_;
 
   const Decomposition& d_;
   std::vector<partitioned::Part*> parts_;
@@ -66,8 +72,9 @@ class RemoteExchange {
 
   mutable std::mutex mutex_;
   std::map<Slot, std::deque<Message>> inbox_;
-  std::map<std::pair<Slot, long>, std::function<void()>> waiting_;  // proxies of a chunk, by step
+  std::condition_variable arrived_;
   bool aborted_ = false;
+  bool reading_ = false;  // a thread is reading the inbox
   std::string why_;
   std::atomic<long> sent_{0};
 };

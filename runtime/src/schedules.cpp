@@ -30,24 +30,20 @@ FlowGraphSchedule::FlowGraphSchedule(const std::vector<Submodel>& subs, int chun
   auto node = [&](int c, std::size_t p, int s) -> Node& {
     return *nodes_[(static_cast<std::size_t>(c) * k + p) * n_stages + static_cast<std::size_t>(s)];
   };
-  // Values of remote q for local p's stage s of step c: a proxy started with the chunk that
-  // passes a message on when they have arrived.
-  auto proxy = [&](int c, std::size_t q, std::size_t p, int s) -> Proxy& {
-    proxies_.push_back(std::make_unique<Proxy>(
-        graph_, flow::unlimited, [this, remote, c, q, p, s](const flow::continue_msg&, Proxy::gateway_type& gate) {
-          happens_after(&start_token);
-          gate.reserve_wait();
-          auto ready = [&gate] {
-            gate.try_put(flow::continue_msg());
-            gate.release_wait();
-          };
-          if (c < steps_)
-            remote->await(c, q, p, s, ready);
-          else
-            ready();
-        }));
-    flow::make_edge(start_, *proxies_.back());
+  // Proxy for remote q's values of stage input s of step c, for local p.
+  auto proxy = [&](int c, std::size_t q, std::size_t p, int s) -> Node& {
+    proxies_.push_back(std::make_unique<Node>(graph_, [this, remote, c, q, p, s](const flow::continue_msg&) {
+      happens_after(&start_token);
+      if (c < steps_) remote->wait(c, q, p, s);
+      return flow::continue_msg();
+    }));
     return *proxies_.back();
+  };
+  // What local p's stage s follows: its previous stage, or the start.
+  auto previous = [&](int c, std::size_t p, int s) -> flow::sender<flow::continue_msg>& {
+    if (s > 0) return node(c, p, s - 1);
+    if (c > 0) return node(c - 1, p, stages - 1);
+    return start_;
   };
   // A finishing node runs the last of its successors that became ready itself and leaves
   // the others to be stolen. Registering each submodel's own next stage last keeps a
@@ -67,19 +63,24 @@ FlowGraphSchedule::FlowGraphSchedule(const std::vector<Submodel>& subs, int chun
     for (std::size_t p = 0; p < k; ++p) {
       if (!is_local(p)) continue;
       for (std::size_t q : inputs(p)) {
-        if (!is_local(q)) {
-          for (int s = 0; s < stages; ++s) flow::make_edge(proxy(c, q, p, s), node(c, p, s));
-          continue;
-        }
+        if (!is_local(q)) continue;
         for (int s = 1; s < stages; ++s) flow::make_edge(node(c, q, s - 1), node(c, p, s));
         if (c > 0) flow::make_edge(node(c - 1, q, stages - 1), node(c, p, 0));
       }
     }
     for (std::size_t p = 0; p < k; ++p) {
       if (!is_local(p)) continue;
-      for (int s = 1; s < stages; ++s) flow::make_edge(node(c, p, s - 1), node(c, p, s));
-      if (c > 0) flow::make_edge(node(c - 1, p, stages - 1), node(c, p, 0));
-      if (c == 0) flow::make_edge(start_, node(0, p, 0));
+      for (int s = 0; s < stages; ++s) {
+        // previous stage -> proxy -> proxy -> ... -> this stage (own stage edge registered last)
+        flow::sender<flow::continue_msg>* before = &previous(c, p, s);
+        for (std::size_t q : inputs(p)) {
+          if (is_local(q)) continue;
+          Node& x = proxy(c, q, p, s);
+          flow::make_edge(*before, x);
+          before = &x;
+        }
+        flow::make_edge(*before, node(c, p, s));
+      }
     }
   }
 }

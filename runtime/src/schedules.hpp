@@ -14,12 +14,14 @@ namespace mbsflow {
 using StageWork = std::function<void(std::size_t p, int s, int c)>;
 
 // Submodels that run in other processes. A local stage that needs a remote neighbour's
-// values waits on a proxy node; await(c, q, p, s, ready) is called when the proxy for
-// remote q's values of stage input s of chunk step c, for local p, starts waiting, and
-// must call ready() once, from any thread, when they are in.
+// values comes after a proxy node whose body, wait(c, q, p, s), returns once remote q's
+// values of stage input s of chunk step c for local p are in. The proxies of a submodel's
+// stage are chained after its previous stage, so at most one node per local submodel
+// waits at a time: with at least as many threads as local submodels, a waiting proxy
+// never keeps a runnable stage from a thread.
 struct RemoteInputs {
   std::vector<char> local;  // per submodel: 1 if its stages run here
-  std::function<void(int c, std::size_t q, std::size_t p, int s, std::function<void()> ready)> await;
+  std::function<void(int c, std::size_t q, std::size_t p, int s)> wait;
 };
 
 // A oneTBB flow graph built once and run for every chunk: node (c, p, s) waits for stage
@@ -36,11 +38,10 @@ class FlowGraphSchedule {
 
  private:
   using Node = tbb::flow::continue_node<tbb::flow::continue_msg>;
-  using Proxy = tbb::flow::async_node<tbb::flow::continue_msg, tbb::flow::continue_msg>;
   tbb::flow::graph graph_;
   tbb::flow::broadcast_node<tbb::flow::continue_msg> start_;
   std::vector<std::unique_ptr<Node>> nodes_;  // null for remote submodels
-  std::vector<std::unique_ptr<Proxy>> proxies_;
+  std::vector<std::unique_ptr<Node>> proxies_;
   StageWork work_;
   int steps_ = 0;
 };

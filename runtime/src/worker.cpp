@@ -72,9 +72,15 @@ Session read_setup(const WorkerOptions& wo, const json& setup) {
   return s;
 }
 
-// Runs this worker's submodels; snapshots and progress go to the coordinator. Returns an
-// error message, empty when the run completed.
-std::string run_part(Session& s, WorkerIo& io, zmq::context_t& ctx, const json& start, int threads,
+struct Outcome {
+  std::string failure;               // empty when this worker's part completed
+  std::optional<json> last_command;  // the coordinator's word after it: finish or abort
+};
+
+// Runs this worker's submodels; snapshots and progress go to the coordinator. Waits for
+// the coordinator's finish or abort before its sockets close (linger 0): until then the
+// last results and boundary values may still be on their way.
+Outcome run_part(Session& s, WorkerIo& io, zmq::context_t& ctx, zmq::socket_t& inbox, const json& start, int threads,
                      const std::atomic<bool>* stop) {
   const std::size_t k = s.d.submodels.size();
   std::vector<std::unique_ptr<Part>> owned(k);
@@ -87,7 +93,7 @@ std::string run_part(Session& s, WorkerIo& io, zmq::context_t& ctx, const json& 
       mine.push_back(static_cast<int>(q));
     }
   const ClusterTimeouts t = io.timeouts();
-  RemoteExchange exchange(ctx, s.d, parts, s.worker_of, start.at("names").get<std::vector<std::string>>(),
+  RemoteExchange exchange(ctx, inbox, s.d, parts, s.worker_of, start.at("names").get<std::vector<std::string>>(),
                           start.at("data_addresses").get<std::vector<std::string>>(), 4, t.lost_s);
   io.attach(&exchange);
   zmq::socket_t results = wire::make_socket(ctx, zmq::socket_type::push);
@@ -111,8 +117,8 @@ std::string run_part(Session& s, WorkerIo& io, zmq::context_t& ctx, const json& 
   RemoteInputs remote;
   remote.local.assign(k, 0);
   for (int q : mine) remote.local[static_cast<std::size_t>(q)] = 1;
-  remote.await = [&](int c, std::size_t q, std::size_t p, int st, std::function<void()> ready) {
-    exchange.await(first + c, st, static_cast<int>(q), static_cast<int>(p), std::move(ready));
+  remote.wait = [&](int c, std::size_t q, std::size_t p, int st) {
+    exchange.wait(first + c, st, static_cast<int>(q), static_cast<int>(p));
   };
   const int chunk = chunk_length(s.o.output_every);
   Scheduler schedule(
@@ -138,7 +144,8 @@ std::string run_part(Session& s, WorkerIo& io, zmq::context_t& ctx, const json& 
 
   std::vector<double> snapshot;
   std::string failure;
-  tbb::task_arena arena(threads > 0 ? threads : tbb::info::default_concurrency());
+  // A proxy waits on its thread (see RemoteInputs): one thread per local submodel at least.
+  tbb::task_arena arena(std::max(threads > 0 ? threads : tbb::info::default_concurrency(), static_cast<int>(mine.size())));
   arena.execute([&] {
     step_in_chunks(
         grid, chunk, 0,
@@ -187,8 +194,9 @@ std::string run_part(Session& s, WorkerIo& io, zmq::context_t& ctx, const json& 
     if (exchange.aborted()) failure = exchange.why();
   } else if (failure.rfind("stopped by the coordinator", 0) != 0 && failure.rfind("the coordinator", 0) != 0)
     report(wire::ResultKind::failed, first, failure.data(), failure.size());
+  Outcome out{failure, io.next_command(io.timeouts().lost_s + 1.0)};
   io.attach(nullptr);
-  return failure;
+  return out;
 }
 
 }  // namespace
@@ -212,7 +220,6 @@ void serve_worker(const WorkerOptions& wo) {
   io.send({{"type", "hello_ok"}, {"program", MBSFLOW_PROGRAM_VERSION}, {"protocol", wo.protocol_version}});
   log("coordinator " + hello.value("coordinator", std::string("?")) + " connected; this is worker " +
       hello.value("name", std::string("?")));
-  const double lost_s = io.timeouts().lost_s;
   // Setup: the model can be large; the coordinator's heartbeats tell it is still there.
   const json setup = expect(io, "setup", 0.0, wo.stop);
   Session s;
@@ -221,9 +228,12 @@ void serve_worker(const WorkerOptions& wo) {
   } catch (const std::exception& e) {
     refuse(io, std::string("cannot set up the run: ") + e.what());
   }
+  zmq::socket_t inbox = wire::make_socket(ctx, zmq::socket_type::pull);
   std::string data_address;
   try {
-    data_address = io.bind_inbox(setup.at("data_bind").get<std::string>(), setup.value("data_address", std::string()));
+    const std::string bind = setup.at("data_bind").get<std::string>();
+    wire::bind(inbox, bind, "the worker's inbox for boundary values");
+    data_address = wire::reachable_address(inbox, setup.value("data_address", std::string()), "the worker's inbox " + bind);
   } catch (const std::exception& e) {
     refuse(io, e.what());
   }
@@ -239,10 +249,7 @@ void serve_worker(const WorkerOptions& wo) {
   log("running submodels " + list + " of " + std::to_string(s.worker_of.size()) + " (" + std::to_string(own) +
       " bodies), inbox " + data_address);
   const int threads = setup.value("threads", 0) > 0 ? setup.value("threads", 0) : wo.threads;
-  const std::string failure = run_part(s, io, ctx, start, threads, wo.stop);
-  // Wait for the coordinator's word before closing: with linger 0, closing at once could
-  // drop the last results, and peers may still need this worker's last values.
-  const std::optional<json> last = io.next_command(lost_s + 1.0);
+  const auto [failure, last] = run_part(s, io, ctx, inbox, start, threads, wo.stop);
   if (!failure.empty()) throw RunError(failure);
   if (last && last->value("type", "") == "finish") io.goodbye();
   if (!last || last->value("type", "") != "finish")

@@ -6,8 +6,16 @@
 
 namespace mbsflow {
 
+namespace {
+std::atomic<int> io_count{0};  // distinct inproc names for several workers in one process (tests)
+}
+
 WorkerIo::WorkerIo(zmq::context_t& ctx, const std::string& listen)
-    : ctx_(ctx), control_(wire::make_socket(ctx, zmq::socket_type::router)) {
+    : ctx_(ctx), control_(wire::make_socket(ctx, zmq::socket_type::router)),
+      wake_in_(wire::make_socket(ctx, zmq::socket_type::pair)), wake_out_(wire::make_socket(ctx, zmq::socket_type::pair)) {
+  const std::string wake = "inproc://mbsflow-worker-io-" + std::to_string(io_count++);
+  wake_in_.bind(wake);
+  wake_out_.connect(wake);
   control_.set(zmq::sockopt::router_mandatory, 1);  // a reply to a vanished coordinator fails, never drops
   wire::bind(control_, listen, "the worker's control socket");
   endpoint_ = control_.get(zmq::sockopt::last_endpoint);
@@ -18,6 +26,7 @@ WorkerIo::~WorkerIo() {
   {
     std::lock_guard lock(mutex_);
     stopping_ = true;
+    wake_out_.send(zmq::str_buffer("!"), zmq::send_flags::dontwait);
   }
   thread_.join();
 }
@@ -35,9 +44,14 @@ std::optional<nlohmann::json> WorkerIo::next_command(double timeout_s) {
   return j;
 }
 
+void WorkerIo::post_locked(std::function<void()> f) {
+  posted_.push_back(std::move(f));
+  wake_out_.send(zmq::str_buffer("!"), zmq::send_flags::dontwait);  // under mutex_: one thread at a time
+}
+
 void WorkerIo::send(nlohmann::json message) {
   std::lock_guard lock(mutex_);
-  posted_.push_back([this, m = std::move(message)] {
+  post_locked([this, m = std::move(message)] {
     if (coordinator_.empty()) return;
     try {
       control_.send(zmq::buffer(coordinator_), zmq::send_flags::sndmore);
@@ -51,26 +65,7 @@ void WorkerIo::send(nlohmann::json message) {
 void WorkerIo::goodbye() {
   send({{"type", "bye"}});
   std::lock_guard lock(mutex_);
-  posted_.push_back([this] { control_.set(zmq::sockopt::linger, 1000); });
-}
-
-std::string WorkerIo::bind_inbox(const std::string& bind, const std::string& address) {
-  std::promise<std::string> bound;
-  std::future<std::string> result = bound.get_future();
-  {
-    std::lock_guard lock(mutex_);
-    posted_.push_back([&] {
-      try {
-        inbox_.emplace(wire::make_socket(ctx_, zmq::socket_type::pull));
-        wire::bind(*inbox_, bind, "the worker's inbox for boundary values");
-        bound.set_value(wire::reachable_address(*inbox_, address, "the worker's inbox " + bind));
-      } catch (...) {
-        inbox_.reset();
-        bound.set_exception(std::current_exception());
-      }
-    });
-  }
-  return result.get();
+  post_locked([this] { control_.set(zmq::sockopt::linger, 1000); });
 }
 
 void WorkerIo::attach(RemoteExchange* exchange) {
@@ -111,24 +106,25 @@ void WorkerIo::loop() {
   heard_ = beat_ = Clock::now();
   while (true) {
     std::deque<std::function<void()>> todo;
-    RemoteExchange* exchange;
     ClusterTimeouts t;
-    bool lost;
+    bool lost, stopping;
     {
       std::lock_guard lock(mutex_);
-      if (stopping_) return;
+      stopping = stopping_;
       todo.swap(posted_);
-      exchange = exchange_;
       t = timeouts_;
       lost = lost_;
     }
-    for (auto& f : todo) f();
-    // Boundary values stay queued in the inbox until an exchange takes them; then they wake
-    // the thread at once. Posted work waits at most 5 ms.
-    const bool read_inbox = inbox_ && exchange;
-    zmq::pollitem_t items[2] = {{control_.handle(), 0, ZMQ_POLLIN, 0},
-                                {read_inbox ? inbox_->handle() : nullptr, 0, ZMQ_POLLIN, 0}};
-    zmq::poll(items, read_inbox ? 2 : 1, std::chrono::milliseconds(5));
+    for (auto& f : todo) f();  // what was posted before the stop still goes out (a goodbye)
+    if (stopping) return;
+    // Sleeps until a message, posted work (the wake-up socket) or the next heartbeat:
+    // a thread that wakes for nothing would take a core from the compute.
+    zmq::pollitem_t items[2] = {{control_.handle(), 0, ZMQ_POLLIN, 0}, {wake_in_.handle(), 0, ZMQ_POLLIN, 0}};
+    const double until_beat = std::max(0.0, t.heartbeat_s - wire::seconds_since(beat_));
+    zmq::poll(items, 2, std::chrono::milliseconds(static_cast<long>(1000.0 * until_beat) + 1));
+    zmq::message_t ignored;
+    while (wake_in_.recv(ignored, zmq::recv_flags::dontwait)) {
+    }
     if (items[0].revents & ZMQ_POLLIN) {
       zmq::message_t id, body;
       (void)control_.recv(id);
@@ -147,16 +143,6 @@ void WorkerIo::loop() {
       } else {
         heard_ = Clock::now();
         if (j.value("type", "") != "heartbeat") command(std::move(j));
-      }
-    }
-    if (read_inbox && (items[1].revents & ZMQ_POLLIN)) {
-      // Under the lock: the main thread may detach and destroy the exchange meanwhile.
-      std::lock_guard lock(mutex_);
-      if (exchange_) {
-        zmq::message_t header, payload;
-        (void)inbox_->recv(header);
-        if (header.more()) (void)inbox_->recv(payload);
-        if (!exchange_->deliver(header, payload)) exchange_->abort("a malformed boundary message arrived");
       }
     }
     if (!coordinator_.empty() && !lost) {

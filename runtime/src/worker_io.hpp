@@ -1,11 +1,11 @@
 #pragma once
-// A worker's I/O thread: owns the control socket (ROUTER, bound at --listen) and the inbox
-// for boundary values, answers and sends heartbeats, notices a silent coordinator, hands
-// commands to the worker's main thread and boundary values to the RemoteExchange.
+// A worker's I/O thread: owns the control socket (ROUTER, bound at --listen), sends
+// heartbeats, notices a silent coordinator and hands commands to the worker's main thread;
+// an abort or a lost coordinator stops the attached RemoteExchange at once.
+#include <atomic>
 #include <condition_variable>
 #include <deque>
 #include <functional>
-#include <future>
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -36,19 +36,18 @@ class WorkerIo {
   // Says goodbye to the coordinator; the control socket then closes with a linger of one
   // second instead of none, so that the goodbye goes out.
   void goodbye();
-  // Binds the inbox and returns the address peers reach it at.
-  std::string bind_inbox(const std::string& bind, const std::string& address);
-  void attach(RemoteExchange* exchange);  // where inbox messages go; aborted when the coordinator is lost
+  void attach(RemoteExchange* exchange);  // stopped on an abort or when the coordinator is lost
   ClusterTimeouts timeouts() const;
 
  private:
   void loop();
   void command(nlohmann::json j);
   void lose(const std::string& why);
+  void post_locked(std::function<void()> f);  // runs f on the I/O thread; call with mutex_ held
 
   zmq::context_t& ctx_;
   zmq::socket_t control_;
-  std::optional<zmq::socket_t> inbox_;
+  zmq::socket_t wake_in_, wake_out_;  // inproc PAIR: wakes the I/O thread for posted work
   std::string endpoint_;
   std::thread thread_;
 
