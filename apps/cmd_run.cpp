@@ -122,6 +122,9 @@ int run(const RunArgs& a) {
   MultibodySystem sys(m);
   const int threads = a.threads > 0 ? a.threads : static_cast<int>(std::thread::hardware_concurrency());
   const bool cluster = !a.cluster.empty() || a.processes > 0;
+  if (cluster && o.method != Method::rk4)
+    throw InputError("--cluster, --processes: runs across processes use RK4 for now (" + std::string(method_name(o.method)) +
+                     " needs a global error norm at every step attempt)");
   std::optional<LocalWorkers> local;
   ClusterConfig cc;
   if (!a.cluster.empty()) cc = read_cluster_file(a.cluster);

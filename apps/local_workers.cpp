@@ -92,8 +92,10 @@ LocalWorkers::LocalWorkers(int n, const std::string& transport, int threads) {
 }
 
 LocalWorkers::~LocalWorkers() {
-  // Finished or aborted workers exit by themselves within a few seconds; anything still
-  // there after that is killed, so that no process is left behind.
+  // The run is over (finished, failed or never started): SIGTERM asks a worker that still
+  // waits for its coordinator to give up; anything still there after 5 s is killed, so
+  // that no process is left behind.
+  for (pid_t pid : pids_) ::kill(pid, SIGTERM);
   const auto start = std::chrono::steady_clock::now();
   for (pid_t pid : pids_) {
     while (::waitpid(pid, nullptr, WNOHANG) == 0) {

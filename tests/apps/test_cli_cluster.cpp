@@ -162,6 +162,11 @@ TEST_CASE("cluster set-up errors: unreachable worker, port in use, bad cluster f
   CHECK(unreachable.err.find("worker w0 (tcp://127.0.0.1:1) did not answer within 1 s") != std::string::npos);
   CHECK(std::chrono::duration<double>(Clock::now() - start).count() < 5.0);
 
+  // DOPRI5 runs in one process only, for now.
+  const Result dopri5 = run("run chain.json --processes 2 --method dopri5", dir);
+  CHECK(dopri5.code == 2);
+  CHECK(dopri5.err.find("runs across processes use RK4 for now (dopri5") != std::string::npos);
+
   // A second worker on a port that is taken.
   Workers first(1, d);
   Child second({"worker", "--listen", first.endpoints[0]}, d, "second");
