@@ -121,29 +121,42 @@ Eigen::VectorXd MultibodySystem::initial_state() const {
   return y;
 }
 
+[[gnu::always_inline]] inline void MultibodySystem::body_kinematics(Eigen::Index i, const Eigen::VectorXd& y) {
+  const Eigen::Vector4d q = y.segment<4>(layout_.orientation(i));
+  const Eigen::Matrix3d r = rotation_matrix(q);
+  rot_[static_cast<std::size_t>(i)] = r;
+  quat_.col(i) = q;
+  pos_.col(i) = y.segment<3>(layout_.position(i));
+  vel_.col(i) = y.segment<3>(layout_.velocity(i));
+  omega_.col(i) = r * y.segment<3>(layout_.angular_velocity(i));
+}
+
+// A driven body's kinematics replace what its state says.
+void MultibodySystem::drive(const Driver& d, double t) {
+  const Eigen::Index i = d.body;
+  const Body& b = model_.bodies[static_cast<std::size_t>(i)];
+  for (int k = 0; k < 3; ++k) {
+    const FunctionValue f = evaluate(d.displacement[static_cast<std::size_t>(k)], t);
+    pos_(k, i) = b.position[static_cast<std::size_t>(k)] + d.velocity[static_cast<std::size_t>(k)] * t + f.value;
+    vel_(k, i) = d.velocity[static_cast<std::size_t>(k)] + f.rate;
+  }
+  quat_.col(i) = quat(b.orientation).normalized();
+  rot_[static_cast<std::size_t>(i)] = rotation_matrix(quat_.col(i));
+  omega_.col(i).setZero();
+}
+
 void MultibodySystem::update_kinematics(double t, const Eigen::VectorXd& y) {
   time_ = t;
-  const Eigen::Index n = layout_.bodies;
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const Eigen::Vector4d q = y.segment<4>(layout_.orientation(i));
-    const Eigen::Matrix3d r = rotation_matrix(q);
-    rot_[static_cast<std::size_t>(i)] = r;
-    quat_.col(i) = q;
-    pos_.col(i) = y.segment<3>(layout_.position(i));
-    vel_.col(i) = y.segment<3>(layout_.velocity(i));
-    omega_.col(i) = r * y.segment<3>(layout_.angular_velocity(i));
-  }
-  for (const Driver& d : model_.drivers) {
-    const Eigen::Index i = d.body;
-    const Body& b = model_.bodies[static_cast<std::size_t>(i)];
-    for (int k = 0; k < 3; ++k) {
-      const FunctionValue f = evaluate(d.displacement[static_cast<std::size_t>(k)], t);
-      pos_(k, i) = b.position[static_cast<std::size_t>(k)] + d.velocity[static_cast<std::size_t>(k)] * t + f.value;
-      vel_(k, i) = d.velocity[static_cast<std::size_t>(k)] + f.rate;
-    }
-    quat_.col(i) = quat(b.orientation).normalized();
-    rot_[static_cast<std::size_t>(i)] = rotation_matrix(quat_.col(i));
-    omega_.col(i).setZero();
+  for (Eigen::Index i = 0; i < layout_.bodies; ++i) body_kinematics(i, y);
+  for (const Driver& d : model_.drivers) drive(d, t);
+}
+
+void MultibodySystem::kinematics_of(double t, const Eigen::VectorXd& y, std::span<const int> bodies) {
+  time_ = t;
+  for (int i : bodies) {
+    body_kinematics(i, y);
+    // The last driver of a body wins, as in update_kinematics.
+    if (const int d = driver_of_body_[static_cast<std::size_t>(i)]; d >= 0) drive(model_.drivers[static_cast<std::size_t>(d)], t);
   }
 }
 
@@ -185,42 +198,48 @@ void MultibodySystem::update_kinematics(double t, const Eigen::VectorXd& y) {
   return f;
 }
 
-void MultibodySystem::compute_joint_forces() {
-  for (std::size_t k = 0; k < joints_.size(); ++k) {
-    const CompiledJoint& j = joints_[k];
-    auto out = joint_out_.col(static_cast<Eigen::Index>(k));
-    const Eigen::Matrix3d& ra = rot_[static_cast<std::size_t>(j.a)];
-    const Eigen::Matrix3d& rb = rot_[static_cast<std::size_t>(j.b)];
-    if (j.spring) {
-      const Eigen::Vector3d aw = ra * j.pa, bw = rb * j.pb;
-      const Eigen::Vector3d delta = pos_.col(j.b) + bw - pos_.col(j.a) - aw;
-      const double length = delta.norm();
-      const Eigen::Vector3d u = length > 0.0 ? Eigen::Vector3d(delta / length) : Eigen::Vector3d::Zero();
-      const Eigen::Vector3d dv = vel_.col(j.b) + omega_.col(j.b).cross(bw) - vel_.col(j.a) - omega_.col(j.a).cross(aw);
-      const double f = j.kt[0] * (length - j.rest_length) + j.ct[0] * u.dot(dv);
-      const Eigen::Vector3d force = -f * u;  // on body2, at its attachment point
-      out.segment<3>(0) = force;
-      out.segment<3>(3) = aw.cross(-force);
-      out.segment<3>(6) = bw.cross(force);
-      continue;
-    }
-    const Deflection def = bushing_deflection(j);
-    const Eigen::Vector3d f = axis_forces(j, def.d, 0) + j.ct.cwiseProduct(def.d_rate) - j.preload_force;
-    const Eigen::Vector3d force = -(def.frame * f);  // on body2 at pb; on body1 (opposite) also at pb
-    const Eigen::Vector3d& theta = def.rotation.theta;
-    const Eigen::Vector3d g = rotation_gradient_to_torque(def.rotation, axis_forces(j, theta, 3) - j.preload_torque) +
-                              j.cr.cwiseProduct(def.omega_rel);
-    const Eigen::Vector3d couple = def.frame * g;  // on body1; body2 gets -couple
+[[gnu::always_inline]] inline void MultibodySystem::joint_force(std::size_t k) {
+  const CompiledJoint& j = joints_[k];
+  auto out = joint_out_.col(static_cast<Eigen::Index>(k));
+  const Eigen::Matrix3d& ra = rot_[static_cast<std::size_t>(j.a)];
+  const Eigen::Matrix3d& rb = rot_[static_cast<std::size_t>(j.b)];
+  if (j.spring) {
+    const Eigen::Vector3d aw = ra * j.pa, bw = rb * j.pb;
+    const Eigen::Vector3d delta = pos_.col(j.b) + bw - pos_.col(j.a) - aw;
+    const double length = delta.norm();
+    const Eigen::Vector3d u = length > 0.0 ? Eigen::Vector3d(delta / length) : Eigen::Vector3d::Zero();
+    const Eigen::Vector3d dv = vel_.col(j.b) + omega_.col(j.b).cross(bw) - vel_.col(j.a) - omega_.col(j.a).cross(aw);
+    const double f = j.kt[0] * (length - j.rest_length) + j.ct[0] * u.dot(dv);
+    const Eigen::Vector3d force = -f * u;  // on body2, at its attachment point
     out.segment<3>(0) = force;
-    out.segment<3>(3) = (def.pb - pos_.col(j.a)).cross(-force) + couple;
-    out.segment<3>(6) = (def.pb - pos_.col(j.b)).cross(force) - couple;
+    out.segment<3>(3) = aw.cross(-force);
+    out.segment<3>(6) = bw.cross(force);
+    return;
   }
+  const Deflection def = bushing_deflection(j);
+  const Eigen::Vector3d f = axis_forces(j, def.d, 0) + j.ct.cwiseProduct(def.d_rate) - j.preload_force;
+  const Eigen::Vector3d force = -(def.frame * f);  // on body2 at pb; on body1 (opposite) also at pb
+  const Eigen::Vector3d& theta = def.rotation.theta;
+  const Eigen::Vector3d g = rotation_gradient_to_torque(def.rotation, axis_forces(j, theta, 3) - j.preload_torque) +
+                            j.cr.cwiseProduct(def.omega_rel);
+  const Eigen::Vector3d couple = def.frame * g;  // on body1; body2 gets -couple
+  out.segment<3>(0) = force;
+  out.segment<3>(3) = (def.pb - pos_.col(j.a)).cross(-force) + couple;
+  out.segment<3>(6) = (def.pb - pos_.col(j.b)).cross(force) - couple;
+}
+
+void MultibodySystem::compute_joint_forces() {
+  for (std::size_t k = 0; k < joints_.size(); ++k) joint_force(k);
   if (elements_.empty()) return;
   const Kinematics k = kinematics();
   for (std::size_t e = 0; e < elements_.size(); ++e) {
     const std::size_t first = element_first_[e], count = element_first_[e + 1] - first;
     elements_[e]->evaluate(time_, k, std::span<Wrench>(element_out_.data() + first, count));
   }
+}
+
+void MultibodySystem::joint_forces_of(std::span<const int> joints) {
+  for (int k : joints) joint_force(static_cast<std::size_t>(k));
 }
 
 void MultibodySystem::add_force_element(std::shared_ptr<const ForceElement> element) {
@@ -258,58 +277,66 @@ void MultibodySystem::joint_wrenches(double t, const Eigen::VectorXd& y, Eigen::
   }
 }
 
-void MultibodySystem::compute_derivatives(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const {
-  for (Eigen::Index i = 0; i < active_; ++i) {
-    const auto bi = static_cast<std::size_t>(i);
-    const Eigen::Matrix3d& r = rot_[bi];
-    Eigen::Vector3d force = mass_[bi] * gravity_;
-    Eigen::Vector3d torque = Eigen::Vector3d::Zero();  // world frame, about the centre of mass
-    for (int p = load_start_[bi]; p < load_start_[bi + 1]; ++p) {
-      const Load& l = model_.loads[static_cast<std::size_t>(load_index_[static_cast<std::size_t>(p)])];
-      const double s = evaluate(l.function, t).value;
-      Eigen::Vector3d f = s * vec(l.force), m = s * vec(l.torque);
-      if (l.body_frame) {
-        f = r * f;
-        m = r * m;
-      }
-      force += f;
-      torque += m + (r * vec(l.point)).cross(f);
+[[gnu::always_inline]] inline void MultibodySystem::body_derivative(Eigen::Index i, double t, const Eigen::VectorXd& y,
+                                                                      Eigen::VectorXd& dydt) const {
+  const auto bi = static_cast<std::size_t>(i);
+  const Eigen::Matrix3d& r = rot_[bi];
+  Eigen::Vector3d force = mass_[bi] * gravity_;
+  Eigen::Vector3d torque = Eigen::Vector3d::Zero();  // world frame, about the centre of mass
+  for (int p = load_start_[bi]; p < load_start_[bi + 1]; ++p) {
+    const Load& l = model_.loads[static_cast<std::size_t>(load_index_[static_cast<std::size_t>(p)])];
+    const double s = evaluate(l.function, t).value;
+    Eigen::Vector3d f = s * vec(l.force), m = s * vec(l.torque);
+    if (l.body_frame) {
+      f = r * f;
+      m = r * m;
     }
-    for (int p = incidence_start_[bi]; p < incidence_start_[bi + 1]; ++p) {
-      const int code = incidence_[static_cast<std::size_t>(p)];
-      const auto col = joint_out_.col(code / 2);
-      if (code & 1) {
-        force += col.segment<3>(0);
-        torque += col.segment<3>(6);
-      } else {
-        force -= col.segment<3>(0);
-        torque += col.segment<3>(3);
-      }
-    }
-    for (int p = element_start_[bi]; p < element_start_[bi + 1]; ++p) {
-      const Wrench& w = element_out_[static_cast<std::size_t>(element_slot_[static_cast<std::size_t>(p)])];
-      force += w.force;
-      torque += w.torque;
-    }
-    const int drv = driver_of_body_[bi];
-    if (drv >= 0) {
-      const Driver& d = model_.drivers[static_cast<std::size_t>(drv)];
-      for (int k = 0; k < 3; ++k) {
-        dydt[layout_.position(i) + k] = vel_(k, i);
-        dydt[layout_.velocity(i) + k] = evaluate(d.displacement[static_cast<std::size_t>(k)], t).accel;
-      }
-      dydt.segment<4>(layout_.orientation(i)).setZero();
-      dydt.segment<3>(layout_.angular_velocity(i)).setZero();
-      continue;
-    }
-    const Eigen::Vector3d w = y.segment<3>(layout_.angular_velocity(i));
-    const Eigen::Vector4d q = y.segment<4>(layout_.orientation(i));
-    dydt.segment<3>(layout_.position(i)) = y.segment<3>(layout_.velocity(i));
-    dydt.segment<3>(layout_.velocity(i)) = inv_mass_[bi] * force;
-    const Eigen::Vector3d tb = r.transpose() * torque;
-    dydt.segment<3>(layout_.angular_velocity(i)) = inv_inertia_[bi] * (tb - w.cross(inertia_[bi] * w));
-    dydt.segment<4>(layout_.orientation(i)) = 0.5 * quat_multiply(q, Eigen::Vector4d(0.0, w[0], w[1], w[2]));
+    force += f;
+    torque += m + (r * vec(l.point)).cross(f);
   }
+  for (int p = incidence_start_[bi]; p < incidence_start_[bi + 1]; ++p) {
+    const int code = incidence_[static_cast<std::size_t>(p)];
+    const auto col = joint_out_.col(code / 2);
+    if (code & 1) {
+      force += col.segment<3>(0);
+      torque += col.segment<3>(6);
+    } else {
+      force -= col.segment<3>(0);
+      torque += col.segment<3>(3);
+    }
+  }
+  for (int p = element_start_[bi]; p < element_start_[bi + 1]; ++p) {
+    const Wrench& w = element_out_[static_cast<std::size_t>(element_slot_[static_cast<std::size_t>(p)])];
+    force += w.force;
+    torque += w.torque;
+  }
+  const int drv = driver_of_body_[bi];
+  if (drv >= 0) {
+    const Driver& d = model_.drivers[static_cast<std::size_t>(drv)];
+    for (int k = 0; k < 3; ++k) {
+      dydt[layout_.position(i) + k] = vel_(k, i);
+      dydt[layout_.velocity(i) + k] = evaluate(d.displacement[static_cast<std::size_t>(k)], t).accel;
+    }
+    dydt.segment<4>(layout_.orientation(i)).setZero();
+    dydt.segment<3>(layout_.angular_velocity(i)).setZero();
+    return;
+  }
+  const Eigen::Vector3d w = y.segment<3>(layout_.angular_velocity(i));
+  const Eigen::Vector4d q = y.segment<4>(layout_.orientation(i));
+  dydt.segment<3>(layout_.position(i)) = y.segment<3>(layout_.velocity(i));
+  dydt.segment<3>(layout_.velocity(i)) = inv_mass_[bi] * force;
+  const Eigen::Vector3d tb = r.transpose() * torque;
+  dydt.segment<3>(layout_.angular_velocity(i)) = inv_inertia_[bi] * (tb - w.cross(inertia_[bi] * w));
+  dydt.segment<4>(layout_.orientation(i)) = 0.5 * quat_multiply(q, Eigen::Vector4d(0.0, w[0], w[1], w[2]));
+}
+
+void MultibodySystem::compute_derivatives(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const {
+  for (Eigen::Index i = 0; i < active_; ++i) body_derivative(i, t, y, dydt);
+}
+
+void MultibodySystem::derivatives_of(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt,
+                                     std::span<const int> bodies) const {
+  for (int i : bodies) body_derivative(i, t, y, dydt);
 }
 
 void MultibodySystem::rhs(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) {
@@ -318,18 +345,28 @@ void MultibodySystem::rhs(double t, const Eigen::VectorXd& y, Eigen::VectorXd& d
   compute_derivatives(t, y, dydt);
 }
 
+// A driven body's state put exactly on its prescribed motion.
+void MultibodySystem::impose(const Driver& d, double t, Eigen::VectorXd& y) const {
+  const Eigen::Index i = d.body;
+  const Body& b = model_.bodies[static_cast<std::size_t>(i)];
+  for (int k = 0; k < 3; ++k) {
+    const FunctionValue f = evaluate(d.displacement[static_cast<std::size_t>(k)], t);
+    y[layout_.position(i) + k] = b.position[static_cast<std::size_t>(k)] + d.velocity[static_cast<std::size_t>(k)] * t + f.value;
+    y[layout_.velocity(i) + k] = d.velocity[static_cast<std::size_t>(k)] + f.rate;
+  }
+  y.segment<4>(layout_.orientation(i)) = quat(b.orientation).normalized();
+  y.segment<3>(layout_.angular_velocity(i)).setZero();
+}
+
 void MultibodySystem::after_step(double t, Eigen::VectorXd& y) const {
   for (Eigen::Index i = 0; i < layout_.bodies; ++i) y.segment<4>(layout_.orientation(i)).normalize();
-  for (const Driver& d : model_.drivers) {
-    const Eigen::Index i = d.body;
-    const Body& b = model_.bodies[static_cast<std::size_t>(i)];
-    for (int k = 0; k < 3; ++k) {
-      const FunctionValue f = evaluate(d.displacement[static_cast<std::size_t>(k)], t);
-      y[layout_.position(i) + k] = b.position[static_cast<std::size_t>(k)] + d.velocity[static_cast<std::size_t>(k)] * t + f.value;
-      y[layout_.velocity(i) + k] = d.velocity[static_cast<std::size_t>(k)] + f.rate;
-    }
-    y.segment<4>(layout_.orientation(i)) = quat(b.orientation).normalized();
-    y.segment<3>(layout_.angular_velocity(i)).setZero();
+  for (const Driver& d : model_.drivers) impose(d, t, y);
+}
+
+void MultibodySystem::after_step_of(double t, Eigen::VectorXd& y, std::span<const int> bodies) const {
+  for (int i : bodies) {
+    y.segment<4>(layout_.orientation(i)).normalize();
+    if (const int d = driver_of_body_[static_cast<std::size_t>(i)]; d >= 0) impose(model_.drivers[static_cast<std::size_t>(d)], t, y);
   }
 }
 

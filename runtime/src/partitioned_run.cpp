@@ -57,7 +57,7 @@ void check_parts(const Context& c, double t) {
 void run_rk4(Context& c, Eigen::VectorXd& y) {
   const StepGrid grid = step_grid(c.o.t_start, c.o.t_end, c.o.step);
   long first = 0;
-  Scheduler schedule(c.d, chunk_length(c.o.output_every), 4, [&](std::size_t p, int s, int step) {
+  Scheduler schedule(c.d, chunk_length(c.o.output_every), 4, [&](std::size_t p, int s, int step, Half) {
     c.clock.time([&] {
       partitioned::pull_ghosts(c.parts, p, s);
       const long n = first + step;
@@ -94,7 +94,7 @@ void run_dopri5(Context& c, Eigen::VectorXd& y) {
   Eigen::VectorXd squares(c.whole.dimension()), dense(c.whole.dimension());
   double t = o.t_start, h = o.step;
   bool need_k0 = true;
-  Scheduler schedule(c.d, 1, 7, [&](std::size_t p, int s, int) {
+  Scheduler schedule(c.d, 1, 7, [&](std::size_t p, int s, int, Half) {
     c.clock.time([&] {
       if (s > 0 || need_k0) partitioned::pull_ghosts(c.parts, p, s);
       partitioned::dopri5_stage(c.parts[p], s, t, h, need_k0, o.atol, o.rtol, squares);

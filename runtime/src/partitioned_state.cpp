@@ -33,6 +33,24 @@ Part::Part(const Model& model, const Submodel& s, int stages)
   for (const auto& f : fields)
     for (Eigen::Index i = 0; i < own; ++i)
       for (int c = 0; c < f.n; ++c) global_element.push_back((global.*f.offset)(s.own[static_cast<std::size_t>(i)]) + c);
+  const auto n_own = static_cast<int>(own);
+  std::vector<char> edge(static_cast<std::size_t>(n_own), 0);
+  const std::vector<Joint>& joints = system.model().joints;
+  for (std::size_t k = 0; k < joints.size(); ++k) {
+    const int a = joints[k].body1, b = joints[k].body2;  // local; ground is -1
+    if (a >= n_own || b >= n_own) {
+      ghost_joints.push_back(static_cast<int>(k));
+      for (int i : {a, b})
+        if (i >= 0 && i < n_own) edge[static_cast<std::size_t>(i)] = 1;
+    } else {
+      inner_joints.push_back(static_cast<int>(k));
+    }
+  }
+  for (int i = 0; i < n_own; ++i) {
+    own_bodies.push_back(i);
+    (edge[static_cast<std::size_t>(i)] ? edge_bodies : inner_bodies).push_back(i);
+  }
+  for (int i = n_own; i < static_cast<int>(system.layout().bodies); ++i) ghost_bodies.push_back(i);
 }
 
 void copy_ghosts(const Part& owner, const Submodel::Exchange& e, Part& me, int s) {
@@ -90,6 +108,62 @@ void rk4_stage(Part& part, int s, double t, double t_next) {
                  part.k[3].segment(at, n), h);
   });
   part.system.after_step(t_next, part.x[0]);
+}
+
+namespace {
+
+// Calls f(offset, length) for each field block of each run of consecutive listed bodies
+// (the layout keeps each field of consecutive bodies together).
+template <class F>
+void for_bodies(const Part& part, const std::vector<int>& bodies, F f) {
+  const StateLayout& l = part.system.layout();
+  for (std::size_t a = 0; a < bodies.size();) {
+    std::size_t b = a + 1;
+    while (b < bodies.size() && bodies[b] == bodies[b - 1] + 1) ++b;
+    const Eigen::Index first = bodies[a], n = static_cast<Eigen::Index>(b - a);
+    f(l.position(first), 3 * n);
+    f(l.orientation(first), 4 * n);
+    f(l.velocity(first), 3 * n);
+    f(l.angular_velocity(first), 3 * n);
+    a = b;
+  }
+}
+
+// The stage update of rk4_stage, for some own bodies: the next stage input, or after
+// stage 3 the new state (renormalised, drivers imposed).
+void rk4_update(Part& part, const std::vector<int>& bodies, int s, double h, double t_next) {
+  const auto i = static_cast<std::size_t>(s);
+  if (s < 3) {
+    for_bodies(part, bodies, [&](Eigen::Index at, Eigen::Index n) {
+      rk4::stage_input(part.x[0].segment(at, n), part.k[i].segment(at, n), h, s, part.x[i + 1].segment(at, n));
+    });
+    return;
+  }
+  for_bodies(part, bodies, [&](Eigen::Index at, Eigen::Index n) {
+    rk4::combine(part.x[0].segment(at, n), part.k[0].segment(at, n), part.k[1].segment(at, n), part.k[2].segment(at, n),
+                 part.k[3].segment(at, n), h);
+  });
+  part.system.after_step_of(t_next, part.x[0], bodies);
+}
+
+}  // namespace
+
+void rk4_inner_stage(Part& part, int s, double t, double t_next) {
+  const double h = t_next - t, ts = t + rk4::stage_fraction[s] * h;
+  const auto i = static_cast<std::size_t>(s);
+  part.system.kinematics_of(ts, part.x[i], part.own_bodies);
+  part.system.joint_forces_of(part.inner_joints);
+  part.system.derivatives_of(ts, part.x[i], part.k[i], part.inner_bodies);
+  rk4_update(part, part.inner_bodies, s, h, t_next);
+}
+
+void rk4_edge_stage(Part& part, int s, double t, double t_next) {
+  const double h = t_next - t, ts = t + rk4::stage_fraction[s] * h;
+  const auto i = static_cast<std::size_t>(s);
+  part.system.kinematics_of(ts, part.x[i], part.ghost_bodies);
+  part.system.joint_forces_of(part.ghost_joints);
+  part.system.derivatives_of(ts, part.x[i], part.k[i], part.edge_bodies);
+  rk4_update(part, part.edge_bodies, s, h, t_next);
 }
 
 void dopri5_stage(Part& part, int s, double t, double h, bool need_k0, double atol, double rtol,

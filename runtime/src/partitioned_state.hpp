@@ -18,6 +18,10 @@ struct Part {
   // r the DOPRI5 dense-output coefficients of the last accepted step.
   std::vector<Eigen::VectorXd> x, k, r;
   std::vector<Eigen::Index> global_element;  // own elements' places in the global state
+  // For a stage in two halves (rk4_inner_stage, rk4_edge_stage): own bodies with no joint
+  // to a ghost (inner) and with one (edge), the ghosts, and the local joints that reach
+  // no ghost and that do.
+  std::vector<int> own_bodies, inner_bodies, edge_bodies, ghost_bodies, inner_joints, ghost_joints;
 };
 
 // Copies the ghost bodies' values of stage input s from their owners.
@@ -46,6 +50,12 @@ void for_own_blocks(const Part& part, F f) {
 // own bodies, or after stage 3 the new y for own bodies (renormalised, drivers imposed).
 // h = t_next - t and the times are those of the sequential loop, to the bit.
 void rk4_stage(Part& part, int s, double t, double t_next);
+
+// rk4_stage in two halves with the same numbers: the inner half needs no ghost values
+// (run it while they travel), the edge half needs the ghosts of stage input s and makes
+// the values the neighbours need next.
+void rk4_inner_stage(Part& part, int s, double t, double t_next);
+void rk4_edge_stage(Part& part, int s, double t, double t_next);
 
 // DOPRI5 stage s (0..6) of an attempt of step h from t: k_s = f(x_s) (k_0 only if
 // need_k0), then x_{s+1} for own bodies; after stage 6 the squared scaled errors of own

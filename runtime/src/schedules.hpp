@@ -11,14 +11,18 @@
 
 namespace mbsflow {
 
-using StageWork = std::function<void(std::size_t p, int s, int c)>;
+// The part of a stage a node computes: all of it, or (with remote inputs) the inner half
+// that needs no ghost values and then the edge half that does.
+enum class Half { whole, inner, edge };
+using StageWork = std::function<void(std::size_t p, int s, int c, Half half)>;
 
-// Submodels that run in other processes. A local stage that needs a remote neighbour's
-// values comes after a proxy node whose body, wait(c, q, p, s), returns once remote q's
-// values of stage input s of chunk step c for local p are in. The proxies of a submodel's
-// stage are chained after its previous stage, so at most one node per local submodel
-// waits at a time: with at least as many threads as local submodels, a waiting proxy
-// never keeps a runnable stage from a thread.
+// Submodels that run in other processes. Each local stage is then two nodes, its inner
+// half (no ghost values needed: it runs while they travel) and its edge half, which comes
+// after a proxy node per remote neighbour whose body, wait(c, q, p, s), returns once
+// remote q's values of stage input s of chunk step c for local p are in. The proxies are
+// chained between the two halves, so at most one node per local submodel waits at a
+// time: with at least as many threads as local submodels, a waiting proxy never keeps a
+// runnable stage from a thread.
 struct RemoteInputs {
   std::vector<char> local;  // per submodel: 1 if its stages run here
   std::function<void(int c, std::size_t q, std::size_t p, int s)> wait;

@@ -123,16 +123,20 @@ Outcome run_part(Session& s, WorkerIo& io, zmq::context_t& ctx, zmq::socket_t& i
   const int chunk = chunk_length(s.o.output_every);
   Scheduler schedule(
       s.d, chunk, 4,
-      [&](std::size_t p, int st, int c) {
+      [&](std::size_t p, int st, int c, Half half) {
         if (exchange.aborted()) return;
         try {
           const long n = first + c;
           Part& part = *parts[p];
+          if (half == Half::inner) {  // needs no ghost values: runs while they travel
+            partitioned::rk4_inner_stage(part, st, grid.time(n), grid.time(n + 1));
+            return;
+          }
           for (const Submodel::Exchange& e : part.sub->exchanges)
             if (parts[static_cast<std::size_t>(e.neighbour)])
               partitioned::copy_ghosts(*parts[static_cast<std::size_t>(e.neighbour)], e, part, st);
           exchange.receive(static_cast<int>(p), n, st);
-          partitioned::rk4_stage(part, st, grid.time(n), grid.time(n + 1));
+          partitioned::rk4_edge_stage(part, st, grid.time(n), grid.time(n + 1));
           // The values this stage made: stage input st+1, or after the last stage the next step's state.
           const long n_next = st == 3 ? n + 1 : n;
           if (n_next < grid.steps) exchange.send(static_cast<int>(p), n_next, (st + 1) % 4);

@@ -7,6 +7,7 @@
 // added, so a body's derivative does not depend on how the model is later partitioned.
 #include <Eigen/Core>
 #include <memory>
+#include <span>
 #include <vector>
 
 #include "mbsflow/graph/force_element.hpp"
@@ -54,6 +55,14 @@ class MultibodySystem {
   void compute_joint_forces();  // joints and force elements
   void compute_derivatives(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const;
 
+  // The same phases for some bodies or joints only, item by item the same arithmetic: a
+  // submodel computes what does not need its neighbours' values while they travel.
+  // Joints only, no force elements.
+  void kinematics_of(double t, const Eigen::VectorXd& y, std::span<const int> bodies);
+  void joint_forces_of(std::span<const int> joints);
+  void derivatives_of(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt, std::span<const int> bodies) const;
+  void after_step_of(double t, Eigen::VectorXd& y, std::span<const int> bodies) const;
+
  private:
   struct CompiledJoint {
     int a = 0, b = 0;  // kinematics indices; ground is index n
@@ -67,6 +76,11 @@ class MultibodySystem {
     double rest_length = 0.0;
   };
   struct Deflection;  // defined in the .cpp
+  void body_kinematics(Eigen::Index i, const Eigen::VectorXd& y);
+  void drive(const Driver& d, double t);
+  void impose(const Driver& d, double t, Eigen::VectorXd& y) const;
+  void joint_force(std::size_t k);
+  void body_derivative(Eigen::Index i, double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const;
   Deflection bushing_deflection(const CompiledJoint& j) const;
   Eigen::Vector3d axis_forces(const CompiledJoint& j, const Eigen::Vector3d& d, int first_axis) const;
   double elastic_energy(const CompiledJoint& j) const;
