@@ -38,6 +38,8 @@ int worker(const WorkerArgs& a) {
   try {
     serve_worker(o);
   } catch (const RunError& e) {
+    // The coordinator says why it stopped the run; a quiet worker need not repeat it.
+    if (a.quiet && std::string(e.what()).rfind("stopped by the coordinator", 0) == 0) return 1;
     throw RunError("worker " + name + ": " + e.what());  // its stderr may be the coordinator's
   }
   return 0;

@@ -24,8 +24,10 @@ std::pair<pid_t, int> spawn_worker(const std::vector<std::string>& args) {
   const pid_t pid = ::fork();
   if (pid < 0) throw RunError("cannot start a worker: fork failed");
   if (pid == 0) {
-    // The worker dies with the coordinator, whatever kills it.
+    // The worker dies with the coordinator, whatever kills it; Ctrl-C on the terminal
+    // reaches only the coordinator (its own process group), which stops the workers.
     ::prctl(PR_SET_PDEATHSIG, SIGKILL);
+    ::setpgid(0, 0);
     if (::getppid() != parent) ::_exit(1);
     ::dup2(out[1], STDOUT_FILENO);
     ::close(out[0]);

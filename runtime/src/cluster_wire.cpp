@@ -1,5 +1,7 @@
 #include "cluster_wire.hpp"
 
+#include <cerrno>
+
 #include "mbsflow/graph/error.hpp"
 
 namespace mbsflow::wire {
@@ -32,6 +34,15 @@ std::string reachable_address(zmq::socket_t& bound, const std::string& configure
   if (got.find("0.0.0.0") != std::string::npos || got.find("[::]") != std::string::npos)
     throw InputError(what + " binds every interface (" + got + "); give the address its peers use to reach it");
   return got;
+}
+
+int poll(zmq::pollitem_t* items, std::size_t n, double seconds) {
+  try {
+    return zmq::poll(items, n, std::chrono::milliseconds(static_cast<long>(seconds * 1000.0)));
+  } catch (const zmq::error_t& e) {
+    if (e.num() == EINTR) return 0;
+    throw;
+  }
 }
 
 bool send_json(zmq::socket_t& s, const nlohmann::json& j, zmq::send_flags flags) {

@@ -46,6 +46,10 @@ void connect(zmq::socket_t& s, const std::string& endpoint, const std::string& w
 // wildcard address.
 std::string reachable_address(zmq::socket_t& bound, const std::string& configured, const std::string& what);
 
+// zmq::poll that reports a signal (EINTR) as "nothing ready": the caller's loop then sees
+// the stop request the signal handler set.
+int poll(zmq::pollitem_t* items, std::size_t n, double seconds);
+
 // JSON control messages.
 // False when it would have to wait (the peer is gone or far behind).
 bool send_json(zmq::socket_t& s, const nlohmann::json& j, zmq::send_flags flags = zmq::send_flags::dontwait);

@@ -84,7 +84,7 @@ class Coordinator {
     for (Peer& p : peers_) items.push_back({p.control.handle(), 0, ZMQ_POLLIN, 0});
     items.push_back({results_.handle(), 0, ZMQ_POLLIN, 0});
     const double wait = std::max(0.0, c_.timeouts.heartbeat_s - wire::seconds_since(beat_));
-    zmq::poll(items.data(), items.size(), std::chrono::milliseconds(static_cast<long>(wait * 1000.0) + 1));
+    wire::poll(items.data(), items.size(), wait + 0.001);
     for (std::size_t w = 0; w < peers_.size(); ++w) {
       if (!(items[w].revents & ZMQ_POLLIN)) continue;
       zmq::message_t m;

@@ -48,7 +48,7 @@ bool RemoteExchange::store(zmq::message_t& header, zmq::message_t& payload) {
 
 bool RemoteExchange::read_inbox(int ms) {
   zmq::pollitem_t item{inbox_socket_.handle(), 0, ZMQ_POLLIN, 0};
-  if (zmq::poll(&item, 1, std::chrono::milliseconds(ms)) <= 0) return true;
+  if (wire::poll(&item, 1, ms / 1000.0) <= 0) return true;
   zmq::message_t header, payload;
   while (inbox_socket_.recv(header, zmq::recv_flags::dontwait)) {
     if (!header.more() || !inbox_socket_.recv(payload) || payload.more() || !store(header, payload)) return false;

@@ -172,7 +172,9 @@ Outcome run_part(Session& s, WorkerIo& io, zmq::context_t& ctx, zmq::socket_t& i
               return;
             }
           if (stop && stop->load()) {
-            failure = "the worker was interrupted";
+            char buf[96];
+            std::snprintf(buf, sizeof buf, "the worker was interrupted at t = %.6g s", grid.time(done));
+            failure = buf;
             return;
           }
           if (done % s.o.output_every == 0 || done == grid.steps) {

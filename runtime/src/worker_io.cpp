@@ -121,7 +121,7 @@ void WorkerIo::loop() {
     // a thread that wakes for nothing would take a core from the compute.
     zmq::pollitem_t items[2] = {{control_.handle(), 0, ZMQ_POLLIN, 0}, {wake_in_.handle(), 0, ZMQ_POLLIN, 0}};
     const double until_beat = std::max(0.0, t.heartbeat_s - wire::seconds_since(beat_));
-    zmq::poll(items, 2, std::chrono::milliseconds(static_cast<long>(1000.0 * until_beat) + 1));
+    wire::poll(items, 2, until_beat + 0.001);
     zmq::message_t ignored;
     while (wake_in_.recv(ignored, zmq::recv_flags::dontwait)) {
     }
