@@ -197,3 +197,32 @@ TEST_CASE("cluster set-up errors: unreachable worker, port in use, bad cluster f
   CHECK(first.procs[0]->wait(5.0).has_value());
   fs::remove_all(d.parent_path());
 }
+
+TEST_CASE("Ctrl-C on the coordinator stops its workers and keeps the results", "[apps][cluster][faults]") {
+  const fs::path d = scratch("cluster-interrupt");
+  const std::string dir = d.string();
+  REQUIRE(run("generate chain --bodies 400 -o chain.json", dir).code == 0);
+  Child coordinator({"run", "chain.json", "--processes", "2", "--t-end", "1000", "--every", "20", "-o", "out.h5"}, d,
+                    "coordinator");
+  std::this_thread::sleep_for(std::chrono::milliseconds(3000));
+  REQUIRE(!coordinator.wait(0.0));
+  const std::string children =
+      read_text("/proc/" + std::to_string(coordinator.pid()) + "/task/" + std::to_string(coordinator.pid()) + "/children");
+  CHECK(!children.empty());
+  coordinator.kill(SIGINT);
+  const std::optional<int> code = coordinator.wait(5.0);
+  const std::string err = coordinator.err();
+  INFO(err);
+  CHECK(code == std::optional<int>(1));
+  CHECK(err.find("interrupted at t = ") != std::string::npos);
+  CHECK(err.find("(SIGINT) in out.h5") != std::string::npos);
+  const std::size_t at = err.find("results keep ");
+  REQUIRE(at != std::string::npos);
+  CHECK(static_cast<long>(mbsflow::ResultsFile((d / "out.h5").string()).time().size()) == std::stol(err.substr(at + 13)));
+  std::istringstream list(children);
+  for (long pid; list >> pid;) {
+    const std::string stat = read_text("/proc/" + std::to_string(pid) + "/stat");
+    CHECK((stat.empty() || stat.find(") Z ") != std::string::npos));
+  }
+  fs::remove_all(d.parent_path());
+}
