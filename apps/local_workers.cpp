@@ -6,6 +6,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
@@ -51,9 +52,13 @@ std::string read_announcement(int fd, double timeout_s) {
   while (line.find('\n') == std::string::npos) {
     const double left = timeout_s - std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     pollfd p{fd, POLLIN, 0};
-    if (left <= 0 || ::poll(&p, 1, static_cast<int>(left * 1000)) <= 0) return "";
+    if (left <= 0) return "";
+    const int ready = ::poll(&p, 1, static_cast<int>(left * 1000));
+    if (ready < 0 && errno == EINTR) continue;  // a signal: the caller sees its stop flag later
+    if (ready <= 0) return "";
     char buf[256];
     const ssize_t n = ::read(fd, buf, sizeof buf);
+    if (n < 0 && errno == EINTR) continue;
     if (n <= 0) return "";
     line.append(buf, static_cast<std::size_t>(n));
   }

@@ -45,9 +45,32 @@ int poll(zmq::pollitem_t* items, std::size_t n, double seconds) {
   }
 }
 
+namespace {
+template <class F>
+auto retrying(F f) {
+  while (true) {
+    try {
+      return f();
+    } catch (const zmq::error_t& e) {
+      if (e.num() != EINTR) throw;
+    }
+  }
+}
+}  // namespace
+
+zmq::recv_result_t recv(zmq::socket_t& s, zmq::message_t& m, zmq::recv_flags flags) {
+  return retrying([&] { return s.recv(m, flags); });
+}
+zmq::send_result_t send(zmq::socket_t& s, zmq::const_buffer b, zmq::send_flags flags) {
+  return retrying([&] { return s.send(b, flags); });
+}
+zmq::send_result_t send(zmq::socket_t& s, zmq::message_t& m, zmq::send_flags flags) {
+  return retrying([&] { return s.send(m, flags); });
+}
+
 bool send_json(zmq::socket_t& s, const nlohmann::json& j, zmq::send_flags flags) {
   const std::string text = j.dump();
-  return s.send(zmq::buffer(text), flags).has_value();
+  return send(s, zmq::buffer(text), flags).has_value();
 }
 
 nlohmann::json parse_json(const zmq::message_t& m) {

@@ -50,6 +50,11 @@ std::string reachable_address(zmq::socket_t& bound, const std::string& configure
 // the stop request the signal handler set.
 int poll(zmq::pollitem_t* items, std::size_t n, double seconds);
 
+// recv and send that retry when a signal interrupts them (EINTR).
+zmq::recv_result_t recv(zmq::socket_t& s, zmq::message_t& m, zmq::recv_flags flags = zmq::recv_flags::none);
+zmq::send_result_t send(zmq::socket_t& s, zmq::const_buffer b, zmq::send_flags flags);
+zmq::send_result_t send(zmq::socket_t& s, zmq::message_t& m, zmq::send_flags flags);
+
 // JSON control messages.
 // False when it would have to wait (the peer is gone or far behind).
 bool send_json(zmq::socket_t& s, const nlohmann::json& j, zmq::send_flags flags = zmq::send_flags::dontwait);
@@ -58,8 +63,8 @@ nlohmann::json parse_json(const zmq::message_t& m);
 // Header frame + payload frame.
 template <class Header>
 bool send_framed(zmq::socket_t& s, const Header& h, const void* data, std::size_t bytes) {
-  if (!s.send(zmq::const_buffer(&h, sizeof h), zmq::send_flags::sndmore)) return false;
-  return s.send(zmq::const_buffer(data, bytes), zmq::send_flags::none).has_value();
+  if (!send(s, zmq::const_buffer(&h, sizeof h), zmq::send_flags::sndmore)) return false;
+  return send(s, zmq::const_buffer(data, bytes), zmq::send_flags::none).has_value();
 }
 template <class Header>
 std::optional<Header> read_header(const zmq::message_t& m) {

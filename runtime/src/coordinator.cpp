@@ -73,6 +73,7 @@ class Coordinator {
             throw RunError(who(w) + buf + "; is `mbsflow worker --listen` running there, and reachable from here?");
           }
       if (deadline_s <= 0.0) check_alive("");
+      check_stop(o_, o_.t_start);  // Ctrl-C during the set-up
     }
   }
 
@@ -88,7 +89,7 @@ class Coordinator {
     for (std::size_t w = 0; w < peers_.size(); ++w) {
       if (!(items[w].revents & ZMQ_POLLIN)) continue;
       zmq::message_t m;
-      while (peers_[w].control.recv(m, zmq::recv_flags::dontwait)) {
+      while (wire::recv(peers_[w].control, m, zmq::recv_flags::dontwait)) {
         peers_[w].heard = Clock::now();
         const json j = wire::parse_json(m);
         if (j.is_object() && j.value("type", "") != "heartbeat") on_control(w, j);
@@ -96,8 +97,8 @@ class Coordinator {
     }
     if (items.back().revents & ZMQ_POLLIN) {
       zmq::message_t header, payload;
-      while (results_.recv(header, zmq::recv_flags::dontwait)) {
-        if (header.more()) (void)results_.recv(payload);
+      while (wire::recv(results_, header, zmq::recv_flags::dontwait)) {
+        if (header.more()) (void)wire::recv(results_, payload);
         const auto h = wire::read_header<wire::ResultHeader>(header);
         if (!h || h->worker < 0 || h->worker >= static_cast<int>(peers_.size()))
           throw RunError("a malformed result message arrived at the coordinator");

@@ -50,8 +50,8 @@ bool RemoteExchange::read_inbox(int ms) {
   zmq::pollitem_t item{inbox_socket_.handle(), 0, ZMQ_POLLIN, 0};
   if (wire::poll(&item, 1, ms / 1000.0) <= 0) return true;
   zmq::message_t header, payload;
-  while (inbox_socket_.recv(header, zmq::recv_flags::dontwait)) {
-    if (!header.more() || !inbox_socket_.recv(payload) || payload.more() || !store(header, payload)) return false;
+  while (wire::recv(inbox_socket_, header, zmq::recv_flags::dontwait)) {
+    if (!header.more() || !wire::recv(inbox_socket_, payload) || payload.more() || !store(header, payload)) return false;
   }
   return true;
 }
@@ -114,8 +114,8 @@ void RemoteExchange::send(int p, long n, int s) {
     h.step = n;
     bool ok = false;
     try {
-      ok = o.socket->send(zmq::const_buffer(&h, sizeof h), zmq::send_flags::sndmore).has_value() &&
-           o.socket->send(payload, zmq::send_flags::none).has_value();
+      ok = wire::send(*o.socket, zmq::const_buffer(&h, sizeof h), zmq::send_flags::sndmore).has_value() &&
+           wire::send(*o.socket, payload, zmq::send_flags::none).has_value();
     } catch (const zmq::error_t&) {
     }
     if (!ok) {

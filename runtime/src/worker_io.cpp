@@ -26,7 +26,7 @@ WorkerIo::~WorkerIo() {
   {
     std::lock_guard lock(mutex_);
     stopping_ = true;
-    wake_out_.send(zmq::str_buffer("!"), zmq::send_flags::dontwait);
+    wire::send(wake_out_, zmq::str_buffer("!"), zmq::send_flags::dontwait);
   }
   thread_.join();
 }
@@ -46,7 +46,7 @@ std::optional<nlohmann::json> WorkerIo::next_command(double timeout_s) {
 
 void WorkerIo::post_locked(std::function<void()> f) {
   posted_.push_back(std::move(f));
-  wake_out_.send(zmq::str_buffer("!"), zmq::send_flags::dontwait);  // under mutex_: one thread at a time
+  wire::send(wake_out_, zmq::str_buffer("!"), zmq::send_flags::dontwait);  // under mutex_: one thread at a time
 }
 
 void WorkerIo::send(nlohmann::json message) {
@@ -54,7 +54,7 @@ void WorkerIo::send(nlohmann::json message) {
   post_locked([this, m = std::move(message)] {
     if (coordinator_.empty()) return;
     try {
-      control_.send(zmq::buffer(coordinator_), zmq::send_flags::sndmore);
+      wire::send(control_, zmq::buffer(coordinator_), zmq::send_flags::sndmore);
       wire::send_json(control_, m);
     } catch (const zmq::error_t& e) {
       lose(std::string("the coordinator was lost: its connection is gone (") + e.what() + ")");
@@ -123,12 +123,12 @@ void WorkerIo::loop() {
     const double until_beat = std::max(0.0, t.heartbeat_s - wire::seconds_since(beat_));
     wire::poll(items, 2, until_beat + 0.001);
     zmq::message_t ignored;
-    while (wake_in_.recv(ignored, zmq::recv_flags::dontwait)) {
+    while (wire::recv(wake_in_, ignored, zmq::recv_flags::dontwait)) {
     }
     if (items[0].revents & ZMQ_POLLIN) {
       zmq::message_t id, body;
-      (void)control_.recv(id);
-      if (id.more()) (void)control_.recv(body);
+      (void)wire::recv(control_, id);
+      if (id.more()) (void)wire::recv(control_, body);
       const std::string from = id.to_string();
       nlohmann::json j = wire::parse_json(body);
       if (!j.is_object()) j = {{"type", "garbage"}};
@@ -136,7 +136,7 @@ void WorkerIo::loop() {
       if (from != coordinator_) {
         // Another coordinator while this one is busy: tell it so, once.
         try {
-          control_.send(zmq::buffer(from), zmq::send_flags::sndmore);
+          wire::send(control_, zmq::buffer(from), zmq::send_flags::sndmore);
           wire::send_json(control_, {{"type", "error"}, {"message", "this worker is busy with another run"}});
         } catch (const zmq::error_t&) {
         }
@@ -149,7 +149,7 @@ void WorkerIo::loop() {
       if (wire::seconds_since(beat_) >= t.heartbeat_s) {
         beat_ = Clock::now();
         try {
-          control_.send(zmq::buffer(coordinator_), zmq::send_flags::sndmore);
+          wire::send(control_, zmq::buffer(coordinator_), zmq::send_flags::sndmore);
           wire::send_json(control_, {{"type", "heartbeat"}});
         } catch (const zmq::error_t& e) {
           lose(std::string("the coordinator was lost: its connection is gone (") + e.what() + ")");
