@@ -130,11 +130,13 @@ class Coordinator {
     while (left > 0 && wire::seconds_since(start) < c_.timeouts.lost_s)
       pump([&](std::size_t, const json& j) { left -= j.value("type", "") == "bye"; }, nullptr);
   }
-  // Stops every worker. The sockets then close with a linger of one second instead of
-  // none: bounded, and long enough for the abort to go out.
+  // Stops every worker. The sockets of the workers still heard from then close with a
+  // linger of one second instead of none: bounded, and long enough for the abort to go
+  // out; a lost worker's socket closes at once.
   void abort(const std::string& reason) {
     send_all({{"type", "abort"}, {"reason", reason}});
-    for (Peer& p : peers_) p.control.set(zmq::sockopt::linger, 1000);
+    for (Peer& p : peers_)
+      if (wire::seconds_since(p.heard) < c_.timeouts.lost_s) p.control.set(zmq::sockopt::linger, 1000);
   }
 
   std::vector<Peer>& peers() { return peers_; }
