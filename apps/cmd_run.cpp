@@ -18,6 +18,7 @@
 #include "mbsflow/io/partition_file.hpp"
 #include "mbsflow/runtime/async_sink.hpp"
 #include "mbsflow/runtime/cluster.hpp"
+#include "mbsflow/runtime/loose_coupling.hpp"
 #include "mbsflow/runtime/partitioned_run.hpp"
 #include "mbsflow/runtime/simulation.hpp"
 #include "progress.hpp"
@@ -42,6 +43,9 @@ struct RunArgs {
   std::string cluster;  // cluster file
   int processes = 0;    // local worker processes
   std::string transport = "tcp";
+  std::string coupling = "tight";
+  std::optional<double> macro_step;
+  int extrapolation = 1;
 };
 
 // How the run is cut: a partition file, --partitions, or default_k submodels (none when
@@ -122,6 +126,10 @@ int run(const RunArgs& a) {
   MultibodySystem sys(m);
   const int threads = a.threads > 0 ? a.threads : static_cast<int>(std::thread::hardware_concurrency());
   const bool cluster = !a.cluster.empty() || a.processes > 0;
+  const bool loose = a.coupling == "loose";
+  if (loose && cluster) throw InputError("--coupling loose: runs in one process for now (not with --cluster or --processes)");
+  if (loose && !a.macro_step) throw InputError("--coupling loose: give --macro-step H");
+  if (!loose && a.macro_step) throw InputError("--macro-step: only with --coupling loose");
   if (cluster && o.method != Method::rk4)
     throw InputError("--cluster, --processes: runs across processes use RK4 for now (" + std::string(method_name(o.method)) +
                      " needs a global error norm at every step attempt)");
@@ -133,11 +141,15 @@ int run(const RunArgs& a) {
     local.emplace(a.processes, a.transport, a.threads > 0 ? a.threads : std::max(1, threads / a.processes));
     cc = local->cluster();
   }
+  // Loose coupling cuts the model even into one submodel (then it is a plain run).
   const std::optional<Decomposition> d =
-      choose_decomposition(m, a, cluster ? cluster_submodels(cc) : default_partitions(m, threads), !cluster);
+      choose_decomposition(m, a, cluster ? cluster_submodels(cc) : default_partitions(m, threads), !cluster && !loose);
   if (cluster && !a.quiet)
     std::fprintf(stderr, "mbsflow: %zu submodels on %zu worker processes (%s), %d cut joints, load imbalance %.1f %%\n",
                  d->submodels.size(), cc.workers.size(), cc.transport.c_str(), d->cut_joints, 100.0 * d->imbalance);
+  else if (loose && !a.quiet)
+    std::fprintf(stderr, "mbsflow: %zu submodels on %d threads, loosely coupled: macro step %.4g s, extrapolation order %d\n",
+                 d->submodels.size(), threads, *a.macro_step, a.extrapolation);
   else if (d && !a.quiet)
     std::fprintf(stderr, "mbsflow: %zu submodels on %d threads (%s), %d cut joints, load imbalance %.1f %%\n",
                  d->submodels.size(), threads, a.executor == "flow" ? "flow graph" : "barrier per stage", d->cut_joints,
@@ -147,8 +159,15 @@ int run(const RunArgs& a) {
   o.stop = install_stop_handlers();
   RunSummary r;
   try {
-    if (cluster)
+    if (cluster) {
       r = run_cluster(m, model_to_json(m), *d, cc, o, sink.get());
+    } else if (loose) {
+      LooseStats ls;
+      r = run_loose(m, *d, o, {*a.macro_step, a.extrapolation, threads}, sink.get(), &ls);
+      if (!a.quiet)
+        std::fprintf(stderr, "mbsflow: coupling error over %ld macro steps: ghost positions off by at most %.3g m, last %.3g m\n",
+                     ls.macro_steps, ls.max_position_error, ls.position_error.empty() ? 0.0 : ls.position_error.back());
+    }
     else if (d)
       r = run_partitioned(m, *d, o, {threads, a.executor == "flow" ? Executor::flow_graph : Executor::barrier}, sink.get());
     else
@@ -215,6 +234,16 @@ Action add_run(CLI::App& app) {
       ->check(CLI::IsMember({"tcp", "ipc"}))
       ->capture_default_str();
   sub->get_option("--cluster")->excludes(sub->get_option("--processes"));
+  sub->add_option("--coupling", a->coupling,
+                  "tight: neighbours exchange every stage (bitwise the one-thread run); loose: each submodel integrates a "
+                  "macro step on its own with extrapolated neighbours (co-simulation)")
+      ->check(CLI::IsMember({"tight", "loose"}))
+      ->capture_default_str();
+  sub->add_option("--macro-step", a->macro_step, "Loose coupling: the exchange interval H in s (well below the period of the cut joints)")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--extrapolation", a->extrapolation, "Loose coupling: order of the neighbours' extrapolation, 0, 1 or 2")
+      ->check(CLI::Range(0, 2))
+      ->capture_default_str();
   return [a] { return run(*a); };
 }
 

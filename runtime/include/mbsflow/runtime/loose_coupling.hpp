@@ -1,0 +1,35 @@
+#pragma once
+// Loose (GRID-style) coupling: every submodel integrates a macro step H on its own, with its
+// own method and step, taking its neighbours' boundary bodies from a polynomial
+// extrapolation of their last exchanged samples; at the end of the macro step the
+// submodels exchange their boundary values. Jacobi-type: all submodels step from the same
+// samples, so a run is repeatable. The difference between what a submodel extrapolated
+// and what its neighbour then sent is the coupling error, reported per macro step.
+#include <vector>
+
+#include "mbsflow/graph/decomposition.hpp"
+#include "mbsflow/runtime/simulation.hpp"
+
+namespace mbsflow {
+
+struct LooseOptions {
+  double macro_step = 0.0;  // H, a whole number of RunOptions::step for RK4
+  int extrapolation = 1;    // polynomial order 0, 1 or 2 over the last 1, 2 or 3 samples
+  int threads = 0;          // 0: all cores
+};
+
+struct LooseStats {
+  long macro_steps = 0;
+  // Per macro step: the largest distance between a ghost body's extrapolated and sent
+  // position at the end of the step (m), and its largest relative velocity difference.
+  std::vector<double> position_error, velocity_error;
+  double max_position_error = 0.0;
+};
+
+// RK4 (fixed substeps of options.step) or DOPRI5 (its own steps, options.rtol/atol) inside
+// each submodel. Snapshots (global body order) at the macro steps on the output grid
+// (every options.output_every * options.step) and at the end.
+RunSummary run_loose(const Model& model, const Decomposition& d, const RunOptions& options, const LooseOptions& loose,
+                     ResultSink* sink, LooseStats* stats = nullptr);
+
+}  // namespace mbsflow

@@ -1,0 +1,41 @@
+// Loose coupling from the command line.
+#include <catch2/catch.hpp>
+#include <cmath>
+
+#include "cli_support.hpp"
+#include "mbsflow/io/results_file.hpp"
+
+using namespace mbsflow::test;
+
+TEST_CASE("run --coupling loose writes results close to the tight run and reports the coupling error", "[apps][loose]") {
+  const fs::path d = scratch("loose");
+  const std::string dir = d.string();
+  REQUIRE(run("generate chain --bodies 60 -o chain.json", dir).code == 0);
+  REQUIRE(run("run chain.json --t-end 0.05 --step 1e-4 --every 100 -q -o tight.h5", dir).code == 0);
+  const Result r = run("run chain.json --t-end 0.05 --step 1e-4 --every 100 --threads 2 --partitions 3 "
+                       "--coupling loose --macro-step 2e-4 --extrapolation 2 -o loose.h5", dir);
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  CHECK(r.err.find("3 submodels on 2 threads, loosely coupled: macro step 0.0002 s, extrapolation order 2") != std::string::npos);
+  CHECK(r.err.find("coupling error over 250 macro steps: ghost positions off by at most ") != std::string::npos);
+  const mbsflow::ResultsFile tight((d / "tight.h5").string()), loose((d / "loose.h5").string());
+  REQUIRE(loose.time().size() == tight.time().size());
+  for (std::size_t i = 0; i < tight.time().size(); ++i) CHECK(std::abs(loose.time()[i] - tight.time()[i]) < 1e-12);
+  const std::vector<double> a = tight.read("/bodies/position"), b = loose.read("/bodies/position");
+  double gap = 0.0;
+  for (std::size_t i = 0; i < a.size(); ++i) gap = std::max(gap, std::abs(a[i] - b[i]));
+  CHECK(gap < 1e-5);
+  CHECK(gap > 0.0);  // loosely coupled: close, not the same
+
+  const Result no_h = run("run chain.json --coupling loose", dir);
+  CHECK(no_h.code == 2);
+  CHECK(no_h.err.find("--coupling loose: give --macro-step H") != std::string::npos);
+  const Result h_only = run("run chain.json --macro-step 1e-3", dir);
+  CHECK(h_only.code == 2);
+  CHECK(h_only.err.find("--macro-step: only with --coupling loose") != std::string::npos);
+  const Result procs = run("run chain.json --coupling loose --macro-step 1e-3 --processes 2", dir);
+  CHECK(procs.code == 2);
+  CHECK(procs.err.find("runs in one process for now") != std::string::npos);
+  CHECK(run("run chain.json --coupling loose --macro-step 1e-3 --extrapolation 3", dir).code == 2);
+  fs::remove_all(d.parent_path());
+}

@@ -1,0 +1,96 @@
+// Loose coupling against the tight run: the coupling error falls with the macro step at
+// the order the extrapolation promises.
+#include <catch2/catch.hpp>
+#include <cmath>
+
+#include "mbsflow/graph/generators.hpp"
+#include "mbsflow/graph/stable_step.hpp"
+#include "mbsflow/runtime/loose_coupling.hpp"
+#include "mbsflow/runtime/simulation.hpp"
+#include "memory_sink.hpp"
+
+using namespace mbsflow;
+
+namespace {
+
+// Largest position difference over all bodies at the end.
+double position_gap(const MultibodySystem& sys, const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+  const StateLayout& l = sys.layout();
+  double gap = 0.0;
+  for (Eigen::Index i = 0; i < l.bodies; ++i) gap = std::max(gap, (a.segment<3>(l.position(i)) - b.segment<3>(l.position(i))).norm());
+  return gap;
+}
+
+}  // namespace
+
+TEST_CASE("loose coupling converges to the tight run at the extrapolation's order", "[runtime][loose]") {
+  ChainParams c;
+  c.bodies = 24;
+  TrainParams t;
+  t.wagons = 3;
+  for (Model m : {make_chain(c), make_train(t)}) {
+    // Macro steps well inside the joints' periods: explicit coupling of stiff joints with
+    // longer ones is unstable, as in any Jacobi co-simulation.
+    const double h = 0.05 * estimate_stable_step(m).step;
+    m.simulation.step = h;
+    m.simulation.t_end = m.simulation.t_start + 256 * h;
+    const RunOptions o = options_from_model(m);
+    MultibodySystem sys(m);
+    const Eigen::VectorXd tight = run_simulation(sys, o, nullptr).final_state;
+    const Decomposition d = decompose(m, 3);
+    const double expected[3][2] = {{0.7, 1.3}, {1.7, 2.3}, {2.4, 3.4}};  // slopes for orders 0, 1, 2
+    for (int order : {0, 1, 2}) {
+      std::vector<double> gaps;
+      for (int substeps : {8, 4, 2, 1}) {
+        LooseOptions lo;
+        lo.macro_step = substeps * h;
+        lo.extrapolation = order;
+        lo.threads = 2;
+        LooseStats stats;
+        const RunSummary r = run_loose(m, d, o, lo, nullptr, &stats);
+        gaps.push_back(position_gap(sys, r.final_state, tight));
+        CHECK(stats.macro_steps == 256 / substeps);
+        CHECK(stats.max_position_error > 0.0);  // the submodels really were coupled loosely
+      }
+      INFO(m.name << ", extrapolation " << order << ": gaps " << gaps[0] << " " << gaps[1] << " " << gaps[2] << " "
+                  << gaps[3]);
+      for (std::size_t i = 1; i < gaps.size(); ++i) CHECK(gaps[i] < gaps[i - 1]);
+      const double slope = std::log2(gaps[2] / gaps[3]);  // the smallest macro steps
+      CHECK(slope > expected[order][0]);
+      CHECK(slope < expected[order][1]);
+    }
+  }
+}
+
+TEST_CASE("loose coupling: repeatable, DOPRI5 inside submodels, snapshots on the output grid", "[runtime][loose]") {
+  ChainParams c;
+  c.bodies = 12;
+  Model m = make_chain(c);
+  const double h = 0.1 * estimate_stable_step(m).step;
+  m.simulation.step = h;
+  m.simulation.t_end = m.simulation.t_start + 64 * h;
+  m.simulation.output_every = 8;
+  RunOptions o = options_from_model(m);
+  const Decomposition d = decompose(m, 2);
+  LooseOptions lo;
+  lo.macro_step = 4 * h;
+  lo.extrapolation = 2;
+  test::MemorySink a, b;
+  const RunSummary ra = run_loose(m, d, o, lo, &a);
+  lo.threads = 1;
+  run_loose(m, d, o, lo, &b);
+  REQUIRE(a.states.size() == 9);  // the start and every 8 steps of h
+  CHECK(a.times == b.times);
+  CHECK(a.states == b.states);  // Jacobi: the same whatever the thread count
+  CHECK(ra.final_state == a.states.back());
+  // DOPRI5 in each submodel: close to the tight DOPRI5 run.
+  o.method = Method::dopri5;
+  o.rtol = o.atol = 1e-9;
+  MultibodySystem sys(m);
+  const Eigen::VectorXd tight = run_simulation(sys, o, nullptr).final_state;
+  const RunSummary r = run_loose(m, d, o, lo, nullptr);
+  CHECK(position_gap(sys, r.final_state, tight) < 1e-5);
+  CHECK(r.evaluations > 0);
+  CHECK_THROWS_WITH(run_loose(m, d, o, LooseOptions{0.0, 1, 0}, nullptr), "--macro-step: must be a positive time");
+  CHECK_THROWS_WITH(run_loose(m, d, o, LooseOptions{h, 3, 0}, nullptr), "--extrapolation: must be 0, 1 or 2");
+}
