@@ -1,7 +1,6 @@
 #include "mbsflow/runtime/loose_coupling.hpp"
 
 #include <oneapi/tbb/info.h>
-#include <oneapi/tbb/parallel_for.h>
 #include <oneapi/tbb/task_arena.h>
 
 #include <chrono>
@@ -15,6 +14,7 @@
 #include "partitioned_state.hpp"
 #include "sink_runner.hpp"
 #include "step_grid.hpp"
+#include "schedules.hpp"
 
 namespace mbsflow {
 namespace {
@@ -161,6 +161,9 @@ RunSummary run_loose(const Model& model, const Decomposition& d, const RunOption
   Eigen::VectorXd y = whole.initial_state(), previous;
   if (sink) sink->begin(whole);
   const StepGrid macro = step_grid(o.t_start, o.t_end, lo.macro_step);
+  // One flow-graph node per submodel per macro step, all independent within the step.
+  double t0 = 0.0, t1 = 0.0;
+  Scheduler schedule(d, 1, 1, [&](std::size_t p, int, int, Half) { integrate(parts[p], locals[p], systems[p], o, t0, t1); });
   const long out_every = std::max(1L, std::lround(o.step * o.output_every / lo.macro_step));
   run_with_sink(sink, out, [&] {
     if (sink) emit(whole, sink, o.t_start, y, out);
@@ -172,10 +175,9 @@ RunSummary run_loose(const Model& model, const Decomposition& d, const RunOption
       history.add(o.t_start - j * lo.macro_step, y - (j * lo.macro_step) * f0);
     history.add(o.t_start, y);
     for (long m = 0; m < macro.steps; ++m) {
-      const double t0 = macro.time(m), t1 = macro.time(m + 1);
-      arena.execute([&] {
-        tbb::parallel_for(std::size_t{0}, parts.size(), [&](std::size_t p) { integrate(parts[p], locals[p], systems[p], o, t0, t1); });
-      });
+      t0 = macro.time(m);
+      t1 = macro.time(m + 1);
+      arena.execute([&] { schedule.run(1); });
       if (auto dv = partitioned::check(parts)) throw RunError(divergence_message(model, *dv, t1, o.method, o.step));
       partitioned::gather(parts, global, y);
       // Coupling error: what each ghost was extrapolated to at t1 against what its owner sent.
