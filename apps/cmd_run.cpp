@@ -46,6 +46,7 @@ struct RunArgs {
   std::string coupling = "tight";
   std::optional<double> macro_step;
   int extrapolation = 1;
+  std::optional<double> coupling_tol;
 };
 
 // How the run is cut: a partition file, --partitions, or default_k submodels (none when
@@ -128,8 +129,11 @@ int run(const RunArgs& a) {
   const bool cluster = !a.cluster.empty() || a.processes > 0;
   const bool loose = a.coupling == "loose";
   if (loose && cluster) throw InputError("--coupling loose: runs in one process for now (not with --cluster or --processes)");
-  if (loose && !a.macro_step) throw InputError("--coupling loose: give --macro-step H");
-  if (!loose && a.macro_step) throw InputError("--macro-step: only with --coupling loose");
+  if (!loose && (a.macro_step || a.coupling_tol)) throw InputError("--macro-step, --coupling-tol: only with --coupling loose");
+  // A tenth of the RK4 stability estimate: explicit coupling of stiff joints over longer
+  // macro steps can blow up (an undamped chain does at four tenths).
+  const double macro_step = a.macro_step ? *a.macro_step : 0.1 * estimate_stable_step(m).step;
+  if (loose && !std::isfinite(macro_step)) throw InputError("--coupling loose: no joints to estimate a macro step from; give --macro-step");
   if (cluster && o.method != Method::rk4)
     throw InputError("--cluster, --processes: runs across processes use RK4 for now (" + std::string(method_name(o.method)) +
                      " needs a global error norm at every step attempt)");
@@ -149,7 +153,7 @@ int run(const RunArgs& a) {
                  d->submodels.size(), cc.workers.size(), cc.transport.c_str(), d->cut_joints, 100.0 * d->imbalance);
   else if (loose && !a.quiet)
     std::fprintf(stderr, "mbsflow: %zu submodels on %d threads, loosely coupled: macro step %.4g s, extrapolation order %d\n",
-                 d->submodels.size(), threads, *a.macro_step, a.extrapolation);
+                 d->submodels.size(), threads, macro_step, a.extrapolation);
   else if (d && !a.quiet)
     std::fprintf(stderr, "mbsflow: %zu submodels on %d threads (%s), %d cut joints, load imbalance %.1f %%\n",
                  d->submodels.size(), threads, a.executor == "flow" ? "flow graph" : "barrier per stage", d->cut_joints,
@@ -163,15 +167,20 @@ int run(const RunArgs& a) {
       r = run_cluster(m, model_to_json(m), *d, cc, o, sink.get());
     } else if (loose) {
       LooseStats ls;
-      r = run_loose(m, *d, o, {*a.macro_step, a.extrapolation, threads}, sink.get(), &ls);
-      if (!a.quiet)
-        std::fprintf(stderr, "mbsflow: coupling error over %ld macro steps: ghost positions off by at most %.3g m, last %.3g m\n",
-                     ls.macro_steps, ls.max_position_error, ls.position_error.empty() ? 0.0 : ls.position_error.back());
-    }
-    else if (d)
+      r = run_loose(m, *d, o, {macro_step, a.extrapolation, threads, a.coupling_tol.value_or(0.0)}, sink.get(), &ls);
+      if (!a.quiet) {
+        char adapt[128] = "";
+        if (a.coupling_tol)
+          std::snprintf(adapt, sizeof adapt, "; macro step %.3g .. %.3g s, %ld taken again", ls.smallest_macro_step,
+                        ls.largest_macro_step, ls.rejected);
+        std::fprintf(stderr, "mbsflow: coupling error over %ld macro steps: ghost positions off by at most %.3g m, last %.3g m%s\n",
+                     ls.macro_steps, ls.max_position_error, ls.position_error.empty() ? 0.0 : ls.position_error.back(), adapt);
+      }
+    } else if (d) {
       r = run_partitioned(m, *d, o, {threads, a.executor == "flow" ? Executor::flow_graph : Executor::barrier}, sink.get());
-    else
+    } else {
       r = run_simulation(sys, o, sink.get());
+    }
   } catch (const RunError& e) {
     progress.finish();
     const int sig = stop_signal();
@@ -239,7 +248,12 @@ Action add_run(CLI::App& app) {
                   "macro step on its own with extrapolated neighbours (co-simulation)")
       ->check(CLI::IsMember({"tight", "loose"}))
       ->capture_default_str();
-  sub->add_option("--macro-step", a->macro_step, "Loose coupling: the exchange interval H in s (well below the period of the cut joints)")
+  sub->add_option("--macro-step", a->macro_step,
+                  "Loose coupling: the exchange interval H in s (default: a tenth of the RK4 stability estimate; "
+                  "with --coupling-tol, the first try)")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--coupling-tol", a->coupling_tol,
+                  "Loose coupling: adapt the macro step so that ghost positions are extrapolated within this many m")
       ->check(CLI::PositiveNumber);
   sub->add_option("--extrapolation", a->extrapolation, "Loose coupling: order of the neighbours' extrapolation, 0, 1 or 2")
       ->check(CLI::Range(0, 2))

@@ -5,6 +5,8 @@
 
 #include <chrono>
 #include <cmath>
+#include <algorithm>
+#include <cstdio>
 #include <deque>
 #include <memory>
 
@@ -158,13 +160,16 @@ RunSummary run_loose(const Model& model, const Decomposition& d, const RunOption
   LooseStats local_stats;
   LooseStats& st = stats ? *stats : local_stats;
   const auto start = Clock::now();
-  Eigen::VectorXd y = whole.initial_state(), previous;
+  Eigen::VectorXd y = whole.initial_state();
   if (sink) sink->begin(whole);
-  const StepGrid macro = step_grid(o.t_start, o.t_end, lo.macro_step);
   // One flow-graph node per submodel per macro step, all independent within the step.
   double t0 = 0.0, t1 = 0.0;
   Scheduler schedule(d, 1, 1, [&](std::size_t p, int, int, Half) { integrate(parts[p], locals[p], systems[p], o, t0, t1); });
-  const long out_every = std::max(1L, std::lround(o.step * o.output_every / lo.macro_step));
+  const bool adaptive = lo.coupling_tol > 0.0;
+  const double dt_out = o.step * o.output_every, order = lo.extrapolation + 1.0;
+  std::vector<Eigen::VectorXd> saved(parts.size());
+  std::vector<double> saved_h(parts.size());
+  Eigen::VectorXd y_new, guess;
   run_with_sink(sink, out, [&] {
     if (sink) emit(whole, sink, o.t_start, y, out);
     // A past for the first macro steps: y(t0 - jH) ~ y0 - jH f(t0, y0). Holding the ghosts
@@ -174,30 +179,60 @@ RunSummary run_loose(const Model& model, const Decomposition& d, const RunOption
     for (int j = lo.extrapolation; j >= 1; --j)
       history.add(o.t_start - j * lo.macro_step, y - (j * lo.macro_step) * f0);
     history.add(o.t_start, y);
-    for (long m = 0; m < macro.steps; ++m) {
-      t0 = macro.time(m);
-      t1 = macro.time(m + 1);
+    double t = o.t_start, H = lo.macro_step;
+    long next_out = 1;
+    while (t < o.t_end) {
+      // Macro steps land on the output grid (and the end), so snapshots fall on it.
+      const double t_out = std::min(o.t_end, o.t_start + static_cast<double>(next_out) * dt_out);
+      const bool clipped = t + H >= t_out - 1e-12 * std::max(1.0, std::abs(t_out));
+      t0 = t;
+      t1 = clipped ? t_out : t + H;
+      if (adaptive)
+        for (std::size_t p = 0; p < parts.size(); ++p) saved[p] = parts[p].x[0], saved_h[p] = locals[p].h;
       arena.execute([&] { schedule.run(1); });
       if (auto dv = partitioned::check(parts)) throw RunError(divergence_message(model, *dv, t1, o.method, o.step));
-      partitioned::gather(parts, global, y);
-      // Coupling error: what each ghost was extrapolated to at t1 against what its owner sent.
+      y_new = y;
+      partitioned::gather(parts, global, y_new);
+      // Coupling error: what each ghost was extrapolated to at t1 against what its owner has.
       const std::vector<double> w = history.weights(t1);
       double dx = 0.0, dv = 0.0;
-      Eigen::VectorXd guess = y;
+      guess = y_new;
       for (const Part& part : parts)
         for (int g : part.sub->ghosts) {
           extrapolate_body(history, w, global, g, global, g, guess);
-          dx = std::max(dx, (guess.segment<3>(global.position(g)) - y.segment<3>(global.position(g))).norm());
-          dv = std::max(dv, (guess.segment<3>(global.velocity(g)) - y.segment<3>(global.velocity(g))).norm());
+          dx = std::max(dx, (guess.segment<3>(global.position(g)) - y_new.segment<3>(global.position(g))).norm());
+          dv = std::max(dv, (guess.segment<3>(global.velocity(g)) - y_new.segment<3>(global.velocity(g))).norm());
         }
+      // Step-size factor from the error model e ~ H^(order).
+      const double factor = adaptive ? std::clamp(0.9 * std::pow(lo.coupling_tol / std::max(dx, 1e-300), 1.0 / order), 0.2, 2.0) : 1.0;
+      if (adaptive && dx > lo.coupling_tol) {  // too far off: back to t0 with a shorter macro step
+        for (std::size_t p = 0; p < parts.size(); ++p) parts[p].x[0] = saved[p], locals[p].h = saved_h[p];
+        H = (t1 - t0) * factor;
+        ++st.rejected;
+        if (H < 1e-6 * lo.macro_step) {
+          char buf[160];
+          std::snprintf(buf, sizeof buf, "coupling error %.3g m above --coupling-tol %.3g m even with a macro step of %.3g s at t = %.6g s",
+                        dx, lo.coupling_tol, t1 - t0, t0);
+          throw RunError(buf);
+        }
+        continue;
+      }
+      y.swap(y_new);
       st.position_error.push_back(dx);
       st.velocity_error.push_back(dv);
       st.max_position_error = std::max(st.max_position_error, dx);
+      st.smallest_macro_step = st.macro_steps == 0 ? t1 - t0 : std::min(st.smallest_macro_step, t1 - t0);
+      st.largest_macro_step = std::max(st.largest_macro_step, t1 - t0);
       ++st.macro_steps;
       history.add(t1, y);
-      if (sink && ((m + 1) % out_every == 0 || m + 1 == macro.steps)) emit(whole, sink, t1, y, out);
-      check_stop(o, t1);
-      if (o.progress) o.progress(t1, m + 1);
+      if (clipped) {
+        if (sink) emit(whole, sink, t1, y, out);
+        ++next_out;
+      }
+      if (adaptive) H = clipped && factor >= 1.0 ? std::max(H, (t1 - t0) * factor) : (t1 - t0) * factor;
+      t = t1;
+      check_stop(o, t);
+      if (o.progress) o.progress(t, st.macro_steps);
     }
   });
   for (const Local& l : locals) {

@@ -27,12 +27,17 @@ TEST_CASE("run --coupling loose writes results close to the tight run and report
   CHECK(gap < 1e-5);
   CHECK(gap > 0.0);  // loosely coupled: close, not the same
 
-  const Result no_h = run("run chain.json --coupling loose", dir);
-  CHECK(no_h.code == 2);
-  CHECK(no_h.err.find("--coupling loose: give --macro-step H") != std::string::npos);
+  // Defaults: a tenth of the stable step; adaptive with a tolerance.
+  const Result defaults = run("run chain.json --t-end 0.01 --coupling loose --threads 2", dir);
+  CHECK(defaults.code == 0);
+  CHECK(defaults.err.find("loosely coupled: macro step ") != std::string::npos);
+  const Result adaptive = run("run chain.json --t-end 0.01 --coupling loose --coupling-tol 1e-9 --threads 2", dir);
+  INFO(adaptive.err);
+  CHECK(adaptive.code == 0);
+  CHECK(adaptive.err.find(" taken again") != std::string::npos);
   const Result h_only = run("run chain.json --macro-step 1e-3", dir);
   CHECK(h_only.code == 2);
-  CHECK(h_only.err.find("--macro-step: only with --coupling loose") != std::string::npos);
+  CHECK(h_only.err.find("--macro-step, --coupling-tol: only with --coupling loose") != std::string::npos);
   const Result procs = run("run chain.json --coupling loose --macro-step 1e-3 --processes 2", dir);
   CHECK(procs.code == 2);
   CHECK(procs.err.find("runs in one process for now") != std::string::npos);

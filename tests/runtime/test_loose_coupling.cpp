@@ -34,6 +34,7 @@ TEST_CASE("loose coupling converges to the tight run at the extrapolation's orde
     const double h = 0.05 * estimate_stable_step(m).step;
     m.simulation.step = h;
     m.simulation.t_end = m.simulation.t_start + 256 * h;
+    m.simulation.output_every = 8;  // every macro step size below divides the output interval
     const RunOptions o = options_from_model(m);
     MultibodySystem sys(m);
     const Eigen::VectorXd tight = run_simulation(sys, o, nullptr).final_state;
@@ -93,4 +94,64 @@ TEST_CASE("loose coupling: repeatable, DOPRI5 inside submodels, snapshots on the
   CHECK(r.evaluations > 0);
   CHECK_THROWS_WITH(run_loose(m, d, o, LooseOptions{0.0, 1, 0}, nullptr), "--macro-step: must be a positive time");
   CHECK_THROWS_WITH(run_loose(m, d, o, LooseOptions{h, 3, 0}, nullptr), "--extrapolation: must be 0, 1 or 2");
+}
+
+TEST_CASE("loose coupling: the adaptive macro step keeps the coupling error below the tolerance", "[runtime][loose]") {
+  ChainParams c;
+  c.bodies = 24;
+  Model m = make_chain(c);
+  const double h = 0.05 * estimate_stable_step(m).step;
+  m.simulation.step = h;
+  m.simulation.t_end = m.simulation.t_start + 512 * h;
+  m.simulation.output_every = 64;
+  const RunOptions o = options_from_model(m);
+  MultibodySystem sys(m);
+  const Eigen::VectorXd tight = run_simulation(sys, o, nullptr).final_state;
+  const Decomposition d = decompose(m, 3);
+  for (int order : {1, 2}) {
+    std::vector<double> gaps;
+    for (double tol : {1e-8, 1e-9}) {
+      LooseOptions lo;
+      lo.macro_step = 8 * h;  // the first try; too long for these tolerances
+      lo.extrapolation = order;
+      lo.coupling_tol = tol;
+      LooseStats st;
+      const RunSummary r = run_loose(m, d, o, lo, nullptr, &st);
+      INFO("order " << order << ", tol " << tol << ": " << st.macro_steps << " macro steps, " << st.rejected
+                    << " taken again, H " << st.smallest_macro_step << " .. " << st.largest_macro_step);
+      CHECK(st.max_position_error <= tol);
+      for (double e : st.position_error) CHECK(e <= tol);
+      CHECK(st.rejected > 0);
+      CHECK(st.smallest_macro_step < st.largest_macro_step);
+      gaps.push_back(position_gap(sys, r.final_state, tight));
+    }
+    // Ten times tighter: the end state ten times closer to the tight run, give or take.
+    INFO("order " << order << ": gaps " << gaps[0] << ", " << gaps[1]);
+    CHECK(gaps[0] / gaps[1] > 4.0);
+    CHECK(gaps[0] / gaps[1] < 25.0);
+  }
+}
+
+TEST_CASE("loose coupling: the energy of an undamped chain stays bounded at a tenth of the stable step", "[runtime][loose]") {
+  ChainParams c;
+  c.bodies = 24;
+  c.damping_ratio = 0.0;
+  Model m = make_chain(c);
+  const double h = 0.1 * estimate_stable_step(m).step;  // the CLI's default macro step
+  m.simulation.step = h;
+  m.simulation.t_end = m.simulation.t_start + 10000 * h;
+  m.simulation.output_every = 100;
+  const RunOptions o = options_from_model(m);
+  LooseOptions lo;
+  lo.macro_step = h;
+  test::MemorySink sink;
+  run_loose(m, decompose(m, 3), o, lo, &sink);
+  MultibodySystem sys(m);
+  const double e0 = sys.energy(o.t_start, sink.states.front()).total();
+  const double scale = 24 * 1.0 * 9.81 * 24 * 0.1;  // m g L of the whole chain: the energy it can trade
+  double drift = 0.0;
+  for (std::size_t i = 0; i < sink.states.size(); ++i)
+    drift = std::max(drift, std::abs(sys.energy(sink.times[i], sink.states[i]).total() - e0));
+  INFO("largest energy change " << drift << " J over " << sink.states.size() << " snapshots");
+  CHECK(drift < 1e-3 * scale);
 }

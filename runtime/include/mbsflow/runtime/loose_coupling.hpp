@@ -16,6 +16,9 @@ struct LooseOptions {
   double macro_step = 0.0;  // H, a whole number of RunOptions::step for RK4
   int extrapolation = 1;    // polynomial order 0, 1 or 2 over the last 1, 2 or 3 samples
   int threads = 0;          // 0: all cores
+  // > 0: adapt the macro step so that the coupling error (m, ghost positions) stays below
+  // this; a macro step above it is taken again from its start with a shorter one.
+  double coupling_tol = 0.0;
 };
 
 struct LooseStats {
@@ -24,11 +27,13 @@ struct LooseStats {
   // position at the end of the step (m), and its largest relative velocity difference.
   std::vector<double> position_error, velocity_error;
   double max_position_error = 0.0;
+  long rejected = 0;  // macro steps taken again (adaptive)
+  double smallest_macro_step = 0.0, largest_macro_step = 0.0;
 };
 
-// RK4 (fixed substeps of options.step) or DOPRI5 (its own steps, options.rtol/atol) inside
-// each submodel. Snapshots (global body order) at the macro steps on the output grid
-// (every options.output_every * options.step) and at the end.
+// RK4 (substeps of options.step) or DOPRI5 (its own steps, options.rtol/atol) inside each
+// submodel. Macro steps end on the output grid (every options.output_every * options.step,
+// shortened where needed), where the snapshots (global body order) are taken.
 RunSummary run_loose(const Model& model, const Decomposition& d, const RunOptions& options, const LooseOptions& loose,
                      ResultSink* sink, LooseStats* stats = nullptr);
 
