@@ -205,21 +205,25 @@ void dopri5_dense(const Part& part, double theta, Eigen::VectorXd& out) {
   });
 }
 
+void gather(const Part& p, const StateLayout& global, Eigen::VectorXd& y) {
+  for (Eigen::Index i = 0; i < p.own; ++i) copy_body(p.system.layout(), p.x[0], i, global, y, p.sub->own[static_cast<std::size_t>(i)]);
+}
+
 void gather(const std::vector<Part>& parts, const StateLayout& global, Eigen::VectorXd& y) {
   y.resize(global.size());
-  for (const Part& p : parts)
-    for (Eigen::Index i = 0; i < p.own; ++i)
-      copy_body(p.system.layout(), p.x[0], i, global, y, p.sub->own[static_cast<std::size_t>(i)]);
+  for (const Part& p : parts) gather(p, global, y);
+}
+
+std::optional<Divergence> check(const Part& p) {
+  auto d = find_divergence(p.system.layout(), p.x[0], p.own);  // own bodies come first
+  if (d) d->body = p.sub->own[static_cast<std::size_t>(d->body)];
+  return d;
 }
 
 std::optional<Divergence> check(const std::vector<Part>& parts) {
   std::optional<Divergence> first;
-  for (const Part& p : parts) {
-    if (auto d = find_divergence(p.system.layout(), p.x[0], p.own)) {  // own bodies come first
-      d->body = p.sub->own[static_cast<std::size_t>(d->body)];
-      if (!first || d->body < first->body) first = d;
-    }
-  }
+  for (const Part& p : parts)
+    if (auto d = check(p); d && (!first || d->body < first->body)) first = d;
   return first;
 }
 

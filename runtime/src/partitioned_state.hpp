@@ -67,8 +67,10 @@ void dopri5_accept(Part& part, double h, double t_new);
 // Own bodies' dense output at fraction theta of the last accepted step, into out (global).
 void dopri5_dense(const Part& part, double theta, Eigen::VectorXd& out);
 
-// Own bodies' states (x[0]) into the global state vector.
+// Own bodies' states (x[0]) into the global state vector (sized by the first form).
 void gather(const std::vector<Part>& parts, const StateLayout& global, Eigen::VectorXd& y);
+void gather(const Part& part, const StateLayout& global, Eigen::VectorXd& y);
 std::optional<Divergence> check(const std::vector<Part>& parts);  // body index is global
+std::optional<Divergence> check(const Part& part);
 
 }  // namespace mbsflow::partitioned

@@ -34,6 +34,9 @@ struct LooseStats {
 // RK4 (substeps of options.step) or DOPRI5 (its own steps, options.rtol/atol) inside each
 // submodel. Macro steps end on the output grid (every options.output_every * options.step,
 // shortened where needed), where the snapshots (global body order) are taken.
+// InputError for a macro step that is not a positive time or an order outside 0..2.
+void check_loose_options(const LooseOptions& loose);
+
 RunSummary run_loose(const Model& model, const Decomposition& d, const RunOptions& options, const LooseOptions& loose,
                      ResultSink* sink, LooseStats* stats = nullptr);
 
