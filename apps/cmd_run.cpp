@@ -47,6 +47,7 @@ struct RunArgs {
   std::optional<double> macro_step;
   int extrapolation = 1;
   std::optional<double> coupling_tol;
+  double exchange_delay = 0.0;  // s, added to every boundary message between processes
 };
 
 // How the run is cut: a partition file, --partitions, or default_k submodels (none when
@@ -128,15 +129,17 @@ int run(const RunArgs& a) {
   const int threads = a.threads > 0 ? a.threads : static_cast<int>(std::thread::hardware_concurrency());
   const bool cluster = !a.cluster.empty() || a.processes > 0;
   const bool loose = a.coupling == "loose";
-  if (loose && cluster) throw InputError("--coupling loose: runs in one process for now (not with --cluster or --processes)");
+  if (a.exchange_delay > 0.0 && !cluster) throw InputError("--exchange-delay: only with --cluster or --processes");
   if (!loose && (a.macro_step || a.coupling_tol)) throw InputError("--macro-step, --coupling-tol: only with --coupling loose");
   // A tenth of the RK4 stability estimate: explicit coupling of stiff joints over longer
   // macro steps can blow up (an undamped chain does at four tenths).
   const double macro_step = a.macro_step ? *a.macro_step : 0.1 * estimate_stable_step(m).step;
   if (loose && !std::isfinite(macro_step)) throw InputError("--coupling loose: no joints to estimate a macro step from; give --macro-step");
-  if (cluster && o.method != Method::rk4)
-    throw InputError("--cluster, --processes: runs across processes use RK4 for now (" + std::string(method_name(o.method)) +
-                     " needs a global error norm at every step attempt)");
+  if (cluster && !loose && o.method != Method::rk4)
+    throw InputError("--cluster, --processes: tightly coupled runs across processes use RK4 for now (" +
+                     std::string(method_name(o.method)) + " needs a global error norm at every step attempt)");
+  if (cluster && loose && a.coupling_tol)
+    throw InputError("--coupling-tol: the adaptive macro step runs in one process for now");
   std::optional<LocalWorkers> local;
   ClusterConfig cc;
   if (!a.cluster.empty()) cc = read_cluster_file(a.cluster);
@@ -148,9 +151,12 @@ int run(const RunArgs& a) {
   // Loose coupling cuts the model even into one submodel (then it is a plain run).
   const std::optional<Decomposition> d =
       choose_decomposition(m, a, cluster ? cluster_submodels(cc) : default_partitions(m, threads), !cluster && !loose);
-  if (cluster && !a.quiet)
-    std::fprintf(stderr, "mbsflow: %zu submodels on %zu worker processes (%s), %d cut joints, load imbalance %.1f %%\n",
-                 d->submodels.size(), cc.workers.size(), cc.transport.c_str(), d->cut_joints, 100.0 * d->imbalance);
+  if (cluster && !a.quiet) {
+    char coupling[96] = "";
+    if (loose) std::snprintf(coupling, sizeof coupling, ", loosely coupled: macro step %.4g s", macro_step);
+    std::fprintf(stderr, "mbsflow: %zu submodels on %zu worker processes (%s), %d cut joints, load imbalance %.1f %%%s\n",
+                 d->submodels.size(), cc.workers.size(), cc.transport.c_str(), d->cut_joints, 100.0 * d->imbalance, coupling);
+  }
   else if (loose && !a.quiet)
     std::fprintf(stderr, "mbsflow: %zu submodels on %d threads, loosely coupled: macro step %.4g s, extrapolation order %d\n",
                  d->submodels.size(), threads, macro_step, a.extrapolation);
@@ -163,11 +169,12 @@ int run(const RunArgs& a) {
   o.stop = install_stop_handlers();
   RunSummary r;
   try {
+    const LooseOptions lo{macro_step, a.extrapolation, threads, a.coupling_tol.value_or(0.0)};
     if (cluster) {
-      r = run_cluster(m, model_to_json(m), *d, cc, o, sink.get());
+      r = run_cluster(m, model_to_json(m), *d, cc, o, sink.get(), nullptr, {loose ? &lo : nullptr, a.exchange_delay});
     } else if (loose) {
       LooseStats ls;
-      r = run_loose(m, *d, o, {macro_step, a.extrapolation, threads, a.coupling_tol.value_or(0.0)}, sink.get(), &ls);
+      r = run_loose(m, *d, o, lo, sink.get(), &ls);
       if (!a.quiet) {
         char adapt[128] = "";
         if (a.coupling_tol)
@@ -255,6 +262,9 @@ Action add_run(CLI::App& app) {
   sub->add_option("--coupling-tol", a->coupling_tol,
                   "Loose coupling: adapt the macro step so that ghost positions are extrapolated within this many m")
       ->check(CLI::PositiveNumber);
+  sub->add_option("--exchange-delay", a->exchange_delay,
+                  "With --cluster or --processes: hold every boundary message back this many s (a slow network, for tests)")
+      ->check(CLI::NonNegativeNumber);
   sub->add_option("--extrapolation", a->extrapolation, "Loose coupling: order of the neighbours' extrapolation, 0, 1 or 2")
       ->check(CLI::Range(0, 2))
       ->capture_default_str();

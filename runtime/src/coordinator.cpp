@@ -5,6 +5,7 @@
 #include "cluster_wire.hpp"
 #include "mbsflow/graph/error.hpp"
 #include "mbsflow/runtime/cluster.hpp"
+#include "mbsflow/runtime/loose_coupling.hpp"
 #include "partitioned_state.hpp"
 #include "sink_runner.hpp"
 #include "step_grid.hpp"
@@ -153,26 +154,43 @@ class Coordinator {
 };
 
 json setup_message(const std::string& model_json, const Decomposition& d, const std::vector<int>& worker_of, std::size_t w,
-                   const ClusterWorker& cw, const RunOptions& o, const std::string& results_address) {
-  return {{"type", "setup"},
+                   const ClusterWorker& cw, const RunOptions& o, const std::string& results_address,
+                   const ClusterCoupling& coupling) {
+  json j = {{"type", "setup"},
           {"model", model_json},
           {"part_of_body", d.part_of_body},
           {"submodels", d.submodels.size()},
           {"worker_of", worker_of},
           {"worker", w},
-          {"options", {{"t_start", o.t_start}, {"t_end", o.t_end}, {"step", o.step}, {"output_every", o.output_every}}},
+          {"options",
+           {{"t_start", o.t_start},
+            {"t_end", o.t_end},
+            {"step", o.step},
+            {"output_every", o.output_every},
+            {"method", method_name(o.method)},
+            {"rtol", o.rtol},
+            {"atol", o.atol}}},
           {"data_bind", cw.data_bind},
           {"data_address", cw.data_address},
           {"results_address", results_address},
-          {"threads", cw.threads}};
+          {"threads", cw.threads},
+          {"exchange_delay_s", coupling.exchange_delay_s}};
+  if (coupling.loose) j["loose"] = {{"macro_step", coupling.loose->macro_step}, {"extrapolation", coupling.loose->extrapolation}};
+  return j;
 }
 
 }  // namespace
 
 RunSummary run_cluster(const Model& model, const std::string& model_json, const Decomposition& d,
-                       const ClusterConfig& cluster, const RunOptions& o, ResultSink* sink, ClusterStats* stats) {
+                       const ClusterConfig& cluster, const RunOptions& o, ResultSink* sink, ClusterStats* stats,
+                       ClusterCoupling coupling) {
   check_options(o);
-  if (o.method != Method::rk4)
+  if (coupling.loose) {
+    check_loose_options(*coupling.loose);
+    if (coupling.loose->coupling_tol > 0.0)
+      throw InputError("--coupling-tol: the adaptive macro step runs in one process for now");
+  }
+  if (!coupling.loose && o.method != Method::rk4)
     throw InputError(std::string("runs across processes use RK4 for now (") + method_name(o.method) +
                      " needs a global error norm at every step attempt)");
   const std::vector<int> worker_of = assign_submodels(cluster, static_cast<int>(d.submodels.size()));
@@ -188,6 +206,7 @@ RunSummary run_cluster(const Model& model, const std::string& model_json, const 
   Eigen::VectorXd y = whole.initial_state();
   if (sink) sink->begin(whole);
   const StepGrid grid = step_grid(o.t_start, o.t_end, o.step);
+  long evaluations = 0;  // as the workers count them
   run_with_sink(sink, out, [&] {
     try {
       for (std::size_t w = 0; w < peers.size(); ++w)
@@ -202,7 +221,7 @@ RunSummary run_cluster(const Model& model, const std::string& model_json, const 
                       {"lost_s", cluster.timeouts.lost_s}}}});
       co.gather("hello_ok", cluster.timeouts.connect_s, [](std::size_t, const json&) {});
       for (std::size_t w = 0; w < peers.size(); ++w)
-        co.send(w, setup_message(model_json, d, worker_of, w, cluster.workers[w], o, co.results_address()));
+        co.send(w, setup_message(model_json, d, worker_of, w, cluster.workers[w], o, co.results_address(), coupling));
       co.gather("ready", 0.0, [&](std::size_t w, const json& j) { peers[w].data_address = j.value("data_address", ""); });
       json names = json::array(), addresses = json::array();
       for (const Peer& p : peers) {
@@ -230,11 +249,14 @@ RunSummary run_cluster(const Model& model, const std::string& model_json, const 
             throw RunError(co.who(w) + ": " + payload.to_string());
           case wire::ResultKind::done:
             p.done = true;
-            if (stats && payload.size() == 2 * sizeof(double)) {
-              double counts[2];
+            if (payload.size() == 3 * sizeof(double)) {
+              double counts[3];
               std::memcpy(counts, payload.data(), sizeof counts);
-              stats->messages += static_cast<long>(counts[0]);
-              stats->bytes_per_stage += counts[1];
+              evaluations += static_cast<long>(counts[2]);
+              if (stats) {
+                stats->messages += static_cast<long>(counts[0]);
+                stats->bytes_per_stage += counts[1];
+              }
             }
             break;
           case wire::ResultKind::snapshot: {
@@ -280,7 +302,7 @@ RunSummary run_cluster(const Model& model, const std::string& model_json, const 
     }
   });
   out.steps = grid.steps;
-  out.evaluations = grid.steps * 4;
+  out.evaluations = coupling.loose ? evaluations : grid.steps * 4;  // loose: the submodels' own evaluations
   out.final_state = std::move(y);
   return out;
 }

@@ -9,9 +9,10 @@ namespace mbsflow {
 
 RemoteExchange::RemoteExchange(zmq::context_t& ctx, zmq::socket_t& inbox, const Decomposition& d, std::vector<partitioned::Part*> parts,
                                std::vector<int> worker_of, const std::vector<std::string>& worker_names,
-                               const std::vector<std::string>& data_addresses, int stages, double send_timeout_s)
+                               const std::vector<std::string>& data_addresses, int stages, double send_timeout_s,
+                               double delay_s)
     : inbox_socket_(inbox), d_(d), parts_(std::move(parts)), worker_of_(std::move(worker_of)), worker_names_(worker_names), stages_(stages),
-      outgoing_(d.submodels.size()) {
+      outgoing_(d.submodels.size()), delay_s_(delay_s) {
   // Remote submodel r takes the bodies e.from of its neighbour p: p sends them to r.
   for (std::size_t r = 0; r < d.submodels.size(); ++r) {
     if (parts_[r]) continue;
@@ -26,6 +27,40 @@ RemoteExchange::RemoteExchange(zmq::context_t& ctx, zmq::socket_t& inbox, const 
       }
       outgoing_[p].push_back({static_cast<int>(r), &e.from, &it->second});
     }
+  }
+}
+
+RemoteExchange::~RemoteExchange() {
+  if (!delayer_.joinable()) return;
+  {
+    std::lock_guard lock(delay_mutex_);
+    stopping_ = true;
+  }
+  delay_changed_.notify_all();
+  delayer_.join();
+}
+
+void RemoteExchange::deliver_delayed() {
+  std::unique_lock lock(delay_mutex_);
+  while (true) {
+    delay_changed_.wait(lock, [&] { return stopping_ || !delayed_.empty(); });
+    if (stopping_) return;
+    const auto due = delayed_.front().due;
+    if (std::chrono::steady_clock::now() < due) {
+      delay_changed_.wait_until(lock, due);
+      continue;
+    }
+    Delayed m = std::move(delayed_.front());
+    delayed_.pop_front();
+    lock.unlock();
+    bool ok = false;
+    try {
+      ok = wire::send(*m.socket, zmq::const_buffer(&m.header, sizeof m.header), zmq::send_flags::sndmore).has_value() &&
+           wire::send(*m.socket, m.payload, zmq::send_flags::none).has_value();
+    } catch (const zmq::error_t&) {
+    }
+    if (!ok) abort("cannot send boundary values to a worker (it stopped taking them)");
+    lock.lock();
   }
 }
 
@@ -112,6 +147,18 @@ void RemoteExchange::send(int p, long n, int s) {
     h.to = o.to;
     h.stage = s;
     h.step = n;
+    if (delay_s_ > 0.0) {
+      {
+        std::lock_guard lock(delay_mutex_);
+        if (!delayer_.joinable()) delayer_ = std::thread([this] { deliver_delayed(); });
+        const auto due = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                                                 std::chrono::duration<double>(delay_s_));
+        delayed_.push_back({due, o.socket, h, std::move(payload)});
+      }
+      delay_changed_.notify_all();
+      ++sent_;
+      continue;
+    }
     bool ok = false;
     try {
       ok = wire::send(*o.socket, zmq::const_buffer(&h, sizeof h), zmq::send_flags::sndmore).has_value() &&

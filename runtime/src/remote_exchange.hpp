@@ -7,16 +7,19 @@
 // whichever waiting proxy gets to it first (one at a time): no thread between the socket
 // and the stage that needs the values.
 #include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <deque>
 #include <map>
 #include <mutex>
 #include <string>
+#include <thread>
 #include <tuple>
 #include <vector>
 #include <zmq.hpp>
 
 #include "mbsflow/graph/decomposition.hpp"
+#include "cluster_wire.hpp"
 #include "partitioned_state.hpp"
 
 namespace mbsflow {
@@ -26,7 +29,8 @@ class RemoteExchange {
   // parts[q]: local submodel q's state, null where q runs elsewhere; worker_of[q] its worker.
   RemoteExchange(zmq::context_t& ctx, zmq::socket_t& inbox, const Decomposition& d, std::vector<partitioned::Part*> parts,
                  std::vector<int> worker_of, const std::vector<std::string>& worker_names,
-                 const std::vector<std::string>& data_addresses, int stages, double send_timeout_s);
+                 const std::vector<std::string>& data_addresses, int stages, double send_timeout_s, double delay_s = 0.0);
+  ~RemoteExchange();
 
   // From a proxy node: returns once remote q's values of stage input s of step n for local
   // p are in, or the exchange was aborted.
@@ -77,6 +81,23 @@ class RemoteExchange {
   bool reading_ = false;  // a thread is reading the inbox
   std::string why_;
   std::atomic<long> sent_{0};
+
+  // With a delay (a slow network, for tests and the benchmark): messages wait in a queue
+  // until they are due and a thread of their own sends them (then the only user of the
+  // sockets).
+  struct Delayed {
+    std::chrono::steady_clock::time_point due;
+    zmq::socket_t* socket;
+    wire::ExchangeHeader header;
+    zmq::message_t payload;
+  };
+  void deliver_delayed();
+  double delay_s_ = 0.0;
+  std::mutex delay_mutex_;
+  std::condition_variable delay_changed_;
+  std::deque<Delayed> delayed_;
+  bool stopping_ = false;
+  std::thread delayer_;
 };
 
 }  // namespace mbsflow

@@ -7,10 +7,7 @@
 #include "cluster_wire.hpp"
 #include "mbsflow/graph/error.hpp"
 #include "mbsflow/runtime/cluster.hpp"
-#include "remote_exchange.hpp"
-#include "schedules.hpp"
-#include "step_grid.hpp"
-#include "worker_io.hpp"
+#include "worker_part.hpp"
 
 namespace mbsflow {
 namespace {
@@ -47,162 +44,26 @@ json expect(WorkerIo& io, const std::string& want, double timeout_s, const std::
   throw RunError(why);
 }
 
-// What the coordinator told this worker to run.
-struct Session {
-  Model model;
-  Decomposition d;
-  std::vector<int> worker_of;
-  int me = 0;
-  RunOptions o;
-  std::string results_address;
-};
-
 Session read_setup(const WorkerOptions& wo, const json& setup) {
-  Session s{wo.read_model(setup.at("model").get<std::string>()), {}, {}, 0, {}, {}};
+  Session s{wo.read_model(setup.at("model").get<std::string>()), {}, {}, 0, {}, {}, std::nullopt, 0.0};
   s.d = decompose(s.model, setup.at("part_of_body").get<std::vector<int>>(), setup.at("submodels").get<int>());
   s.worker_of = setup.at("worker_of").get<std::vector<int>>();
   s.me = setup.at("worker").get<int>();
   const json& o = setup.at("options");
-  s.o.method = Method::rk4;
+  s.o.method = *parse_method(o.value("method", std::string("rk4")));
+  s.o.rtol = o.value("rtol", 1e-6);
+  s.o.atol = o.value("atol", 1e-8);
   s.o.t_start = o.at("t_start").get<double>();
   s.o.t_end = o.at("t_end").get<double>();
   s.o.step = o.at("step").get<double>();
   s.o.output_every = o.at("output_every").get<int>();
   s.results_address = setup.at("results_address").get<std::string>();
+  if (setup.contains("loose")) {
+    const json& l = setup.at("loose");
+    s.loose = LooseOptions{l.at("macro_step").get<double>(), l.at("extrapolation").get<int>(), 0, 0.0};
+  }
+  s.exchange_delay_s = setup.value("exchange_delay_s", 0.0);
   return s;
-}
-
-struct Outcome {
-  std::string failure;               // empty when this worker's part completed
-  std::optional<json> last_command;  // the coordinator's word after it: finish or abort
-};
-
-// Runs this worker's submodels; snapshots and progress go to the coordinator. Waits for
-// the coordinator's finish or abort before its sockets close (linger 0): until then the
-// last results and boundary values may still be on their way.
-Outcome run_part(Session& s, WorkerIo& io, zmq::context_t& ctx, zmq::socket_t& inbox, const json& start, int threads,
-                     const std::atomic<bool>* stop) {
-  const std::size_t k = s.d.submodels.size();
-  std::vector<std::unique_ptr<Part>> owned(k);
-  std::vector<Part*> parts(k, nullptr);
-  std::vector<int> mine;  // local submodels, ascending
-  for (std::size_t q = 0; q < k; ++q)
-    if (s.worker_of[q] == s.me) {
-      owned[q] = std::make_unique<Part>(s.model, s.d.submodels[q], 4);
-      parts[q] = owned[q].get();
-      mine.push_back(static_cast<int>(q));
-    }
-  const ClusterTimeouts t = io.timeouts();
-  RemoteExchange exchange(ctx, inbox, s.d, parts, s.worker_of, start.at("names").get<std::vector<std::string>>(),
-                          start.at("data_addresses").get<std::vector<std::string>>(), 4, t.lost_s);
-  io.attach(&exchange);
-  zmq::socket_t results = wire::make_socket(ctx, zmq::socket_type::push);
-  results.set(zmq::sockopt::sndtimeo, static_cast<int>(t.lost_s * 1000.0));
-  wire::connect(results, s.results_address, "the coordinator's results inbox");
-  auto report = [&](wire::ResultKind kind, long step, const void* data, std::size_t bytes) {
-    wire::ResultHeader h;
-    h.kind = kind;
-    h.worker = s.me;
-    h.step = step;
-    bool ok = false;
-    try {
-      ok = wire::send_framed(results, h, data, bytes);
-    } catch (const zmq::error_t&) {
-    }
-    if (!ok) exchange.abort("the coordinator stopped taking results");
-  };
-
-  const StepGrid grid = step_grid(s.o.t_start, s.o.t_end, s.o.step);
-  long first = 0;
-  RemoteInputs remote;
-  remote.local.assign(k, 0);
-  for (int q : mine) remote.local[static_cast<std::size_t>(q)] = 1;
-  remote.wait = [&](int c, std::size_t q, std::size_t p, int st) {
-    exchange.wait(first + c, st, static_cast<int>(q), static_cast<int>(p));
-  };
-  const int chunk = chunk_length(s.o.output_every);
-  Scheduler schedule(
-      s.d, chunk, 4,
-      [&](std::size_t p, int st, int c, Half half) {
-        if (exchange.aborted()) return;
-        try {
-          const long n = first + c;
-          Part& part = *parts[p];
-          if (half == Half::inner) {  // needs no ghost values: runs while they travel
-            partitioned::rk4_inner_stage(part, st, grid.time(n), grid.time(n + 1));
-            return;
-          }
-          for (const Submodel::Exchange& e : part.sub->exchanges)
-            if (parts[static_cast<std::size_t>(e.neighbour)])
-              partitioned::copy_ghosts(*parts[static_cast<std::size_t>(e.neighbour)], e, part, st);
-          exchange.receive(static_cast<int>(p), n, st);
-          partitioned::rk4_edge_stage(part, st, grid.time(n), grid.time(n + 1));
-          // The values this stage made: stage input st+1, or after the last stage the next step's state.
-          const long n_next = st == 3 ? n + 1 : n;
-          if (n_next < grid.steps) exchange.send(static_cast<int>(p), n_next, (st + 1) % 4);
-        } catch (const std::exception& e) {
-          exchange.abort(e.what());
-        }
-      },
-      false, &remote);
-
-  std::vector<double> snapshot;
-  std::string failure;
-  // A proxy waits on its thread (see RemoteInputs): one thread per local submodel at least.
-  tbb::task_arena arena(std::max(threads > 0 ? threads : tbb::info::default_concurrency(), static_cast<int>(mine.size())));
-  arena.execute([&] {
-    step_in_chunks(
-        grid, chunk, 0,
-        [&](long from, int steps) {
-          if (!failure.empty()) return;
-          first = from;
-          schedule.run(steps);
-        },
-        [&](long done) {
-          if (!failure.empty()) return;
-          if (exchange.aborted()) {
-            failure = exchange.why();
-            return;
-          }
-          for (int q : mine)
-            if (auto dv = find_divergence(parts[static_cast<std::size_t>(q)]->system.layout(),
-                                          parts[static_cast<std::size_t>(q)]->x[0], parts[static_cast<std::size_t>(q)]->own)) {
-              dv->body = parts[static_cast<std::size_t>(q)]->sub->own[static_cast<std::size_t>(dv->body)];
-              failure = divergence_message(s.model, *dv, grid.time(done), s.o.method, s.o.step);
-              return;
-            }
-          if (stop && stop->load()) {
-            char buf[96];
-            std::snprintf(buf, sizeof buf, "the worker was interrupted at t = %.6g s", grid.time(done));
-            failure = buf;
-            return;
-          }
-          if (done % s.o.output_every == 0 || done == grid.steps) {
-            snapshot.clear();
-            for (int q : mine) {
-              const Part& part = *parts[static_cast<std::size_t>(q)];
-              const std::size_t at = snapshot.size();
-              snapshot.resize(at + static_cast<std::size_t>(part.own) * partitioned::body_numbers);
-              std::vector<int> own(static_cast<std::size_t>(part.own));
-              for (std::size_t i = 0; i < own.size(); ++i) own[i] = static_cast<int>(i);
-              partitioned::pack_bodies(part.system.layout(), part.x[0], own, snapshot.data() + at);
-            }
-            report(wire::ResultKind::snapshot, done, snapshot.data(), snapshot.size() * sizeof(double));
-          } else {
-            report(wire::ResultKind::progress, done, nullptr, 0);
-          }
-        });
-  });
-  if (failure.empty() && exchange.aborted()) failure = exchange.why();
-  const double counts[2] = {static_cast<double>(exchange.messages_sent()), exchange.bytes_per_stage()};
-  if (failure.empty()) {
-    report(wire::ResultKind::done, grid.steps, counts, sizeof counts);
-    if (exchange.aborted()) failure = exchange.why();
-  } else if (failure.rfind("stopped by the coordinator", 0) != 0 && failure.rfind("the coordinator", 0) != 0)
-    report(wire::ResultKind::failed, first, failure.data(), failure.size());
-  Outcome out{failure, io.next_command(io.timeouts().lost_s + 1.0)};
-  io.attach(nullptr);
-  return out;
 }
 
 }  // namespace
@@ -255,7 +116,19 @@ void serve_worker(const WorkerOptions& wo) {
   log("running submodels " + list + " of " + std::to_string(s.worker_of.size()) + " (" + std::to_string(own) +
       " bodies), inbox " + data_address);
   const int threads = setup.value("threads", 0) > 0 ? setup.value("threads", 0) : wo.threads;
-  const auto [failure, last] = run_part(s, io, ctx, inbox, start, threads, wo.stop);
+  Outcome outcome;
+  if (s.loose) {
+    outcome = run_loose_part(s, io, ctx, inbox, start, threads, wo.stop);
+  } else {
+    const std::size_t k = s.d.submodels.size();
+    std::vector<std::unique_ptr<partitioned::Part>> owned(k);
+    std::vector<partitioned::Part*> parts(k, nullptr);
+    for (std::size_t q = 0; q < k; ++q)
+      if (s.worker_of[q] == s.me) parts[q] = (owned[q] = std::make_unique<partitioned::Part>(s.model, s.d.submodels[q], 4)).get();
+    WorkerPart w(s, io, ctx, inbox, start, parts, wo.stop);
+    outcome = run_tight(w, threads);
+  }
+  const auto& [failure, last] = outcome;
   if (!failure.empty()) throw RunError(failure);
   if (last && last->value("type", "") == "finish") io.goodbye();
   if (!last || last->value("type", "") != "finish")

@@ -14,6 +14,7 @@
 #include "mbsflow/io/model_reader.hpp"
 #include "mbsflow/io/model_writer.hpp"
 #include "mbsflow/runtime/cluster.hpp"
+#include "mbsflow/runtime/loose_coupling.hpp"
 #include "mbsflow/runtime/simulation.hpp"
 #include "memory_sink.hpp"
 
@@ -151,4 +152,32 @@ TEST_CASE("cluster: an unreachable worker is an error within the connect timeout
   CHECK_THROWS_WITH(run_cluster(m, model_to_json(m), decompose(m, 1), c, options_from_model(m), nullptr),
                     Catch::Contains("worker w0 (tcp://127.0.0.1:1) did not answer within 0.5 s"));
   CHECK(std::chrono::steady_clock::now() - start < std::chrono::seconds(3));
+}
+
+TEST_CASE("loosely coupled cluster runs equal the one-process loose run bit for bit, with delayed messages too",
+          "[runtime][cluster][loose]") {
+  ChainParams chain;
+  chain.bodies = 30;
+  Model m = short_run(make_chain(chain), 42);
+  for (Method method : {Method::rk4, Method::dopri5}) {
+    m.simulation.method = method;
+    RunOptions o = options_from_model(m);
+    o.rtol = o.atol = 1e-9;
+    LooseOptions lo;
+    lo.macro_step = 3 * o.step;
+    lo.extrapolation = 2;
+    const Decomposition d = decompose(m, 3);
+    test::MemorySink reference;
+    run_loose(m, d, o, lo, &reference);
+    REQUIRE(reference.states.size() == 7);  // the start and every 7 steps
+    ThreadWorkers pool({"tcp://127.0.0.1:*", "tcp://127.0.0.1:*"});
+    ClusterConfig c = cluster_of(pool.endpoints, "", "tcp://127.0.0.1:*");
+    for (auto& w : c.workers) w.data_bind = "tcp://127.0.0.1:*";
+    c.workers[0].weight = 2;
+    test::MemorySink sink;
+    run_cluster(m, model_to_json(m), d, c, o, &sink, nullptr, {&lo, method == Method::rk4 ? 0.002 : 0.0});
+    INFO(method_name(method));
+    CHECK(sink.times == reference.times);
+    CHECK(sink.states == reference.states);
+  }
 }

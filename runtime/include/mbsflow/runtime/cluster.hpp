@@ -56,11 +56,21 @@ struct ClusterStats {
 };
 
 // The coordinator. model_json is the model as written by model_to_json, which every worker
-// reads back to the same Model. RK4 only. Throws RunError naming the worker when one is
-// lost or fails; InputError for bad settings.
+// reads back to the same Model. Tight coupling: RK4 only. Throws RunError naming the
+// worker when one is lost or fails; InputError for bad settings.
+struct LooseOptions;
+
+// How the workers are coupled: tight (every RK4 stage) unless loose is set (macro steps,
+// RK4 or DOPRI5 inside; a fixed macro step). exchange_delay_s holds every boundary message
+// back that long (a slow network, for tests and the benchmark).
+struct ClusterCoupling {
+  const LooseOptions* loose = nullptr;
+  double exchange_delay_s = 0.0;
+};
+
 RunSummary run_cluster(const Model& model, const std::string& model_json, const Decomposition& d,
                        const ClusterConfig& cluster, const RunOptions& options, ResultSink* sink,
-                       ClusterStats* stats = nullptr);
+                       ClusterStats* stats = nullptr, ClusterCoupling coupling = {});
 
 struct WorkerOptions {
   std::string listen;  // control endpoint to bind; a tcp port of * picks a free one

@@ -1,0 +1,97 @@
+// A worker's part of a loosely coupled run: its submodels integrate macro steps on their
+// own (loose_part.hpp) and exchange their boundary bodies with the other workers at the
+// macro-step ends only. Every worker takes the same macro steps and ghost values as the
+// one-process run_loose, so the results are the same to the bit.
+#include <oneapi/tbb/info.h>
+#include <oneapi/tbb/task_arena.h>
+
+#include <memory>
+
+#include "loose_part.hpp"
+#include "schedules.hpp"
+#include "step_grid.hpp"
+#include "worker_part.hpp"
+
+namespace mbsflow {
+
+using loose::LoosePart;
+
+namespace {
+
+// Ghost slots of x[j] from the owners: local ones directly, remote ones after sending this
+// worker's own values as message n. Returns false if the exchange was stopped.
+bool exchange_values(WorkerPart& w, std::vector<std::unique_ptr<LoosePart>>& lp, long n, int j) {
+  for (int p : w.mine) w.exchange.send(p, n, j);
+  for (int p : w.mine) {
+    LoosePart& me = *lp[static_cast<std::size_t>(p)];
+    for (const Submodel::Exchange& e : me.part.sub->exchanges) {
+      if (partitioned::Part* owner = w.parts[static_cast<std::size_t>(e.neighbour)])
+        partitioned::copy_ghosts(*owner, e, me.part, j);
+      else
+        w.exchange.wait(n, j, e.neighbour, p);
+    }
+    if (w.exchange.aborted()) return false;
+    w.exchange.receive(p, n, j);
+  }
+  return !w.exchange.aborted();
+}
+
+}  // namespace
+
+Outcome run_loose_part(Session& s, WorkerIo& io, zmq::context_t& ctx, zmq::socket_t& inbox, const nlohmann::json& start,
+                       int threads, const std::atomic<bool>* stop) {
+  const LooseOptions& lo = *s.loose;
+  const std::size_t k = s.d.submodels.size();
+  std::vector<std::unique_ptr<LoosePart>> lp(k);
+  std::vector<partitioned::Part*> parts(k, nullptr);
+  for (std::size_t q = 0; q < k; ++q)
+    if (s.worker_of[q] == s.me) parts[q] = &(lp[q] = std::make_unique<LoosePart>(s.model, s.d.submodels[q], s.o, lo.extrapolation))->part;
+  WorkerPart w(s, io, ctx, inbox, start, parts, stop);
+  const StepGrid grid = step_grid(s.o.t_start, s.o.t_end, s.o.step);
+  double t0 = 0.0, t1 = 0.0;
+  // One node per local submodel per macro step, all independent within the step.
+  Scheduler schedule(s.d, 1, 1, [&](std::size_t p, int, int, Half) {
+    if (lp[p] && !w.exchange.aborted()) {
+      try {
+        lp[p]->integrate(t0, t1);
+      } catch (const std::exception& e) {
+        w.exchange.abort(e.what());
+      }
+    }
+  });
+  tbb::task_arena arena(threads > 0 ? threads : tbb::info::default_concurrency());
+  // Messages: the starting past j (1..k) as message j, the macro-step ends from k+1 on.
+  std::string failure;
+  long step = 0;  // of the tight grid, for the coordinator
+  for (int p : w.mine) lp[static_cast<std::size_t>(p)]->make_past(s.o.t_start, lo.macro_step);
+  for (int j = 1; j <= lo.extrapolation && failure.empty(); ++j)
+    if (!exchange_values(w, lp, j, j)) failure = w.exchange.why();
+  for (int p : w.mine) lp[static_cast<std::size_t>(p)]->start(s.o.t_start, lo.macro_step);
+  double t = s.o.t_start;
+  long next_out = 1, n = lo.extrapolation + 1;
+  while (failure.empty() && t < s.o.t_end) {
+    bool on_output = false;
+    t0 = t;
+    t1 = loose::next_macro_end(grid, s.o.output_every, next_out, t, lo.macro_step, &on_output);
+    arena.execute([&] { schedule.run(1); });
+    failure = w.check(t1);
+    if (!failure.empty() || !exchange_values(w, lp, n++, 0)) {
+      if (failure.empty()) failure = w.exchange.why();
+      break;
+    }
+    for (int p : w.mine) {
+      (void)lp[static_cast<std::size_t>(p)]->error(t1);
+      lp[static_cast<std::size_t>(p)]->push(t1);
+    }
+    t = t1;
+    step = on_output ? std::min(next_out * static_cast<long>(s.o.output_every), grid.steps)
+                     : std::lround((t - s.o.t_start) / s.o.step);
+    w.report_state(step, on_output);
+    if (on_output) ++next_out;
+  }
+  double evaluations = 0.0;
+  for (int p : w.mine) evaluations += static_cast<double>(lp[static_cast<std::size_t>(p)]->evaluations);
+  return w.finish(failure, failure.empty() ? grid.steps : step, evaluations);
+}
+
+}  // namespace mbsflow

@@ -1,0 +1,80 @@
+#include "worker_part.hpp"
+
+#include <cstdio>
+
+#include "mbsflow/runtime/divergence.hpp"
+
+namespace mbsflow {
+
+using nlohmann::json;
+
+WorkerPart::WorkerPart(Session& session, WorkerIo& io, zmq::context_t& ctx, zmq::socket_t& inbox, const json& start,
+                       std::vector<partitioned::Part*> local, const std::atomic<bool>* stop)
+    : s(session), parts(std::move(local)),
+      exchange(ctx, inbox, s.d, parts, s.worker_of, start.at("names").get<std::vector<std::string>>(),
+               start.at("data_addresses").get<std::vector<std::string>>(), 4, io.timeouts().lost_s, s.exchange_delay_s),
+      io_(io), results_(wire::make_socket(ctx, zmq::socket_type::push)), stop_(stop) {
+  for (std::size_t q = 0; q < parts.size(); ++q)
+    if (parts[q]) mine.push_back(static_cast<int>(q));
+  io.attach(&exchange);
+  results_.set(zmq::sockopt::sndtimeo, static_cast<int>(io.timeouts().lost_s * 1000.0));
+  wire::connect(results_, s.results_address, "the coordinator's results inbox");
+}
+
+WorkerPart::~WorkerPart() { io_.attach(nullptr); }
+
+void WorkerPart::report(wire::ResultKind kind, long step, const void* data, std::size_t bytes) {
+  wire::ResultHeader h;
+  h.kind = kind;
+  h.worker = s.me;
+  h.step = step;
+  bool ok = false;
+  try {
+    ok = wire::send_framed(results_, h, data, bytes);
+  } catch (const zmq::error_t&) {
+  }
+  if (!ok) exchange.abort("the coordinator stopped taking results");
+}
+
+std::string WorkerPart::check(double t) const {
+  if (exchange.aborted()) return exchange.why();
+  for (int q : mine)
+    if (auto dv = partitioned::check(*parts[static_cast<std::size_t>(q)]))
+      return divergence_message(s.model, *dv, t, s.o.method, s.o.step);
+  if (stop_ && stop_->load()) {
+    char buf[96];
+    std::snprintf(buf, sizeof buf, "the worker was interrupted at t = %.6g s", t);
+    return buf;
+  }
+  return "";
+}
+
+void WorkerPart::report_state(long step, bool snapshot) {
+  if (!snapshot) return report(wire::ResultKind::progress, step, nullptr, 0);
+  snapshot_.clear();
+  for (int q : mine) {
+    const partitioned::Part& part = *parts[static_cast<std::size_t>(q)];
+    const std::size_t at = snapshot_.size();
+    snapshot_.resize(at + static_cast<std::size_t>(part.own) * partitioned::body_numbers);
+    std::vector<int> own(static_cast<std::size_t>(part.own));
+    for (std::size_t i = 0; i < own.size(); ++i) own[i] = static_cast<int>(i);
+    partitioned::pack_bodies(part.system.layout(), part.x[0], own, snapshot_.data() + at);
+  }
+  report(wire::ResultKind::snapshot, step, snapshot_.data(), snapshot_.size() * sizeof(double));
+}
+
+Outcome WorkerPart::finish(std::string failure, long step, double evaluations) {
+  if (failure.empty() && exchange.aborted()) failure = exchange.why();
+  const double counts[3] = {static_cast<double>(exchange.messages_sent()), exchange.bytes_per_stage(), evaluations};
+  if (failure.empty()) {
+    report(wire::ResultKind::done, step, counts, sizeof counts);
+    if (exchange.aborted()) failure = exchange.why();
+  } else if (failure.rfind("stopped by the coordinator", 0) != 0 && failure.rfind("the coordinator", 0) != 0) {
+    report(wire::ResultKind::failed, step, failure.data(), failure.size());
+  }
+  // The sockets stay open until the coordinator's word: the last results and boundary
+  // values may still be on their way (linger 0).
+  return {failure, io_.next_command(io_.timeouts().lost_s + 1.0)};
+}
+
+}  // namespace mbsflow

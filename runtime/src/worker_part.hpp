@@ -1,0 +1,69 @@
+#pragma once
+// What a worker's part of a run needs whatever the coupling: the run's settings as the
+// coordinator sent them, its local submodels, the boundary exchange with the other
+// workers, and the results channel to the coordinator.
+#include <atomic>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+#include <zmq.hpp>
+
+#include "cluster_wire.hpp"
+#include "mbsflow/runtime/loose_coupling.hpp"
+#include "remote_exchange.hpp"
+#include "worker_io.hpp"
+
+namespace mbsflow {
+
+// What the coordinator told this worker to run.
+struct Session {
+  Model model;
+  Decomposition d;
+  std::vector<int> worker_of;
+  int me = 0;
+  RunOptions o;
+  std::string results_address;
+  std::optional<LooseOptions> loose;  // loose coupling, else tight
+  double exchange_delay_s = 0.0;      // added to every boundary message (tests, benchmark)
+};
+
+struct Outcome {
+  std::string failure;                         // empty when this worker's part completed
+  std::optional<nlohmann::json> last_command;  // the coordinator's word after it: finish or abort
+};
+
+class WorkerPart {
+ public:
+  // parts[q]: local submodel q's state, null where q runs elsewhere.
+  WorkerPart(Session& s, WorkerIo& io, zmq::context_t& ctx, zmq::socket_t& inbox, const nlohmann::json& start,
+             std::vector<partitioned::Part*> parts, const std::atomic<bool>* stop);
+  ~WorkerPart();
+
+  Session& s;
+  std::vector<partitioned::Part*> parts;
+  std::vector<int> mine;  // local submodels, ascending
+  RemoteExchange exchange;
+
+  // A failure message when the run must stop at time t (aborted, diverged, interrupted).
+  std::string check(double t) const;
+  // Own bodies of the local submodels to the coordinator (snapshot at `step` of the tight
+  // grid), or only the progress.
+  void report_state(long step, bool snapshot);
+  // Reports done or the failure, then waits for the coordinator's finish or abort.
+  Outcome finish(std::string failure, long step, double evaluations);
+
+ private:
+  void report(wire::ResultKind kind, long step, const void* data, std::size_t bytes);
+  WorkerIo& io_;
+  zmq::socket_t results_;
+  const std::atomic<bool>* stop_;
+  std::vector<double> snapshot_;
+};
+
+// The loops: RK4 stages exchanged every stage (tight), or macro steps (loose).
+Outcome run_tight(WorkerPart& w, int threads);
+Outcome run_loose_part(Session& s, WorkerIo& io, zmq::context_t& ctx, zmq::socket_t& inbox, const nlohmann::json& start,
+                       int threads, const std::atomic<bool>* stop);
+
+}  // namespace mbsflow
