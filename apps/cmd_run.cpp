@@ -48,6 +48,7 @@ struct RunArgs {
   int extrapolation = 1;
   std::optional<double> coupling_tol;
   double exchange_delay = 0.0;  // s, added to every boundary message between processes
+  int max_lag = 0;
 };
 
 // How the run is cut: a partition file, --partitions, or default_k submodels (none when
@@ -130,7 +131,8 @@ int run(const RunArgs& a) {
   const bool cluster = !a.cluster.empty() || a.processes > 0;
   const bool loose = a.coupling == "loose";
   if (a.exchange_delay > 0.0 && !cluster) throw InputError("--exchange-delay: only with --cluster or --processes");
-  if (!loose && (a.macro_step || a.coupling_tol)) throw InputError("--macro-step, --coupling-tol: only with --coupling loose");
+  if (!loose && (a.macro_step || a.coupling_tol || a.max_lag > 0))
+    throw InputError("--macro-step, --coupling-tol, --max-lag: only with --coupling loose");
   // A tenth of the RK4 stability estimate: explicit coupling of stiff joints over longer
   // macro steps can blow up (an undamped chain does at four tenths).
   const double macro_step = a.macro_step ? *a.macro_step : 0.1 * estimate_stable_step(m).step;
@@ -169,7 +171,7 @@ int run(const RunArgs& a) {
   o.stop = install_stop_handlers();
   RunSummary r;
   try {
-    const LooseOptions lo{macro_step, a.extrapolation, threads, a.coupling_tol.value_or(0.0)};
+    const LooseOptions lo{macro_step, a.extrapolation, threads, a.coupling_tol.value_or(0.0), a.max_lag};
     if (cluster) {
       r = run_cluster(m, model_to_json(m), *d, cc, o, sink.get(), nullptr, {loose ? &lo : nullptr, a.exchange_delay});
     } else if (loose) {
@@ -262,6 +264,11 @@ Action add_run(CLI::App& app) {
   sub->add_option("--coupling-tol", a->coupling_tol,
                   "Loose coupling: adapt the macro step so that ghost positions are extrapolated within this many m")
       ->check(CLI::PositiveNumber);
+  sub->add_option("--max-lag", a->max_lag,
+                  "Loose coupling: take neighbours' values L macro steps back, so that submodels run up to L steps ahead "
+                  "while messages travel (repeatable: always exactly L back)")
+      ->check(CLI::Range(0, 1000))
+      ->capture_default_str();
   sub->add_option("--exchange-delay", a->exchange_delay,
                   "With --cluster or --processes: hold every boundary message back this many s (a slow network, for tests)")
       ->check(CLI::NonNegativeNumber);

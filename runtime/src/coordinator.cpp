@@ -175,7 +175,10 @@ json setup_message(const std::string& model_json, const Decomposition& d, const 
           {"results_address", results_address},
           {"threads", cw.threads},
           {"exchange_delay_s", coupling.exchange_delay_s}};
-  if (coupling.loose) j["loose"] = {{"macro_step", coupling.loose->macro_step}, {"extrapolation", coupling.loose->extrapolation}};
+  if (coupling.loose)
+    j["loose"] = {{"macro_step", coupling.loose->macro_step},
+                  {"extrapolation", coupling.loose->extrapolation},
+                  {"max_lag", coupling.loose->max_lag}};
   return j;
 }
 

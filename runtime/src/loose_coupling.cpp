@@ -33,6 +33,8 @@ void exchange(std::vector<std::unique_ptr<LoosePart>>& parts, int j) {
 void check_loose_options(const LooseOptions& lo) {
   if (!(lo.macro_step > 0.0) || !std::isfinite(lo.macro_step)) throw InputError("--macro-step: must be a positive time");
   if (lo.extrapolation < 0 || lo.extrapolation > 2) throw InputError("--extrapolation: must be 0, 1 or 2");
+  if (lo.max_lag < 0) throw InputError("--max-lag: must be >= 0");
+  if (lo.max_lag > 0 && lo.coupling_tol > 0.0) throw InputError("--max-lag: needs a fixed macro step (not with --coupling-tol)");
 }
 
 RunSummary run_loose(const Model& model, const Decomposition& d, const RunOptions& o, const LooseOptions& lo,
@@ -42,7 +44,7 @@ RunSummary run_loose(const Model& model, const Decomposition& d, const RunOption
   const int threads = lo.threads > 0 ? lo.threads : tbb::info::default_concurrency();
   tbb::task_arena arena(threads);
   std::vector<std::unique_ptr<LoosePart>> parts;
-  for (const Submodel& s : d.submodels) parts.push_back(std::make_unique<LoosePart>(model, s, o, lo.extrapolation));
+  for (const Submodel& s : d.submodels) parts.push_back(std::make_unique<LoosePart>(model, s, o, lo.extrapolation, lo.max_lag));
   MultibodySystem whole(model);
   const StateLayout& global = whole.layout();
   RunSummary out;
@@ -73,18 +75,27 @@ RunSummary run_loose(const Model& model, const Decomposition& d, const RunOption
       arena.execute([&] { schedule.run(1); });
       for (auto& p : parts)
         if (auto dv = partitioned::check(p->part)) throw RunError(divergence_message(model, *dv, t1, o.method, o.step));
-      exchange(parts, 0);
+      // The owners' values at the macro-step end L steps back (this one for L = 0).
+      for (auto& p : parts) p->keep(st.macro_steps + 1, t1);
+      const long lagged = st.macro_steps + 1 - lo.max_lag;
       loose::CouplingError e;
-      for (auto& p : parts) {
-        const loose::CouplingError pe = p->error(t1);
-        e.position = std::max(e.position, pe.position);
-        e.velocity = std::max(e.velocity, pe.velocity);
+      if (lagged >= 1) {
+        for (auto& me : parts)
+          for (const Submodel::Exchange& x : me->part.sub->exchanges) {
+            const LoosePart& owner = *parts[static_cast<std::size_t>(x.neighbour)];
+            partitioned::copy_ghosts(owner.part.system.layout(), owner.kept(lagged), x, me->part, 0);
+          }
+        for (auto& p : parts) {
+          const loose::CouplingError pe = p->error(p->kept_time(lagged));
+          e.position = std::max(e.position, pe.position);
+          e.velocity = std::max(e.velocity, pe.velocity);
+        }
       }
       // Step-size factor from the error model e ~ H^(order).
       const double factor =
           adaptive ? std::clamp(0.9 * std::pow(lo.coupling_tol / std::max(e.position, 1e-300), 1.0 / order), 0.2, 2.0) : 1.0;
       if (adaptive && e.position > lo.coupling_tol) {  // too far off: back to t0 with a shorter macro step
-        for (auto& p : parts) p->restore();
+        for (auto& p : parts) p->restore(st.macro_steps + 1);
         H = (t1 - t0) * factor;
         ++st.rejected;
         if (H < 1e-6 * lo.macro_step) {
@@ -97,7 +108,7 @@ RunSummary run_loose(const Model& model, const Decomposition& d, const RunOption
         continue;
       }
       for (auto& p : parts) {
-        p->push(t1);
+        if (lagged >= 1) p->push(p->kept_time(lagged));
         partitioned::gather(p->part, global, y);
       }
       st.position_error.push_back(e.position);

@@ -24,8 +24,8 @@ struct LoosePart::Ghosted {
   }
 };
 
-LoosePart::LoosePart(const Model& model, const Submodel& sub, const RunOptions& o, int extrapolation)
-    : part(model, sub, extrapolation + 1), o_(o), order_(extrapolation) {
+LoosePart::LoosePart(const Model& model, const Submodel& sub, const RunOptions& o, int extrapolation, int max_lag)
+    : part(model, sub, extrapolation + 1), o_(o), order_(extrapolation), lag_(max_lag) {
   if (o.method == Method::rk4) {
     rk4_ = std::make_unique<Rk4>(part.system.dimension());
   } else {
@@ -127,9 +127,27 @@ void LoosePart::save() {
   saved_h_ = h_;
 }
 
-void LoosePart::restore() {
+void LoosePart::restore(long index) {
   part.x[0] = saved_;
   h_ = saved_h_;
+  while (!kept_.empty() && std::get<0>(kept_.back()) >= index) kept_.pop_back();
+}
+
+void LoosePart::keep(long index, double t) {
+  kept_.emplace_back(index, t, part.x[0]);
+  while (static_cast<int>(kept_.size()) > lag_ + 1) kept_.pop_front();
+}
+
+const Eigen::VectorXd& LoosePart::kept(long index) const {
+  for (const auto& [i, t, x] : kept_)
+    if (i == index) return x;
+  throw RunError("internal: the state of macro step " + std::to_string(index) + " is no longer kept");
+}
+
+double LoosePart::kept_time(long index) const {
+  for (const auto& [i, t, x] : kept_)
+    if (i == index) return t;
+  throw RunError("internal: the state of macro step " + std::to_string(index) + " is no longer kept");
 }
 
 double next_macro_end(const StepGrid& grid, long output_every, long next_out, double t, double H, bool* on_output) {

@@ -5,6 +5,7 @@
 // the samples are these local vectors at the last few macro-step ends. At the start,
 // x[1..k] hold the own bodies' past y0 - jH f0 (j = 1..k) for the owners to exchange too.
 #include <deque>
+#include <tuple>
 #include <memory>
 #include <vector>
 
@@ -22,7 +23,7 @@ struct CouplingError {
 
 class LoosePart {
  public:
-  LoosePart(const Model& model, const Submodel& sub, const RunOptions& o, int extrapolation);
+  LoosePart(const Model& model, const Submodel& sub, const RunOptions& o, int extrapolation, int max_lag);
 
   partitioned::Part part;
 
@@ -36,8 +37,14 @@ class LoosePart {
   // was off; push makes x[0] the newest sample.
   CouplingError error(double t1);
   void push(double t1);
-  void save();     // x[0] and the integrator's step, to take a macro step again
-  void restore();
+  void save();  // x[0] and the integrator's step, to take a macro step again
+  void restore(long index);  // forgets what keep(index) kept
+
+  // The own state at macro-step end `index` (time t), kept while a lagged neighbour may
+  // still need it (max_lag + 1 of them).
+  void keep(long index, double t);
+  const Eigen::VectorXd& kept(long index) const;
+  double kept_time(long index) const;
 
   long steps = 0, rejected = 0, evaluations = 0;
 
@@ -48,6 +55,8 @@ class LoosePart {
 
   const RunOptions& o_;
   int order_;
+  int lag_;
+  std::deque<std::tuple<long, double, Eigen::VectorXd>> kept_;  // index, time, x[0]
   std::deque<std::pair<double, Eigen::VectorXd>> samples_;  // newest first
   std::unique_ptr<Rk4> rk4_;
   std::unique_ptr<Dopri5> dopri5_;

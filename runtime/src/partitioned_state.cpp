@@ -53,10 +53,13 @@ Part::Part(const Model& model, const Submodel& s, int stages)
   for (int i = n_own; i < static_cast<int>(system.layout().bodies); ++i) ghost_bodies.push_back(i);
 }
 
-void copy_ghosts(const Part& owner, const Submodel::Exchange& e, Part& me, int s) {
-  const auto stage = static_cast<std::size_t>(s);
+void copy_ghosts(const StateLayout& owner_layout, const Eigen::VectorXd& from, const Submodel::Exchange& e, Part& me, int s) {
   for (std::size_t i = 0; i < e.from.size(); ++i)
-    copy_body(owner.system.layout(), owner.x[stage], e.from[i], me.system.layout(), me.x[stage], e.to[i]);
+    copy_body(owner_layout, from, e.from[i], me.system.layout(), me.x[static_cast<std::size_t>(s)], e.to[i]);
+}
+
+void copy_ghosts(const Part& owner, const Submodel::Exchange& e, Part& me, int s) {
+  copy_ghosts(owner.system.layout(), owner.x[static_cast<std::size_t>(s)], e, me, s);
 }
 
 void pull_ghosts(std::vector<Part>& parts, std::size_t p, int s) {

@@ -26,8 +26,10 @@ struct Part {
 
 // Copies the ghost bodies' values of stage input s from their owners.
 void pull_ghosts(std::vector<Part>& parts, std::size_t p, int s);
-// The same for one exchange, from an owner in this process.
+// The same for one exchange, from an owner in this process, or from an owner's state
+// vector `from` (in its layout) kept from earlier.
 void copy_ghosts(const Part& owner, const Submodel::Exchange& e, Part& me, int s);
+void copy_ghosts(const StateLayout& owner_layout, const Eigen::VectorXd& from, const Submodel::Exchange& e, Part& me, int s);
 
 // Bodies' values as 13 numbers each (position, orientation, velocity, angular velocity),
 // for another process or the coordinator, and back. Bit for bit; the buffer need not be

@@ -60,7 +60,8 @@ Session read_setup(const WorkerOptions& wo, const json& setup) {
   s.results_address = setup.at("results_address").get<std::string>();
   if (setup.contains("loose")) {
     const json& l = setup.at("loose");
-    s.loose = LooseOptions{l.at("macro_step").get<double>(), l.at("extrapolation").get<int>(), 0, 0.0};
+    s.loose = LooseOptions{l.at("macro_step").get<double>(), l.at("extrapolation").get<int>(), 0, 0.0,
+                           l.value("max_lag", 0)};
   }
   s.exchange_delay_s = setup.value("exchange_delay_s", 0.0);
   return s;

@@ -18,15 +18,16 @@ using loose::LoosePart;
 
 namespace {
 
-// Ghost slots of x[j] from the owners: local ones directly, remote ones after sending this
-// worker's own values as message n. Returns false if the exchange was stopped.
-bool exchange_values(WorkerPart& w, std::vector<std::unique_ptr<LoosePart>>& lp, long n, int j) {
-  for (int p : w.mine) w.exchange.send(p, n, j);
+// Ghost slots of x[j] from the owners' values in message n: local owners' from `local`
+// (their x[j], or what they kept), remote ones' from the inbox. False if the exchange
+// was stopped.
+template <class Local>
+bool receive_values(WorkerPart& w, std::vector<std::unique_ptr<LoosePart>>& lp, long n, int j, Local local) {
   for (int p : w.mine) {
     LoosePart& me = *lp[static_cast<std::size_t>(p)];
     for (const Submodel::Exchange& e : me.part.sub->exchanges) {
-      if (partitioned::Part* owner = w.parts[static_cast<std::size_t>(e.neighbour)])
-        partitioned::copy_ghosts(*owner, e, me.part, j);
+      if (lp[static_cast<std::size_t>(e.neighbour)])
+        local(*lp[static_cast<std::size_t>(e.neighbour)], e, me);
       else
         w.exchange.wait(n, j, e.neighbour, p);
     }
@@ -45,7 +46,7 @@ Outcome run_loose_part(Session& s, WorkerIo& io, zmq::context_t& ctx, zmq::socke
   std::vector<std::unique_ptr<LoosePart>> lp(k);
   std::vector<partitioned::Part*> parts(k, nullptr);
   for (std::size_t q = 0; q < k; ++q)
-    if (s.worker_of[q] == s.me) parts[q] = &(lp[q] = std::make_unique<LoosePart>(s.model, s.d.submodels[q], s.o, lo.extrapolation))->part;
+    if (s.worker_of[q] == s.me) parts[q] = &(lp[q] = std::make_unique<LoosePart>(s.model, s.d.submodels[q], s.o, lo.extrapolation, lo.max_lag))->part;
   WorkerPart w(s, io, ctx, inbox, start, parts, stop);
   const StepGrid grid = step_grid(s.o.t_start, s.o.t_end, s.o.step);
   double t0 = 0.0, t1 = 0.0;
@@ -64,24 +65,42 @@ Outcome run_loose_part(Session& s, WorkerIo& io, zmq::context_t& ctx, zmq::socke
   std::string failure;
   long step = 0;  // of the tight grid, for the coordinator
   for (int p : w.mine) lp[static_cast<std::size_t>(p)]->make_past(s.o.t_start, lo.macro_step);
-  for (int j = 1; j <= lo.extrapolation && failure.empty(); ++j)
-    if (!exchange_values(w, lp, j, j)) failure = w.exchange.why();
+  for (int j = 1; j <= lo.extrapolation && failure.empty(); ++j) {
+    for (int p : w.mine) w.exchange.send(p, j, j);
+    if (!receive_values(w, lp, j, j, [j](LoosePart& owner, const Submodel::Exchange& e, LoosePart& me) {
+          partitioned::copy_ghosts(owner.part, e, me.part, j);
+        }))
+      failure = w.exchange.why();
+  }
   for (int p : w.mine) lp[static_cast<std::size_t>(p)]->start(s.o.t_start, lo.macro_step);
   double t = s.o.t_start;
-  long next_out = 1, n = lo.extrapolation + 1;
+  long next_out = 1, index = 0;  // macro-step ends so far; the end i is message extrapolation + i
   while (failure.empty() && t < s.o.t_end) {
     bool on_output = false;
     t0 = t;
     t1 = loose::next_macro_end(grid, s.o.output_every, next_out, t, lo.macro_step, &on_output);
     arena.execute([&] { schedule.run(1); });
     failure = w.check(t1);
-    if (!failure.empty() || !exchange_values(w, lp, n++, 0)) {
-      if (failure.empty()) failure = w.exchange.why();
-      break;
-    }
+    if (!failure.empty()) break;
+    ++index;
     for (int p : w.mine) {
-      (void)lp[static_cast<std::size_t>(p)]->error(t1);
-      lp[static_cast<std::size_t>(p)]->push(t1);
+      lp[static_cast<std::size_t>(p)]->keep(index, t1);
+      w.exchange.send(p, lo.extrapolation + index, 0);
+    }
+    // The neighbours' values at the macro-step end max_lag steps back (this one for 0).
+    const long lagged = index - lo.max_lag;
+    if (lagged >= 1) {
+      if (!receive_values(w, lp, lo.extrapolation + lagged, 0, [lagged](LoosePart& owner, const Submodel::Exchange& e, LoosePart& me) {
+            partitioned::copy_ghosts(owner.part.system.layout(), owner.kept(lagged), e, me.part, 0);
+          })) {
+        failure = w.exchange.why();
+        break;
+      }
+      for (int p : w.mine) {
+        LoosePart& me = *lp[static_cast<std::size_t>(p)];
+        (void)me.error(me.kept_time(lagged));
+        me.push(me.kept_time(lagged));
+      }
     }
     t = t1;
     step = on_output ? std::min(next_out * static_cast<long>(s.o.output_every), grid.steps)

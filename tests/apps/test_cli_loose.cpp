@@ -37,7 +37,7 @@ TEST_CASE("run --coupling loose writes results close to the tight run and report
   CHECK(adaptive.err.find(" taken again") != std::string::npos);
   const Result h_only = run("run chain.json --macro-step 1e-3", dir);
   CHECK(h_only.code == 2);
-  CHECK(h_only.err.find("--macro-step, --coupling-tol: only with --coupling loose") != std::string::npos);
+  CHECK(h_only.err.find("--macro-step, --coupling-tol, --max-lag: only with --coupling loose") != std::string::npos);
   // Across processes: the same numbers as in one process; a slow network changes nothing.
   const std::string common = "run chain.json --t-end 0.05 --step 1e-4 --every 100 --partitions 3 -q --coupling loose "
                              "--macro-step 2e-4 --extrapolation 2 -o ";
@@ -53,6 +53,11 @@ TEST_CASE("run --coupling loose writes results close to the tight run and report
   CHECK(tol.code == 2);
   CHECK(tol.err.find("the adaptive macro step runs in one process for now") != std::string::npos);
   CHECK(run("run chain.json --exchange-delay 0.01", dir).code == 2);
+  CHECK(run("run chain.json --max-lag 1", dir).code == 2);
+  REQUIRE(run(common + "lag-threads.h5 --threads 2 --max-lag 2", dir).code == 0);
+  REQUIRE(run(common + "lag-procs.h5 --processes 2 --max-lag 2 --exchange-delay 0.001", dir).code == 0);
+  CHECK(mbsflow::ResultsFile((d / "lag-threads.h5").string()).read("/bodies/position") ==
+        mbsflow::ResultsFile((d / "lag-procs.h5").string()).read("/bodies/position"));
   CHECK(run("run chain.json --coupling loose --macro-step 1e-3 --extrapolation 3", dir).code == 2);
   fs::remove_all(d.parent_path());
 }

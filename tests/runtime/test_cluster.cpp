@@ -154,18 +154,19 @@ TEST_CASE("cluster: an unreachable worker is an error within the connect timeout
   CHECK(std::chrono::steady_clock::now() - start < std::chrono::seconds(3));
 }
 
-TEST_CASE("loosely coupled cluster runs equal the one-process loose run bit for bit, with delayed messages too",
+TEST_CASE("loosely coupled cluster runs equal the one-process loose run bit for bit, with lag and delayed messages too",
           "[runtime][cluster][loose]") {
   ChainParams chain;
   chain.bodies = 30;
   Model m = short_run(make_chain(chain), 42);
-  for (Method method : {Method::rk4, Method::dopri5}) {
+  for (auto [method, lag] : {std::pair{Method::rk4, 0}, std::pair{Method::dopri5, 0}, std::pair{Method::rk4, 2}}) {
     m.simulation.method = method;
     RunOptions o = options_from_model(m);
     o.rtol = o.atol = 1e-9;
     LooseOptions lo;
     lo.macro_step = 3 * o.step;
     lo.extrapolation = 2;
+    lo.max_lag = lag;
     const Decomposition d = decompose(m, 3);
     test::MemorySink reference;
     run_loose(m, d, o, lo, &reference);
@@ -176,7 +177,7 @@ TEST_CASE("loosely coupled cluster runs equal the one-process loose run bit for 
     c.workers[0].weight = 2;
     test::MemorySink sink;
     run_cluster(m, model_to_json(m), d, c, o, &sink, nullptr, {&lo, method == Method::rk4 ? 0.002 : 0.0});
-    INFO(method_name(method));
+    INFO(method_name(method) << ", lag " << lag);
     CHECK(sink.times == reference.times);
     CHECK(sink.states == reference.states);
   }

@@ -94,6 +94,8 @@ TEST_CASE("loose coupling: repeatable, DOPRI5 inside submodels, snapshots on the
   CHECK(r.evaluations > 0);
   CHECK_THROWS_WITH(run_loose(m, d, o, LooseOptions{0.0, 1, 0}, nullptr), "--macro-step: must be a positive time");
   CHECK_THROWS_WITH(run_loose(m, d, o, LooseOptions{h, 3, 0}, nullptr), "--extrapolation: must be 0, 1 or 2");
+  CHECK_THROWS_WITH(run_loose(m, d, o, LooseOptions{h, 1, 0, 1e-6, 1}, nullptr),
+                    "--max-lag: needs a fixed macro step (not with --coupling-tol)");
 }
 
 TEST_CASE("loose coupling: the adaptive macro step keeps the coupling error below the tolerance", "[runtime][loose]") {
@@ -154,4 +156,37 @@ TEST_CASE("loose coupling: the energy of an undamped chain stays bounded at a te
     drift = std::max(drift, std::abs(sys.energy(sink.times[i], sink.states[i]).total() - e0));
   INFO("largest energy change " << drift << " J over " << sink.states.size() << " snapshots");
   CHECK(drift < 1e-3 * scale);
+}
+
+TEST_CASE("loose coupling with a lag: values L macro steps old, still converging at the extrapolation's order",
+          "[runtime][loose]") {
+  ChainParams c;
+  c.bodies = 24;
+  Model m = make_chain(c);
+  const double h = 0.05 * estimate_stable_step(m).step;
+  m.simulation.step = h;
+  m.simulation.t_end = m.simulation.t_start + 256 * h;
+  m.simulation.output_every = 8;
+  const RunOptions o = options_from_model(m);
+  MultibodySystem sys(m);
+  const Eigen::VectorXd tight = run_simulation(sys, o, nullptr).final_state;
+  const Decomposition d = decompose(m, 3);
+  for (int order : {1, 2}) {
+    std::vector<double> lag0, lag1;
+    for (int substeps : {4, 2, 1}) {
+      for (int lag : {0, 1}) {
+        LooseOptions lo;
+        lo.macro_step = substeps * h;
+        lo.extrapolation = order;
+        lo.max_lag = lag;
+        (lag ? lag1 : lag0).push_back(position_gap(sys, run_loose(m, d, o, lo, nullptr).final_state, tight));
+      }
+    }
+    INFO("order " << order << ": lag 0 gaps " << lag0[0] << " " << lag0[1] << " " << lag0[2] << "; lag 1 gaps " << lag1[0]
+                  << " " << lag1[1] << " " << lag1[2]);
+    for (std::size_t i = 0; i < 3; ++i) CHECK(lag1[i] > lag0[i]);  // older values: a larger error
+    const double slope = std::log2(lag1[1] / lag1[2]);
+    CHECK(slope > order + 0.6);
+    CHECK(slope < order + 1.4);
+  }
 }

@@ -19,6 +19,11 @@ struct LooseOptions {
   // > 0: adapt the macro step so that the coupling error (m, ghost positions) stays below
   // this; a macro step above it is taken again from its start with a shorter one.
   double coupling_tol = 0.0;
+  // L > 0: a macro step takes its neighbours' values from L macro steps further back, so a
+  // submodel may run L macro steps ahead of its neighbours and their messages may travel
+  // meanwhile. Always exactly L back (not the newest that happens to be in): runs stay
+  // repeatable. Fixed macro step only.
+  int max_lag = 0;
 };
 
 struct LooseStats {
@@ -34,7 +39,8 @@ struct LooseStats {
 // RK4 (substeps of options.step) or DOPRI5 (its own steps, options.rtol/atol) inside each
 // submodel. Macro steps end on the output grid (every options.output_every * options.step,
 // shortened where needed), where the snapshots (global body order) are taken.
-// InputError for a macro step that is not a positive time or an order outside 0..2.
+// InputError for a macro step that is not a positive time, an order outside 0..2, a
+// negative lag or a lag with the adaptive macro step.
 void check_loose_options(const LooseOptions& loose);
 
 RunSummary run_loose(const Model& model, const Decomposition& d, const RunOptions& options, const LooseOptions& loose,
