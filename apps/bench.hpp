@@ -21,6 +21,7 @@ int bench_rhs(const BenchArgs& a);
 int bench_output(const BenchArgs& a);
 int bench_parallel(const BenchArgs& a);
 int bench_cluster(const BenchArgs& a);
+int bench_latency(const BenchArgs& a);
 
 using BenchClock = std::chrono::steady_clock;
 inline double seconds_since(BenchClock::time_point start) {

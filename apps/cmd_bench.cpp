@@ -13,8 +13,9 @@ Action add_bench(CLI::App& app) {
                   "rhs: cost of one right-hand-side evaluation per body; "
                   "output: cost of writing results (6500-body chain, none / every 10 steps / every step); "
                   "parallel: scaling of partitioned runs over threads, flow graph vs barrier; "
-                  "cluster: 2 threads vs 2 processes over tcp and ipc, exchange cost, predicted speedup on a cluster")
-      ->check(CLI::IsMember({"rhs", "output", "parallel", "cluster"}));
+                  "cluster: 2 threads vs 2 processes over tcp and ipc, exchange cost, predicted speedup on a cluster; "
+                  "latency: tight vs loose coupling on 2 processes as the network gets slower")
+      ->check(CLI::IsMember({"rhs", "output", "parallel", "cluster", "latency"}));
   sub->add_option("--bodies", a->bodies, "Chain sizes (rhs: 2000,6500,100000; output: 6500; parallel, cluster: 2000,4000,6500)")
       ->delimiter(',');
   sub->add_option("--threads", a->threads, "parallel: up to this many threads (default: all cores)")->check(CLI::PositiveNumber);
@@ -27,6 +28,7 @@ Action add_bench(CLI::App& app) {
     if (a->what == "rhs") return bench_rhs(*a);
     if (a->what == "output") return bench_output(*a);
     if (a->what == "cluster") return bench_cluster(*a);
+    if (a->what == "latency") return bench_latency(*a);
     return bench_parallel(*a);
   };
 }
