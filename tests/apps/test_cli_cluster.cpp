@@ -78,36 +78,40 @@ TEST_CASE("runs on 2, 3 and 4 processes write the one-process results bit for bi
 
 TEST_CASE("a worker killed mid-run: the coordinator names it, keeps the results and exits 1 within 5 s",
           "[apps][cluster][faults]") {
-  const fs::path d = scratch("cluster-worker-lost");
-  const std::string dir = d.string();
-  REQUIRE(run("generate chain --bodies 400 -o chain.json", dir).code == 0);
-  Workers w(2, d);
-  write_cluster(d / "cluster.json", w.endpoints);
-  Child coordinator({"run", "chain.json", "--cluster", "cluster.json", "--t-end", "1000", "--every", "20", "-o", "out.h5"}, d,
-                    "coordinator");
-  std::this_thread::sleep_for(std::chrono::milliseconds(3000));  // also long enough under sanitizers
-  REQUIRE(!coordinator.wait(0.0));
-  w.procs[1]->kill(SIGKILL);
-  const auto killed = Clock::now();
-  const std::optional<int> code = coordinator.wait(10.0);
-  const double took = std::chrono::duration<double>(Clock::now() - killed).count();
-  const std::string err = coordinator.err();
-  INFO(err);
-  CHECK(code == std::optional<int>(1));
-  CHECK(took < 5.0);
-  CHECK(err.find("worker w1 (" + w.endpoints[1] + ") was lost") != std::string::npos);
-  CHECK(err.find("every worker had completed t = ") != std::string::npos);
-  // The results file holds the snapshots the message counts.
-  const std::size_t at = err.find("results keep ");
-  REQUIRE(at != std::string::npos);
-  const long kept = std::stol(err.substr(at + 13));
-  CHECK(kept > 1);
-  const mbsflow::ResultsFile results((d / "out.h5").string());
-  CHECK(static_cast<long>(results.time().size()) == kept);
-  // The other worker was told to stop and leaves nothing behind.
-  CHECK(w.procs[0]->wait(5.0) == std::optional<int>(1));
-  CHECK(w.procs[0]->err().find("stopped by the coordinator") != std::string::npos);
-  fs::remove_all(d.parent_path());
+  for (const bool loose : {false, true}) {
+    INFO((loose ? "loose" : "tight") << " coupling");
+    const fs::path d = scratch(loose ? "cluster-worker-lost-loose" : "cluster-worker-lost");
+    const std::string dir = d.string();
+    REQUIRE(run("generate chain --bodies 400 -o chain.json", dir).code == 0);
+    Workers w(2, d);
+    write_cluster(d / "cluster.json", w.endpoints);
+    std::vector<std::string> args{"run", "chain.json", "--cluster", "cluster.json", "--t-end", "1000", "--every", "20", "-o", "out.h5"};
+    if (loose) args.insert(args.end(), {"--coupling", "loose"});
+    Child coordinator(args, d, "coordinator");
+    std::this_thread::sleep_for(std::chrono::milliseconds(3000));  // also long enough under sanitizers
+    REQUIRE(!coordinator.wait(0.0));
+    w.procs[1]->kill(SIGKILL);
+    const auto killed = Clock::now();
+    const std::optional<int> code = coordinator.wait(10.0);
+    const double took = std::chrono::duration<double>(Clock::now() - killed).count();
+    const std::string err = coordinator.err();
+    INFO(err);
+    CHECK(code == std::optional<int>(1));
+    CHECK(took < 5.0);
+    CHECK(err.find("worker w1 (" + w.endpoints[1] + ") was lost") != std::string::npos);
+    CHECK(err.find("every worker had completed t = ") != std::string::npos);
+    // The results file holds the snapshots the message counts.
+    const std::size_t at = err.find("results keep ");
+    REQUIRE(at != std::string::npos);
+    const long kept = std::stol(err.substr(at + 13));
+    CHECK(kept > 1);
+    const mbsflow::ResultsFile results((d / "out.h5").string());
+    CHECK(static_cast<long>(results.time().size()) == kept);
+    // The other worker was told to stop and leaves nothing behind.
+    CHECK(w.procs[0]->wait(5.0) == std::optional<int>(1));
+    CHECK(w.procs[0]->err().find("stopped by the coordinator") != std::string::npos);
+  }
+  fs::remove_all(scratch("").parent_path());
 }
 
 TEST_CASE("the coordinator killed: every worker notices and exits within 5 s", "[apps][cluster][faults]") {
