@@ -1,8 +1,11 @@
 #pragma once
 // The benchmarks of `mbsflow bench`: each prints a table and writes a CSV file.
 #include <chrono>
+#include <fstream>
 #include <string>
 #include <vector>
+
+#include "mbsflow/graph/error.hpp"
 
 namespace mbsflow::cli {
 
@@ -16,6 +19,18 @@ struct BenchArgs {
   std::string csv;          // default: bench_WHAT.csv
   int threads = 0;          // parallel: up to this many threads (default: all cores)
 };
+
+// The CSV file of a benchmark: --csv, or bench_WHAT.csv; InputError if it cannot be written.
+struct BenchCsv {
+  std::string path;
+  std::ofstream out;
+};
+inline BenchCsv open_csv(const BenchArgs& a) {
+  BenchCsv c{a.csv.empty() ? "bench_" + a.what + ".csv" : a.csv, {}};
+  c.out.open(c.path);
+  if (!c.out) throw InputError("--csv: cannot write " + c.path);
+  return c;
+}
 
 int bench_rhs(const BenchArgs& a);
 int bench_output(const BenchArgs& a);

@@ -37,9 +37,7 @@ constexpr SeedRow seed[] = {{2000, 200, 42, 34, 30}, {4000, 410, 93, 57, 45}, {6
 
 int bench_cluster(const BenchArgs& a) {
   const std::vector<int> sizes = a.bodies.empty() ? std::vector<int>{2000, 4000, 6500} : a.bodies;
-  const std::string csv_path = a.csv.empty() ? "bench_cluster.csv" : a.csv;
-  std::ofstream csv(csv_path);
-  if (!csv) throw InputError("--csv: cannot write " + csv_path);
+  auto [csv_path, csv] = open_csv(a);
   csv << "table,bodies,case,processes,threads,steps,wall_s,s_per_step,speedup,efficiency,exchange_s_per_stage,bytes,seconds\n";
 
   // 1. The exchange: one-way time per message size, tcp and ipc.

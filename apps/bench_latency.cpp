@@ -21,9 +21,7 @@ namespace mbsflow::cli {
 
 int bench_latency(const BenchArgs& a) {
   const int bodies = a.bodies.empty() ? 6500 : a.bodies.front();
-  const std::string csv_path = a.csv.empty() ? "bench_latency.csv" : a.csv;
-  std::ofstream csv(csv_path);
-  if (!csv) throw InputError("--csv: cannot write " + csv_path);
+  auto [csv_path, csv] = open_csv(a);
   csv << "bodies,delay_ms,coupling,max_lag,macro_steps,wall_s,simulated_per_wall,relative\n";
   TrainParams p;
   p.wagons = std::max(1, bodies / 7);

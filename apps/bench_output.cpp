@@ -82,9 +82,7 @@ int bench_output(const BenchArgs& a) {
   std::filesystem::remove(file);
   std::filesystem::remove(xdmf_path(file));
   const double raw = raw_write_rate(a.dir, std::max(cases[2].bytes, 64e6));
-  const std::string csv_path = a.csv.empty() ? "bench_output.csv" : a.csv;
-  std::ofstream csv(csv_path);
-  if (!csv) throw InputError("--csv: cannot write " + csv_path);
+  auto [csv_path, csv] = open_csv(a);
   csv << "bodies,steps,output_every,snapshots,wall_s,slowdown_percent,bytes,writer_MB_per_s,run_MB_per_s,waits,raw_write_MB_per_s\n";
   std::printf("output cost: %d-body chain, %d RK4 steps, HDF5 through the asynchronous writer (fastest of %d runs)\n", n,
               a.steps, a.repeats);

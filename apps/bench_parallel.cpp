@@ -19,9 +19,7 @@ int bench_parallel(const BenchArgs& a) {
   const std::vector<int> sizes = a.bodies.empty() ? std::vector<int>{2000, 4000, 6500} : a.bodies;
   const int cores = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
   const int max_threads = a.threads > 0 ? a.threads : cores;
-  const std::string csv_path = a.csv.empty() ? "bench_parallel.csv" : a.csv;
-  std::ofstream csv(csv_path);
-  if (!csv) throw InputError("--csv: cannot write " + csv_path);
+  auto [csv_path, csv] = open_csv(a);
   csv << "bodies,executor,threads,partitions,steps,wall_s,s_per_simulated_s,speedup,efficiency,wait_fraction\n";
   std::printf("partitioned RK4 on generate chain models, %d cores here, fastest of %d runs\n", cores, a.repeats);
   std::printf("%8s %-10s %7s %10s %12s %8s %10s %7s\n", "bodies", "executor", "threads", "steps", "s per sim s", "speedup",

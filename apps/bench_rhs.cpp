@@ -46,9 +46,7 @@ Eigen::VectorXd perturbed_state(const MultibodySystem& sys) {
 
 int bench_rhs(const BenchArgs& a) {
   const std::vector<int> sizes = a.bodies.empty() ? std::vector<int>{2000, 6500, 100000} : a.bodies;
-  const std::string csv_path = a.csv.empty() ? "bench_rhs.csv" : a.csv;
-  std::ofstream csv(csv_path);
-  if (!csv) throw InputError("--csv: cannot write " + csv_path);
+  auto [csv_path, csv] = open_csv(a);
   csv << "bodies,evaluations_per_s,ns_per_body_eval,ns_kinematics,ns_joints,ns_bodies\n";
   std::printf("right-hand side of generate chain, one thread (ns per body per evaluation)\n");
   std::printf("%10s %12s %10s %12s %10s %10s\n", "bodies", "evals/s", "total", "kinematics", "joints", "bodies");

@@ -137,11 +137,9 @@ int run(const RunArgs& a) {
   // macro steps can blow up (an undamped chain does at four tenths).
   const double macro_step = a.macro_step ? *a.macro_step : 0.1 * estimate_stable_step(m).step;
   if (loose && !std::isfinite(macro_step)) throw InputError("--coupling loose: no joints to estimate a macro step from; give --macro-step");
-  if (cluster && !loose && o.method != Method::rk4)
-    throw InputError("--cluster, --processes: tightly coupled runs across processes use RK4 for now (" +
-                     std::string(method_name(o.method)) + " needs a global error norm at every step attempt)");
-  if (cluster && loose && a.coupling_tol)
-    throw InputError("--coupling-tol: the adaptive macro step runs in one process for now");
+  const LooseOptions lo{macro_step, a.extrapolation, threads, a.coupling_tol.value_or(0.0), a.max_lag};
+  const ClusterCoupling coupling{loose ? &lo : nullptr, a.exchange_delay};
+  if (cluster) check_cluster_run(o, coupling);  // before any worker is started
   std::optional<LocalWorkers> local;
   ClusterConfig cc;
   if (!a.cluster.empty()) cc = read_cluster_file(a.cluster);
@@ -171,9 +169,8 @@ int run(const RunArgs& a) {
   o.stop = install_stop_handlers();
   RunSummary r;
   try {
-    const LooseOptions lo{macro_step, a.extrapolation, threads, a.coupling_tol.value_or(0.0), a.max_lag};
     if (cluster) {
-      r = run_cluster(m, model_to_json(m), *d, cc, o, sink.get(), nullptr, {loose ? &lo : nullptr, a.exchange_delay});
+      r = run_cluster(m, model_to_json(m), *d, cc, o, sink.get(), nullptr, coupling);
     } else if (loose) {
       LooseStats ls;
       r = run_loose(m, *d, o, lo, sink.get(), &ls);

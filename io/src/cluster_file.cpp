@@ -1,8 +1,6 @@
 #include "mbsflow/io/cluster_file.hpp"
 
-#include <fstream>
 #include <set>
-#include <sstream>
 
 #include "json_node.hpp"
 #include "mbsflow/graph/error.hpp"
@@ -113,11 +111,7 @@ ClusterConfig read_cluster_text(const std::string& text, const std::string& name
 }
 
 ClusterConfig read_cluster_file(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path + ": cannot open the cluster file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return read_cluster_text(text.str(), path);
+  return read_cluster_text(read_input_file(path, "cluster file"), path);
 }
 
 }  // namespace mbsflow

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
+#include <sstream>
 
 #include "mbsflow/graph/error.hpp"
 
@@ -39,6 +41,14 @@ std::string overflow_error(const nlohmann::json::out_of_range& e, const std::str
 }
 
 }  // namespace
+
+std::string read_input_file(const std::string& path, const std::string& what) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path + ": cannot open the " + what);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
 
 nlohmann::json parse_json_document(const std::string& text, const std::string& name) {
   try {

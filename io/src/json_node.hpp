@@ -64,6 +64,8 @@ class JsonNode {
 // "file:line:col: path: what" with whatever of these is known.
 std::string format_input_error(const std::string& file, SourceLocation at, const std::string& path, const std::string& what);
 std::string number_text(double v);  // shortest text that reads back as v
+// The whole of an input file; InputError("path: cannot open the WHAT") if it cannot be read.
+std::string read_input_file(const std::string& path, const std::string& what);
 // Parses a JSON document; InputError("name:line:col: invalid JSON: ...") if it is not one.
 nlohmann::json parse_json_document(const std::string& text, const std::string& name);
 

@@ -302,11 +302,7 @@ Model read_model_text(const std::string& text, const std::string& name) {
 }
 
 Model read_model_file(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path + ": cannot open the model file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return read_model_text(text.str(), path);
+  return read_model_text(read_input_file(path, "model file"), path);
 }
 
 }  // namespace mbsflow

@@ -49,8 +49,7 @@ class Coordinator {
     for (std::size_t w = 0; w < peers_.size(); ++w) send(w, j);
   }
 
-  // Waits until every worker has answered with `want` (after reset_answers), sending
-  // heartbeats; RunError on an error reply, a lost worker or, with a deadline, silence.
+  // Waits until every worker has answered with `want`, sending heartbeats; RunError on an error reply, a lost worker or, with a deadline, silence.
   void gather(const std::string& want, double deadline_s, const std::function<void(std::size_t, const json&)>& take) {
     for (Peer& p : peers_) p.answered = false;
     const auto start = Clock::now();
@@ -184,9 +183,7 @@ json setup_message(const std::string& model_json, const Decomposition& d, const 
 
 }  // namespace
 
-RunSummary run_cluster(const Model& model, const std::string& model_json, const Decomposition& d,
-                       const ClusterConfig& cluster, const RunOptions& o, ResultSink* sink, ClusterStats* stats,
-                       ClusterCoupling coupling) {
+void check_cluster_run(const RunOptions& o, const ClusterCoupling& coupling) {
   check_options(o);
   if (coupling.loose) {
     check_loose_options(*coupling.loose);
@@ -194,8 +191,14 @@ RunSummary run_cluster(const Model& model, const std::string& model_json, const 
       throw InputError("--coupling-tol: the adaptive macro step runs in one process for now");
   }
   if (!coupling.loose && o.method != Method::rk4)
-    throw InputError(std::string("runs across processes use RK4 for now (") + method_name(o.method) +
+    throw InputError(std::string("tightly coupled runs across processes use RK4 for now (") + method_name(o.method) +
                      " needs a global error norm at every step attempt)");
+}
+
+RunSummary run_cluster(const Model& model, const std::string& model_json, const Decomposition& d,
+                       const ClusterConfig& cluster, const RunOptions& o, ResultSink* sink, ClusterStats* stats,
+                       ClusterCoupling coupling) {
+  check_cluster_run(o, coupling);
   const std::vector<int> worker_of = assign_submodels(cluster, static_cast<int>(d.submodels.size()));
   Coordinator co(cluster, o);
   auto& peers = co.peers();

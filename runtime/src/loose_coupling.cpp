@@ -21,13 +21,6 @@ namespace {
 using loose::LoosePart;
 using Clock = std::chrono::steady_clock;
 
-// Every ghost slot of stage input j (x[j]) from its owner in this process.
-void exchange(std::vector<std::unique_ptr<LoosePart>>& parts, int j) {
-  for (auto& me : parts)
-    for (const Submodel::Exchange& e : me->part.sub->exchanges)
-      partitioned::copy_ghosts(parts[static_cast<std::size_t>(e.neighbour)]->part, e, me->part, j);
-}
-
 }  // namespace
 
 void check_loose_options(const LooseOptions& lo) {
@@ -62,7 +55,10 @@ RunSummary run_loose(const Model& model, const Decomposition& d, const RunOption
   run_with_sink(sink, out, [&] {
     if (sink) emit(whole, sink, o.t_start, y, out);
     for (auto& p : parts) p->make_past(o.t_start, lo.macro_step);
-    for (int j = 1; j <= lo.extrapolation; ++j) exchange(parts, j);
+    for (int j = 1; j <= lo.extrapolation; ++j)
+      loose::copy_local_ghosts(parts, j, [j](const LoosePart& owner) -> const Eigen::VectorXd& {
+        return owner.part.x[static_cast<std::size_t>(j)];
+      });
     for (auto& p : parts) p->start(o.t_start, lo.macro_step);
     double t = o.t_start, H = lo.macro_step;
     long next_out = 1;
@@ -80,11 +76,7 @@ RunSummary run_loose(const Model& model, const Decomposition& d, const RunOption
       const long lagged = st.macro_steps + 1 - lo.max_lag;
       loose::CouplingError e;
       if (lagged >= 1) {
-        for (auto& me : parts)
-          for (const Submodel::Exchange& x : me->part.sub->exchanges) {
-            const LoosePart& owner = *parts[static_cast<std::size_t>(x.neighbour)];
-            partitioned::copy_ghosts(owner.part.system.layout(), owner.kept(lagged), x, me->part, 0);
-          }
+        loose::copy_local_ghosts(parts, 0, [lagged](const LoosePart& owner) -> const Eigen::VectorXd& { return owner.kept(lagged); });
         for (auto& p : parts) {
           const loose::CouplingError pe = p->error(p->kept_time(lagged));
           e.position = std::max(e.position, pe.position);

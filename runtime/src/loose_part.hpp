@@ -65,6 +65,19 @@ class LoosePart {
   double saved_h_ = 0.0;
 };
 
+// Ghost slots of x[s] of every part here (parts indexed by submodel, null where it runs
+// elsewhere) from owners here: from(owner) is the owner's state vector to copy from (its
+// x[s], or what it kept). Owners elsewhere are left to the caller.
+template <class From>
+void copy_local_ghosts(std::vector<std::unique_ptr<LoosePart>>& parts, int s, From from) {
+  for (auto& me : parts) {
+    if (!me) continue;
+    for (const Submodel::Exchange& e : me->part.sub->exchanges)
+      if (const LoosePart* owner = parts[static_cast<std::size_t>(e.neighbour)].get())
+        partitioned::copy_ghosts(owner->part.system.layout(), from(*owner), e, me->part, s);
+  }
+}
+
 // Where the macro step from t with length H ends: at t + H, or on the next output time
 // (grid.time of the output step, as the tight run has it) when it reaches that.
 double next_macro_end(const StepGrid& grid, long output_every, long next_out, double t, double H, bool* on_output);

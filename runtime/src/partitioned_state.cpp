@@ -149,24 +149,26 @@ void rk4_update(Part& part, const std::vector<int>& bodies, int s, double h, dou
   part.system.after_step_of(t_next, part.x[0], bodies);
 }
 
+// Half of rk4_stage: kinematics of `moved`, forces of `joints`, derivatives and stage
+// update of `bodies`.
+void rk4_half(Part& part, int s, double t, double t_next, const std::vector<int>& moved, const std::vector<int>& joints,
+              const std::vector<int>& bodies) {
+  const double h = t_next - t, ts = t + rk4::stage_fraction[s] * h;
+  const auto i = static_cast<std::size_t>(s);
+  part.system.kinematics_of(ts, part.x[i], moved);
+  part.system.joint_forces_of(joints);
+  part.system.derivatives_of(ts, part.x[i], part.k[i], bodies);
+  rk4_update(part, bodies, s, h, t_next);
+}
+
 }  // namespace
 
 void rk4_inner_stage(Part& part, int s, double t, double t_next) {
-  const double h = t_next - t, ts = t + rk4::stage_fraction[s] * h;
-  const auto i = static_cast<std::size_t>(s);
-  part.system.kinematics_of(ts, part.x[i], part.own_bodies);
-  part.system.joint_forces_of(part.inner_joints);
-  part.system.derivatives_of(ts, part.x[i], part.k[i], part.inner_bodies);
-  rk4_update(part, part.inner_bodies, s, h, t_next);
+  rk4_half(part, s, t, t_next, part.own_bodies, part.inner_joints, part.inner_bodies);
 }
 
 void rk4_edge_stage(Part& part, int s, double t, double t_next) {
-  const double h = t_next - t, ts = t + rk4::stage_fraction[s] * h;
-  const auto i = static_cast<std::size_t>(s);
-  part.system.kinematics_of(ts, part.x[i], part.ghost_bodies);
-  part.system.joint_forces_of(part.ghost_joints);
-  part.system.derivatives_of(ts, part.x[i], part.k[i], part.edge_bodies);
-  rk4_update(part, part.edge_bodies, s, h, t_next);
+  rk4_half(part, s, t, t_next, part.ghost_bodies, part.ghost_joints, part.edge_bodies);
 }
 
 void dopri5_stage(Part& part, int s, double t, double h, bool need_k0, double atol, double rtol,

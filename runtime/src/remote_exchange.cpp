@@ -53,13 +53,7 @@ void RemoteExchange::deliver_delayed() {
     Delayed m = std::move(delayed_.front());
     delayed_.pop_front();
     lock.unlock();
-    bool ok = false;
-    try {
-      ok = wire::send(*m.socket, zmq::const_buffer(&m.header, sizeof m.header), zmq::send_flags::sndmore).has_value() &&
-           wire::send(*m.socket, m.payload, zmq::send_flags::none).has_value();
-    } catch (const zmq::error_t&) {
-    }
-    if (!ok) abort("cannot send boundary values to a worker (it stopped taking them)");
+    transmit(*m.socket, m.header, m.payload);
     lock.lock();
   }
 }
@@ -159,19 +153,22 @@ void RemoteExchange::send(int p, long n, int s) {
       ++sent_;
       continue;
     }
-    bool ok = false;
-    try {
-      ok = wire::send(*o.socket, zmq::const_buffer(&h, sizeof h), zmq::send_flags::sndmore).has_value() &&
-           wire::send(*o.socket, payload, zmq::send_flags::none).has_value();
-    } catch (const zmq::error_t&) {
-    }
-    if (!ok) {
-      abort("cannot send boundary values to worker " +
-            worker_names_[static_cast<std::size_t>(worker_of_[static_cast<std::size_t>(o.to)])] + " (it stopped taking them)");
-      return;
-    }
+    if (!transmit(*o.socket, h, payload)) return;
     ++sent_;
   }
+}
+
+bool RemoteExchange::transmit(zmq::socket_t& socket, const wire::ExchangeHeader& h, zmq::message_t& payload) {
+  bool ok = false;
+  try {
+    ok = wire::send(socket, zmq::const_buffer(&h, sizeof h), zmq::send_flags::sndmore).has_value() &&
+         wire::send(socket, payload, zmq::send_flags::none).has_value();
+  } catch (const zmq::error_t&) {
+  }
+  if (!ok)
+    abort("cannot send boundary values to worker " +
+          worker_names_[static_cast<std::size_t>(worker_of_[static_cast<std::size_t>(h.to)])] + " (it stopped taking them)");
+  return ok;
 }
 
 void RemoteExchange::abort(const std::string& why) {

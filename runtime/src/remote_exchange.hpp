@@ -92,6 +92,8 @@ class RemoteExchange {
     zmq::message_t payload;
   };
   void deliver_delayed();
+  // Sends one message now; stops the exchange, naming the receiving worker, if it cannot.
+  bool transmit(zmq::socket_t& socket, const wire::ExchangeHeader& h, zmq::message_t& payload);
   double delay_s_ = 0.0;
   std::mutex delay_mutex_;
   std::condition_variable delay_changed_;

@@ -1,7 +1,4 @@
 // mbsflow worker: one session with a coordinator (see cluster.hpp, docs/cluster.md).
-#include <oneapi/tbb/info.h>
-#include <oneapi/tbb/task_arena.h>
-
 #include <cstdio>
 
 #include "cluster_wire.hpp"
@@ -13,7 +10,6 @@ namespace mbsflow {
 namespace {
 
 using nlohmann::json;
-using partitioned::Part;
 
 // The next command, which must be of type `want`; RunError for an abort, a lost
 // coordinator, a stop request, silence beyond timeout_s (> 0) or anything else.
@@ -117,18 +113,7 @@ void serve_worker(const WorkerOptions& wo) {
   log("running submodels " + list + " of " + std::to_string(s.worker_of.size()) + " (" + std::to_string(own) +
       " bodies), inbox " + data_address);
   const int threads = setup.value("threads", 0) > 0 ? setup.value("threads", 0) : wo.threads;
-  Outcome outcome;
-  if (s.loose) {
-    outcome = run_loose_part(s, io, ctx, inbox, start, threads, wo.stop);
-  } else {
-    const std::size_t k = s.d.submodels.size();
-    std::vector<std::unique_ptr<partitioned::Part>> owned(k);
-    std::vector<partitioned::Part*> parts(k, nullptr);
-    for (std::size_t q = 0; q < k; ++q)
-      if (s.worker_of[q] == s.me) parts[q] = (owned[q] = std::make_unique<partitioned::Part>(s.model, s.d.submodels[q], 4)).get();
-    WorkerPart w(s, io, ctx, inbox, start, parts, wo.stop);
-    outcome = run_tight(w, threads);
-  }
+  const Outcome outcome = (s.loose ? run_loose_part : run_tight)(s, io, ctx, inbox, start, threads, wo.stop);
   const auto& [failure, last] = outcome;
   if (!failure.empty()) throw RunError(failure);
   if (last && last->value("type", "") == "finish") io.goodbye();

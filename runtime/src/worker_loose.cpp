@@ -18,19 +18,15 @@ using loose::LoosePart;
 
 namespace {
 
-// Ghost slots of x[j] from the owners' values in message n: local owners' from `local`
-// (their x[j], or what they kept), remote ones' from the inbox. False if the exchange
-// was stopped.
-template <class Local>
-bool receive_values(WorkerPart& w, std::vector<std::unique_ptr<LoosePart>>& lp, long n, int j, Local local) {
+// Ghost slots of x[j] from the owners' values: local owners' through from(owner) (their
+// x[j], or what they kept), remote ones' from message n in the inbox. False if the
+// exchange was stopped.
+template <class From>
+bool receive_values(WorkerPart& w, std::vector<std::unique_ptr<LoosePart>>& lp, long n, int j, From from) {
+  loose::copy_local_ghosts(lp, j, from);
   for (int p : w.mine) {
-    LoosePart& me = *lp[static_cast<std::size_t>(p)];
-    for (const Submodel::Exchange& e : me.part.sub->exchanges) {
-      if (lp[static_cast<std::size_t>(e.neighbour)])
-        local(*lp[static_cast<std::size_t>(e.neighbour)], e, me);
-      else
-        w.exchange.wait(n, j, e.neighbour, p);
-    }
+    for (const Submodel::Exchange& e : lp[static_cast<std::size_t>(p)]->part.sub->exchanges)
+      if (!lp[static_cast<std::size_t>(e.neighbour)]) w.exchange.wait(n, j, e.neighbour, p);
     if (w.exchange.aborted()) return false;
     w.exchange.receive(p, n, j);
   }
@@ -67,8 +63,8 @@ Outcome run_loose_part(Session& s, WorkerIo& io, zmq::context_t& ctx, zmq::socke
   for (int p : w.mine) lp[static_cast<std::size_t>(p)]->make_past(s.o.t_start, lo.macro_step);
   for (int j = 1; j <= lo.extrapolation && failure.empty(); ++j) {
     for (int p : w.mine) w.exchange.send(p, j, j);
-    if (!receive_values(w, lp, j, j, [j](LoosePart& owner, const Submodel::Exchange& e, LoosePart& me) {
-          partitioned::copy_ghosts(owner.part, e, me.part, j);
+    if (!receive_values(w, lp, j, j, [j](const LoosePart& owner) -> const Eigen::VectorXd& {
+          return owner.part.x[static_cast<std::size_t>(j)];
         }))
       failure = w.exchange.why();
   }
@@ -90,17 +86,12 @@ Outcome run_loose_part(Session& s, WorkerIo& io, zmq::context_t& ctx, zmq::socke
     // The neighbours' values at the macro-step end max_lag steps back (this one for 0).
     const long lagged = index - lo.max_lag;
     if (lagged >= 1) {
-      if (!receive_values(w, lp, lo.extrapolation + lagged, 0, [lagged](LoosePart& owner, const Submodel::Exchange& e, LoosePart& me) {
-            partitioned::copy_ghosts(owner.part.system.layout(), owner.kept(lagged), e, me.part, 0);
-          })) {
+      if (!receive_values(w, lp, lo.extrapolation + lagged, 0,
+                          [lagged](const LoosePart& owner) -> const Eigen::VectorXd& { return owner.kept(lagged); })) {
         failure = w.exchange.why();
         break;
       }
-      for (int p : w.mine) {
-        LoosePart& me = *lp[static_cast<std::size_t>(p)];
-        (void)me.error(me.kept_time(lagged));
-        me.push(me.kept_time(lagged));
-      }
+      for (int p : w.mine) lp[static_cast<std::size_t>(p)]->push(lp[static_cast<std::size_t>(p)]->kept_time(lagged));
     }
     t = t1;
     step = on_output ? std::min(next_out * static_cast<long>(s.o.output_every), grid.steps)

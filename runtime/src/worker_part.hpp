@@ -61,8 +61,10 @@ class WorkerPart {
   std::vector<double> snapshot_;
 };
 
-// The loops: RK4 stages exchanged every stage (tight), or macro steps (loose).
-Outcome run_tight(WorkerPart& w, int threads);
+// The loops, each with its local submodels' state: RK4 with values exchanged every stage
+// (tight), or macro steps (loose).
+Outcome run_tight(Session& s, WorkerIo& io, zmq::context_t& ctx, zmq::socket_t& inbox, const nlohmann::json& start,
+                  int threads, const std::atomic<bool>* stop);
 Outcome run_loose_part(Session& s, WorkerIo& io, zmq::context_t& ctx, zmq::socket_t& inbox, const nlohmann::json& start,
                        int threads, const std::atomic<bool>* stop);
 

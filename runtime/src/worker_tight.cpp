@@ -4,6 +4,8 @@
 #include <oneapi/tbb/info.h>
 #include <oneapi/tbb/task_arena.h>
 
+#include <memory>
+
 #include "schedules.hpp"
 #include "step_grid.hpp"
 #include "worker_part.hpp"
@@ -12,9 +14,14 @@ namespace mbsflow {
 
 using partitioned::Part;
 
-Outcome run_tight(WorkerPart& w, int threads) {
-  Session& s = w.s;
+Outcome run_tight(Session& s, WorkerIo& io, zmq::context_t& ctx, zmq::socket_t& inbox, const nlohmann::json& start,
+                  int threads, const std::atomic<bool>* stop) {
   const std::size_t k = s.d.submodels.size();
+  std::vector<std::unique_ptr<Part>> owned(k);
+  std::vector<Part*> parts(k, nullptr);
+  for (std::size_t q = 0; q < k; ++q)
+    if (s.worker_of[q] == s.me) parts[q] = (owned[q] = std::make_unique<Part>(s.model, s.d.submodels[q], 4)).get();
+  WorkerPart w(s, io, ctx, inbox, start, parts, stop);
   const StepGrid grid = step_grid(s.o.t_start, s.o.t_end, s.o.step);
   long first = 0;
   RemoteInputs remote;

@@ -21,24 +21,44 @@ double position_gap(const MultibodySystem& sys, const Eigen::VectorXd& a, const 
   return gap;
 }
 
+// A model run for `steps` steps of a fraction of its stable step (macro steps well inside
+// the joints' periods: explicit coupling of stiff joints over longer ones is unstable, as
+// in any Jacobi co-simulation), the tight run's end state, and 3 submodels.
+struct TightCase {
+  Model m;
+  double h;
+  RunOptions o;
+  MultibodySystem sys;
+  Eigen::VectorXd tight;
+  Decomposition d;
+  TightCase(Model model, double fraction, int steps, int output_every)
+      : m(std::move(model)), h(fraction * estimate_stable_step(m).step), o(options(m, h, steps, output_every)), sys(m),
+        tight(run_simulation(sys, o, nullptr).final_state), d(decompose(m, 3)) {}
+  static RunOptions options(Model& m, double h, int steps, int output_every) {
+    m.simulation.step = h;
+    m.simulation.t_end = m.simulation.t_start + steps * h;
+    m.simulation.output_every = output_every;
+    return options_from_model(m);
+  }
+  double gap(const Eigen::VectorXd& y) const { return position_gap(sys, y, tight); }
+};
+
+ChainParams chain_of(int bodies) {
+  ChainParams c;
+  c.bodies = bodies;
+  return c;
+}
+
 }  // namespace
 
 TEST_CASE("loose coupling converges to the tight run at the extrapolation's order", "[runtime][loose]") {
-  ChainParams c;
-  c.bodies = 24;
   TrainParams t;
   t.wagons = 3;
-  for (Model m : {make_chain(c), make_train(t)}) {
-    // Macro steps well inside the joints' periods: explicit coupling of stiff joints with
-    // longer ones is unstable, as in any Jacobi co-simulation.
-    const double h = 0.05 * estimate_stable_step(m).step;
-    m.simulation.step = h;
-    m.simulation.t_end = m.simulation.t_start + 256 * h;
-    m.simulation.output_every = 8;  // every macro step size below divides the output interval
-    const RunOptions o = options_from_model(m);
-    MultibodySystem sys(m);
-    const Eigen::VectorXd tight = run_simulation(sys, o, nullptr).final_state;
-    const Decomposition d = decompose(m, 3);
+  for (const Model& model : {make_chain(chain_of(24)), make_train(t)}) {
+    // every macro step size below divides the output interval of 8 steps
+    const TightCase k(model, 0.05, 256, 8);
+    const Model& m = k.m;
+    const double h = k.h;
     const double expected[3][2] = {{0.7, 1.3}, {1.7, 2.3}, {2.4, 3.4}};  // slopes for orders 0, 1, 2
     for (int order : {0, 1, 2}) {
       std::vector<double> gaps;
@@ -48,8 +68,8 @@ TEST_CASE("loose coupling converges to the tight run at the extrapolation's orde
         lo.extrapolation = order;
         lo.threads = 2;
         LooseStats stats;
-        const RunSummary r = run_loose(m, d, o, lo, nullptr, &stats);
-        gaps.push_back(position_gap(sys, r.final_state, tight));
+        const RunSummary r = run_loose(m, k.d, k.o, lo, nullptr, &stats);
+        gaps.push_back(k.gap(r.final_state));
         CHECK(stats.macro_steps == 256 / substeps);
         CHECK(stats.max_position_error > 0.0);  // the submodels really were coupled loosely
       }
@@ -99,33 +119,23 @@ TEST_CASE("loose coupling: repeatable, DOPRI5 inside submodels, snapshots on the
 }
 
 TEST_CASE("loose coupling: the adaptive macro step keeps the coupling error below the tolerance", "[runtime][loose]") {
-  ChainParams c;
-  c.bodies = 24;
-  Model m = make_chain(c);
-  const double h = 0.05 * estimate_stable_step(m).step;
-  m.simulation.step = h;
-  m.simulation.t_end = m.simulation.t_start + 512 * h;
-  m.simulation.output_every = 64;
-  const RunOptions o = options_from_model(m);
-  MultibodySystem sys(m);
-  const Eigen::VectorXd tight = run_simulation(sys, o, nullptr).final_state;
-  const Decomposition d = decompose(m, 3);
+  const TightCase k(make_chain(chain_of(24)), 0.05, 512, 64);
   for (int order : {1, 2}) {
     std::vector<double> gaps;
     for (double tol : {1e-8, 1e-9}) {
       LooseOptions lo;
-      lo.macro_step = 8 * h;  // the first try; too long for these tolerances
+      lo.macro_step = 8 * k.h;  // the first try; too long for these tolerances
       lo.extrapolation = order;
       lo.coupling_tol = tol;
       LooseStats st;
-      const RunSummary r = run_loose(m, d, o, lo, nullptr, &st);
+      const RunSummary r = run_loose(k.m, k.d, k.o, lo, nullptr, &st);
       INFO("order " << order << ", tol " << tol << ": " << st.macro_steps << " macro steps, " << st.rejected
                     << " taken again, H " << st.smallest_macro_step << " .. " << st.largest_macro_step);
       CHECK(st.max_position_error <= tol);
       for (double e : st.position_error) CHECK(e <= tol);
       CHECK(st.rejected > 0);
       CHECK(st.smallest_macro_step < st.largest_macro_step);
-      gaps.push_back(position_gap(sys, r.final_state, tight));
+      gaps.push_back(k.gap(r.final_state));
     }
     // Ten times tighter: the end state ten times closer to the tight run, give or take.
     INFO("order " << order << ": gaps " << gaps[0] << ", " << gaps[1]);
@@ -160,26 +170,16 @@ TEST_CASE("loose coupling: the energy of an undamped chain stays bounded at a te
 
 TEST_CASE("loose coupling with a lag: values L macro steps old, still converging at the extrapolation's order",
           "[runtime][loose]") {
-  ChainParams c;
-  c.bodies = 24;
-  Model m = make_chain(c);
-  const double h = 0.05 * estimate_stable_step(m).step;
-  m.simulation.step = h;
-  m.simulation.t_end = m.simulation.t_start + 256 * h;
-  m.simulation.output_every = 8;
-  const RunOptions o = options_from_model(m);
-  MultibodySystem sys(m);
-  const Eigen::VectorXd tight = run_simulation(sys, o, nullptr).final_state;
-  const Decomposition d = decompose(m, 3);
+  const TightCase k(make_chain(chain_of(24)), 0.05, 256, 8);
   for (int order : {1, 2}) {
     std::vector<double> lag0, lag1;
     for (int substeps : {4, 2, 1}) {
       for (int lag : {0, 1}) {
         LooseOptions lo;
-        lo.macro_step = substeps * h;
+        lo.macro_step = substeps * k.h;
         lo.extrapolation = order;
         lo.max_lag = lag;
-        (lag ? lag1 : lag0).push_back(position_gap(sys, run_loose(m, d, o, lo, nullptr).final_state, tight));
+        (lag ? lag1 : lag0).push_back(k.gap(run_loose(k.m, k.d, k.o, lo, nullptr).final_state));
       }
     }
     INFO("order " << order << ": lag 0 gaps " << lag0[0] << " " << lag0[1] << " " << lag0[2] << "; lag 1 gaps " << lag1[0]

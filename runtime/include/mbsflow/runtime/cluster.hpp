@@ -71,6 +71,9 @@ struct ClusterCoupling {
 RunSummary run_cluster(const Model& model, const std::string& model_json, const Decomposition& d,
                        const ClusterConfig& cluster, const RunOptions& options, ResultSink* sink,
                        ClusterStats* stats = nullptr, ClusterCoupling coupling = {});
+// The checks run_cluster makes of its settings before it contacts anyone (InputError);
+// callers that start workers first call it before.
+void check_cluster_run(const RunOptions& options, const ClusterCoupling& coupling);
 
 struct WorkerOptions {
   std::string listen;  // control endpoint to bind; a tcp port of * picks a free one
