@@ -1,0 +1,68 @@
+#pragma once
+// An initial value problem y' = f(t, y), y(t0) = y0, for the implicit methods: the user
+// system of the library API and the built-in test problems.
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+#include <functional>
+#include <optional>
+#include <string>
+
+namespace mbsflow {
+
+// Rows [begin, end) of a vector: the right-hand side may be asked for a slice of the
+// equations only, so that large systems split their work over threads.
+struct RowRange {
+  Eigen::Index begin = 0, end = 0;
+};
+
+struct OdeProblem {
+  std::string name;
+  Eigen::Index size = 0;
+  double t0 = 0, t_end = 1;
+  Eigen::VectorXd y0;
+  // dydt[rows] = f(t, y)[rows]; y is the whole state, only the rows in the range are
+  // written. A system that cannot split its evaluation computes what it needs for the range.
+  std::function<void(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt, RowRange rows)> rhs;
+  // Optional: the Jacobian df/dy at (t, y), written into a matrix whose sparsity pattern is
+  // `sparsity` (or dense when no pattern is given).
+  std::function<void(double t, const Eigen::VectorXd& y, Eigen::SparseMatrix<double>& jac)> jacobian;
+  // Optional: the structural non-zeros of df/dy (values ignored). Without it the Jacobian
+  // is taken as dense; with it finite differences need one evaluation per column colour.
+  std::optional<Eigen::SparseMatrix<double>> sparsity;
+  // Optional: the exact solution, for error reports and tests.
+  std::function<Eigen::VectorXd(double t)> exact;
+
+  void evaluate(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const { rhs(t, y, dydt, {0, size}); }
+};
+
+// A problem from a whole-vector right-hand side f(t, y, dydt) (no slicing).
+template <class F>
+OdeProblem make_ode_problem(std::string name, double t0, double t_end, Eigen::VectorXd y0, F f) {
+  OdeProblem p;
+  p.name = std::move(name);
+  p.size = y0.size();
+  p.t0 = t0;
+  p.t_end = t_end;
+  p.y0 = std::move(y0);
+  // Evaluated whole, once per call, and copied into the requested rows.
+  p.rhs = [f = std::move(f)](double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt, RowRange rows) {
+    if (rows.begin == 0 && rows.end == y.size()) {
+      f(t, y, dydt);
+      return;
+    }
+    Eigen::VectorXd all(y.size());
+    f(t, y, all);
+    dydt.segment(rows.begin, rows.end - rows.begin) = all.segment(rows.begin, rows.end - rows.begin);
+  };
+  return p;
+}
+
+// The seed's test problems (eqs. 10-12 of seed 001), each with its exact solution and
+// exact Jacobian.
+OdeProblem hairer_wanner_problem();  // eq. 10 on [0, 2.5]
+OdeProblem detest_b1_problem();      // eq. 11 on [0, 20]
+OdeProblem heat_problem(Eigen::Index n);  // eq. 12 on [0, 4]
+// By name: "hnw", "b1", "heat" (n used by heat); throws std::invalid_argument otherwise.
+OdeProblem builtin_problem(const std::string& name, Eigen::Index n);
+
+}  // namespace mbsflow

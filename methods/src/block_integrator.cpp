@@ -1,0 +1,372 @@
+// The driver of the block methods: start-up, the window of past points, the Jacobian and
+// factorisations, and the seed's step control from the s- and (s+1)-point blocks.
+#include "mbsflow/methods/block_integrator.hpp"
+
+#include <oneapi/tbb/parallel_for.h>
+#include <oneapi/tbb/task_arena.h>
+
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <sstream>
+#include <stdexcept>
+
+#include "block_solve.hpp"
+#include "mbsflow/methods/jacobian.hpp"
+#include "mbsflow/methods/tsan_annotations.hpp"
+
+namespace mbsflow {
+
+const char* to_string(BlockIteration i) { return i == BlockIteration::newton ? "newton" : "functional"; }
+
+BlockIteration block_iteration_from_string(const std::string& name) {
+  if (name == "newton") return BlockIteration::newton;
+  if (name == "functional") return BlockIteration::functional;
+  throw std::invalid_argument("unknown iteration '" + name + "' (newton or functional)");
+}
+
+Eigen::VectorXd AcceptedBlock::interpolate(double t) const {
+  const DenseWeights w = dense_output_weights(*method, (t - t0) / tau);
+  const int m = method->spec.m;
+  Eigen::VectorXd y = Eigen::VectorXd::Zero((*u)[0].size());
+  for (int j = 0; j < m; ++j) {
+    if (w.wu(j) != 0) y += w.wu(j) * (*past_u)[static_cast<std::size_t>(j)];
+    if (w.wd(j) != 0) y += (tau * w.wd(j)) * (*past_f)[static_cast<std::size_t>(j)];
+  }
+  for (int i = 0; i < points; ++i)
+    if (w.wg(i) != 0) y += (tau * w.wg(i)) * (*f)[static_cast<std::size_t>(i)];
+  return y;
+}
+
+namespace {
+
+void check_settings(const OdeProblem& p, const BlockSettings& s) {
+  auto bad = [](const std::string& what) { throw std::invalid_argument(what); };
+  if (p.size < 1 || p.y0.size() != p.size || !p.rhs) bad("the problem needs a size, y0 of that size and a right-hand side");
+  if (!(p.t_end > p.t0)) bad("the end time must be after the start time");
+  if (!(s.rtol > 0) || !(s.atol > 0)) bad("tolerances must be positive");
+  if (!(s.global_fraction > 0 && s.global_fraction <= 1)) bad("global_fraction must be in (0, 1]");
+  if (!(s.facmin > 0 && s.facmin < 1 && s.facmax > 1)) bad("facmin must be in (0, 1) and facmax above 1");
+  if (s.fixed_step < 0 || s.initial_step < 0) bad("steps must be positive");
+  if (s.threads < 0) bad("threads must be >= 0");
+}
+
+double scaled_max(const Eigen::VectorXd& v, const Eigen::VectorXd& scale) {
+  return (v.array().abs() / scale.array()).maxCoeff();
+}
+
+// Hairer & Wanner's starting step (I, II.4) for a method of order q, with the block's
+// scaled max norm.
+double starting_step(const OdeProblem& p, const Eigen::VectorXd& y0, const Eigen::VectorXd& f0, const Eigen::VectorXd& scale,
+                     int q, long& evaluations) {
+  const double d0 = scaled_max(y0, scale), d1 = scaled_max(f0, scale);
+  const double h0 = (d0 < 1e-5 || d1 < 1e-5) ? 1e-6 : 0.01 * d0 / d1;
+  Eigen::VectorXd y1 = y0 + h0 * f0, f1(p.size);
+  p.evaluate(p.t0 + h0, y1, f1);
+  ++evaluations;
+  const double d2 = scaled_max(f1 - f0, scale) / h0, dm = std::max(d1, d2);
+  const double h1 = dm <= 1e-15 ? std::max(1e-6, h0 * 1e-3) : std::pow(0.01 / dm, 1.0 / (q + 1));
+  return std::min(100 * h0, h1);
+}
+
+// The last accepted block (or the start-up block), kept for the dense output that
+// rebuilds the window of a multistep method when the step changes.
+struct LastBlock {
+  const BlockCoefficients* method = nullptr;
+  double t0 = 0, tau = 0;
+  std::vector<Eigen::VectorXd> past_u, past_f, u, f;
+  AcceptedBlock view() const {
+    AcceptedBlock b;
+    b.t0 = t0;
+    b.tau = tau;
+    b.points = static_cast<int>(u.size());
+    b.method = method;
+    b.past_u = &past_u;
+    b.past_f = &past_f;
+    b.u = &u;
+    b.f = &f;
+    return b;
+  }
+};
+
+BlockMethodSpec larger(const BlockMethodSpec& s) { return {s.m, s.s + 1, s.order > 0 ? s.order + 1 : 0}; }
+
+// The first m - 1 points of a multistep method come from a one-step block method with
+// max(s, m - 1, p - 1) points at the same spacing, of order at least p (so the start does
+// not lower the order).
+BlockMethodSpec start_up_method(const BlockMethodSpec& s) {
+  return {1, std::max({s.s, s.m - 1, s.effective_order() - 1}), 0};
+}
+
+class Driver {
+ public:
+  Driver(const OdeProblem& p, const BlockSettings& s, const std::function<void(const AcceptedBlock&)>& on_block)
+      : p_(p), s_(s), on_block_(on_block),
+        fixed_(s.fixed_step > 0),
+        slice_(s.slice_size > 0 ? s.slice_size : p.size >= 8192 ? 4096 : p.size),
+        arena_(s.threads > 0 ? s.threads : tbb::task_arena::automatic),
+        small_(generate_block_method(s.method), p, s, slice_),
+        large_(generate_block_method(larger(s.method)), p, s, slice_) {
+    if (s.method.m > 1) starter_ = std::make_unique<BlockSolve>(generate_block_method(start_up_method(s.method)), p, s, slice_);
+    // A flow graph runs its nodes in the arena it was made in.
+    arena_.execute([&] {
+      graph_ = std::make_unique<tbb::flow::graph>();
+      small_.build(*graph_);
+      if (!fixed_) large_.build(*graph_);
+      if (starter_) starter_->build(*graph_);
+    });
+    if (s.iteration == BlockIteration::newton) jacobian_ = std::make_unique<JacobianEvaluator>(p, s.finite_difference_jacobian);
+  }
+
+  BlockResult run();
+
+ private:
+  int m() const { return s_.method.m; }
+  bool newton() const { return s_.iteration == BlockIteration::newton; }
+  void rebuild_window(double tau);
+  bool solve(std::initializer_list<BlockSolve*> blocks, double tau);
+  bool factorize(std::initializer_list<BlockSolve*> blocks, double tau);
+  void accept(const BlockSolve& b, double tau);
+  void record(double tau, int taken, double error, const BlockSolve& a, const BlockSolve* b = nullptr);
+  double block_difference(double tau) const;
+
+  const OdeProblem& p_;
+  const BlockSettings& s_;
+  const std::function<void(const AcceptedBlock&)>& on_block_;
+  bool fixed_;
+  Eigen::Index slice_;
+  tbb::task_arena arena_;
+  BlockSolve small_, large_;
+  std::unique_ptr<BlockSolve> starter_;
+  std::unique_ptr<tbb::flow::graph> graph_;
+  std::unique_ptr<JacobianEvaluator> jacobian_;
+  Eigen::SparseMatrix<double> jac_;
+  BlockResult result_;
+  double t_ = 0;
+  double window_tau_ = 0;
+  std::vector<Eigen::VectorXd> past_u_, past_f_;  // the window: m points, oldest first
+  Eigen::VectorXd scale_;
+  LastBlock last_;
+  bool have_jacobian_ = false;
+  bool jacobian_at_point_ = false;  // evaluated at the window's last point
+  bool jacobian_stale_ = false;     // to be evaluated again before the next factorisation
+  const BlockSolve* factorized_for_ = nullptr;
+  double factorized_tau_ = std::numeric_limits<double>::quiet_NaN();
+};
+
+void Driver::record(double tau, int taken, double error, const BlockSolve& a, const BlockSolve* b) {
+  BlockStepRecord r;
+  r.t = t_;
+  r.tau = tau;
+  r.taken = taken;
+  r.error = error;
+  r.iterations_s = a.iterations;
+  r.iterations_s1 = b ? b->iterations : 0;
+  r.iteration_failed = a.failed || (b && b->failed);
+  result_.steps.push_back(r);
+}
+
+// Factorises I - tau mu_e J for every system of the blocks (in parallel), evaluating J
+// first when there is none or it is stale. Kept while tau and J stay the same. False when
+// a matrix is singular (or J is not finite): the step is then retried smaller.
+bool Driver::factorize(std::initializer_list<BlockSolve*> blocks, double tau) {
+  BlockStats& st = result_.stats;
+  if (!have_jacobian_ || jacobian_stale_) {
+    jac_ = jacobian_->evaluate(t_, past_u_.back(), past_f_.back(), st.rhs_evaluations);
+    ++st.jacobians;
+    have_jacobian_ = jacobian_at_point_ = true;
+    jacobian_stale_ = false;
+    factorized_for_ = nullptr;
+  }
+  if (tau == factorized_tau_ && factorized_for_ == *blocks.begin()) return true;
+  std::vector<std::pair<BlockSolve*, int>> work;
+  for (BlockSolve* b : blocks)
+    for (int e = 0; e < b->systems(); ++e) work.emplace_back(b, e);
+  const LinearSolverKind kind = choose_linear_solver(jac_, s_.linear_solver);
+  st.factorizations += static_cast<long>(work.size());
+  st.linear_solver = kind;
+  factorized_for_ = nullptr;
+  try {
+    arena_.execute([&] {
+      tbb::parallel_for(std::size_t(0), work.size(),
+                        [&](std::size_t w) { work[w].first->factorize(work[w].second, jac_, tau, kind); });
+    });
+  } catch (const std::runtime_error&) {
+    return false;
+  }
+  factorized_tau_ = tau;
+  factorized_for_ = *blocks.begin();
+  return true;
+}
+
+bool Driver::solve(std::initializer_list<BlockSolve*> blocks, double tau) {
+  scale_ = s_.atol + s_.rtol * past_u_.back().array().abs();
+  for (BlockSolve* b : blocks) b->setup(t_, tau, past_u_, past_f_, scale_);
+  if (newton() && !factorize(blocks, tau)) {
+    for (BlockSolve* b : blocks) b->failed = true;
+    ++result_.stats.steps;
+    return false;
+  }
+  arena_.execute([&] {
+    for (BlockSolve* b : blocks) b->start();
+    graph_->wait_for_all();
+  });
+  bool ok = true;
+  for (BlockSolve* b : blocks) {
+    b->finished();
+    result_.stats.rhs_evaluations += b->evaluations;
+    result_.stats.iterations += b->iterations;
+    ok = ok && !b->failed;
+  }
+  ++result_.stats.steps;
+  return ok;
+}
+
+// Largest scaled difference of the two blocks over their s shared points.
+double Driver::block_difference(double) const {
+  double err = 0;
+  for (int i = 0; i < small_.points(); ++i) {
+    const Eigen::ArrayXd sc = s_.atol + s_.rtol * past_u_.back().array().abs().max(large_.u[i].array().abs());
+    err = std::max(err, ((large_.u[i] - small_.u[i]).array().abs() / sc).maxCoeff());
+  }
+  return err;
+}
+
+void Driver::accept(const BlockSolve& b, double tau) {
+  last_.method = &b.method();
+  last_.t0 = t_;
+  last_.tau = tau;
+  last_.past_u = past_u_;
+  last_.past_f = past_f_;
+  last_.u = b.u;
+  last_.f = b.f;
+  if (on_block_) on_block_(last_.view());
+  // The new window: the last m of the old window and the block's points.
+  const int k = b.points();
+  std::vector<Eigen::VectorXd> u = past_u_, f = past_f_;
+  u.insert(u.end(), b.u.begin(), b.u.end());
+  f.insert(f.end(), b.f.begin(), b.f.end());
+  past_u_.assign(u.end() - m(), u.end());
+  past_f_.assign(f.end() - m(), f.end());
+  t_ = last_.t0 + k * tau;
+  window_tau_ = tau;
+  jacobian_at_point_ = false;
+  ++result_.stats.accepted;
+}
+
+// A multistep method whose step changed: its past points at the new spacing from the
+// last block's collocation polynomial, and f evaluated there.
+void Driver::rebuild_window(double tau) {
+  const AcceptedBlock view = last_.view();
+  for (int j = 1; j < m(); ++j) {
+    const double tj = t_ - j * tau;
+    const std::size_t at = static_cast<std::size_t>(m() - 1 - j);
+    past_u_[at] = view.interpolate(tj);
+    p_.evaluate(tj, past_u_[at], past_f_[at]);
+    ++result_.stats.rhs_evaluations;
+  }
+  window_tau_ = tau;
+}
+
+BlockResult Driver::run() {
+  BlockStats& st = result_.stats;
+  t_ = p_.t0;
+  past_u_ = {p_.y0};
+  past_f_ = {Eigen::VectorXd(p_.size)};
+  p_.evaluate(t_, past_u_[0], past_f_[0]);
+  ++st.rhs_evaluations;
+  const int s = s_.method.s, q = small_.method().order;
+  double tau = s_.fixed_step;
+  if (!fixed_) {
+    scale_ = s_.atol + s_.rtol * p_.y0.array().abs();
+    tau = s_.initial_step > 0 ? s_.initial_step : starting_step(p_, p_.y0, past_f_[0], scale_, q, st.rhs_evaluations);
+  }
+  const double t_end = p_.t_end, eps_t = 1e-12 * std::max(1.0, std::abs(t_end));
+  auto fail = [&](const std::string& why) {
+    std::ostringstream os;
+    os << why << " at t = " << t_ << " (step " << tau << ")";
+    throw std::runtime_error(os.str());
+  };
+  // After an iteration that did not converge: a fresh Jacobian first, then a smaller step.
+  auto iteration_failed = [&] {
+    ++st.iteration_failures;
+    ++st.rejected;
+    if (newton() && !jacobian_at_point_)
+      jacobian_stale_ = true;
+    else
+      tau *= 0.5;
+  };
+  while (t_end - t_ > eps_t) {
+    if (st.steps >= s_.max_steps) fail("reached the maximum number of steps");
+    const double min_step = s_.min_step > 0 ? s_.min_step : 1e-14 * std::max(1.0, std::abs(t_));
+    if (tau < min_step) fail("step size underflow");
+    if (past_u_.size() < static_cast<std::size_t>(m())) {  // start-up of a multistep method
+      tau = std::min(tau, (t_end - t_) / starter_->points());
+      if (!solve({starter_.get()}, tau)) {
+        record(tau, 0, std::numeric_limits<double>::quiet_NaN(), *starter_);
+        iteration_failed();
+        continue;
+      }
+      record(tau, starter_->points(), 0, *starter_);
+      accept(*starter_, tau);
+      factorized_for_ = nullptr;
+      continue;
+    }
+    bool allow_large = !fixed_;
+    const double left = t_end - t_;
+    if (left < (s + 0.5) * tau) {
+      tau = left / s;  // the s-point block lands on the end
+      allow_large = false;
+    } else if (left < (s + 1) * tau) {
+      tau = left / (s + 1);  // the (s+1)-point block lands on the end
+    }
+    if (m() > 1 && tau != window_tau_) rebuild_window(tau);
+    const bool ok = fixed_ ? solve({&small_}, tau) : solve({&small_, &large_}, tau);
+    if (!ok) {
+      record(tau, 0, std::numeric_limits<double>::quiet_NaN(), small_, fixed_ ? nullptr : &large_);
+      iteration_failed();
+      continue;
+    }
+    if (fixed_) {
+      record(tau, s, 0, small_);
+      accept(small_, tau);
+      continue;
+    }
+    const double err = block_difference(tau), gf = s_.global_fraction;
+    const double fac = err == 0 ? s_.facmax
+                                : std::min(s_.facmax, std::max(s_.facmin, s_.safety * std::pow(gf / err, 1.0 / q)));
+    const int taken = err <= gf && allow_large ? s + 1 : err <= 1 ? s : 0;
+    record(tau, taken, err, small_, &large_);
+    if (taken == 0) {
+      ++st.rejected;
+      tau *= std::min(fac, 0.9);
+      continue;
+    }
+    if (newton() && (small_.iterations > 2 || large_.iterations > 2)) jacobian_stale_ = true;
+    double tau_new = tau * fac;
+    if (newton() && fac >= 1 && fac <= 1.2) tau_new = tau;  // keep the factorisations
+    if (m() > 1) tau_new = std::min(tau_new, tau * double(taken + m() - 1) / double(m() - 1));
+    if (taken == s + 1) {
+      ++st.taken_s1;
+      accept(large_, tau);
+    } else {
+      ++st.taken_s;
+      accept(small_, tau);
+    }
+    tau = tau_new;
+  }
+  result_.t = t_;
+  result_.y = past_u_.back();
+  return result_;
+}
+
+}  // namespace
+
+BlockResult integrate_block(const OdeProblem& problem, const BlockSettings& settings,
+                            const std::function<void(const AcceptedBlock&)>& on_block) {
+  check_settings(problem, settings);
+  Driver d(problem, settings, on_block);
+  return d.run();
+}
+
+}  // namespace mbsflow

@@ -1,0 +1,313 @@
+// Generation of collocation block methods in exact rational arithmetic
+// (Boost.Multiprecision's cpp_rational: header-only, part of libboost-dev).
+#include "mbsflow/methods/block_method.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/LU>
+#include <boost/multiprecision/cpp_int.hpp>
+#include <cmath>
+#include <stdexcept>
+
+namespace mbsflow {
+namespace {
+
+using Rational = boost::multiprecision::cpp_rational;
+
+std::string text(const Rational& r) {
+  const auto num = boost::multiprecision::numerator(r), den = boost::multiprecision::denominator(r);
+  return den == 1 ? num.str() : num.str() + "/" + den.str();
+}
+double to_double(const Rational& r) { return r.convert_to<double>(); }
+
+template <class T>
+T power(T x, int l) {
+  T r = 1;
+  for (int i = 0; i < l; ++i) r *= x;
+  return r;
+}
+
+// The unknowns of a row: u-coefficients at points j = -(m-1)..0 (index 0..m-1), then
+// f-coefficients at points j = -(m-1)..s (index m..2m+s-1).
+int point_of(const BlockMethodSpec& spec, int unknown) {
+  return unknown < spec.m ? unknown - (spec.m - 1) : unknown - spec.m - (spec.m - 1);
+}
+
+// Which unknowns a method of the spec's order keeps (see the header for the order in
+// which the others are dropped).
+std::vector<bool> kept_unknowns(const BlockMethodSpec& spec) {
+  const int n = 2 * spec.m + spec.s;
+  std::vector<bool> keep(n, true);
+  int drop = spec.maximal_order() - spec.effective_order();
+  for (int j = 0; j < spec.m - 1 && drop > 0; ++j, --drop) keep[j] = false;           // old u
+  for (int j = spec.m; j < 2 * spec.m && drop > 0; ++j, --drop) keep[j] = false;      // old f, then f_0
+  return keep;
+}
+
+// Exactness on 1, x, ..., x^order at the target x: one equation per power, one column
+// per kept unknown.
+template <class T>
+void order_system(const BlockMethodSpec& spec, const std::vector<bool>& keep, const T& x, std::vector<std::vector<T>>& a,
+                  std::vector<T>& b) {
+  const int q = spec.effective_order();
+  a.assign(q + 1, {});
+  b.assign(q + 1, T(0));
+  for (int l = 0; l <= q; ++l) {
+    for (int k = 0; k < static_cast<int>(keep.size()); ++k) {
+      if (!keep[k]) continue;
+      const T j = T(point_of(spec, k));
+      if (k < spec.m)
+        a[l].push_back(power(j, l));
+      else
+        a[l].push_back(l == 0 ? T(0) : T(l) * power(j, l - 1));
+    }
+    b[l] = power(x, l);
+  }
+}
+
+// Gaussian elimination with pivoting on the first non-zero (exact) entry.
+std::vector<Rational> solve_exact(std::vector<std::vector<Rational>> a, std::vector<Rational> b) {
+  const std::size_t n = b.size();
+  for (std::size_t c = 0; c < n; ++c) {
+    std::size_t p = c;
+    while (p < n && a[p][c] == 0) ++p;
+    if (p == n) throw std::invalid_argument("the order conditions of this block method are singular");
+    std::swap(a[p], a[c]);
+    std::swap(b[p], b[c]);
+    for (std::size_t r = 0; r < n; ++r) {
+      if (r == c || a[r][c] == 0) continue;
+      const Rational f = a[r][c] / a[c][c];
+      for (std::size_t k = c; k < n; ++k) a[r][k] -= f * a[c][k];
+      b[r] -= f * b[c];
+    }
+  }
+  for (std::size_t c = 0; c < n; ++c) b[c] /= a[c][c];
+  return b;
+}
+
+Rational determinant(std::vector<std::vector<Rational>> a) {
+  const std::size_t n = a.size();
+  Rational det = 1;
+  for (std::size_t c = 0; c < n; ++c) {
+    std::size_t p = c;
+    while (p < n && a[p][c] == 0) ++p;
+    if (p == n) return 0;
+    if (p != c) {
+      std::swap(a[p], a[c]);
+      det = -det;
+    }
+    det *= a[c][c];
+    for (std::size_t r = c + 1; r < n; ++r) {
+      const Rational f = a[r][c] / a[c][c];
+      for (std::size_t k = c; k < n; ++k) a[r][k] -= f * a[c][k];
+    }
+  }
+  return det;
+}
+
+void check_spec(const BlockMethodSpec& spec) {
+  if (spec.m < 1 || spec.s < 1) throw std::invalid_argument("a block method needs m >= 1 and s >= 1");
+  if (spec.order < 0 || spec.order > spec.maximal_order())
+    throw std::invalid_argument("order " + std::to_string(spec.order) + " is outside 1.." +
+                                std::to_string(spec.maximal_order()) + " (the maximal order 2m+s-1)");
+  if (spec.order > 0 && spec.order < spec.s)
+    throw std::invalid_argument("order " + std::to_string(spec.order) + " is below s = " + std::to_string(spec.s) +
+                                ": a block method of s points keeps its s f-values, so its order is at least s");
+}
+
+// The exact coefficients of all rows, row-major per kind, as rationals.
+struct ExactRows {
+  std::vector<Rational> q, d, g;
+};
+ExactRows exact_rows(const BlockMethodSpec& spec, const std::vector<bool>& keep) {
+  ExactRows rows;
+  const int n = 2 * spec.m + spec.s;
+  for (int i = 1; i <= spec.s; ++i) {
+    std::vector<std::vector<Rational>> a;
+    std::vector<Rational> b;
+    order_system<Rational>(spec, keep, Rational(i), a, b);
+    const std::vector<Rational> x = solve_exact(std::move(a), std::move(b));
+    std::vector<Rational> full(n, 0);
+    for (int k = 0, used = 0; k < n; ++k)
+      if (keep[k]) full[k] = x[used++];
+    for (int k = 0; k < n; ++k) {
+      auto& to = k < spec.m ? rows.q : k < 2 * spec.m ? rows.d : rows.g;
+      to.push_back(full[k]);
+    }
+  }
+  return rows;
+}
+
+}  // namespace
+
+BlockCoefficients generate_block_method(const BlockMethodSpec& spec) {
+  check_spec(spec);
+  BlockCoefficients c;
+  c.spec = spec;
+  c.order = spec.effective_order();
+  const std::vector<bool> keep = kept_unknowns(spec);
+  c.keep_u.assign(keep.begin(), keep.begin() + spec.m);
+  c.keep_f.assign(keep.begin() + spec.m, keep.end());
+  const ExactRows rows = exact_rows(spec, keep);
+  c.q.resize(spec.s, spec.m);
+  c.d.resize(spec.s, spec.m);
+  c.g.resize(spec.s, spec.s);
+  for (int i = 0; i < spec.s; ++i) {
+    for (int j = 0; j < spec.m; ++j) {
+      c.q(i, j) = to_double(rows.q[i * spec.m + j]);
+      c.d(i, j) = to_double(rows.d[i * spec.m + j]);
+    }
+    for (int j = 0; j < spec.s; ++j) c.g(i, j) = to_double(rows.g[i * spec.s + j]);
+  }
+  for (const Rational& r : rows.q) c.q_exact.push_back(text(r));
+  for (const Rational& r : rows.d) c.d_exact.push_back(text(r));
+  for (const Rational& r : rows.g) c.g_exact.push_back(text(r));
+  return c;
+}
+
+DenseWeights dense_output_weights(const BlockCoefficients& method, double theta) {
+  const BlockMethodSpec spec = method.spec;
+  std::vector<bool> keep(method.keep_u);
+  keep.insert(keep.end(), method.keep_f.begin(), method.keep_f.end());
+  std::vector<std::vector<double>> a;
+  std::vector<double> b;
+  order_system<double>(spec, keep, theta, a, b);
+  const int n = static_cast<int>(b.size());
+  Eigen::MatrixXd am(n, n);
+  Eigen::VectorXd bv(n);
+  for (int r = 0; r < n; ++r) {
+    for (int k = 0; k < n; ++k) am(r, k) = a[r][k];
+    bv(r) = b[r];
+  }
+  const Eigen::VectorXd x = am.fullPivLu().solve(bv);
+  DenseWeights w{Eigen::VectorXd::Zero(spec.m), Eigen::VectorXd::Zero(spec.m), Eigen::VectorXd::Zero(spec.s)};
+  for (int k = 0, used = 0; k < static_cast<int>(keep.size()); ++k) {
+    if (!keep[k]) continue;
+    const double v = x(used++);
+    if (k < spec.m)
+      w.wu(k) = v;
+    else if (k < 2 * spec.m)
+      w.wd(k - spec.m) = v;
+    else
+      w.wg(k - 2 * spec.m) = v;
+  }
+  return w;
+}
+
+std::string order_condition_residual(const BlockCoefficients& method) {
+  const BlockMethodSpec& spec = method.spec;
+  Rational worst = 0;
+  auto parse = [](const std::string& s) { return Rational(s); };
+  for (int i = 1; i <= spec.s; ++i) {
+    for (int l = 0; l <= method.order; ++l) {
+      Rational sum = 0;
+      for (int j = 0; j < spec.m; ++j) {
+        const Rational p = Rational(j - (spec.m - 1));
+        sum += parse(method.q_exact[(i - 1) * spec.m + j]) * power(p, l);
+        if (l > 0) sum += Rational(l) * parse(method.d_exact[(i - 1) * spec.m + j]) * power(p, l - 1);
+      }
+      if (l > 0)
+        for (int j = 1; j <= spec.s; ++j)
+          sum += Rational(l) * parse(method.g_exact[(i - 1) * spec.s + j - 1]) * power(Rational(j), l - 1);
+      const Rational residual = abs(sum - power(Rational(i), l));
+      if (residual > worst) worst = residual;
+    }
+  }
+  return text(worst);
+}
+
+StabilityFunction stability_function(const BlockCoefficients& method) {
+  const int s = method.spec.s;
+  if (method.spec.m != 1) throw std::invalid_argument("a stability function is given for one-step methods (m = 1) only");
+  // u = (I - z G)^{-1} (1 + z d) u0; u_s by Cramer's rule. P and Q have degree <= s: take
+  // them at z = 0..s and interpolate.
+  std::vector<Rational> qv, pv;
+  for (int zi = 0; zi <= s; ++zi) {
+    const Rational z = zi;
+    std::vector<std::vector<Rational>> a(s, std::vector<Rational>(s));
+    for (int i = 0; i < s; ++i)
+      for (int j = 0; j < s; ++j) a[i][j] = Rational(i == j ? 1 : 0) - z * Rational(method.g_exact[i * s + j]);
+    qv.push_back(determinant(a));
+    for (int i = 0; i < s; ++i) a[i][s - 1] = 1 + z * Rational(method.d_exact[i]);
+    pv.push_back(determinant(a));
+  }
+  std::vector<std::vector<Rational>> vandermonde(s + 1, std::vector<Rational>(s + 1));
+  for (int zi = 0; zi <= s; ++zi)
+    for (int k = 0; k <= s; ++k) vandermonde[zi][k] = power(Rational(zi), k);
+  const std::vector<Rational> pc = solve_exact(vandermonde, pv), qc = solve_exact(vandermonde, qv);
+  StabilityFunction r;
+  r.numerator.resize(s + 1);
+  r.denominator.resize(s + 1);
+  for (int k = 0; k <= s; ++k) {
+    r.numerator_exact.push_back(text(pc[k]));
+    r.denominator_exact.push_back(text(qc[k]));
+    r.numerator(k) = to_double(pc[k]);
+    r.denominator(k) = to_double(qc[k]);
+  }
+  return r;
+}
+
+std::complex<double> StabilityFunction::operator()(std::complex<double> z) const {
+  std::complex<double> p = 0, q = 0;
+  for (Eigen::Index k = numerator.size() - 1; k >= 0; --k) p = p * z + numerator(k);
+  for (Eigen::Index k = denominator.size() - 1; k >= 0; --k) q = q * z + denominator(k);
+  return p / q;
+}
+
+double StabilityFunction::at_infinity() const {
+  auto degree = [](const std::vector<std::string>& c) {
+    int d = static_cast<int>(c.size()) - 1;
+    while (d > 0 && c[d] == "0") --d;
+    return d;
+  };
+  const int dp = degree(numerator_exact), dq = degree(denominator_exact);
+  if (dp < dq) return 0.0;
+  if (dp > dq) return std::numeric_limits<double>::infinity();
+  return std::abs(numerator(dp) / denominator(dq));
+}
+
+ZeroStability check_zero_stability(const BlockCoefficients& method) {
+  const int m = method.spec.m, s = method.spec.s;
+  ZeroStability z;
+  if (m == 1) return z;
+  // The next window is the last m of (window, block): entry a is combined point s + a.
+  Eigen::MatrixXd map = Eigen::MatrixXd::Zero(m, m);
+  for (int a = 0; a < m; ++a) {
+    const int c = s + a;
+    if (c < m)
+      map(a, c) = 1;
+    else
+      map.row(a) = method.q.row(c - m);
+  }
+  const Eigen::VectorXcd ev = map.eigenvalues();
+  int principal = -1;
+  for (int i = 0; i < m; ++i)
+    if (principal < 0 || std::abs(ev(i) - 1.0) < std::abs(ev(principal) - 1.0)) principal = i;
+  const double slack = 1e-9;
+  for (int i = 0; i < m; ++i)
+    if (i != principal) z.parasitic_radius = std::max(z.parasitic_radius, std::abs(ev(i)));
+  z.strongly = z.parasitic_radius < 1 - slack;
+  z.zero_stable = z.parasitic_radius <= 1 + slack;
+  for (int i = 0; i < m; ++i)  // eigenvalues on the circle must be simple
+    for (int j = i + 1; j < m; ++j)
+      if (std::abs(ev(i)) > 1 - slack && std::abs(ev(i) - ev(j)) < 1e-6) z.zero_stable = false;
+  return z;
+}
+
+StabilityReport check_a_stability(const BlockCoefficients& method) {
+  const StabilityFunction r = stability_function(method);
+  StabilityReport rep;
+  rep.at_infinity = r.at_infinity();
+  rep.min_pole_real_part = std::numeric_limits<double>::infinity();
+  const Eigen::VectorXcd mu = method.g.eigenvalues();
+  for (Eigen::Index i = 0; i < mu.size(); ++i)
+    if (std::abs(mu(i)) > 1e-14) rep.min_pole_real_part = std::min(rep.min_pole_real_part, (1.0 / mu(i)).real());
+  for (int k = 0; k <= 4000; ++k) {
+    const double y = k == 0 ? 0.0 : std::pow(10.0, -3.0 + 7.0 * (k - 1) / 3999.0);
+    rep.max_on_imaginary_axis = std::max(rep.max_on_imaginary_axis, std::abs(r({0.0, y})));
+  }
+  const double slack = 1e-12;
+  rep.a_stable = rep.min_pole_real_part > 0 && rep.max_on_imaginary_axis <= 1 + slack && rep.at_infinity <= 1 + slack;
+  return rep;
+}
+
+}  // namespace mbsflow

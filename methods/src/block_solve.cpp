@@ -1,0 +1,330 @@
+#include "block_solve.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/LU>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "mbsflow/methods/tsan_annotations.hpp"
+
+namespace mbsflow {
+
+namespace flow = tbb::flow;
+
+namespace {
+// |du| within a few units of rounding of |u| (or of the smallest normal number).
+template <class D, class U>
+bool at_roundoff(const D& du, const U& u) {
+  const double eps = std::numeric_limits<double>::epsilon();
+  return (du.array().abs() <= 8 * eps * u.array().abs() + std::numeric_limits<double>::min()).all();
+}
+}  // namespace
+
+BlockSolve::BlockSolve(const BlockCoefficients& method, const OdeProblem& problem, const BlockSettings& settings,
+                       Eigen::Index slice_size)
+    : method_(method),
+      problem_(problem),
+      kind_(settings.iteration),
+      max_iterations_(settings.max_iterations > 0 ? settings.max_iterations
+                      : settings.iteration == BlockIteration::newton ? 7
+                                                                     : 50),
+      tol_(settings.iteration_tol),
+      n_(problem.size),
+      slice_(std::max<Eigen::Index>(1, std::min(slice_size, problem.size))) {
+  const int k = points();
+  u.assign(k, Eigen::VectorXd::Zero(n_));
+  f.assign(k, Eigen::VectorXd::Zero(n_));
+  b_.assign(k, Eigen::VectorXd::Zero(n_));
+  slice_norm_.assign(static_cast<std::size_t>(slices()), 0.0);
+  slice_at_roundoff_.assign(static_cast<std::size_t>(slices()), 0);
+  f_not_finite_.assign(static_cast<std::size_t>(slices() * k), 0);
+  if (kind_ != BlockIteration::newton) return;
+  r_.assign(k, Eigen::VectorXd::Zero(n_));
+  // g = T diag(mu) T^-1, with real columns for real eigenvalues and conjugate columns for
+  // a complex pair, so that only one system per pair is solved.
+  Eigen::EigenSolver<Eigen::MatrixXd> eig(method_.g);
+  if (eig.info() != Eigen::Success) throw std::invalid_argument("cannot diagonalise the block method's matrix g");
+  const Eigen::VectorXcd mu = eig.eigenvalues();
+  Eigen::MatrixXcd v = eig.eigenvectors();
+  t_.resize(k, k);
+  std::vector<bool> done(k, false);
+  for (int e = 0; e < k; ++e) {
+    if (done[e]) continue;
+    done[e] = true;
+    System sys;
+    sys.mu = mu(e);
+    sys.column = e;
+    const double scale_mu = std::max(1.0, std::abs(mu(e)));
+    if (std::abs(mu(e).imag()) <= 1e-12 * scale_mu) {
+      sys.mu = mu(e).real();
+      Eigen::VectorXd col = v.col(e).real();
+      t_.col(e) = (col / col.norm()).cast<std::complex<double>>();
+    } else {
+      sys.complex = true;
+      if (mu(e).imag() < 0) sys.mu = std::conj(mu(e));
+      t_.col(e) = mu(e).imag() < 0 ? Eigen::VectorXcd(v.col(e).conjugate()) : Eigen::VectorXcd(v.col(e));
+      int partner = -1;
+      for (int o = 0; o < k; ++o)
+        if (!done[o] && std::abs(mu(o) - std::conj(mu(e))) <= 1e-10 * scale_mu) {
+          partner = o;
+          break;
+        }
+      if (partner < 0) throw std::invalid_argument("block method matrix g: complex eigenvalue without its conjugate");
+      done[partner] = true;
+      t_.col(partner) = t_.col(e).conjugate();
+    }
+    if (std::abs(sys.mu) == 0) throw std::invalid_argument("block method matrix g is singular");
+    systems_.push_back(std::move(sys));
+  }
+  Eigen::FullPivLU<Eigen::MatrixXcd> lu(t_);
+  if (!lu.isInvertible()) throw std::invalid_argument("block method matrix g is not diagonalisable");
+  t_inv_ = lu.inverse();
+  for (System& sys : systems_) {
+    if (sys.complex)
+      sys.zc.resize(n_);
+    else
+      sys.zr.resize(n_);
+  }
+}
+
+void BlockSolve::factorize(int system, const Eigen::SparseMatrix<double>& jac, double tau, LinearSolverKind kind) {
+  System& sys = systems_[static_cast<std::size_t>(system)];
+  if (sys.complex)
+    sys.complex_solver.factorize(jac, tau * sys.mu, kind);
+  else
+    sys.real_solver.factorize(jac, tau * sys.mu.real(), kind);
+}
+
+LinearSolverKind BlockSolve::solver_kind() const {
+  if (systems_.empty()) return LinearSolverKind::dense;
+  return systems_.front().complex ? systems_.front().complex_solver.kind() : systems_.front().real_solver.kind();
+}
+
+void BlockSolve::setup(double t0, double tau, const std::vector<Eigen::VectorXd>& past_u,
+                       const std::vector<Eigen::VectorXd>& past_f, const Eigen::VectorXd& scale) {
+  t0_ = t0;
+  tau_ = tau;
+  past_u_ = &past_u;
+  past_f_ = &past_f;
+  scale_ = &scale;
+  iterations = 0;
+  failed = false;
+  evaluations = 0;
+}
+
+// B_i = sum_j q_ij u_j + tau sum_j d_ij f_j over the past points, and the starting
+// iterate: u_0 for Newton, the Euler predictor u_0 + i tau f_0 for functional iteration.
+void BlockSolve::prepare(Eigen::Index r) {
+  const Eigen::Index lo = slice_begin(r), len = slice_length(r);
+  const int k = points(), m = method_.spec.m;
+  const Eigen::VectorXd& u0 = (*past_u_)[static_cast<std::size_t>(m - 1)];
+  const Eigen::VectorXd& f0 = (*past_f_)[static_cast<std::size_t>(m - 1)];
+  for (int i = 0; i < k; ++i) {
+    auto bi = b_[i].segment(lo, len);
+    bi.setZero();
+    for (int j = 0; j < m; ++j) {
+      if (method_.q(i, j) != 0) bi += method_.q(i, j) * (*past_u_)[static_cast<std::size_t>(j)].segment(lo, len);
+      if (method_.d(i, j) != 0) bi += (tau_ * method_.d(i, j)) * (*past_f_)[static_cast<std::size_t>(j)].segment(lo, len);
+    }
+    if (kind_ == BlockIteration::newton)
+      u[i].segment(lo, len) = u0.segment(lo, len);
+    else
+      u[i].segment(lo, len) = u0.segment(lo, len) + (double(i + 1) * tau_) * f0.segment(lo, len);
+  }
+}
+
+void BlockSolve::evaluate(int i, Eigen::Index r) {
+  problem_.rhs(t0_ + double(i + 1) * tau_, u[i], f[i], {slice_begin(r), slice_begin(r) + slice_length(r)});
+  f_not_finite_[static_cast<std::size_t>(r * points() + i)] = !f[i].segment(slice_begin(r), slice_length(r)).allFinite();
+}
+
+// After f is evaluated at the latest iterate: converged, failed, or iterate again. The
+// convergence test is Hairer & Wanner's (IV.8): with the contraction rate theta from the
+// last two corrections, eta = theta / (1 - theta), stop when eta |dU| <= tol.
+bool BlockSolve::gate() {
+  evaluations += points();
+  // f undefined at an iterate (outside the problem's domain): the step must be cut.
+  if (std::any_of(f_not_finite_.begin(), f_not_finite_.end(), [](char c) { return c != 0; })) {
+    failed = true;
+    return false;
+  }
+  if (iterations == 0) return true;
+  double norm = 0;
+  for (double v : slice_norm_) norm = std::max(norm, v);
+  if (!std::isfinite(norm)) {
+    failed = true;
+    return false;
+  }
+  // A correction at the level of rounding cannot get smaller: converged, whatever the
+  // tolerance asked for.
+  if (std::all_of(slice_at_roundoff_.begin(), slice_at_roundoff_.end(), [](char c) { return c != 0; })) return false;
+  double eta;
+  if (iterations == 1) {
+    eta = std::pow(std::max(eta_, std::numeric_limits<double>::epsilon()), 0.8);
+  } else {
+    const double theta = norm / last_norm_;
+    if (theta >= 0.99) {
+      failed = true;
+      return false;
+    }
+    eta = theta / (1 - theta);
+  }
+  last_norm_ = norm;
+  if (eta * norm <= tol_ || norm == 0) {
+    eta_ = eta;
+    return false;
+  }
+  if (iterations >= max_iterations_) {
+    failed = true;
+    return false;
+  }
+  return true;
+}
+
+// z_e = -(T^-1 R)_e with the residuals R_l = U_l - B_l - tau sum_j g_lj F_j.
+void BlockSolve::residual(Eigen::Index r) {
+  const Eigen::Index lo = slice_begin(r), len = slice_length(r);
+  const int k = points();
+  for (int l = 0; l < k; ++l) {
+    auto rl = r_[l].segment(lo, len);
+    rl = u[l].segment(lo, len) - b_[l].segment(lo, len);
+    for (int j = 0; j < k; ++j) rl -= (tau_ * method_.g(l, j)) * f[j].segment(lo, len);
+  }
+  for (System& sys : systems_) {
+    if (sys.complex) {
+      auto z = sys.zc.segment(lo, len);
+      z.setZero();
+      for (int l = 0; l < k; ++l) {  // a complex times a real vector: two real products
+        const std::complex<double> c = t_inv_(sys.column, l);
+        z.real() -= c.real() * r_[l].segment(lo, len);
+        z.imag() -= c.imag() * r_[l].segment(lo, len);
+      }
+    } else {
+      auto z = sys.zr.segment(lo, len);
+      z.setZero();
+      for (int l = 0; l < k; ++l) z -= t_inv_(sys.column, l).real() * r_[l].segment(lo, len);
+    }
+  }
+}
+
+void BlockSolve::solve(int e) {
+  System& sys = systems_[static_cast<std::size_t>(e)];
+  if (sys.complex)
+    sys.complex_solver.solve(sys.zc);
+  else
+    sys.real_solver.solve(sys.zr);
+}
+
+// dU = T w (a complex pair contributes twice the real part of one of its columns).
+void BlockSolve::update(Eigen::Index r) {
+  const Eigen::Index lo = slice_begin(r), len = slice_length(r);
+  double norm = 0;
+  bool roundoff = true;
+  Eigen::VectorXd du(len);
+  for (int i = 0; i < points(); ++i) {
+    du.setZero();
+    for (const System& sys : systems_) {
+      if (sys.complex)
+        du += (2.0 * t_(i, sys.column).real()) * sys.zc.segment(lo, len).real() -
+              (2.0 * t_(i, sys.column).imag()) * sys.zc.segment(lo, len).imag();
+      else
+        du += t_(i, sys.column).real() * sys.zr.segment(lo, len);
+    }
+    u[i].segment(lo, len) += du;
+    norm = std::max(norm, (du.array().abs() / scale_->segment(lo, len).array()).maxCoeff());
+    roundoff = roundoff && at_roundoff(du, u[i].segment(lo, len));
+  }
+  slice_norm_[static_cast<std::size_t>(r)] = norm;
+  slice_at_roundoff_[static_cast<std::size_t>(r)] = roundoff;
+}
+
+void BlockSolve::functional_update(Eigen::Index r) {
+  const Eigen::Index lo = slice_begin(r), len = slice_length(r);
+  double norm = 0;
+  bool roundoff = true;
+  Eigen::VectorXd next(len);
+  for (int i = 0; i < points(); ++i) {
+    next = b_[i].segment(lo, len);
+    for (int j = 0; j < points(); ++j) next += (tau_ * method_.g(i, j)) * f[j].segment(lo, len);
+    norm = std::max(norm, ((next - u[i].segment(lo, len)).array().abs() / scale_->segment(lo, len).array()).maxCoeff());
+    roundoff = roundoff && at_roundoff(next - u[i].segment(lo, len), next);
+    u[i].segment(lo, len) = next;
+  }
+  slice_norm_[static_cast<std::size_t>(r)] = norm;
+  slice_at_roundoff_[static_cast<std::size_t>(r)] = roundoff;
+}
+
+void BlockSolve::build(flow::graph& g) {
+  const Eigen::Index n_slices = slices();
+  const int k = points();
+  start_ = std::make_unique<Start>(g);
+  evaluate_start_ = std::make_unique<Start>(g);
+  correct_start_ = std::make_unique<Start>(g);
+  auto node = [&](auto body) -> Node& {
+    nodes_.push_back(std::make_unique<Node>(g, [this, body](const flow::continue_msg&) {
+      happens_after(&token_);
+      body();
+      happens_before(&token_);
+      return flow::continue_msg();
+    }));
+    return *nodes_.back();
+  };
+  // A join that fires `next` once all its predecessors are done.
+  auto join = [&](Start& next) -> Node& { return node([&next] { next.try_put(flow::continue_msg()); }); };
+
+  Node& prepared = join(*evaluate_start_);
+  for (Eigen::Index r = 0; r < n_slices; ++r) {
+    Node& p = node([this, r] { prepare(r); });
+    flow::make_edge(*start_, p);
+    flow::make_edge(p, prepared);
+  }
+  Node& gate_node = node([this] {
+    if (gate()) {
+      ++iterations;
+      correct_start_->try_put(flow::continue_msg());
+    }
+  });
+  for (int i = 0; i < k; ++i)
+    for (Eigen::Index r = 0; r < n_slices; ++r) {
+      Node& e = node([this, i, r] { evaluate(i, r); });
+      flow::make_edge(*evaluate_start_, e);
+      flow::make_edge(e, gate_node);
+    }
+  Node& corrected = join(*evaluate_start_);
+  if (kind_ == BlockIteration::functional) {
+    for (Eigen::Index r = 0; r < n_slices; ++r) {
+      Node& c = node([this, r] { functional_update(r); });
+      flow::make_edge(*correct_start_, c);
+      flow::make_edge(c, corrected);
+    }
+    return;
+  }
+  Node& residuals_done = node([] {});
+  for (Eigen::Index r = 0; r < n_slices; ++r) {
+    Node& c = node([this, r] { residual(r); });
+    flow::make_edge(*correct_start_, c);
+    flow::make_edge(c, residuals_done);
+  }
+  Node& solved = node([] {});
+  for (int e = 0; e < systems(); ++e) {
+    Node& s = node([this, e] { solve(e); });
+    flow::make_edge(residuals_done, s);
+    flow::make_edge(s, solved);
+  }
+  for (Eigen::Index r = 0; r < n_slices; ++r) {
+    Node& c = node([this, r] { update(r); });
+    flow::make_edge(solved, c);
+    flow::make_edge(c, corrected);
+  }
+}
+
+void BlockSolve::start() {
+  happens_before(&token_);
+  start_->try_put(flow::continue_msg());
+}
+
+void BlockSolve::finished() { happens_after(&token_); }
+
+}  // namespace mbsflow

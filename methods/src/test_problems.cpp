@@ -1,0 +1,136 @@
+// The test problems of seed 001 (eqs. 10-12), with exact solutions and Jacobians.
+#include <cmath>
+#include <memory>
+#include <numbers>
+#include <stdexcept>
+#include <vector>
+
+#include "mbsflow/methods/ode_problem.hpp"
+
+namespace mbsflow {
+namespace {
+
+Eigen::SparseMatrix<double> from_triplets(Eigen::Index n, const std::vector<Eigen::Triplet<double>>& t) {
+  Eigen::SparseMatrix<double> m(n, n);
+  m.setFromTriplets(t.begin(), t.end());
+  m.makeCompressed();
+  return m;
+}
+
+}  // namespace
+
+OdeProblem hairer_wanner_problem() {
+  OdeProblem p;
+  p.name = "hnw";
+  p.size = 4;
+  p.t0 = 0;
+  p.t_end = 2.5;
+  p.y0 = Eigen::VectorXd::Ones(4);
+  p.rhs = [](double t, const Eigen::VectorXd& x, Eigen::VectorXd& dx, RowRange rows) {
+    for (Eigen::Index i = rows.begin; i < rows.end; ++i) {
+      switch (i) {
+        case 0: dx(0) = 2 * t * std::pow(x(1), 0.2) * x(3); break;
+        case 1: dx(1) = 10 * t * std::exp(5 * (x(2) - 1)) * x(3); break;
+        case 2: dx(2) = 2 * t * x(3); break;
+        default: dx(3) = -2 * t * std::log(x(0)); break;
+      }
+    }
+  };
+  const std::vector<Eigen::Triplet<double>> pattern = {{0, 1, 1}, {0, 3, 1}, {1, 2, 1}, {1, 3, 1}, {2, 3, 1}, {3, 0, 1}};
+  p.sparsity = from_triplets(4, pattern);
+  p.jacobian = [](double t, const Eigen::VectorXd& x, Eigen::SparseMatrix<double>& j) {
+    const double e = std::exp(5 * (x(2) - 1));
+    j = from_triplets(4, {{0, 1, 2 * t * 0.2 * std::pow(x(1), -0.8) * x(3)},
+                          {0, 3, 2 * t * std::pow(x(1), 0.2)},
+                          {1, 2, 50 * t * e * x(3)},
+                          {1, 3, 10 * t * e},
+                          {2, 3, 2 * t},
+                          {3, 0, -2 * t / x(0)}});
+  };
+  p.exact = [](double t) {
+    const double s = std::sin(t * t);
+    Eigen::VectorXd x(4);
+    x << std::exp(s), std::exp(5 * s), s + 1, std::cos(t * t);
+    return x;
+  };
+  return p;
+}
+
+OdeProblem detest_b1_problem() {
+  OdeProblem p;
+  p.name = "b1";
+  p.size = 4;
+  p.t0 = 0;
+  p.t_end = 20;
+  p.y0 = Eigen::VectorXd(4);
+  p.y0 << 1, 0, 1, 0;
+  p.rhs = [](double, const Eigen::VectorXd& x, Eigen::VectorXd& dx, RowRange rows) {
+    for (Eigen::Index i = rows.begin; i < rows.end; ++i) {
+      switch (i) {
+        case 0: dx(0) = -x(0) + x(1); break;
+        case 1: dx(1) = -100 * x(0) - x(1); break;
+        case 2: dx(2) = -100 * x(2) + x(3); break;
+        default: dx(3) = -1e4 * x(2) - 100 * x(3); break;
+      }
+    }
+  };
+  const std::vector<Eigen::Triplet<double>> a = {{0, 0, -1}, {0, 1, 1},     {1, 0, -100}, {1, 1, -1},
+                                                 {2, 2, -100}, {2, 3, 1}, {3, 2, -1e4}, {3, 3, -100}};
+  p.sparsity = from_triplets(4, a);
+  p.jacobian = [a](double, const Eigen::VectorXd&, Eigen::SparseMatrix<double>& j) { j = from_triplets(4, a); };
+  // exp(A t) x(0) in closed form: A is two 2x2 blocks [[a, 1], [-b^2, a]], whose
+  // exponential is e^{a t} [[cos bt, sin(bt)/b], [-b sin bt, cos bt]].
+  p.exact = [](double t) {
+    Eigen::VectorXd x(4);
+    x << std::exp(-t) * std::cos(10 * t), -10 * std::exp(-t) * std::sin(10 * t), std::exp(-100 * t) * std::cos(100 * t),
+        -100 * std::exp(-100 * t) * std::sin(100 * t);
+    return x;
+  };
+  return p;
+}
+
+OdeProblem heat_problem(Eigen::Index n) {
+  if (n < 1) throw std::invalid_argument("heat: N must be at least 1");
+  OdeProblem p;
+  p.name = "heat";
+  p.size = n;
+  p.t0 = 0;
+  p.t_end = 4;
+  const double h2 = double(n + 1) * double(n + 1), w = std::numbers::pi / double(n + 1);
+  const double lambda1 = 2 * h2 * (1 - std::cos(w)), lambda2 = 2 * h2 * (1 - std::cos(2 * w));
+  // sin(k i pi/(N+1)) for k = 1, 2, computed once: the forcing needs them every evaluation.
+  auto s1 = std::make_shared<Eigen::VectorXd>(n), s2 = std::make_shared<Eigen::VectorXd>(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    (*s1)(i) = std::sin(double(i + 1) * w);
+    (*s2)(i) = std::sin(2 * double(i + 1) * w);
+  }
+  p.y0 = *s1 + *s2;
+  p.rhs = [=](double t, const Eigen::VectorXd& x, Eigen::VectorXd& dx, RowRange rows) {
+    const double f1 = (lambda1 - 1) * std::exp(-t), f2 = (lambda2 - 2) * std::exp(-2 * t);
+    for (Eigen::Index i = rows.begin; i < rows.end; ++i) {
+      const double left = i > 0 ? x(i - 1) : 0.0, right = i + 1 < n ? x(i + 1) : 0.0;
+      dx(i) = h2 * (left - 2 * x(i) + right) + f1 * (*s1)(i) + f2 * (*s2)(i);
+    }
+  };
+  std::vector<Eigen::Triplet<double>> t;
+  t.reserve(3 * n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    if (i > 0) t.emplace_back(i, i - 1, h2);
+    t.emplace_back(i, i, -2 * h2);
+    if (i + 1 < n) t.emplace_back(i, i + 1, h2);
+  }
+  auto jac = std::make_shared<Eigen::SparseMatrix<double>>(from_triplets(n, t));
+  p.sparsity = *jac;
+  p.jacobian = [jac](double, const Eigen::VectorXd&, Eigen::SparseMatrix<double>& j) { j = *jac; };
+  p.exact = [=](double tt) -> Eigen::VectorXd { return std::exp(-tt) * *s1 + std::exp(-2 * tt) * *s2; };
+  return p;
+}
+
+OdeProblem builtin_problem(const std::string& name, Eigen::Index n) {
+  if (name == "hnw") return hairer_wanner_problem();
+  if (name == "b1") return detest_b1_problem();
+  if (name == "heat") return heat_problem(n);
+  throw std::invalid_argument("unknown problem '" + name + "' (hnw, b1 or heat)");
+}
+
+}  // namespace mbsflow
