@@ -15,6 +15,7 @@ Action add_bench(CLI::App& app);
 Action add_info(CLI::App& app);
 Action add_export(CLI::App& app);
 Action add_worker(CLI::App& app);
+Action add_ode(CLI::App& app);
 
 // The command line as typed, for the results file.
 const std::string& invocation();

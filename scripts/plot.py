@@ -1,5 +1,6 @@
 #!/usr/bin/python3
-"""Plot an mbsflow results file: body trajectories and energies.
+"""Plot an mbsflow results file: body trajectories and energies, or (for a file from
+mbsflow ode) the solution, its error and the step-size diagram (seed 001, figs. 5-7).
 
 usage: scripts/plot.py FILE.h5 [--bodies a,b,...] [-o plot.png]
 
@@ -26,6 +27,38 @@ def pick_bodies(names, wanted):
     return sorted({round(i * (n - 1) / max(count - 1, 1)) for i in range(count)})
 
 
+def plot_ode(f, path, out):
+    """Solution, error and step sizes of an mbsflow ode run."""
+    t = f["solution/time"][:]
+    values = f["solution/values"][:]
+    comps = f["solution/components"][:]
+    has_error = "solution/error" in f
+    fig, axes = plt.subplots(1, 3 if has_error else 2, figsize=(16 if has_error else 11, 4.5))
+    ax = axes[0]
+    for j, c in enumerate(comps):
+        ax.plot(t, values[:, j], label=f"x{c + 1}")
+    ax.set(xlabel="t", ylabel="x", title="solution")
+    if len(comps) <= 9:
+        ax.legend(fontsize="small")
+    if has_error:
+        ax = axes[1]
+        ax.semilogy(t, f["solution/error"][:])
+        ax.set(xlabel="t", ylabel="max |x - exact|", title="error")
+    ax = axes[-1]
+    st, tau, taken = f["steps/t"][:], f["steps/tau"][:], f["steps/taken"][:]
+    s = int(f.attrs.get("s", 0))
+    for mask, style, label in [(taken == s + 1, "o", f"{s + 1}-point block taken"), (taken == s, "s", f"{s}-point block taken"),
+                               (taken == 0, "x", "rejected")]:
+        if mask.any():
+            ax.semilogy(st[mask], tau[mask], style, markersize=3, label=label)
+    ax.set(xlabel="t", ylabel="point spacing tau", title="step sizes")
+    ax.legend(fontsize="small")
+    fig.suptitle(f"{f.attrs.get('problem', '')}: N = {int(f.attrs.get('n', 0))}, s = {s}, "
+                 f"tol {f.attrs.get('tol', 0):g}  ({path})")
+    fig.tight_layout()
+    fig.savefig(out, dpi=110)
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("file")
@@ -34,6 +67,10 @@ def main():
     args = parser.parse_args()
     out = args.output or (args.file.rsplit(".", 1)[0] + ".png")
     with h5py.File(args.file, "r") as f:
+        if "solution" in f:
+            plot_ode(f, args.file, out)
+            print(out)
+            return
         t = f["time"][:]
         names = [n.decode() if isinstance(n, bytes) else n for n in f["bodies/names"][:]]
         chosen = pick_bodies(names, [b for b in args.bodies.split(",") if b])

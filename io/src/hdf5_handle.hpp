@@ -50,4 +50,20 @@ inline Handle string_type() {
   return t;
 }
 
+inline void write_string_attribute(hid_t obj, const char* name, const std::string& value) {
+  const Handle type = string_type();
+  const Handle space(H5Screate(H5S_SCALAR), H5Sclose, "create a scalar space");
+  const Handle attr(H5Acreate2(obj, name, type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose,
+                    std::string("create attribute ") + name);
+  const char* p = value.c_str();
+  check(H5Awrite(attr.get(), type.get(), &p), std::string("write attribute ") + name);
+}
+
+inline void write_number_attribute(hid_t obj, const char* name, double value) {
+  const Handle space(H5Screate(H5S_SCALAR), H5Sclose, "create a scalar space");
+  const Handle attr(H5Acreate2(obj, name, H5T_IEEE_F64LE, space.get(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose,
+                    std::string("create attribute ") + name);
+  check(H5Awrite(attr.get(), H5T_NATIVE_DOUBLE, &value), std::string("write attribute ") + name);
+}
+
 }  // namespace mbsflow::h5

@@ -15,22 +15,6 @@ namespace {
 constexpr std::size_t buffer_bytes = std::size_t{32} << 20;  // bounds the chunk row kept in memory
 constexpr hsize_t chunk_samples = 4096;                       // time rows x bodies per chunk
 
-void write_string_attribute(hid_t obj, const char* name, const std::string& value) {
-  const h5::Handle type = h5::string_type();
-  const h5::Handle space(H5Screate(H5S_SCALAR), H5Sclose, "create a scalar space");
-  const h5::Handle attr(H5Acreate2(obj, name, type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose,
-                        std::string("create attribute ") + name);
-  const char* p = value.c_str();
-  h5::check(H5Awrite(attr.get(), type.get(), &p), std::string("write attribute ") + name);
-}
-
-void write_number_attribute(hid_t obj, const char* name, double value) {
-  const h5::Handle space(H5Screate(H5S_SCALAR), H5Sclose, "create a scalar space");
-  const h5::Handle attr(H5Acreate2(obj, name, H5T_IEEE_F64LE, space.get(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose,
-                        std::string("create attribute ") + name);
-  h5::check(H5Awrite(attr.get(), H5T_NATIVE_DOUBLE, &value), std::string("write attribute ") + name);
-}
-
 void write_names(hid_t parent, const char* name, const std::vector<std::string>& names) {
   const h5::Handle type = h5::string_type();
   const hsize_t n = names.size();
@@ -154,16 +138,16 @@ void Hdf5Sink::begin(const MultibodySystem& system) {
     write_names(group.get(), "names", names);
   }
   const hid_t root = f->file.get();
-  write_string_attribute(root, "mbsflow_version", MBSFLOW_VERSION);
-  write_string_attribute(root, "model_name", m.name);
-  write_string_attribute(root, "model", info_.model_json);
-  write_string_attribute(root, "method", info_.method);
-  write_number_attribute(root, "step", info_.step);
-  write_number_attribute(root, "t_start", info_.t_start);
-  write_number_attribute(root, "t_end", info_.t_end);
-  write_number_attribute(root, "output_every", info_.output_every);
-  write_string_attribute(root, "command_line", info_.command_line);
-  write_string_attribute(root, "fields", fields_text(fields_));
+  h5::write_string_attribute(root, "mbsflow_version", MBSFLOW_VERSION);
+  h5::write_string_attribute(root, "model_name", m.name);
+  h5::write_string_attribute(root, "model", info_.model_json);
+  h5::write_string_attribute(root, "method", info_.method);
+  h5::write_number_attribute(root, "step", info_.step);
+  h5::write_number_attribute(root, "t_start", info_.t_start);
+  h5::write_number_attribute(root, "t_end", info_.t_end);
+  h5::write_number_attribute(root, "output_every", info_.output_every);
+  h5::write_string_attribute(root, "command_line", info_.command_line);
+  h5::write_string_attribute(root, "fields", fields_text(fields_));
   file_ = std::move(f);
 }
 

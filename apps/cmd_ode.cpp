@@ -1,0 +1,204 @@
+// mbsflow ode: the seed's test problems (and their methods) from the command line.
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <stdexcept>
+
+#include "commands.hpp"
+#include "mbsflow/graph/error.hpp"
+#include "mbsflow/io/ode_results.hpp"
+#include "mbsflow/methods/block_integrator.hpp"
+#include "mbsflow/version.hpp"
+
+namespace mbsflow::cli {
+namespace {
+
+struct OdeArgs {
+  std::string problem, method = "colloc", iteration = "newton", jacobian = "exact", solver = "auto", output;
+  long n = 1000;
+  int s = 3, m = 1, order = 0, threads = 0;
+  double tol = 1e-6, atol = 0, fixed_step = 0, initial_step = 0;
+  bool describe = false, stability_table = false, quiet = false;
+};
+
+std::string join(const std::vector<std::string>& v, std::size_t row, std::size_t width) {
+  std::string out;
+  for (std::size_t j = 0; j < width; ++j) out += (j ? ", " : "") + v[row * width + j];
+  return out;
+}
+
+std::string polynomial(const std::vector<std::string>& c) {
+  std::string out;
+  for (std::size_t k = 0; k < c.size(); ++k) {
+    if (c[k] == "0") continue;
+    out += (out.empty() ? "" : " + ") + ("(" + c[k] + ")") + (k == 0 ? "" : k == 1 ? " z" : " z^" + std::to_string(k));
+  }
+  return out.empty() ? "0" : out;
+}
+
+int describe(const OdeArgs& a) {
+  const BlockCoefficients c = generate_block_method({a.m, a.s, a.order});
+  std::cout << "collocation block method: m = " << a.m << " steps, s = " << a.s << " points, order " << c.order
+            << " (maximal " << c.spec.maximal_order() << ")\n"
+            << "u_i = sum_j q_ij u_j + tau (sum_j d_ij f_j + sum_j g_ij f_j), past points j = " << -(a.m - 1)
+            << "..0, block points j = 1.." << a.s << "\n";
+  for (int i = 0; i < a.s; ++i)
+    std::cout << "  i = " << i + 1 << ": q = (" << join(c.q_exact, i, a.m) << "), d = (" << join(c.d_exact, i, a.m)
+              << "), g = (" << join(c.g_exact, i, a.s) << ")\n";
+  std::cout << "order conditions: largest exact residual " << order_condition_residual(c) << "\n";
+  if (a.m == 1) {
+    const StabilityFunction r = stability_function(c);
+    const StabilityReport rep = check_a_stability(c);
+    std::cout << "stability function R(z) = P(z)/Q(z), z = lambda tau, u_s = R(z) u_0\n"
+              << "  P(z) = " << polynomial(r.numerator_exact) << "\n  Q(z) = " << polynomial(r.denominator_exact) << "\n"
+              << "  max |R(iy)| = " << rep.max_on_imaginary_axis << ", |R(inf)| = " << rep.at_infinity
+              << ", smallest Re(pole) = " << rep.min_pole_real_part << ": " << (rep.a_stable ? "A-stable" : "not A-stable")
+              << "\n";
+  } else {
+    const ZeroStability z = check_zero_stability(c);
+    std::cout << "zero-stability: largest parasitic root " << z.parasitic_radius << ": "
+              << (!z.zero_stable ? "not zero-stable" : z.strongly ? "zero-stable" : "weakly zero-stable") << "\n";
+  }
+  return 0;
+}
+
+// The table of docs/methods.md: one-step methods s = 1..6 at maximal and lowest order.
+int stability_table() {
+  std::cout << "| s | order | R(z) at infinity | max abs R(iy) | A-stable |\n|---|---|---|---|---|\n";
+  for (int s = 1; s <= 6; ++s)
+    for (int order : {s + 1, s}) {
+      const StabilityReport r = check_a_stability(generate_block_method({1, s, order}));
+      std::printf("| %d | %d%s | %.3g | %.4g | %s |\n", s, order, order == s + 1 ? " (maximal)" : "", r.at_infinity,
+                  r.max_on_imaginary_axis, r.a_stable ? "yes" : "no");
+    }
+  std::cout << "\n| m | s | order | parasitic root | zero-stable |\n|---|---|---|---|---|\n";
+  for (int m = 2; m <= 4; ++m)
+    for (int s = 1; s <= 3; ++s)
+      for (int order = m + s; order <= 2 * m + s - 1; ++order) {
+        const ZeroStability z = check_zero_stability(generate_block_method({m, s, order}));
+        std::printf("| %d | %d | %d%s | %.3g | %s |\n", m, s, order, order == 2 * m + s - 1 ? " (maximal)" : "",
+                    z.parasitic_radius, !z.zero_stable ? "no" : z.strongly ? "yes" : "weakly");
+      }
+  return 0;
+}
+
+std::vector<long> kept_components(long n) {
+  std::vector<long> c;
+  const long count = std::min<long>(n, 9);
+  for (long i = 0; i < count; ++i) c.push_back(count == 1 ? 0 : i * (n - 1) / (count - 1));
+  return c;
+}
+
+int run(const OdeArgs& a) {
+  if (a.problem.empty()) throw InputError("ode: --problem is required (hnw, b1 or heat)");
+  if (a.method != "colloc") throw InputError("ode: --method " + a.method + " is not available (colloc)");
+  OdeProblem p;
+  BlockSettings s;
+  try {
+    p = builtin_problem(a.problem, a.n);
+    s.method = {a.m, a.s, a.order};
+    generate_block_method(s.method);
+    s.iteration = block_iteration_from_string(a.iteration);
+    s.linear_solver = linear_solver_from_string(a.solver);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(std::string("ode: ") + e.what());
+  }
+  if (a.jacobian != "exact" && a.jacobian != "fd") throw InputError("ode: --jacobian must be exact or fd");
+  s.finite_difference_jacobian = a.jacobian == "fd";
+  s.rtol = a.tol;
+  s.atol = a.atol > 0 ? a.atol : a.tol;
+  s.fixed_step = a.fixed_step;
+  s.initial_step = a.initial_step;
+  s.threads = a.threads;
+
+  OdeResults out;
+  out.components = kept_components(p.size);
+  double max_error = 0;
+  const bool keep = !a.output.empty();
+  auto on_block = [&](const AcceptedBlock& b) {
+    for (int i = 0; i < b.points; ++i) {
+      const double t = b.t0 + (i + 1) * b.tau;
+      const Eigen::VectorXd& y = (*b.u)[static_cast<std::size_t>(i)];
+      const double err = p.exact ? (y - p.exact(t)).cwiseAbs().maxCoeff() : 0.0;
+      max_error = std::max(max_error, err);
+      if (!keep) continue;
+      out.time.push_back(t);
+      for (long c : out.components) out.values.push_back(y(c));
+      if (p.exact) out.error.push_back(err);
+    }
+  };
+  if (!a.quiet)
+    std::cerr << "mbsflow ode: " << p.name << " (N = " << p.size << ") on [" << p.t0 << ", " << p.t_end << "], colloc m = " << a.m
+              << ", s = " << a.s << " / " << a.s + 1 << ", order " << s.method.effective_order() << ", tol " << a.tol << ", "
+              << a.iteration << "\n";
+  const auto start = std::chrono::steady_clock::now();
+  BlockResult r;
+  try {
+    r = integrate_block(p, s, on_block);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(std::string("ode: ") + e.what());
+  } catch (const std::runtime_error& e) {
+    throw RunError(std::string("ode: ") + e.what() + " (try a smaller --tol, or --iteration newton for a stiff problem)");
+  }
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const BlockStats& st = r.stats;
+  std::printf("steps %ld (accepted %ld: %ld with s+1 = %d points, %ld with s = %d; rejected %ld, of which %ld by the iteration)\n",
+              st.steps, st.accepted, st.taken_s1, a.s + 1, st.taken_s, a.s, st.rejected, st.iteration_failures);
+  std::printf("rhs evaluations %ld, iterations %ld, Jacobians %ld, factorizations %ld (%s)\n", st.rhs_evaluations,
+              st.iterations, st.jacobians, st.factorizations,
+              a.iteration == "newton" ? to_string(st.linear_solver) : "none");
+  if (p.exact) std::printf("max error %.3e (against the exact solution, all accepted points)\n", max_error);
+  std::printf("wall time %.3f s\n", seconds);
+  if (keep) {
+    out.steps = r.steps;
+    out.texts = {{"mbsflow_version", MBSFLOW_VERSION}, {"problem", p.name}, {"method", a.method}, {"iteration", a.iteration},
+                 {"command", invocation()}};
+    out.numbers = {{"n", double(p.size)}, {"s", double(a.s)}, {"m", double(a.m)}, {"order", double(s.method.effective_order())},
+                   {"tol", a.tol}, {"max_error", max_error}, {"wall_seconds", seconds}, {"rhs_evaluations", double(st.rhs_evaluations)}};
+    write_ode_results(a.output, out);
+    if (!a.quiet) std::cerr << "results: " << a.output << " (plot: /usr/bin/python3 scripts/plot.py " << a.output << ")\n";
+  }
+  return 0;
+}
+
+}  // namespace
+
+Action add_ode(CLI::App& app) {
+  auto a = std::make_shared<OdeArgs>();
+  CLI::App* sub = app.add_subcommand("ode", "Integrate an ODE test problem with the collocation block methods");
+  sub->add_option("--problem", a->problem, "hnw (eq. 10, Hairer-Wanner), b1 (eq. 11, DETEST B1), heat (eq. 12, N equations)")
+      ->check(CLI::IsMember({"hnw", "b1", "heat"}));
+  sub->add_option("--n", a->n, "heat: number of equations")->check(CLI::PositiveNumber)->capture_default_str();
+  sub->add_option("--method", a->method, "colloc: collocation block methods")->capture_default_str();
+  sub->add_option("--s", a->s, "points per block (the controller also runs s+1)")->check(CLI::Range(1, 12))->capture_default_str();
+  sub->add_option("--m", a->m, "steps (1: one-step methods)")->check(CLI::Range(1, 8))->capture_default_str();
+  sub->add_option("--order", a->order, "order of the s-point method (0: maximal, 2m+s-1)")->check(CLI::NonNegativeNumber);
+  sub->add_option("--tol", a->tol, "relative (and, without --atol, absolute) tolerance")->check(CLI::PositiveNumber)->capture_default_str();
+  sub->add_option("--atol", a->atol, "absolute tolerance (default: --tol)")->check(CLI::PositiveNumber);
+  sub->add_option("--iteration", a->iteration, "newton (stiff) or functional (the seed's, non-stiff)")
+      ->check(CLI::IsMember({"newton", "functional"}))->capture_default_str();
+  sub->add_option("--jacobian", a->jacobian, "exact (the problem's) or fd (finite differences)")
+      ->check(CLI::IsMember({"exact", "fd"}))->capture_default_str();
+  sub->add_option("--linear-solver", a->solver, "auto, dense, banded or sparse")
+      ->check(CLI::IsMember({"auto", "dense", "banded", "sparse"}))->capture_default_str();
+  sub->add_option("--fixed-step", a->fixed_step, "no step control: the s-point method with this point spacing")->check(CLI::PositiveNumber);
+  sub->add_option("--initial-step", a->initial_step, "first point spacing (default: chosen from the problem)")->check(CLI::PositiveNumber);
+  sub->add_option("--threads", a->threads, "threads (0: all cores; 1: sequential, the same numbers)")->check(CLI::NonNegativeNumber);
+  sub->add_option("-o,--output", a->output, "HDF5 file for the solution and the step record");
+  sub->add_flag("--describe", a->describe, "print the method's coefficients, order check and stability, and exit");
+  sub->add_flag("--stability-table", a->stability_table, "print the stability tables of docs/methods.md and exit");
+  sub->add_flag("-q,--quiet", a->quiet, "no progress lines on stderr");
+  return [a] {
+    try {
+      if (a->stability_table) return stability_table();
+      if (a->describe) return describe(*a);
+    } catch (const std::invalid_argument& e) {
+      throw InputError(std::string("ode: ") + e.what());
+    }
+    return run(*a);
+  };
+}
+
+}  // namespace mbsflow::cli
