@@ -18,6 +18,8 @@ struct BenchArgs {
   std::string dir = ".";    // output: where the results files go
   std::string csv;          // default: bench_WHAT.csv
   int threads = 0;          // parallel: up to this many threads (default: all cores)
+  std::vector<std::string> problems;  // ode: default hnw, b1, heat1000, heat100000, heat1000000
+  std::vector<double> tolerances;     // ode: default 1e-4, 1e-6, 1e-8, 1e-10
 };
 
 // The CSV file of a benchmark: --csv, or bench_WHAT.csv; InputError if it cannot be written.
@@ -37,6 +39,7 @@ int bench_output(const BenchArgs& a);
 int bench_parallel(const BenchArgs& a);
 int bench_cluster(const BenchArgs& a);
 int bench_latency(const BenchArgs& a);
+int bench_ode(const BenchArgs& a);
 
 using BenchClock = std::chrono::steady_clock;
 inline double seconds_since(BenchClock::time_point start) {

@@ -1,0 +1,202 @@
+// mbsflow bench ode: work-precision of the block methods against SUNDIALS CVODE (BDF with
+// dense or band Newton) and Boost.Odeint (rk4, dopri5) on the seed's problems, in one run.
+#include <cvode/cvode.h>
+#include <nvector/nvector_serial.h>
+#include <sunlinsol/sunlinsol_band.h>
+#include <sunlinsol/sunlinsol_dense.h>
+#include <sunmatrix/sunmatrix_band.h>
+#include <sunmatrix/sunmatrix_dense.h>
+
+#include <boost/numeric/odeint.hpp>
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <iostream>
+
+#include "bench.hpp"
+#include "mbsflow/methods/block_integrator.hpp"
+#include "mbsflow/methods/shifted_solver.hpp"
+
+namespace mbsflow::cli {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+struct Outcome {
+  bool ok = false;
+  double seconds = 0, max_error = 0;
+  long evaluations = 0, steps = 0;
+  std::string note;
+};
+
+double error_at(const OdeProblem& p, double t, const double* y) {
+  const Eigen::VectorXd e = p.exact(t);
+  double m = 0;
+  for (Eigen::Index i = 0; i < p.size; ++i) m = std::max(m, std::abs(y[i] - e(i)));
+  return m;
+}
+
+// CVODE: BDF, Newton with the problem's exact Jacobian, band solver for banded systems.
+struct CvodeData {
+  const OdeProblem* p;
+  Eigen::VectorXd y, f;
+  Eigen::SparseMatrix<double> jac;
+  bool band;
+};
+int cvode_rhs(sunrealtype t, N_Vector y, N_Vector ydot, void* data) {
+  auto* d = static_cast<CvodeData*>(data);
+  d->y = Eigen::Map<Eigen::VectorXd>(N_VGetArrayPointer(y), d->p->size);
+  d->p->evaluate(t, d->y, d->f);
+  Eigen::Map<Eigen::VectorXd>(N_VGetArrayPointer(ydot), d->p->size) = d->f;
+  return d->f.allFinite() ? 0 : 1;
+}
+int cvode_jac(sunrealtype t, N_Vector y, N_Vector, SUNMatrix j, void* data, N_Vector, N_Vector, N_Vector) {
+  auto* d = static_cast<CvodeData*>(data);
+  d->y = Eigen::Map<Eigen::VectorXd>(N_VGetArrayPointer(y), d->p->size);
+  d->p->jacobian(t, d->y, d->jac);
+  SUNMatZero(j);
+  for (Eigen::Index c = 0; c < d->jac.outerSize(); ++c)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(d->jac, c); it; ++it) {
+      if (d->band)
+        SM_ELEMENT_B(j, it.row(), it.col()) = it.value();
+      else
+        SM_ELEMENT_D(j, it.row(), it.col()) = it.value();
+    }
+  return 0;
+}
+
+Outcome run_cvode(const OdeProblem& p, double tol) {
+  Outcome o;
+  SUNContext ctx;
+  SUNContext_Create(nullptr, &ctx);
+  N_Vector y = N_VNew_Serial(p.size, ctx);
+  Eigen::Map<Eigen::VectorXd>(N_VGetArrayPointer(y), p.size) = p.y0;
+  CvodeData d{&p, Eigen::VectorXd(p.size), Eigen::VectorXd(p.size), *p.sparsity, p.size > 100};
+  const Bandwidth bw = bandwidth_of(*p.sparsity);
+  SUNMatrix a = d.band ? SUNBandMatrix(p.size, bw.upper, bw.lower, ctx) : SUNDenseMatrix(p.size, p.size, ctx);
+  SUNLinearSolver ls = d.band ? SUNLinSol_Band(y, a, ctx) : SUNLinSol_Dense(y, a, ctx);
+  void* mem = CVodeCreate(CV_BDF, ctx);
+  CVodeInit(mem, cvode_rhs, p.t0, y);
+  CVodeSStolerances(mem, tol, tol);
+  CVodeSetUserData(mem, &d);
+  CVodeSetLinearSolver(mem, ls, a);
+  CVodeSetJacFn(mem, cvode_jac);
+  CVodeSetMaxNumSteps(mem, 10'000'000);
+  CVodeSetStopTime(mem, p.t_end);
+  CVodeSetMaxHnilWarns(mem, -1);  // its step-underflow warnings: reported below instead
+  const auto start = Clock::now();
+  sunrealtype t = p.t0;
+  o.ok = true;
+  int stalled = 0;  // CVODE goes on when t + h == t; count steps that do not move
+  while (t < p.t_end - 1e-12 * std::max(1.0, std::abs(p.t_end))) {
+    const sunrealtype before = t;
+    const int flag = CVode(mem, p.t_end, y, &t, CV_ONE_STEP);
+    stalled = t == before ? stalled + 1 : 0;
+    if (flag < 0 || stalled > 100) {
+      o.ok = false;
+      o.note = (flag < 0 ? "CVODE flag " + std::to_string(flag) : std::string("step size underflow")) + " at t = " + std::to_string(t);
+      break;
+    }
+    o.max_error = std::max(o.max_error, error_at(p, t, N_VGetArrayPointer(y)));
+  }
+  o.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  long nfe = 0, nst = 0;
+  CVodeGetNumRhsEvals(mem, &nfe);
+  CVodeGetNumSteps(mem, &nst);
+  o.evaluations = nfe;
+  o.steps = nst;
+  CVodeFree(&mem);
+  SUNLinSolFree(ls);
+  SUNMatDestroy(a);
+  N_VDestroy(y);
+  SUNContext_Free(&ctx);
+  return o;
+}
+
+// Boost.Odeint, explicit: dopri5 with error control at tol, or rk4 with `steps` steps.
+Outcome run_odeint(const OdeProblem& p, double tol, long rk4_steps) {
+  namespace odeint = boost::numeric::odeint;
+  using State = std::vector<double>;
+  Outcome o;
+  Eigen::VectorXd yv(p.size), fv(p.size);
+  auto sys = [&](const State& x, State& dx, double t) {
+    yv = Eigen::Map<const Eigen::VectorXd>(x.data(), p.size);
+    p.evaluate(t, yv, fv);
+    Eigen::Map<Eigen::VectorXd>(dx.data(), p.size) = fv;
+    ++o.evaluations;
+  };
+  State x(p.y0.data(), p.y0.data() + p.size);
+  auto observe = [&](const State& s, double t) { o.max_error = std::max(o.max_error, error_at(p, t, s.data())); ++o.steps; };
+  const auto start = Clock::now();
+  if (rk4_steps > 0) {
+    odeint::integrate_n_steps(odeint::runge_kutta4<State>(), sys, x, p.t0, (p.t_end - p.t0) / rk4_steps, rk4_steps, observe);
+  } else {
+    odeint::integrate_adaptive(odeint::make_controlled(tol, tol, odeint::runge_kutta_dopri5<State>()), sys, x, p.t0, p.t_end,
+                               1e-6, observe);
+  }
+  o.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  o.ok = std::isfinite(o.max_error) && o.max_error < 1e6;
+  if (!o.ok) o.note = "unstable at this step";
+  return o;
+}
+
+Outcome run_colloc(const OdeProblem& p, double tol, int s, int threads) {
+  Outcome o;
+  BlockSettings st;
+  st.method = {1, s, 0};
+  st.rtol = st.atol = tol;
+  st.threads = threads;
+  const auto start = Clock::now();
+  try {
+    const BlockResult r = integrate_block(p, st, [&](const AcceptedBlock& b) {
+      for (int i = 0; i < b.points; ++i)
+        o.max_error = std::max(o.max_error, error_at(p, b.t0 + (i + 1) * b.tau, (*b.u)[static_cast<std::size_t>(i)].data()));
+    });
+    o.ok = true;
+    o.evaluations = r.stats.rhs_evaluations;
+    o.steps = r.stats.steps;
+  } catch (const std::runtime_error& e) {
+    o.note = e.what();
+  }
+  o.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  return o;
+}
+
+}  // namespace
+
+int bench_ode(const BenchArgs& a) {
+  const std::vector<std::string> problems =
+      a.problems.empty() ? std::vector<std::string>{"hnw", "b1", "heat1000", "heat100000", "heat1000000"} : a.problems;
+  const std::vector<double> tols = a.tolerances.empty() ? std::vector<double>{1e-4, 1e-6, 1e-8, 1e-10} : a.tolerances;
+  BenchCsv csv = open_csv(a);
+  csv.out << "problem,n,solver,threads,tol,ok,seconds,max_error,rhs_evaluations,steps,note\n";
+  std::printf("%-8s %8s %-18s %3s %7s %10s %10s %10s %8s\n", "problem", "N", "solver", "thr", "tol", "seconds", "max error",
+              "f evals", "steps");
+  for (const std::string& name : problems) {
+    const bool heat = name.rfind("heat", 0) == 0;
+    const long n = heat ? std::stol(name.substr(4)) : 4;
+    const OdeProblem p = builtin_problem(heat ? "heat" : name, n);
+    auto row = [&](const std::string& solver, int threads, double tol, const Outcome& o) {
+      std::printf("%-8s %8ld %-18s %3d %7.0e %10.4f %10.3e %10ld %8ld %s\n", p.name.c_str(), long(p.size), solver.c_str(), threads,
+                  tol, o.seconds, o.max_error, o.evaluations, o.steps, o.ok ? "" : ("failed: " + o.note).c_str());
+      csv.out << p.name << ',' << p.size << ',' << solver << ',' << threads << ',' << tol << ',' << (o.ok ? 1 : 0) << ','
+              << o.seconds << ',' << o.max_error << ',' << o.evaluations << ',' << o.steps << ",\"" << o.note << "\"\n";
+      std::fflush(stdout);
+    };
+    for (std::size_t k = 0; k < tols.size(); ++k) {
+      const double tol = tols[k];
+      row(std::string("cvode-bdf-") + (p.size > 100 ? "band" : "dense"), 1, tol, run_cvode(p, tol));
+      for (int s : {2, 3})
+        for (int threads : {1, 2}) row("colloc-s" + std::to_string(s), threads, tol, run_colloc(p, tol, s, threads));
+      if (p.size <= 100) {  // explicit methods: the heat problem's stability limit is out of reach
+        row("odeint-dopri5", 1, tol, run_odeint(p, tol, 0));
+        row("odeint-rk4", 1, tol, run_odeint(p, tol, 500L << (2 * k)));
+      }
+    }
+  }
+  std::printf("CSV: %s (work-precision plot: /usr/bin/python3 scripts/plot_work_precision.py %s)\n", csv.path.c_str(),
+              csv.path.c_str());
+  return 0;
+}
+
+}  // namespace mbsflow::cli
