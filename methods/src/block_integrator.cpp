@@ -2,7 +2,6 @@
 // factorisations, and the seed's step control from the s- and (s+1)-point blocks.
 #include "mbsflow/methods/block_integrator.hpp"
 
-#include <oneapi/tbb/parallel_for.h>
 #include <oneapi/tbb/task_arena.h>
 
 #include <cmath>
@@ -136,9 +135,9 @@ class Driver {
   bool fixed_;
   Eigen::Index slice_;
   tbb::task_arena arena_;
+  std::unique_ptr<tbb::flow::graph> graph_;  // declared first: destroyed after the nodes below
   BlockSolve small_, large_;
   std::unique_ptr<BlockSolve> starter_;
-  std::unique_ptr<tbb::flow::graph> graph_;
   std::unique_ptr<JacobianEvaluator> jacobian_;
   Eigen::SparseMatrix<double> jac_;
   BlockResult result_;
@@ -179,21 +178,23 @@ bool Driver::factorize(std::initializer_list<BlockSolve*> blocks, double tau) {
     factorized_for_ = nullptr;
   }
   if (tau == factorized_tau_ && factorized_for_ == *blocks.begin()) return true;
-  std::vector<std::pair<BlockSolve*, int>> work;
-  for (BlockSolve* b : blocks)
-    for (int e = 0; e < b->systems(); ++e) work.emplace_back(b, e);
   const LinearSolverKind kind = choose_linear_solver(jac_, s_.linear_solver);
-  st.factorizations += static_cast<long>(work.size());
+  for (BlockSolve* b : blocks) {
+    b->request_factorization(jac_, tau, kind);
+    st.factorizations += b->systems();
+  }
   st.linear_solver = kind;
   factorized_for_ = nullptr;
-  try {
-    arena_.execute([&] {
-      tbb::parallel_for(std::size_t(0), work.size(),
-                        [&](std::size_t w) { work[w].first->factorize(work[w].second, jac_, tau, kind); });
-    });
-  } catch (const std::runtime_error&) {
-    return false;
+  arena_.execute([&] {
+    for (BlockSolve* b : blocks) b->start_factorization();
+    graph_->wait_for_all();
+  });
+  bool ok = true;
+  for (BlockSolve* b : blocks) {
+    b->finished();
+    ok = ok && b->factorization_ok();
   }
+  if (!ok) return false;
   factorized_tau_ = tau;
   factorized_for_ = *blocks.begin();
   return true;

@@ -14,6 +14,10 @@ namespace mbsflow {
 namespace flow = tbb::flow;
 
 namespace {
+// Orders every node's reading of its own captures after the thread that built the graph
+// (ThreadSanitizer; see tsan_annotations.hpp). Taken first, before any capture is read.
+long capture_token = 0;
+
 // |du| within a few units of rounding of |u| (or of the smallest normal number).
 template <class D, class U>
 bool at_roundoff(const D& du, const U& u) {
@@ -89,12 +93,32 @@ BlockSolve::BlockSolve(const BlockCoefficients& method, const OdeProblem& proble
   }
 }
 
-void BlockSolve::factorize(int system, const Eigen::SparseMatrix<double>& jac, double tau, LinearSolverKind kind) {
+void BlockSolve::request_factorization(const Eigen::SparseMatrix<double>& jac, double tau, LinearSolverKind kind) {
+  factor_jac_ = &jac;
+  factor_tau_ = tau;
+  factor_kind_ = kind;
+  factor_failed_.assign(systems_.size(), 0);
+}
+
+void BlockSolve::start_factorization() {
+  happens_before(&token_);
+  factor_start_->try_put(flow::continue_msg());
+}
+
+bool BlockSolve::factorization_ok() const {
+  return std::none_of(factor_failed_.begin(), factor_failed_.end(), [](char c) { return c != 0; });
+}
+
+void BlockSolve::factorize(int system) {
   System& sys = systems_[static_cast<std::size_t>(system)];
-  if (sys.complex)
-    sys.complex_solver.factorize(jac, tau * sys.mu, kind);
-  else
-    sys.real_solver.factorize(jac, tau * sys.mu.real(), kind);
+  try {
+    if (sys.complex)
+      sys.complex_solver.factorize(*factor_jac_, factor_tau_ * sys.mu, factor_kind_);
+    else
+      sys.real_solver.factorize(*factor_jac_, factor_tau_ * sys.mu.real(), factor_kind_);
+  } catch (const std::runtime_error&) {
+    factor_failed_[static_cast<std::size_t>(system)] = 1;
+  }
 }
 
 LinearSolverKind BlockSolve::solver_kind() const {
@@ -262,8 +286,10 @@ void BlockSolve::build(flow::graph& g) {
   start_ = std::make_unique<Start>(g);
   evaluate_start_ = std::make_unique<Start>(g);
   correct_start_ = std::make_unique<Start>(g);
+  factor_start_ = std::make_unique<Start>(g);
   auto node = [&](auto body) -> Node& {
     nodes_.push_back(std::make_unique<Node>(g, [this, body](const flow::continue_msg&) {
+      happens_after(&capture_token);
       happens_after(&token_);
       body();
       happens_before(&token_);
@@ -274,6 +300,7 @@ void BlockSolve::build(flow::graph& g) {
   // A join that fires `next` once all its predecessors are done.
   auto join = [&](Start& next) -> Node& { return node([&next] { next.try_put(flow::continue_msg()); }); };
 
+  for (int e = 0; e < systems(); ++e) flow::make_edge(*factor_start_, node([this, e] { factorize(e); }));
   Node& prepared = join(*evaluate_start_);
   for (Eigen::Index r = 0; r < n_slices; ++r) {
     Node& p = node([this, r] { prepare(r); });
@@ -299,6 +326,7 @@ void BlockSolve::build(flow::graph& g) {
       flow::make_edge(*correct_start_, c);
       flow::make_edge(c, corrected);
     }
+    happens_before(&capture_token);
     return;
   }
   Node& residuals_done = node([] {});
@@ -318,6 +346,7 @@ void BlockSolve::build(flow::graph& g) {
     flow::make_edge(solved, c);
     flow::make_edge(c, corrected);
   }
+  happens_before(&capture_token);
 }
 
 void BlockSolve::start() {
@@ -326,5 +355,7 @@ void BlockSolve::start() {
 }
 
 void BlockSolve::finished() { happens_after(&token_); }
+
+
 
 }  // namespace mbsflow

@@ -32,8 +32,12 @@ class BlockSolve {
 
   // The linear systems of the Newton iteration: one per real eigenvalue or complex pair.
   int systems() const { return static_cast<int>(systems_.size()); }
-  void factorize(int system, const Eigen::SparseMatrix<double>& jac, double tau, LinearSolverKind kind);
   LinearSolverKind solver_kind() const;
+  // Factorising I - tau mu_e J for every system, each a node of the graph: set up, start
+  // (then g.wait_for_all() and finished()), and whether all matrices were regular.
+  void request_factorization(const Eigen::SparseMatrix<double>& jac, double tau, LinearSolverKind kind);
+  void start_factorization();
+  bool factorization_ok() const;
 
   // The data of one attempt (read by the nodes; must outlive the run).
   void setup(double t0, double tau, const std::vector<Eigen::VectorXd>& past_u, const std::vector<Eigen::VectorXd>& past_f,
@@ -64,6 +68,7 @@ class BlockSolve {
   Eigen::Index slices() const { return (n_ + slice_ - 1) / slice_; }
   Eigen::Index slice_begin(Eigen::Index r) const { return r * slice_; }
   Eigen::Index slice_length(Eigen::Index r) const { return std::min(slice_, n_ - r * slice_); }
+  void factorize(int system);
   void prepare(Eigen::Index r);
   void evaluate(int i, Eigen::Index r);
   bool gate();  // true: iterate again
@@ -91,7 +96,11 @@ class BlockSolve {
   const std::vector<Eigen::VectorXd>* past_f_ = nullptr;
   const Eigen::VectorXd* scale_ = nullptr;
   // The subgraph.
-  std::unique_ptr<Start> start_, evaluate_start_, correct_start_;
+  std::unique_ptr<Start> start_, evaluate_start_, correct_start_, factor_start_;
+  const Eigen::SparseMatrix<double>* factor_jac_ = nullptr;
+  double factor_tau_ = 0;
+  LinearSolverKind factor_kind_ = LinearSolverKind::automatic;
+  std::vector<char> factor_failed_;
   std::vector<std::unique_ptr<Node>> nodes_;
   long token_ = 0;  // ThreadSanitizer's view of the node order (tsan_annotations.hpp)
 };

@@ -13,4 +13,5 @@ step("configure the example" ${CMAKE_COMMAND} -S "${SOURCE_DIR}/examples/embed" 
      -G Ninja -DCMAKE_BUILD_TYPE=Release "-DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix")
 step("build the example" ${CMAKE_COMMAND} --build "${WORK_DIR}/build")
 step("run the example" "${WORK_DIR}/build/embed_example" "${WORK_DIR}/embed.h5")
+step("run the ODE example" "${WORK_DIR}/build/ode_example")
 file(REMOVE_RECURSE "${WORK_DIR}")
