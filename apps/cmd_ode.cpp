@@ -105,7 +105,6 @@ int run(const OdeArgs& a) {
   } catch (const std::invalid_argument& e) {
     throw InputError(std::string("ode: ") + e.what());
   }
-  if (a.jacobian != "exact" && a.jacobian != "fd") throw InputError("ode: --jacobian must be exact or fd");
   s.finite_difference_jacobian = a.jacobian == "fd";
   s.rtol = a.tol;
   s.atol = a.atol > 0 ? a.atol : a.tol;

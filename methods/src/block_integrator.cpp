@@ -74,18 +74,7 @@ struct LastBlock {
   const BlockCoefficients* method = nullptr;
   double t0 = 0, tau = 0;
   std::vector<Eigen::VectorXd> past_u, past_f, u, f;
-  AcceptedBlock view() const {
-    AcceptedBlock b;
-    b.t0 = t0;
-    b.tau = tau;
-    b.points = static_cast<int>(u.size());
-    b.method = method;
-    b.past_u = &past_u;
-    b.past_f = &past_f;
-    b.u = &u;
-    b.f = &f;
-    return b;
-  }
+  AcceptedBlock view() const { return {t0, tau, static_cast<int>(u.size()), method, &past_u, &past_f, &u, &f}; }
 };
 
 BlockMethodSpec larger(const BlockMethodSpec& s) { return {s.m, s.s + 1, s.order > 0 ? s.order + 1 : 0}; }
@@ -127,7 +116,7 @@ class Driver {
   bool factorize(std::initializer_list<BlockSolve*> blocks, double tau);
   void accept(const BlockSolve& b, double tau);
   void record(double tau, int taken, double error, const BlockSolve& a, const BlockSolve* b = nullptr);
-  double block_difference(double tau) const;
+  double block_difference() const;
 
   const OdeProblem& p_;
   const BlockSettings& s_;
@@ -146,9 +135,8 @@ class Driver {
   std::vector<Eigen::VectorXd> past_u_, past_f_;  // the window: m points, oldest first
   Eigen::VectorXd scale_;
   LastBlock last_;
-  bool have_jacobian_ = false;
   bool jacobian_at_point_ = false;  // evaluated at the window's last point
-  bool jacobian_stale_ = false;     // to be evaluated again before the next factorisation
+  bool jacobian_stale_ = true;      // to be evaluated (again) before the next factorisation
   const BlockSolve* factorized_for_ = nullptr;
   double factorized_tau_ = std::numeric_limits<double>::quiet_NaN();
 };
@@ -166,14 +154,14 @@ void Driver::record(double tau, int taken, double error, const BlockSolve& a, co
 }
 
 // Factorises I - tau mu_e J for every system of the blocks (in parallel), evaluating J
-// first when there is none or it is stale. Kept while tau and J stay the same. False when
+// first when it is stale (or not yet taken). Kept while tau and J stay the same. False when
 // a matrix is singular (or J is not finite): the step is then retried smaller.
 bool Driver::factorize(std::initializer_list<BlockSolve*> blocks, double tau) {
   BlockStats& st = result_.stats;
-  if (!have_jacobian_ || jacobian_stale_) {
+  if (jacobian_stale_) {
     jac_ = jacobian_->evaluate(t_, past_u_.back(), past_f_.back(), st.rhs_evaluations);
     ++st.jacobians;
-    have_jacobian_ = jacobian_at_point_ = true;
+    jacobian_at_point_ = true;
     jacobian_stale_ = false;
     factorized_for_ = nullptr;
   }
@@ -201,11 +189,11 @@ bool Driver::factorize(std::initializer_list<BlockSolve*> blocks, double tau) {
 }
 
 bool Driver::solve(std::initializer_list<BlockSolve*> blocks, double tau) {
+  ++result_.stats.steps;
   scale_ = s_.atol + s_.rtol * past_u_.back().array().abs();
   for (BlockSolve* b : blocks) b->setup(t_, tau, past_u_, past_f_, scale_);
   if (newton() && !factorize(blocks, tau)) {
     for (BlockSolve* b : blocks) b->failed = true;
-    ++result_.stats.steps;
     return false;
   }
   arena_.execute([&] {
@@ -219,12 +207,11 @@ bool Driver::solve(std::initializer_list<BlockSolve*> blocks, double tau) {
     result_.stats.iterations += b->iterations;
     ok = ok && !b->failed;
   }
-  ++result_.stats.steps;
   return ok;
 }
 
 // Largest scaled difference of the two blocks over their s shared points.
-double Driver::block_difference(double) const {
+double Driver::block_difference() const {
   double err = 0;
   for (int i = 0; i < small_.points(); ++i) {
     const Eigen::ArrayXd sc = s_.atol + s_.rtol * past_u_.back().array().abs().max(large_.u[i].array().abs());
@@ -234,22 +221,30 @@ double Driver::block_difference(double) const {
 }
 
 void Driver::accept(const BlockSolve& b, double tau) {
-  last_.method = &b.method();
-  last_.t0 = t_;
-  last_.tau = tau;
-  last_.past_u = past_u_;
-  last_.past_f = past_f_;
-  last_.u = b.u;
-  last_.f = b.f;
-  if (on_block_) on_block_(last_.view());
-  // The new window: the last m of the old window and the block's points.
   const int k = b.points();
-  std::vector<Eigen::VectorXd> u = past_u_, f = past_f_;
-  u.insert(u.end(), b.u.begin(), b.u.end());
-  f.insert(f.end(), b.f.begin(), b.f.end());
-  past_u_.assign(u.end() - m(), u.end());
-  past_f_.assign(f.end() - m(), f.end());
-  t_ = last_.t0 + k * tau;
+  if (on_block_) on_block_({t_, tau, k, &b.method(), &past_u_, &past_f_, &b.u, &b.f});
+  if (m() > 1) {  // kept for rebuilding the window when the step changes
+    last_.method = &b.method();
+    last_.t0 = t_;
+    last_.tau = tau;
+    last_.past_u = past_u_;
+    last_.past_f = past_f_;
+    last_.u = b.u;
+    last_.f = b.f;
+  }
+  // The new window: the last m of (old window of w points, block points); after the
+  // start-up it grows from 1 to m. Entry a is combined point w + k - m + a >= a, so an old
+  // entry is read before it is overwritten.
+  const int w = static_cast<int>(past_u_.size());
+  past_u_.resize(static_cast<std::size_t>(m()));
+  past_f_.resize(static_cast<std::size_t>(m()));
+  for (int a = 0; a < m(); ++a) {
+    const int c = w + k - m() + a;
+    const auto at = static_cast<std::size_t>(a);
+    past_u_[at] = c < w ? past_u_[static_cast<std::size_t>(c)] : b.u[static_cast<std::size_t>(c - w)];
+    past_f_[at] = c < w ? past_f_[static_cast<std::size_t>(c)] : b.f[static_cast<std::size_t>(c - w)];
+  }
+  t_ += k * tau;
   window_tau_ = tau;
   jacobian_at_point_ = false;
   ++result_.stats.accepted;
@@ -310,7 +305,6 @@ BlockResult Driver::run() {
       }
       record(tau, starter_->points(), 0, *starter_);
       accept(*starter_, tau);
-      factorized_for_ = nullptr;
       continue;
     }
     bool allow_large = !fixed_;
@@ -333,7 +327,7 @@ BlockResult Driver::run() {
       accept(small_, tau);
       continue;
     }
-    const double err = block_difference(tau), gf = s_.global_fraction;
+    const double err = block_difference(), gf = s_.global_fraction;
     const double fac = err == 0 ? s_.facmax
                                 : std::min(s_.facmax, std::max(s_.facmin, s_.safety * std::pow(gf / err, 1.0 / q)));
     const int taken = err <= gf && allow_large ? s + 1 : err <= 1 ? s : 0;

@@ -121,11 +121,6 @@ void BlockSolve::factorize(int system) {
   }
 }
 
-LinearSolverKind BlockSolve::solver_kind() const {
-  if (systems_.empty()) return LinearSolverKind::dense;
-  return systems_.front().complex ? systems_.front().complex_solver.kind() : systems_.front().real_solver.kind();
-}
-
 void BlockSolve::setup(double t0, double tau, const std::vector<Eigen::VectorXd>& past_u,
                        const std::vector<Eigen::VectorXd>& past_f, const Eigen::VectorXd& scale) {
   t0_ = t0;
@@ -159,9 +154,12 @@ void BlockSolve::prepare(Eigen::Index r) {
   }
 }
 
-void BlockSolve::evaluate(int i, Eigen::Index r) {
-  problem_.rhs(t0_ + double(i + 1) * tau_, u[i], f[i], {slice_begin(r), slice_begin(r) + slice_length(r)});
-  f_not_finite_[static_cast<std::size_t>(r * points() + i)] = !f[i].segment(slice_begin(r), slice_length(r)).allFinite();
+// f of point i over slices [first_slice, first_slice + slice_count).
+void BlockSolve::evaluate(int i, Eigen::Index first_slice, Eigen::Index slice_count) {
+  const Eigen::Index begin = slice_begin(first_slice), end = slice_begin(first_slice + slice_count - 1) +
+                                                             slice_length(first_slice + slice_count - 1);
+  problem_.rhs(t0_ + double(i + 1) * tau_, u[i], f[i], {begin, end});
+  f_not_finite_[static_cast<std::size_t>(first_slice * points() + i)] = !f[i].segment(begin, end - begin).allFinite();
 }
 
 // After f is evaluated at the latest iterate: converged, failed, or iterate again. The
@@ -313,9 +311,12 @@ void BlockSolve::build(flow::graph& g) {
       correct_start_->try_put(flow::continue_msg());
     }
   });
+  // A right-hand side that evaluates whole vectors only gets one node per point (asked
+  // per slice it would compute everything once per slice).
+  const Eigen::Index f_slices = problem_.sliceable ? n_slices : 1, per_node = problem_.sliceable ? 1 : n_slices;
   for (int i = 0; i < k; ++i)
-    for (Eigen::Index r = 0; r < n_slices; ++r) {
-      Node& e = node([this, i, r] { evaluate(i, r); });
+    for (Eigen::Index r = 0; r < f_slices; ++r) {
+      Node& e = node([this, i, r, per_node] { evaluate(i, r * per_node, per_node); });
       flow::make_edge(*evaluate_start_, e);
       flow::make_edge(e, gate_node);
     }

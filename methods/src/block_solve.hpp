@@ -32,7 +32,6 @@ class BlockSolve {
 
   // The linear systems of the Newton iteration: one per real eigenvalue or complex pair.
   int systems() const { return static_cast<int>(systems_.size()); }
-  LinearSolverKind solver_kind() const;
   // Factorising I - tau mu_e J for every system, each a node of the graph: set up, start
   // (then g.wait_for_all() and finished()), and whether all matrices were regular.
   void request_factorization(const Eigen::SparseMatrix<double>& jac, double tau, LinearSolverKind kind);
@@ -70,7 +69,7 @@ class BlockSolve {
   Eigen::Index slice_length(Eigen::Index r) const { return std::min(slice_, n_ - r * slice_); }
   void factorize(int system);
   void prepare(Eigen::Index r);
-  void evaluate(int i, Eigen::Index r);
+  void evaluate(int i, Eigen::Index first_slice, Eigen::Index slice_count);
   bool gate();  // true: iterate again
   void residual(Eigen::Index r);
   void solve(int e);

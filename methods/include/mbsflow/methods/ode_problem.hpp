@@ -23,6 +23,9 @@ struct OdeProblem {
   // dydt[rows] = f(t, y)[rows]; y is the whole state, only the rows in the range are
   // written. A system that cannot split its evaluation computes what it needs for the range.
   std::function<void(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt, RowRange rows)> rhs;
+  // Whether asking for a slice of rows costs only that slice (false: the whole vector is
+  // computed anyway, so solvers ask for whole vectors).
+  bool sliceable = true;
   // Optional: the Jacobian df/dy at (t, y), written into a matrix whose sparsity pattern is
   // `sparsity` (or dense when no pattern is given).
   std::function<void(double t, const Eigen::VectorXd& y, Eigen::SparseMatrix<double>& jac)> jacobian;
@@ -44,6 +47,7 @@ OdeProblem make_ode_problem(std::string name, double t0, double t_end, Eigen::Ve
   p.t0 = t0;
   p.t_end = t_end;
   p.y0 = std::move(y0);
+  p.sliceable = false;
   // Evaluated whole, once per call, and copied into the requested rows.
   p.rhs = [f = std::move(f)](double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt, RowRange rows) {
     if (rows.begin == 0 && rows.end == y.size()) {
