@@ -7,34 +7,20 @@
 #include <limits>
 #include <stdexcept>
 
-#include "mbsflow/methods/tsan_annotations.hpp"
+#include "annotated_node.hpp"
 
 namespace mbsflow {
 
 namespace flow = tbb::flow;
-
-namespace {
-// Orders every node's reading of its own captures after the thread that built the graph
-// (ThreadSanitizer; see tsan_annotations.hpp). Taken first, before any capture is read.
-long capture_token = 0;
-
-// |du| within a few units of rounding of |u| (or of the smallest normal number).
-template <class D, class U>
-bool at_roundoff(const D& du, const U& u) {
-  const double eps = std::numeric_limits<double>::epsilon();
-  return (du.array().abs() <= 8 * eps * u.array().abs() + std::numeric_limits<double>::min()).all();
-}
-}  // namespace
 
 BlockSolve::BlockSolve(const BlockCoefficients& method, const OdeProblem& problem, const BlockSettings& settings,
                        Eigen::Index slice_size)
     : method_(method),
       problem_(problem),
       kind_(settings.iteration),
-      max_iterations_(settings.max_iterations > 0 ? settings.max_iterations
-                      : settings.iteration == BlockIteration::newton ? 7
-                                                                     : 50),
-      tol_(settings.iteration_tol),
+      monitor_{settings.iteration_tol, settings.max_iterations > 0                       ? settings.max_iterations
+                                       : settings.iteration == BlockIteration::newton ? 7
+                                                                                      : 50},
       n_(problem.size),
       slice_(std::max<Eigen::Index>(1, std::min(slice_size, problem.size))) {
   const int k = points();
@@ -162,9 +148,8 @@ void BlockSolve::evaluate(int i, Eigen::Index first_slice, Eigen::Index slice_co
   f_not_finite_[static_cast<std::size_t>(first_slice * points() + i)] = !f[i].segment(begin, end - begin).allFinite();
 }
 
-// After f is evaluated at the latest iterate: converged, failed, or iterate again. The
-// convergence test is Hairer & Wanner's (IV.8): with the contraction rate theta from the
-// last two corrections, eta = theta / (1 - theta), stop when eta |dU| <= tol.
+// After f is evaluated at the latest iterate: converged, failed, or iterate again
+// (convergence_monitor.hpp).
 bool BlockSolve::gate() {
   evaluations += points();
   // f undefined at an iterate (outside the problem's domain): the step must be cut.
@@ -175,34 +160,15 @@ bool BlockSolve::gate() {
   if (iterations == 0) return true;
   double norm = 0;
   for (double v : slice_norm_) norm = std::max(norm, v);
-  if (!std::isfinite(norm)) {
-    failed = true;
-    return false;
+  const bool roundoff =
+      std::all_of(slice_at_roundoff_.begin(), slice_at_roundoff_.end(), [](char c) { return c != 0; });
+  switch (monitor_.next(iterations, norm, roundoff)) {
+    case IterationVerdict::iterate: return true;
+    case IterationVerdict::converged: return false;
+    case IterationVerdict::failed: break;
   }
-  // A correction at the level of rounding cannot get smaller: converged, whatever the
-  // tolerance asked for.
-  if (std::all_of(slice_at_roundoff_.begin(), slice_at_roundoff_.end(), [](char c) { return c != 0; })) return false;
-  double eta;
-  if (iterations == 1) {
-    eta = std::pow(std::max(eta_, std::numeric_limits<double>::epsilon()), 0.8);
-  } else {
-    const double theta = norm / last_norm_;
-    if (theta >= 0.99) {
-      failed = true;
-      return false;
-    }
-    eta = theta / (1 - theta);
-  }
-  last_norm_ = norm;
-  if (eta * norm <= tol_ || norm == 0) {
-    eta_ = eta;
-    return false;
-  }
-  if (iterations >= max_iterations_) {
-    failed = true;
-    return false;
-  }
-  return true;
+  failed = true;
+  return false;
 }
 
 // z_e = -(T^-1 R)_e with the residuals R_l = U_l - B_l - tau sum_j g_lj F_j.
@@ -285,16 +251,7 @@ void BlockSolve::build(flow::graph& g) {
   evaluate_start_ = std::make_unique<Start>(g);
   correct_start_ = std::make_unique<Start>(g);
   factor_start_ = std::make_unique<Start>(g);
-  auto node = [&](auto body) -> Node& {
-    nodes_.push_back(std::make_unique<Node>(g, [this, body](const flow::continue_msg&) {
-      happens_after(&capture_token);
-      happens_after(&token_);
-      body();
-      happens_before(&token_);
-      return flow::continue_msg();
-    }));
-    return *nodes_.back();
-  };
+  auto node = [&](auto body) -> Node& { return annotated_node(g, nodes_, &token_, body); };
   // A join that fires `next` once all its predecessors are done.
   auto join = [&](Start& next) -> Node& { return node([&next] { next.try_put(flow::continue_msg()); }); };
 
@@ -327,7 +284,7 @@ void BlockSolve::build(flow::graph& g) {
       flow::make_edge(*correct_start_, c);
       flow::make_edge(c, corrected);
     }
-    happens_before(&capture_token);
+    captures_published();
     return;
   }
   Node& residuals_done = node([] {});
@@ -347,7 +304,7 @@ void BlockSolve::build(flow::graph& g) {
     flow::make_edge(solved, c);
     flow::make_edge(c, corrected);
   }
-  happens_before(&capture_token);
+  captures_published();
 }
 
 void BlockSolve::start() {

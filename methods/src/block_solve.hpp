@@ -16,6 +16,8 @@
 #include <memory>
 #include <vector>
 
+#include "annotated_node.hpp"
+#include "convergence_monitor.hpp"
 #include "mbsflow/methods/block_integrator.hpp"
 
 namespace mbsflow {
@@ -61,7 +63,7 @@ class BlockSolve {
     Eigen::VectorXd zr;
     Eigen::VectorXcd zc;
   };
-  using Node = tbb::flow::continue_node<tbb::flow::continue_msg>;
+  using Node = ContinueNode;
   using Start = tbb::flow::broadcast_node<tbb::flow::continue_msg>;
 
   Eigen::Index slices() const { return (n_ + slice_ - 1) / slice_; }
@@ -79,8 +81,7 @@ class BlockSolve {
   BlockCoefficients method_;
   const OdeProblem& problem_;
   BlockIteration kind_;
-  int max_iterations_;
-  double tol_;
+  ConvergenceMonitor monitor_;
   Eigen::Index n_, slice_;
   Eigen::MatrixXcd t_, t_inv_;
   std::vector<System> systems_;
@@ -88,7 +89,6 @@ class BlockSolve {
   std::vector<double> slice_norm_;
   std::vector<char> slice_at_roundoff_;
   std::vector<char> f_not_finite_;  // per point and slice: the last f had a NaN or infinity  // the last correction was within rounding of the iterate
-  double last_norm_ = 0, eta_ = 1.0;
   // The attempt.
   double t0_ = 0, tau_ = 0;
   const std::vector<Eigen::VectorXd>* past_u_ = nullptr;
