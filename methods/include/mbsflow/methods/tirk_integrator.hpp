@@ -1,0 +1,98 @@
+#pragma once
+// Implicit Runge-Kutta methods iterated in parallel through a triangular (seed 004) or
+// diagonal approximation T of their matrix A. Every scheme is the splitting iteration
+//
+//   Y_i - tau t_ii f(Y_i) = x_n + tau sum_j (A - T)_ij F_j^(nu-1) + tau sum_{j<i} t_ij F_j^(nu),
+//
+// whose fixed point is the Runge-Kutta solution itself (so the tableau's order is kept),
+// with Y_i the stage values, F_j = f(t_n + c_j tau, Y_j), and T = T_L (triangular: stage i
+// waits for the stages j < i of the same iteration), T = D (diagonal: all stages at
+// once) or T = 0 (Jacobi: the full matrix, explicit, all stages at once). The stage
+// equation is solved
+//   - by fixed-point substitution (functional: jacobi, triangular, diagonal) for
+//     non-stiff problems, which contracts for tau < 1 / (L M),
+//     M = max_i sum_j |(A - T)_ij| + max_i sum_j |t_ij|, L the Lipschitz constant of f;
+//   - by one simplified Newton step with I - tau t_ii J (newton-triangular = PTIRK,
+//     newton-diagonal = PDIRK, after van der Houwen, Sommeijer and de Swart), one
+//     factorisation per distinct t_ii, for stiff problems.
+// Stages (and slices of equations) are nodes of a oneTBB flow graph; the numbers do not
+// depend on the thread count.
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "mbsflow/methods/block_integrator.hpp"
+#include "mbsflow/methods/rk_tableau.hpp"
+
+namespace mbsflow {
+
+enum class TirkIteration { jacobi, triangular, diagonal, newton_triangular, newton_diagonal };
+const char* to_string(TirkIteration i);
+TirkIteration tirk_iteration_from_string(const std::string& name);  // throws std::invalid_argument
+bool is_newton(TirkIteration i);
+
+// The approximation T of the implicit block of A that an iteration uses.
+Eigen::MatrixXd splitting_matrix(const TriangularSplitting& split, TirkIteration i);
+// M of the contraction bound tau < 1 / (L M) of the functional iteration with T.
+double contraction_constant(const Eigen::MatrixXd& a, const Eigen::MatrixXd& t);
+
+struct TirkSettings {
+  std::string tableau = "radau3";
+  TirkIteration iteration = TirkIteration::newton_triangular;
+  double rtol = 1e-6, atol = 1e-6;
+  double safety = 0.9, facmin = 0.2, facmax = 4.0;
+  double initial_step = 0;  // 0: chosen from the problem
+  double fixed_step = 0;    // > 0: no step control
+  double min_step = 0;      // 0: 1e-14 |t|
+  long max_steps = 10'000'000;
+  int max_iterations = 0;    // 0: 10 for Newton-type, 50 for functional iterations
+  int fixed_iterations = 0;  // > 0: exactly this many iterations per step, no convergence test
+  // Functional triangular/diagonal: substitutions per stage and iteration for the stage's
+  // own term tau t_ii f(Y_i) (each one f evaluation). With 1 the diagonal scheme is Jacobi.
+  int inner_iterations = 3;
+  double iteration_tol = 0.03;  // stop when the estimated iteration error is this fraction of the tolerance
+  bool finite_difference_jacobian = false;
+  LinearSolverKind linear_solver = LinearSolverKind::automatic;
+  int threads = 0;              // 0: all cores; 1: sequential (the same numbers)
+  Eigen::Index slice_size = 0;  // equations per slice; 0: 4096 once a system has 8192 or more
+};
+
+struct TirkStats {
+  long steps = 0, accepted = 0, rejected = 0, iteration_failures = 0;
+  long rhs_evaluations = 0, jacobians = 0, factorizations = 0, iterations = 0;
+  LinearSolverKind linear_solver = LinearSolverKind::dense;
+  double contraction_m = 0;       // M of the scheme
+  double lipschitz_start = 0;     // ||J(t0, y0)||_inf (computed for the functional schemes too)
+  double lipschitz_observed = 0;  // largest |F^nu - F^(nu-1)| / |Y^nu - Y^(nu-1)| seen in the iterations
+  double largest_step = 0;        // largest accepted step
+};
+
+struct TirkResult {
+  TirkStats stats;
+  std::vector<BlockStepRecord> steps;  // taken = stages of an accepted step, 0 rejected
+  double t = 0;
+  Eigen::VectorXd y;
+};
+
+// Integrates from problem.t0 to problem.t_end; on_step (optional) sees every accepted
+// step's end point. Throws std::invalid_argument for bad settings, std::runtime_error when
+// the step falls below the minimum (a functional iteration that diverges at a fixed step
+// says so, with its contraction bound) or max_steps is reached.
+TirkResult integrate_tirk(const OdeProblem& problem, const TirkSettings& settings,
+                          const std::function<void(double t, const Eigen::VectorXd& y)>& on_step = {});
+
+// The measurement of the seed's claim: one step of size tau from (t, x), started from
+// the trivial predictor Y_i = x, iterated `count` times with fixed_iterations; error[nu-1] =
+// max_i |Y_i^nu - Y_i*|_inf / max(1, |Y*|_inf) after iteration nu, against the converged
+// stage values Y* (newton-triangular iterated to rounding). evaluations[nu-1]: f
+// evaluations spent so far. reference_ok: Y* converged (its stage residual is reported).
+struct IterationTrace {
+  std::vector<double> error;
+  std::vector<long> evaluations;
+  bool reference_ok = false;
+  double reference_residual = 0;
+};
+IterationTrace trace_tirk_iterations(const OdeProblem& problem, const TirkSettings& settings, double t,
+                                     const Eigen::VectorXd& x, double tau, int count);
+
+}  // namespace mbsflow

@@ -1,0 +1,390 @@
+// The driver of the triangularised Runge-Kutta methods: iterations, Jacobian and
+// factorisations, the embedded error estimate and the step control.
+#include "mbsflow/methods/tirk_integrator.hpp"
+
+#include <oneapi/tbb/task_arena.h>
+
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <sstream>
+#include <stdexcept>
+
+#include "mbsflow/methods/jacobian.hpp"
+#include "starting_step.hpp"
+#include "tirk_stages.hpp"
+
+namespace mbsflow {
+
+const char* to_string(TirkIteration i) {
+  switch (i) {
+    case TirkIteration::jacobi: return "jacobi";
+    case TirkIteration::triangular: return "triangular";
+    case TirkIteration::diagonal: return "diagonal";
+    case TirkIteration::newton_triangular: return "newton-triangular";
+    case TirkIteration::newton_diagonal: return "newton-diagonal";
+  }
+  return "?";
+}
+
+TirkIteration tirk_iteration_from_string(const std::string& name) {
+  for (TirkIteration i : {TirkIteration::jacobi, TirkIteration::triangular, TirkIteration::diagonal,
+                          TirkIteration::newton_triangular, TirkIteration::newton_diagonal})
+    if (name == to_string(i)) return i;
+  throw std::invalid_argument("unknown iteration '" + name +
+                              "' (jacobi, triangular, diagonal, newton-triangular or newton-diagonal)");
+}
+
+bool is_newton(TirkIteration i) { return i == TirkIteration::newton_triangular || i == TirkIteration::newton_diagonal; }
+
+Eigen::MatrixXd splitting_matrix(const TriangularSplitting& split, TirkIteration i) {
+  switch (i) {
+    case TirkIteration::jacobi: return Eigen::MatrixXd::Zero(split.d.size(), split.d.size());
+    case TirkIteration::triangular:
+    case TirkIteration::newton_triangular: return split.t_lower;
+    default: return split.diagonal;
+  }
+}
+
+double contraction_constant(const Eigen::MatrixXd& a, const Eigen::MatrixXd& t) {
+  return (a - t).cwiseAbs().rowwise().sum().maxCoeff() + t.cwiseAbs().rowwise().sum().maxCoeff();
+}
+
+namespace {
+
+void check_settings(const OdeProblem& p, const TirkSettings& s) {
+  auto bad = [](const std::string& what) { throw std::invalid_argument(what); };
+  if (p.size < 1 || p.y0.size() != p.size || !p.rhs) bad("the problem needs a size, y0 of that size and a right-hand side");
+  if (!(p.t_end > p.t0)) bad("the end time must be after the start time");
+  if (!(s.rtol > 0) || !(s.atol > 0)) bad("tolerances must be positive");
+  if (!(s.facmin > 0 && s.facmin < 1 && s.facmax > 1)) bad("facmin must be in (0, 1) and facmax above 1");
+  if (s.fixed_step < 0 || s.initial_step < 0) bad("steps must be positive");
+  if (s.threads < 0 || s.fixed_iterations < 0 || s.max_iterations < 0) bad("threads and iteration counts must be >= 0");
+  if (s.inner_iterations < 1) bad("inner_iterations must be at least 1");
+}
+
+double infinity_norm(const Eigen::SparseMatrix<double>& j) {
+  Eigen::VectorXd rows = Eigen::VectorXd::Zero(j.rows());
+  for (Eigen::Index c = 0; c < j.outerSize(); ++c)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(j, c); it; ++it) rows(it.row()) += std::abs(it.value());
+  return rows.size() ? rows.maxCoeff() : 0.0;
+}
+
+class Driver {
+ public:
+  Driver(const OdeProblem& p, const TirkSettings& s)
+      : p_(p), s_(s),
+        tableau_(rk_tableau(s.tableau)),
+        split_(ldu_splitting(tableau_.implicit_block())),
+        embedded_(embedded_formula(tableau_, split_)),
+        t_matrix_(splitting_matrix(split_, s.iteration)),
+        arena_(s.threads > 0 ? s.threads : tbb::task_arena::automatic),
+        stages_(tableau_, t_matrix_, s.iteration, s.inner_iterations, p,
+                s.slice_size > 0 ? s.slice_size : p.size >= 8192 ? 4096 : p.size),
+        jacobian_(p, s.finite_difference_jacobian) {
+    arena_.execute([&] {
+      graph_ = std::make_unique<tbb::flow::graph>();
+      stages_.build(*graph_);
+    });
+    monitor_.tol = s.iteration_tol;
+    monitor_.max_iterations = s.max_iterations > 0 ? s.max_iterations : newton() ? 10 : 50;
+    const int last = tableau_.stages() - 1;
+    stiffly_accurate_ = tableau_.c(last) == 1.0 && (tableau_.a.row(last).transpose() - tableau_.b).cwiseAbs().maxCoeff() < 1e-15;
+    result_.stats.contraction_m = contraction_constant(tableau_.implicit_block(), t_matrix_);
+  }
+
+  TirkResult run(const std::function<void(double, const Eigen::VectorXd&)>& on_step);
+  // One step from (t, x) iterated at most `count` times from the trivial predictor;
+  // after(k) sees the stages after iteration k and returns false to stop. False when the
+  // factorisation failed or an iterate was not finite.
+  bool iterate_step(double t, const Eigen::VectorXd& x, const Eigen::VectorXd& fx, double tau, int count,
+                    const std::function<bool(int)>& after);
+  const TirkStages& stages() const { return stages_; }
+  const RkTableau& tableau() const { return tableau_; }
+
+ private:
+  bool newton() const { return is_newton(s_.iteration); }
+  void begin_step(double t, const Eigen::VectorXd& x, const Eigen::VectorXd& fx, double tau);
+  bool factorize(double tau);
+  bool iterate_once();
+  bool iterate(int iterations);
+  Eigen::VectorXd step_end(const Eigen::VectorXd& x, const Eigen::VectorXd& fx, double tau) const;
+  double estimate(const Eigen::VectorXd& x, const Eigen::VectorXd& x_new, const Eigen::VectorXd& fx, double tau) const;
+  [[noreturn]] void fail(const std::string& why, double tau) const;
+
+  const OdeProblem& p_;
+  const TirkSettings& s_;
+  RkTableau tableau_;
+  TriangularSplitting split_;
+  EmbeddedFormula embedded_;
+  Eigen::MatrixXd t_matrix_;
+  tbb::task_arena arena_;
+  std::unique_ptr<tbb::flow::graph> graph_;  // declared before the stages: destroyed after their nodes
+  TirkStages stages_;
+  JacobianEvaluator jacobian_;
+  Eigen::SparseMatrix<double> jac_;
+  ConvergenceMonitor monitor_;
+  TirkResult result_;
+  bool stiffly_accurate_ = false;
+  double t_ = 0;
+  Eigen::VectorXd scale_;
+  bool jacobian_at_point_ = false, jacobian_stale_ = true;
+  double factorized_tau_ = std::numeric_limits<double>::quiet_NaN();
+  int iterations_ = 0;
+};
+
+void Driver::fail(const std::string& why, double tau) const {
+  std::ostringstream os;
+  os << why << " at t = " << t_ << " (step " << tau << ")";
+  if (!newton()) {
+    const TirkStats& st = result_.stats;
+    const double l = std::max(st.lipschitz_start, st.lipschitz_observed);
+    os << "; the " << to_string(s_.iteration) << " functional iteration contracts for tau < 1/(L M)";
+    if (l > 0) os << " = " << 1.0 / (l * st.contraction_m);
+    os << " (M = " << st.contraction_m << ", L >= " << l << " from |J(t0, y0)| and the iterates)";
+  }
+  throw std::runtime_error(os.str());
+}
+
+// I - tau t_ii J for every distinct t_ii, J evaluated first when stale. Kept while tau and
+// J stay the same. False when a matrix is singular.
+bool Driver::factorize(double tau) {
+  TirkStats& st = result_.stats;
+  if (!jacobian_stale_ && tau == factorized_tau_) return true;
+  if (jacobian_stale_) {
+    jac_ = jacobian_.evaluate(t_, stages_.y().front(), stages_.f().front(), st.rhs_evaluations);
+    ++st.jacobians;
+    jacobian_at_point_ = true;
+    jacobian_stale_ = false;
+  }
+  const LinearSolverKind kind = choose_linear_solver(jac_, s_.linear_solver);
+  stages_.request_factorization(jac_, tau, kind);
+  st.factorizations += stages_.systems();
+  st.linear_solver = kind;
+  arena_.execute([&] {
+    stages_.start_factorization();
+    graph_->wait_for_all();
+  });
+  stages_.finished_factorization();
+  factorized_tau_ = stages_.factorization_ok() ? tau : std::numeric_limits<double>::quiet_NaN();
+  return stages_.factorization_ok();
+}
+
+void Driver::begin_step(double t, const Eigen::VectorXd& x, const Eigen::VectorXd& fx, double tau) {
+  ++result_.stats.steps;
+  t_ = t;
+  scale_ = s_.atol + s_.rtol * x.array().abs();
+  stages_.setup(t, tau, x, fx, scale_);
+  iterations_ = 0;
+}
+
+// One iteration through the graph; false when f was not finite.
+bool Driver::iterate_once() {
+  arena_.execute([&] {
+    stages_.start();
+    graph_->wait_for_all();
+  });
+  stages_.finished();
+  ++iterations_;
+  ++result_.stats.iterations;
+  result_.stats.rhs_evaluations += stages_.evaluations_per_iteration();
+  if (!newton()) result_.stats.lipschitz_observed = std::max(result_.stats.lipschitz_observed, stages_.lipschitz_ratio());
+  return !stages_.f_failed();
+}
+
+// Until converged, or exactly `iterations` times (> 0). False: diverged or failed.
+bool Driver::iterate(int iterations) {
+  for (;;) {
+    if (!iterate_once()) return false;
+    const double norm = stages_.correction();
+    if (iterations > 0) {
+      if (!std::isfinite(norm)) return false;
+      if (iterations_ >= iterations) return true;
+      continue;
+    }
+    switch (monitor_.next(iterations_, norm, stages_.at_rounding())) {
+      case IterationVerdict::iterate: continue;
+      case IterationVerdict::converged: return true;
+      case IterationVerdict::failed: return false;
+    }
+  }
+}
+
+// x_{n+1}: the last stage for a stiffly accurate method (Y_s, whose f is known), else
+// x_n + tau sum b_i F_i.
+Eigen::VectorXd Driver::step_end(const Eigen::VectorXd& x, const Eigen::VectorXd& fx, double tau) const {
+  if (stiffly_accurate_) return stages_.y().back();
+  Eigen::VectorXd out = x;
+  const int first = tableau_.first_implicit();
+  for (int j = 0; j < tableau_.stages(); ++j)
+    if (tableau_.b(j) != 0) out += (tau * tableau_.b(j)) * (j < first ? fx : stages_.f()[static_cast<std::size_t>(j - first)]);
+  return out;
+}
+
+double Driver::estimate(const Eigen::VectorXd& x, const Eigen::VectorXd& x_new, const Eigen::VectorXd& fx, double tau) const {
+  Eigen::VectorXd e = (tau * embedded_.gamma) * fx;
+  const int first = tableau_.first_implicit();
+  for (int j = 0; j < tableau_.stages(); ++j) {
+    const double w = embedded_.bhat(j) - tableau_.b(j);
+    if (w != 0) e += (tau * w) * (j < first ? fx : stages_.f()[static_cast<std::size_t>(j - first)]);
+  }
+  if (newton()) stages_.solve_with(embedded_.gamma, e);  // the stiff filter
+  const Eigen::ArrayXd sc = s_.atol + s_.rtol * x.array().abs().max(x_new.array().abs());
+  return (e.array().abs() / sc).maxCoeff();
+}
+
+TirkResult Driver::run(const std::function<void(double, const Eigen::VectorXd&)>& on_step) {
+  TirkStats& st = result_.stats;
+  double t = p_.t0;
+  t_ = t;
+  Eigen::VectorXd x = p_.y0, fx(p_.size);
+  p_.evaluate(t, x, fx);
+  ++st.rhs_evaluations;
+  // L at the start, for the contraction bound of the functional iterations.
+  jac_ = jacobian_.evaluate(t, x, fx, st.rhs_evaluations);
+  ++st.jacobians;
+  st.lipschitz_start = infinity_norm(jac_);
+  jacobian_stale_ = false;
+  jacobian_at_point_ = true;
+  const bool fixed = s_.fixed_step > 0;
+  double tau = s_.fixed_step;
+  if (!fixed) {
+    const Eigen::VectorXd scale = s_.atol + s_.rtol * x.array().abs();
+    tau = s_.initial_step > 0 ? s_.initial_step : starting_step(p_, x, fx, scale, tableau_.order, st.rhs_evaluations);
+  }
+  const double t_end = p_.t_end, eps_t = 1e-12 * std::max(1.0, std::abs(t_end));
+  bool after_rejection = false;  // the step after a rejected one does not grow (Hairer & Wanner, IV.8)
+  while (t_end - t > eps_t) {
+    if (st.steps >= s_.max_steps) fail("reached the maximum number of steps", tau);
+    const double min_step = s_.min_step > 0 ? s_.min_step : 1e-14 * std::max(1.0, std::abs(t));
+    if (tau < min_step) fail("step size underflow", tau);
+    const bool lands = tau >= t_end - t;
+    const double h = lands ? t_end - t : tau;
+    begin_step(t, x, fx, h);
+    const bool ok = (!newton() || factorize(h)) && iterate(s_.fixed_iterations);
+    BlockStepRecord rec;
+    rec.t = t;
+    rec.tau = h;
+    rec.iterations_s = iterations_;
+    rec.iteration_failed = !ok;
+    rec.error = std::numeric_limits<double>::quiet_NaN();
+    if (!ok) {
+      result_.steps.push_back(rec);
+      ++st.iteration_failures;
+      ++st.rejected;
+      if (fixed) fail(newton() ? "the Newton-type iteration did not converge" : "the functional iteration diverged", h);
+      if (newton() && !jacobian_at_point_)
+        jacobian_stale_ = true;
+      else
+        tau = h * 0.5;
+      after_rejection = true;
+      continue;
+    }
+    Eigen::VectorXd x_new = step_end(x, fx, h);
+    double err = 0, fac = s_.facmax;
+    if (!fixed) {
+      err = estimate(x, x_new, fx, h);
+      fac = err == 0 ? s_.facmax
+                     : std::min(s_.facmax, std::max(s_.facmin, s_.safety * std::pow(err, -1.0 / (embedded_.order + 1))));
+    }
+    rec.error = err;
+    if (err > 1) {
+      result_.steps.push_back(rec);
+      ++st.rejected;
+      tau = h * fac;
+      after_rejection = true;
+      continue;
+    }
+    if (after_rejection) fac = std::min(fac, 1.0);
+    after_rejection = false;
+    rec.taken = tableau_.stages();
+    result_.steps.push_back(rec);
+    ++st.accepted;
+    st.largest_step = std::max(st.largest_step, h);
+    if (newton() && monitor_.theta > 0.3) jacobian_stale_ = true;
+    t = lands ? t_end : t + h;
+    x = std::move(x_new);
+    if (stiffly_accurate_) {
+      fx = stages_.f().back();
+    } else {
+      p_.evaluate(t, x, fx);
+      ++st.rhs_evaluations;
+    }
+    jacobian_at_point_ = false;
+    if (on_step) on_step(t, x);
+    if (!fixed) tau = newton() && fac >= 1 && fac <= 1.2 ? h : h * fac;  // kept: no new factorisation
+  }
+  result_.t = t;
+  result_.y = x;
+  return result_;
+}
+
+bool Driver::iterate_step(double t, const Eigen::VectorXd& x, const Eigen::VectorXd& fx, double tau, int count,
+                          const std::function<bool(int)>& after) {
+  begin_step(t, x, fx, tau);
+  if (newton()) {
+    jacobian_stale_ = true;
+    if (!factorize(tau)) return false;
+  }
+  for (int k = 1; k <= count; ++k) {
+    if (!iterate_once() || !std::isfinite(stages_.correction())) return false;
+    if (!after(k)) break;
+  }
+  return true;
+}
+
+}  // namespace
+
+TirkResult integrate_tirk(const OdeProblem& problem, const TirkSettings& settings,
+                          const std::function<void(double t, const Eigen::VectorXd& y)>& on_step) {
+  check_settings(problem, settings);
+  Driver d(problem, settings);
+  return d.run(on_step);
+}
+
+IterationTrace trace_tirk_iterations(const OdeProblem& problem, const TirkSettings& settings, double t,
+                                     const Eigen::VectorXd& x, double tau, int count) {
+  check_settings(problem, settings);
+  if (!(tau > 0) || count < 1) throw std::invalid_argument("trace: the step and the iteration count must be positive");
+  IterationTrace out;
+  Eigen::VectorXd fx(problem.size);
+  problem.evaluate(t, x, fx);
+  // The converged stage values: newton-triangular until the corrections reach rounding.
+  TirkSettings rs = settings;
+  rs.iteration = TirkIteration::newton_triangular;
+  Driver reference(problem, rs);
+  std::vector<Eigen::VectorXd> y_star;
+  if (reference.iterate_step(t, x, fx, tau, 400, [&](int) { return !reference.stages().at_rounding(); })) {
+    const TirkStages& st = reference.stages();
+    const RkTableau& tab = reference.tableau();
+    const int first = tab.first_implicit();
+    double res = 0, size = 1;
+    for (int i = 0; i < st.implicit(); ++i) {
+      Eigen::VectorXd r = st.y()[static_cast<std::size_t>(i)] - x;
+      for (int j = 0; j < tab.stages(); ++j)
+        r -= (tau * tab.a(first + i, j)) * (j < first ? fx : st.f()[static_cast<std::size_t>(j - first)]);
+      res = std::max(res, r.cwiseAbs().maxCoeff());
+      size = std::max(size, st.y()[static_cast<std::size_t>(i)].cwiseAbs().maxCoeff());
+    }
+    out.reference_residual = res / size;
+    out.reference_ok = out.reference_residual <= 1e-10;
+    y_star = st.y();
+  }
+  out.error.assign(static_cast<std::size_t>(count), std::numeric_limits<double>::quiet_NaN());
+  out.evaluations.assign(static_cast<std::size_t>(count), 0);
+  if (!out.reference_ok) return out;
+  double size = 1;
+  for (const Eigen::VectorXd& y : y_star) size = std::max(size, y.cwiseAbs().maxCoeff());
+  Driver scheme(problem, settings);
+  std::fill(out.error.begin(), out.error.end(), std::numeric_limits<double>::infinity());
+  scheme.iterate_step(t, x, fx, tau, count, [&](int k) {
+    double e = 0;
+    for (std::size_t i = 0; i < y_star.size(); ++i) e = std::max(e, (scheme.stages().y()[i] - y_star[i]).cwiseAbs().maxCoeff());
+    out.error[static_cast<std::size_t>(k - 1)] = e / size;
+    out.evaluations[static_cast<std::size_t>(k - 1)] = k * scheme.stages().evaluations_per_iteration();
+    return true;
+  });
+  return out;
+}
+
+}  // namespace mbsflow

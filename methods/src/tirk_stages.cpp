@@ -1,0 +1,235 @@
+#include "tirk_stages.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "annotated_node.hpp"
+
+namespace mbsflow {
+
+namespace flow = tbb::flow;
+
+TirkStages::TirkStages(const RkTableau& tableau, const Eigen::MatrixXd& t, TirkIteration kind, int inner_iterations,
+                       const OdeProblem& problem, Eigen::Index slice_size)
+    : tableau_(tableau),
+      t_(t),
+      kind_(kind),
+      inner_(kind == TirkIteration::jacobi ? 1 : std::max(1, inner_iterations)),
+      problem_(problem),
+      first_(tableau.first_implicit()),
+      si_(tableau.implicit_stages()),
+      n_(problem.size),
+      slice_(std::max<Eigen::Index>(1, std::min(slice_size, problem.size))) {
+  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(n_);
+  for (auto* v : {&y_old_, &y_new_, &f_old_, &f_new_, &g_}) v->assign(static_cast<std::size_t>(si_), zero);
+  const auto cells = static_cast<std::size_t>(si_ * slices());
+  norm_.assign(cells, 0.0);
+  roundoff_.assign(cells, 0);
+  f_bad_.assign(cells, 0);
+  if (!newton()) return;
+  for (int i = 0; i < si_; ++i) {
+    const double v = t_(i, i);
+    if (!(v > 0)) throw std::invalid_argument("Newton-type iteration: the diagonal of T must be positive");
+    auto same = std::find_if(diagonal_values_.begin(), diagonal_values_.end(),
+                             [v](double w) { return std::abs(v - w) <= 1e-14 * std::max(v, w); });
+    if (same == diagonal_values_.end()) {
+      solver_of_stage_.push_back(static_cast<int>(diagonal_values_.size()));
+      diagonal_values_.push_back(v);
+    } else {
+      solver_of_stage_.push_back(static_cast<int>(same - diagonal_values_.begin()));
+    }
+  }
+  solvers_.resize(diagonal_values_.size());
+}
+
+void TirkStages::request_factorization(const Eigen::SparseMatrix<double>& jac, double tau, LinearSolverKind kind) {
+  factor_jac_ = &jac;
+  factor_tau_ = tau;
+  factor_kind_ = kind;
+  factor_failed_.assign(solvers_.size(), 0);
+}
+
+void TirkStages::start_factorization() {
+  happens_before(&token_);
+  factor_start_->try_put(flow::continue_msg());
+}
+
+void TirkStages::finished_factorization() { happens_after(&token_); }
+
+bool TirkStages::factorization_ok() const {
+  return std::none_of(factor_failed_.begin(), factor_failed_.end(), [](char c) { return c != 0; });
+}
+
+void TirkStages::solve_with(double gamma, Eigen::VectorXd& v) const {
+  for (std::size_t k = 0; k < diagonal_values_.size(); ++k)
+    if (std::abs(diagonal_values_[k] - gamma) <= 1e-14 * gamma) return solvers_[k].solve(v);
+  throw std::logic_error("solve_with: no factorisation for this diagonal value");
+}
+
+void TirkStages::setup(double t, double tau, const Eigen::VectorXd& x, const Eigen::VectorXd& fx, const Eigen::VectorXd& scale) {
+  t_n_ = t;
+  tau_ = tau;
+  x_ = &x;
+  fx_ = &fx;
+  scale_ = &scale;
+  for (int i = 0; i < si_; ++i) {
+    y_old_[static_cast<std::size_t>(i)] = x;
+    f_old_[static_cast<std::size_t>(i)] = fx;
+  }
+}
+
+void TirkStages::assemble(int i, Eigen::Index r) {
+  const Eigen::Index lo = slice_begin(r), len = slice_length(r);
+  const auto at = static_cast<std::size_t>(i);
+  const int row = first_ + i;
+  auto g = g_[at].segment(lo, len);
+  g = x_->segment(lo, len);
+  for (int j = 0; j < tableau_.stages(); ++j) {
+    const double a = tableau_.a(row, j);
+    if (a == 0) continue;
+    const Eigen::VectorXd& fj = j < first_ ? *fx_ : f_old_[static_cast<std::size_t>(j - first_)];
+    g += (tau_ * a) * fj.segment(lo, len);
+  }
+  for (int j = 0; j < i; ++j)
+    if (t_(i, j) != 0)
+      g += (tau_ * t_(i, j)) *
+           (f_new_[static_cast<std::size_t>(j)].segment(lo, len) - f_old_[static_cast<std::size_t>(j)].segment(lo, len));
+  if (newton()) {
+    g -= y_old_[at].segment(lo, len);  // the Newton residual
+    return;
+  }
+  y_new_[at].segment(lo, len) = g;
+  if (layers() == 1) measure(i, r, y_new_[at], y_old_[at]);
+}
+
+// Another substitution for the stage's own term: Y_i = G_i + tau t_ii (f(Y_i) - F_i^old).
+void TirkStages::substitute(int i, Eigen::Index r, int layer) {
+  const Eigen::Index lo = slice_begin(r), len = slice_length(r);
+  const auto at = static_cast<std::size_t>(i);
+  y_new_[at].segment(lo, len) =
+      g_[at].segment(lo, len) + (tau_ * t_(i, i)) * (f_new_[at].segment(lo, len) - f_old_[at].segment(lo, len));
+  if (layer == layers() - 1) measure(i, r, y_new_[at], y_old_[at]);
+}
+
+void TirkStages::solve(int i) {
+  const auto at = static_cast<std::size_t>(i);
+  solvers_[static_cast<std::size_t>(solver_of_stage_[at])].solve(g_[at]);
+  y_new_[at] = y_old_[at] + g_[at];
+  for (Eigen::Index r = 0; r < slices(); ++r) measure(i, r, y_new_[at], y_old_[at]);
+}
+
+void TirkStages::evaluate(int i, Eigen::Index first_slice, Eigen::Index count) {
+  const auto at = static_cast<std::size_t>(i);
+  const Eigen::Index begin = slice_begin(first_slice), end = slice_begin(first_slice + count - 1) + slice_length(first_slice + count - 1);
+  problem_.rhs(t_n_ + tableau_.c(first_ + i) * tau_, y_new_[at], f_new_[at], {begin, end});
+  for (Eigen::Index r = first_slice; r < first_slice + count; ++r)
+    f_bad_[static_cast<std::size_t>(i * slices() + r)] = !f_new_[at].segment(slice_begin(r), slice_length(r)).allFinite();
+}
+
+void TirkStages::measure(int i, Eigen::Index r, const Eigen::VectorXd& y_new, const Eigen::VectorXd& y_old) {
+  const Eigen::Index lo = slice_begin(r), len = slice_length(r);
+  const auto dy = y_new.segment(lo, len) - y_old.segment(lo, len);
+  const auto cell = static_cast<std::size_t>(i * slices() + r);
+  norm_[cell] = (dy.array().abs() / scale_->segment(lo, len).array()).maxCoeff();
+  roundoff_[cell] = at_roundoff(dy, y_new.segment(lo, len));
+}
+
+void TirkStages::build(flow::graph& g) {
+  const Eigen::Index n_slices = slices();
+  // A right-hand side that evaluates whole vectors only gets one node per stage.
+  const Eigen::Index f_nodes = problem_.sliceable ? n_slices : 1, per_node = problem_.sliceable ? 1 : n_slices;
+  start_ = std::make_unique<Start>(g);
+  factor_start_ = std::make_unique<Start>(g);
+  auto node = [&](auto body) -> Node& { return annotated_node(g, nodes_, &token_, body); };
+  for (int k = 0; k < systems(); ++k)
+    flow::make_edge(*factor_start_, node([this, k] {
+                      try {
+                        solvers_[static_cast<std::size_t>(k)].factorize(*factor_jac_, factor_tau_ * diagonal_values_[static_cast<std::size_t>(k)],
+                                                                        factor_kind_);
+                      } catch (const std::runtime_error&) {
+                        factor_failed_[static_cast<std::size_t>(k)] = 1;
+                      }
+                    }));
+  // final_eval[i][e]: the last evaluation nodes of stage i, which later stages wait for.
+  std::vector<std::vector<Node*>> final_eval(static_cast<std::size_t>(si_));
+  for (int i = 0; i < si_; ++i) {
+    std::vector<Node*> layer;  // the nodes that write Y_i in the current layer
+    for (Eigen::Index r = 0; r < n_slices; ++r) {
+      Node& a = node([this, i, r] { assemble(i, r); });
+      bool waits = false;
+      if (kind_ == TirkIteration::triangular || kind_ == TirkIteration::newton_triangular)
+        for (int j = 0; j < i; ++j)
+          if (t_(i, j) != 0) {
+            flow::make_edge(*final_eval[static_cast<std::size_t>(j)][static_cast<std::size_t>(r / per_node)], a);
+            waits = true;
+          }
+      if (!waits) flow::make_edge(*start_, a);
+      layer.push_back(&a);
+    }
+    if (newton()) {
+      Node& s = node([this, i] { solve(i); });
+      for (Node* a : layer) flow::make_edge(*a, s);
+      layer = {&s};
+    }
+    for (int l = 0; l < layers(); ++l) {
+      Node& written = node([] {});
+      for (Node* w : layer) flow::make_edge(*w, written);
+      std::vector<Node*> evals;
+      for (Eigen::Index e = 0; e < f_nodes; ++e) {
+        Node& ev = node([this, i, e, per_node] { evaluate(i, e * per_node, per_node); });
+        flow::make_edge(written, ev);
+        evals.push_back(&ev);
+      }
+      if (l == layers() - 1) {
+        final_eval[static_cast<std::size_t>(i)] = evals;
+        break;
+      }
+      Node& evaluated = node([] {});
+      for (Node* ev : evals) flow::make_edge(*ev, evaluated);
+      layer.clear();
+      for (Eigen::Index r = 0; r < n_slices; ++r) {
+        Node& sub = node([this, i, r, l] { substitute(i, r, l + 1); });
+        flow::make_edge(evaluated, sub);
+        layer.push_back(&sub);
+      }
+    }
+  }
+  captures_published();
+}
+
+void TirkStages::start() {
+  happens_before(&token_);
+  start_->try_put(flow::continue_msg());
+}
+
+void TirkStages::finished() {
+  happens_after(&token_);
+  std::swap(y_old_, y_new_);
+  std::swap(f_old_, f_new_);
+}
+
+double TirkStages::correction() const { return *std::max_element(norm_.begin(), norm_.end()); }
+
+bool TirkStages::at_rounding() const {
+  return std::all_of(roundoff_.begin(), roundoff_.end(), [](char c) { return c != 0; });
+}
+
+bool TirkStages::f_failed() const {
+  return std::any_of(f_bad_.begin(), f_bad_.end(), [](char c) { return c != 0; });
+}
+
+// After finished(): old and new have been swapped, so the previous iterate is in *_new_.
+double TirkStages::lipschitz_ratio() const {
+  double df = 0, dy = 0;
+  for (int i = 0; i < si_; ++i) {
+    const auto at = static_cast<std::size_t>(i);
+    df = std::max(df, (f_old_[at] - f_new_[at]).cwiseAbs().maxCoeff());
+    dy = std::max(dy, (y_old_[at] - y_new_[at]).cwiseAbs().maxCoeff());
+  }
+  return dy > 0 ? df / dy : 0.0;
+}
+
+long TirkStages::evaluations_per_iteration() const { return static_cast<long>(si_) * layers(); }
+
+}  // namespace mbsflow

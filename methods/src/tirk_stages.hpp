@@ -1,0 +1,107 @@
+#pragma once
+// One iteration of a triangularised Runge-Kutta method as a oneTBB flow graph (the
+// formulas are in tirk_integrator.hpp). For implicit stage i and slice r of equations:
+//
+//   assemble(i, r): G_i = x_n + tau sum_j a_ij F_j^old + tau sum_{j<i} t_ij (F_j^new - F_j^old)
+//     functional: Y_i = G_i, then (inner substitutions) Y_i = G_i + tau t_ii (f(Y_i) - F_i^old)
+//     Newton:     solve(i): (I - tau t_ii J) dY = G_i - Y_i^old, Y_i = Y_i^old + dY
+//   evaluate(i, r): F_i^new = f(t_n + c_i tau, Y_i)
+//
+// With the triangular T, assemble(i, r) waits for evaluate(j, r) of the stages j < i with
+// t_ij != 0 (a pipelined DAG: slices of stage i start as soon as the same slices of the
+// earlier stages are done); with the diagonal T or Jacobi all stages start together.
+// Every node writes its own rows only and the driver reduces in a fixed order, so the
+// numbers do not depend on the thread count.
+#include <oneapi/tbb/flow_graph.h>
+
+#include <memory>
+#include <vector>
+
+#include "convergence_monitor.hpp"
+#include "mbsflow/methods/tirk_integrator.hpp"
+
+namespace mbsflow {
+
+class TirkStages {
+ public:
+  TirkStages(const RkTableau& tableau, const Eigen::MatrixXd& t, TirkIteration kind, int inner_iterations,
+             const OdeProblem& problem, Eigen::Index slice_size);
+  TirkStages(const TirkStages&) = delete;
+  TirkStages& operator=(const TirkStages&) = delete;
+
+  void build(tbb::flow::graph& g);
+
+  // Factorising I - tau t_ii J for every distinct t_ii (Newton-type iterations), one node
+  // each: request, start (then wait_for_all and finished()), check.
+  void request_factorization(const Eigen::SparseMatrix<double>& jac, double tau, LinearSolverKind kind);
+  void start_factorization();
+  void finished_factorization();
+  bool factorization_ok() const;
+  int systems() const { return static_cast<int>(solvers_.size()); }
+  // (I - tau gamma J)^-1 v with the factorisation of the diagonal value gamma (one of t_ii).
+  void solve_with(double gamma, Eigen::VectorXd& v) const;
+
+  // A step from (t, x, fx = f(t, x)): the trivial predictor Y_i = x, F_i = fx.
+  void setup(double t, double tau, const Eigen::VectorXd& x, const Eigen::VectorXd& fx, const Eigen::VectorXd& scale);
+  void start();     // one iteration; call g.wait_for_all() after it
+  void finished();  // after wait_for_all: the new iterate becomes the current one
+  // After finished(): the scaled size of the last correction, whether it was at rounding
+  // level, whether some f was not finite, and |dF| / |dY| over the stages (0 if dY = 0).
+  double correction() const;
+  bool at_rounding() const;
+  bool f_failed() const;
+  double lipschitz_ratio() const;
+  long evaluations_per_iteration() const;
+
+  const RkTableau& tableau() const { return tableau_; }
+  int implicit() const { return si_; }
+  // The current stage values and their f, implicit stages only (index 0 = first implicit).
+  const std::vector<Eigen::VectorXd>& y() const { return y_old_; }
+  const std::vector<Eigen::VectorXd>& f() const { return f_old_; }
+
+ private:
+  using Node = tbb::flow::continue_node<tbb::flow::continue_msg>;
+  using Start = tbb::flow::broadcast_node<tbb::flow::continue_msg>;
+
+  Eigen::Index slices() const { return (n_ + slice_ - 1) / slice_; }
+  Eigen::Index slice_begin(Eigen::Index r) const { return r * slice_; }
+  Eigen::Index slice_length(Eigen::Index r) const { return std::min(slice_, n_ - r * slice_); }
+  bool newton() const { return is_newton(kind_); }
+  int layers() const { return newton() ? 1 : inner_; }
+  void assemble(int i, Eigen::Index r);
+  void substitute(int i, Eigen::Index r, int layer);
+  void solve(int i);
+  void evaluate(int i, Eigen::Index first_slice, Eigen::Index count);
+  void measure(int i, Eigen::Index r, const Eigen::VectorXd& y_new, const Eigen::VectorXd& y_old);
+
+  const RkTableau& tableau_;
+  Eigen::MatrixXd t_;  // the splitting matrix over the implicit stages
+  TirkIteration kind_;
+  int inner_;
+  const OdeProblem& problem_;
+  int first_, si_;
+  Eigen::Index n_, slice_;
+  std::vector<Eigen::VectorXd> y_old_, y_new_, f_old_, f_new_, g_;
+  std::vector<double> norm_;     // per stage and slice
+  std::vector<char> roundoff_;   // per stage and slice
+  std::vector<char> f_bad_;      // per stage and slice
+  // Factorisations: one per distinct diagonal value of T.
+  std::vector<double> diagonal_values_;
+  std::vector<int> solver_of_stage_;
+  std::vector<ShiftedSolver<double>> solvers_;
+  std::vector<char> factor_failed_;
+  const Eigen::SparseMatrix<double>* factor_jac_ = nullptr;
+  double factor_tau_ = 0;
+  LinearSolverKind factor_kind_ = LinearSolverKind::automatic;
+  // The step.
+  double t_n_ = 0, tau_ = 0;
+  const Eigen::VectorXd* x_ = nullptr;
+  const Eigen::VectorXd* fx_ = nullptr;
+  const Eigen::VectorXd* scale_ = nullptr;
+  // The graph.
+  std::unique_ptr<Start> start_, factor_start_;
+  std::vector<std::unique_ptr<Node>> nodes_;
+  long token_ = 0;  // ThreadSanitizer's view of the node order (tsan_annotations.hpp)
+};
+
+}  // namespace mbsflow
