@@ -20,6 +20,7 @@ struct BenchArgs {
   int threads = 0;          // parallel: up to this many threads (default: all cores)
   std::vector<std::string> problems;  // ode: default hnw, b1, heat1000, heat100000, heat1000000
   std::vector<double> tolerances;     // ode: default 1e-4, 1e-6, 1e-8, 1e-10
+  std::string tableau;                // iterations: default radau3
 };
 
 // The CSV file of a benchmark: --csv, or bench_WHAT.csv; InputError if it cannot be written.
@@ -40,6 +41,7 @@ int bench_parallel(const BenchArgs& a);
 int bench_cluster(const BenchArgs& a);
 int bench_latency(const BenchArgs& a);
 int bench_ode(const BenchArgs& a);
+int bench_iterations(const BenchArgs& a);
 
 using BenchClock = std::chrono::steady_clock;
 inline double seconds_since(BenchClock::time_point start) {

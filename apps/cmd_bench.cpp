@@ -15,9 +15,13 @@ Action add_bench(CLI::App& app) {
                   "parallel: scaling of partitioned runs over threads, flow graph vs barrier; "
                   "cluster: 2 threads vs 2 processes over tcp and ipc, exchange cost, predicted speedup on a cluster; "
                   "latency: tight vs loose coupling on 2 processes as the network gets slower; "
-                  "ode: work-precision of the block methods against CVODE and Boost.Odeint on the seed's problems")
-      ->check(CLI::IsMember({"rhs", "output", "parallel", "cluster", "latency", "ode"}));
-  sub->add_option("--problems", a->problems, "ode: hnw, b1, heatN (default hnw,b1,heat1000,heat100000,heat1000000)")->delimiter(',');
+                  "ode: work-precision of the block and tirk methods against CVODE and Boost.Odeint on the seed's problems; "
+                  "iterations: iteration error after 1, 2, ... iterations of the tirk schemes (seed 004's claim)")
+      ->check(CLI::IsMember({"rhs", "output", "parallel", "cluster", "latency", "ode", "iterations"}));
+  sub->add_option("--problems", a->problems,
+                  "ode, iterations: hnw, b1, heatN (default ode: hnw,b1,heat1000,heat100000,heat1000000; iterations: hnw,b1,heat200)")
+      ->delimiter(',');
+  sub->add_option("--tableau", a->tableau, "iterations: the tirk tableau (default radau3)");
   sub->add_option("--tolerances", a->tolerances, "ode: tolerances (default 1e-4,1e-6,1e-8,1e-10)")->delimiter(',');
   sub->add_option("--bodies", a->bodies, "Chain sizes (rhs: 2000,6500,100000; output: 6500; parallel, cluster: 2000,4000,6500)")
       ->delimiter(',');
@@ -33,6 +37,7 @@ Action add_bench(CLI::App& app) {
     if (a->what == "cluster") return bench_cluster(*a);
     if (a->what == "latency") return bench_latency(*a);
     if (a->what == "ode") return bench_ode(*a);
+    if (a->what == "iterations") return bench_iterations(*a);
     return bench_parallel(*a);
   };
 }

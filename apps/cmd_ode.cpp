@@ -7,21 +7,13 @@
 #include <stdexcept>
 
 #include "commands.hpp"
+#include "ode_common.hpp"
 #include "mbsflow/graph/error.hpp"
 #include "mbsflow/io/ode_results.hpp"
 #include "mbsflow/methods/block_integrator.hpp"
-#include "mbsflow/version.hpp"
 
 namespace mbsflow::cli {
 namespace {
-
-struct OdeArgs {
-  std::string problem, method = "colloc", iteration = "newton", jacobian = "exact", solver = "auto", output;
-  long n = 1000;
-  int s = 3, m = 1, order = 0, threads = 0;
-  double tol = 1e-6, atol = 0, fixed_step = 0, initial_step = 0;
-  bool describe = false, stability_table = false, quiet = false;
-};
 
 std::string join(const std::vector<std::string>& v, std::size_t row, std::size_t width) {
   std::string out;
@@ -84,23 +76,16 @@ int stability_table() {
   return 0;
 }
 
-std::vector<long> kept_components(long n) {
-  std::vector<long> c;
-  const long count = std::min<long>(n, 9);
-  for (long i = 0; i < count; ++i) c.push_back(count == 1 ? 0 : i * (n - 1) / (count - 1));
-  return c;
-}
-
 int run(const OdeArgs& a) {
   if (a.problem.empty()) throw InputError("ode: --problem is required (hnw, b1 or heat)");
-  if (a.method != "colloc") throw InputError("ode: --method " + a.method + " is not available (colloc)");
+  if (a.method == "tirk") return run_tirk(a);
   OdeProblem p;
   BlockSettings s;
   try {
     p = builtin_problem(a.problem, a.n);
     s.method = {a.m, a.s, a.order};
     generate_block_method(s.method);
-    s.iteration = block_iteration_from_string(a.iteration);
+    s.iteration = block_iteration_from_string(a.iteration.empty() ? "newton" : a.iteration);
     s.linear_solver = linear_solver_from_string(a.solver);
   } catch (const std::invalid_argument& e) {
     throw InputError(std::string("ode: ") + e.what());
@@ -112,26 +97,14 @@ int run(const OdeArgs& a) {
   s.initial_step = a.initial_step;
   s.threads = a.threads;
 
-  OdeResults out;
-  out.components = kept_components(p.size);
-  double max_error = 0;
-  const bool keep = !a.output.empty();
+  OdeRecorder rec(p, !a.output.empty());
   auto on_block = [&](const AcceptedBlock& b) {
-    for (int i = 0; i < b.points; ++i) {
-      const double t = b.t0 + (i + 1) * b.tau;
-      const Eigen::VectorXd& y = (*b.u)[static_cast<std::size_t>(i)];
-      const double err = p.exact ? (y - p.exact(t)).cwiseAbs().maxCoeff() : 0.0;
-      max_error = std::max(max_error, err);
-      if (!keep) continue;
-      out.time.push_back(t);
-      for (long c : out.components) out.values.push_back(y(c));
-      if (p.exact) out.error.push_back(err);
-    }
+    for (int i = 0; i < b.points; ++i) rec.add(b.t0 + (i + 1) * b.tau, (*b.u)[static_cast<std::size_t>(i)]);
   };
   if (!a.quiet)
     std::cerr << "mbsflow ode: " << p.name << " (N = " << p.size << ") on [" << p.t0 << ", " << p.t_end << "], colloc m = " << a.m
               << ", s = " << a.s << " / " << a.s + 1 << ", order " << s.method.effective_order() << ", tol " << a.tol << ", "
-              << a.iteration << "\n";
+              << to_string(s.iteration) << "\n";
   const auto start = std::chrono::steady_clock::now();
   BlockResult r;
   try {
@@ -147,18 +120,14 @@ int run(const OdeArgs& a) {
               st.steps, st.accepted, st.taken_s1, a.s + 1, st.taken_s, a.s, st.rejected, st.iteration_failures);
   std::printf("rhs evaluations %ld, iterations %ld, Jacobians %ld, factorizations %ld (%s)\n", st.rhs_evaluations,
               st.iterations, st.jacobians, st.factorizations,
-              a.iteration == "newton" ? to_string(st.linear_solver) : "none");
-  if (p.exact) std::printf("max error %.3e (against the exact solution, all accepted points)\n", max_error);
+              s.iteration == BlockIteration::newton ? to_string(st.linear_solver) : "none");
+  if (p.exact) std::printf("max error %.3e (against the exact solution, all accepted points)\n", rec.max_error());
   std::printf("wall time %.3f s\n", seconds);
-  if (keep) {
-    out.steps = r.steps;
-    out.texts = {{"mbsflow_version", MBSFLOW_VERSION}, {"problem", p.name}, {"method", a.method}, {"iteration", a.iteration},
-                 {"command", invocation()}};
-    out.numbers = {{"n", double(p.size)}, {"s", double(a.s)}, {"m", double(a.m)}, {"order", double(s.method.effective_order())},
-                   {"tol", a.tol}, {"max_error", max_error}, {"wall_seconds", seconds}, {"rhs_evaluations", double(st.rhs_evaluations)}};
-    write_ode_results(a.output, out);
-    if (!a.quiet) std::cerr << "results: " << a.output << " (plot: /usr/bin/python3 scripts/plot.py " << a.output << ")\n";
-  }
+  rec.write(a.output, r.steps,
+            {{"problem", p.name}, {"method", a.method}, {"iteration", to_string(s.iteration)}},
+            {{"n", double(p.size)}, {"s", double(a.s)}, {"m", double(a.m)}, {"order", double(s.method.effective_order())},
+             {"tol", a.tol}, {"wall_seconds", seconds}, {"rhs_evaluations", double(st.rhs_evaluations)}},
+            a.quiet);
   return 0;
 }
 
@@ -166,33 +135,52 @@ int run(const OdeArgs& a) {
 
 Action add_ode(CLI::App& app) {
   auto a = std::make_shared<OdeArgs>();
-  CLI::App* sub = app.add_subcommand("ode", "Integrate an ODE test problem with the collocation block methods");
+  CLI::App* sub = app.add_subcommand(
+      "ode", "Integrate an ODE test problem with the collocation block methods (colloc) or triangularised implicit Runge-Kutta methods (tirk)");
   sub->add_option("--problem", a->problem, "hnw (eq. 10, Hairer-Wanner), b1 (eq. 11, DETEST B1), heat (eq. 12, N equations)")
       ->check(CLI::IsMember({"hnw", "b1", "heat"}));
   sub->add_option("--n", a->n, "heat: number of equations")->check(CLI::PositiveNumber)->capture_default_str();
-  sub->add_option("--method", a->method, "colloc: collocation block methods")->capture_default_str();
-  sub->add_option("--s", a->s, "points per block (the controller also runs s+1)")->check(CLI::Range(1, 12))->capture_default_str();
-  sub->add_option("--m", a->m, "steps (1: one-step methods)")->check(CLI::Range(1, 8))->capture_default_str();
-  sub->add_option("--order", a->order, "order of the s-point method (0: maximal, 2m+s-1)")->check(CLI::NonNegativeNumber);
+  sub->add_option("--method", a->method, "colloc (block methods, seed 001) or tirk (Runge-Kutta iterated through T, seed 004)")
+      ->check(CLI::IsMember({"colloc", "tirk"}))->capture_default_str();
+  sub->add_option("--s", a->s, "colloc: points per block (the controller also runs s+1)")->check(CLI::Range(1, 12))->capture_default_str();
+  sub->add_option("--m", a->m, "colloc: steps (1: one-step methods)")->check(CLI::Range(1, 8))->capture_default_str();
+  sub->add_option("--order", a->order, "colloc: order of the s-point method (0: maximal, 2m+s-1)")->check(CLI::NonNegativeNumber);
+  sub->add_option("--tableau", a->tableau,
+                  "tirk: radau2, radau3, radau5 (Radau IIA, s stages), gauss2, gauss3, lobatto3c, block1..block6 (seed 001's one-step "
+                  "block methods)")
+      ->capture_default_str();
   sub->add_option("--tol", a->tol, "relative (and, without --atol, absolute) tolerance")->check(CLI::PositiveNumber)->capture_default_str();
   sub->add_option("--atol", a->atol, "absolute tolerance (default: --tol)")->check(CLI::PositiveNumber);
-  sub->add_option("--iteration", a->iteration, "newton (stiff) or functional (the seed's, non-stiff)")
-      ->check(CLI::IsMember({"newton", "functional"}))->capture_default_str();
+  sub->add_option("--iteration", a->iteration,
+                  "colloc: newton (default) or functional; tirk: newton-triangular (default), newton-diagonal, triangular, "
+                  "diagonal or jacobi")
+      ->check(CLI::IsMember({"newton", "functional", "jacobi", "triangular", "diagonal", "newton-triangular", "newton-diagonal"}));
+  sub->add_option("--iterations", a->iterations, "tirk: exactly this many iterations per step, no convergence test (0: until converged)")
+      ->check(CLI::NonNegativeNumber);
+  sub->add_option("--inner", a->inner, "tirk, functional triangular/diagonal: substitutions for a stage's own term per iteration")
+      ->check(CLI::Range(1, 50))->capture_default_str();
   sub->add_option("--jacobian", a->jacobian, "exact (the problem's) or fd (finite differences)")
       ->check(CLI::IsMember({"exact", "fd"}))->capture_default_str();
   sub->add_option("--linear-solver", a->solver, "auto, dense, banded or sparse")
       ->check(CLI::IsMember({"auto", "dense", "banded", "sparse"}))->capture_default_str();
-  sub->add_option("--fixed-step", a->fixed_step, "no step control: the s-point method with this point spacing")->check(CLI::PositiveNumber);
-  sub->add_option("--initial-step", a->initial_step, "first point spacing (default: chosen from the problem)")->check(CLI::PositiveNumber);
+  sub->add_option("--fixed-step", a->fixed_step, "no step control: this step (colloc: point spacing)")->check(CLI::PositiveNumber);
+  sub->add_option("--initial-step", a->initial_step, "first step (default: chosen from the problem)")->check(CLI::PositiveNumber);
   sub->add_option("--threads", a->threads, "threads (0: all cores; 1: sequential, the same numbers)")->check(CLI::NonNegativeNumber);
   sub->add_option("-o,--output", a->output, "HDF5 file for the solution and the step record");
-  sub->add_flag("--describe", a->describe, "print the method's coefficients, order check and stability, and exit");
+  auto describe_name = std::make_shared<std::string>();
+  CLI::Option* describe_opt = sub->add_option("--describe", *describe_name,
+                                          "print a method's coefficients and properties and exit: a tableau name, or without one the "
+                                          "method of --method/--tableau/--m/--s/--order")
+                              ->expected(0, 1);
   sub->add_flag("--stability-table", a->stability_table, "print the stability tables of docs/methods.md and exit");
   sub->add_flag("-q,--quiet", a->quiet, "no progress lines on stderr");
-  return [a] {
+  return [a, describe_opt, describe_name] {
     try {
       if (a->stability_table) return stability_table();
-      if (a->describe) return describe(*a);
+      if (describe_opt->count() > 0) {
+        if (!describe_name->empty()) return describe_tableau(*describe_name);
+        return a->method == "tirk" ? describe_tableau(a->tableau) : describe(*a);
+      }
     } catch (const std::invalid_argument& e) {
       throw InputError(std::string("ode: ") + e.what());
     }

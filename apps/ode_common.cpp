@@ -1,0 +1,38 @@
+#include "ode_common.hpp"
+
+#include <algorithm>
+#include <iostream>
+
+#include "commands.hpp"
+#include "mbsflow/version.hpp"
+
+namespace mbsflow::cli {
+
+OdeRecorder::OdeRecorder(const OdeProblem& p, bool keep) : p_(p), keep_(keep) {
+  const long count = std::min<long>(p.size, 9);
+  for (long i = 0; i < count; ++i) out_.components.push_back(count == 1 ? 0 : i * (p.size - 1) / (count - 1));
+}
+
+void OdeRecorder::add(double t, const Eigen::VectorXd& y) {
+  const double err = p_.exact ? (y - p_.exact(t)).cwiseAbs().maxCoeff() : 0.0;
+  max_error_ = std::max(max_error_, err);
+  if (!keep_) return;
+  out_.time.push_back(t);
+  for (long c : out_.components) out_.values.push_back(y(c));
+  if (p_.exact) out_.error.push_back(err);
+}
+
+void OdeRecorder::write(const std::string& path, std::vector<BlockStepRecord> steps,
+                        std::vector<std::pair<std::string, std::string>> texts, std::vector<std::pair<std::string, double>> numbers,
+                        bool quiet) {
+  if (!keep_) return;
+  out_.steps = std::move(steps);
+  out_.texts = {{"mbsflow_version", MBSFLOW_VERSION}, {"command", invocation()}};
+  out_.texts.insert(out_.texts.end(), texts.begin(), texts.end());
+  out_.numbers = std::move(numbers);
+  out_.numbers.emplace_back("max_error", max_error_);
+  write_ode_results(path, out_);
+  if (!quiet) std::cerr << "results: " << path << " (plot: /usr/bin/python3 scripts/plot.py " << path << ")\n";
+}
+
+}  // namespace mbsflow::cli

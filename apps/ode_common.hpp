@@ -1,0 +1,42 @@
+#pragma once
+// What the two method families of `mbsflow ode` share: the arguments, the recording of the
+// accepted points with their error, and the results file.
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "mbsflow/io/ode_results.hpp"
+#include "mbsflow/methods/ode_problem.hpp"
+
+namespace mbsflow::cli {
+
+struct OdeArgs {
+  std::string problem, method = "colloc", tableau = "radau3", iteration, jacobian = "exact", solver = "auto", output;
+  long n = 1000;
+  int s = 3, m = 1, order = 0, threads = 0, iterations = 0, inner = 3;
+  double tol = 1e-6, atol = 0, fixed_step = 0, initial_step = 0;
+  bool stability_table = false, quiet = false;
+};
+
+// The accepted points of a run: the error against the exact solution (all components) and,
+// for the results file, up to 9 components spread over the state.
+class OdeRecorder {
+ public:
+  OdeRecorder(const OdeProblem& p, bool keep);
+  void add(double t, const Eigen::VectorXd& y);
+  double max_error() const { return max_error_; }
+  // Writes the file (when one was asked for) and says where it is and how to plot it.
+  void write(const std::string& path, std::vector<BlockStepRecord> steps, std::vector<std::pair<std::string, std::string>> texts,
+             std::vector<std::pair<std::string, double>> numbers, bool quiet);
+
+ private:
+  const OdeProblem& p_;
+  bool keep_;
+  OdeResults out_;
+  double max_error_ = 0;
+};
+
+int run_tirk(const OdeArgs& a);
+int describe_tableau(const std::string& name);
+
+}  // namespace mbsflow::cli
