@@ -27,6 +27,10 @@ def pick_bodies(names, wanted):
     return sorted({round(i * (n - 1) / max(count - 1, 1)) for i in range(count)})
 
 
+def text(v):
+    return v.decode() if isinstance(v, bytes) else str(v)
+
+
 def plot_ode(f, path, out):
     """Solution, error and step sizes of an mbsflow ode run."""
     t = f["solution/time"][:]
@@ -47,13 +51,20 @@ def plot_ode(f, path, out):
     ax = axes[-1]
     st, tau, taken = f["steps/t"][:], f["steps/tau"][:], f["steps/taken"][:]
     s = int(f.attrs.get("s", 0))
-    for mask, style, label in [(taken == s + 1, "o", f"{s + 1}-point block taken"), (taken == s, "s", f"{s}-point block taken"),
-                               (taken == 0, "x", "rejected")]:
+    method = text(f.attrs.get("method", "colloc"))
+    if method == "tirk":  # Runge-Kutta steps: accepted (taken = stages) or rejected
+        marks = [(taken > 0, "o", "accepted step"), (taken == 0, "x", "rejected")]
+        what = f"tirk {text(f.attrs.get('tableau', ''))}, {text(f.attrs.get('iteration', ''))}"
+    else:
+        marks = [(taken == s + 1, "o", f"{s + 1}-point block taken"), (taken == s, "s", f"{s}-point block taken"),
+                 (taken == 0, "x", "rejected")]
+        what = f"colloc s = {s}"
+    for mask, style, label in marks:
         if mask.any():
             ax.semilogy(st[mask], tau[mask], style, markersize=3, label=label)
-    ax.set(xlabel="t", ylabel="point spacing tau", title="step sizes")
+    ax.set(xlabel="t", ylabel="step" if method == "tirk" else "point spacing tau", title="step sizes")
     ax.legend(fontsize="small")
-    fig.suptitle(f"{f.attrs.get('problem', '')}: N = {int(f.attrs.get('n', 0))}, s = {s}, "
+    fig.suptitle(f"{text(f.attrs.get('problem', ''))}: N = {int(f.attrs.get('n', 0))}, {what}, "
                  f"tol {f.attrs.get('tol', 0):g}  ({path})")
     fig.tight_layout()
     fig.savefig(out, dpi=110)

@@ -123,7 +123,9 @@ RkTableau block(int s) {
   RkTableau t;
   t.name = "block" + std::to_string(s);
   t.family = "one-step collocation block method (seed 001), " + std::to_string(s) + " equispaced points";
-  t.order = m.order;
+  // Stage order s + 1; at the block end the symmetric nodes give the next even order
+  // (as for Lobatto IIIA): s + 2 for even s.
+  t.order = m.order % 2 == 0 ? m.order : m.order + 1;
   t.a = Eigen::MatrixXd::Zero(s + 1, s + 1);
   for (int i = 0; i < s; ++i) {
     t.a(i + 1, 0) = m.d(i, 0) / s;
@@ -161,6 +163,7 @@ TriangularSplitting ldu_splitting(const Eigen::MatrixXd& a) {
   s.d = upper.diagonal();
   s.diagonal = s.d.asDiagonal();
   s.u = s.d.cwiseInverse().asDiagonal() * upper;
+  s.u.diagonal().setOnes();  // exactly, not d_i / d_i rounded
   s.t_lower = s.l * s.diagonal;
   s.t_upper = s.u;
   s.reconstruction_error = (s.t_lower * s.t_upper - a).cwiseAbs().maxCoeff();

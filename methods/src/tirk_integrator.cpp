@@ -105,7 +105,7 @@ class Driver {
  private:
   bool newton() const { return is_newton(s_.iteration); }
   void begin_step(double t, const Eigen::VectorXd& x, const Eigen::VectorXd& fx, double tau);
-  bool factorize(double tau);
+  bool factorize(const Eigen::VectorXd& x, const Eigen::VectorXd& fx, double tau);
   bool iterate_once();
   bool iterate(int iterations);
   Eigen::VectorXd step_end(const Eigen::VectorXd& x, const Eigen::VectorXd& fx, double tau) const;
@@ -148,11 +148,11 @@ void Driver::fail(const std::string& why, double tau) const {
 
 // I - tau t_ii J for every distinct t_ii, J evaluated first when stale. Kept while tau and
 // J stay the same. False when a matrix is singular.
-bool Driver::factorize(double tau) {
+bool Driver::factorize(const Eigen::VectorXd& x, const Eigen::VectorXd& fx, double tau) {
   TirkStats& st = result_.stats;
   if (!jacobian_stale_ && tau == factorized_tau_) return true;
   if (jacobian_stale_) {
-    jac_ = jacobian_.evaluate(t_, stages_.y().front(), stages_.f().front(), st.rhs_evaluations);
+    jac_ = jacobian_.evaluate(t_, x, fx, st.rhs_evaluations);
     ++st.jacobians;
     jacobian_at_point_ = true;
     jacobian_stale_ = false;
@@ -176,6 +176,12 @@ void Driver::begin_step(double t, const Eigen::VectorXd& x, const Eigen::VectorX
   scale_ = s_.atol + s_.rtol * x.array().abs();
   stages_.setup(t, tau, x, fx, scale_);
   iterations_ = 0;
+  arena_.execute([&] {
+    stages_.start_predictor();
+    graph_->wait_for_all();
+  });
+  stages_.finished_predictor();
+  result_.stats.rhs_evaluations += stages_.predictor_evaluations();
 }
 
 // One iteration through the graph; false when f was not finite.
@@ -261,7 +267,7 @@ TirkResult Driver::run(const std::function<void(double, const Eigen::VectorXd&)>
     const bool lands = tau >= t_end - t;
     const double h = lands ? t_end - t : tau;
     begin_step(t, x, fx, h);
-    const bool ok = (!newton() || factorize(h)) && iterate(s_.fixed_iterations);
+    const bool ok = (!newton() || factorize(x, fx, h)) && iterate(s_.fixed_iterations);
     BlockStepRecord rec;
     rec.t = t;
     rec.tau = h;
@@ -324,7 +330,7 @@ bool Driver::iterate_step(double t, const Eigen::VectorXd& x, const Eigen::Vecto
   begin_step(t, x, fx, tau);
   if (newton()) {
     jacobian_stale_ = true;
-    if (!factorize(tau)) return false;
+    if (!factorize(x, fx, tau)) return false;
   }
   for (int k = 1; k <= count; ++k) {
     if (!iterate_once() || !std::isfinite(stages_.correction())) return false;

@@ -79,6 +79,19 @@ void TirkStages::setup(double t, double tau, const Eigen::VectorXd& x, const Eig
   }
 }
 
+void TirkStages::start_predictor() {
+  happens_before(&token_);
+  predict_start_->try_put(flow::continue_msg());
+}
+
+void TirkStages::finished_predictor() { happens_after(&token_); }
+
+long TirkStages::predictor_evaluations() const {
+  long n = 0;
+  for (int i = 0; i < si_; ++i) n += tableau_.c(first_ + i) != 0;
+  return n;
+}
+
 void TirkStages::assemble(int i, Eigen::Index r) {
   const Eigen::Index lo = slice_begin(r), len = slice_length(r);
   const auto at = static_cast<std::size_t>(i);
@@ -141,7 +154,19 @@ void TirkStages::build(flow::graph& g) {
   const Eigen::Index f_nodes = problem_.sliceable ? n_slices : 1, per_node = problem_.sliceable ? 1 : n_slices;
   start_ = std::make_unique<Start>(g);
   factor_start_ = std::make_unique<Start>(g);
+  predict_start_ = std::make_unique<Start>(g);
   auto node = [&](auto body) -> Node& { return annotated_node(g, nodes_, &token_, body); };
+  for (int i = 0; i < si_; ++i) {
+    if (tableau_.c(first_ + i) == 0) continue;  // f(t_n, x) is known
+    for (Eigen::Index e = 0; e < f_nodes; ++e) {
+      const Eigen::Index begin = slice_begin(e * per_node),
+                         end = std::min(n_, slice_begin(e * per_node + per_node));
+      flow::make_edge(*predict_start_, node([this, i, begin, end] {
+                        const auto at = static_cast<std::size_t>(i);
+                        problem_.rhs(t_n_ + tableau_.c(first_ + i) * tau_, *x_, f_old_[at], {begin, end});
+                      }));
+    }
+  }
   for (int k = 0; k < systems(); ++k)
     flow::make_edge(*factor_start_, node([this, k] {
                       try {

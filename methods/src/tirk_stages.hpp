@@ -41,8 +41,13 @@ class TirkStages {
   // (I - tau gamma J)^-1 v with the factorisation of the diagonal value gamma (one of t_ii).
   void solve_with(double gamma, Eigen::VectorXd& v) const;
 
-  // A step from (t, x, fx = f(t, x)): the trivial predictor Y_i = x, F_i = fx.
+  // A step from (t, x, fx = f(t, x)): the trivial predictor Y_i = x, F_i = fx; then
+  // start_predictor() (and wait_for_all, finished_predictor()) evaluates F_i = f(t_n + c_i tau, x)
+  // for the stages with c_i != 0, so that the first correction measures the iteration.
   void setup(double t, double tau, const Eigen::VectorXd& x, const Eigen::VectorXd& fx, const Eigen::VectorXd& scale);
+  void start_predictor();
+  void finished_predictor();
+  long predictor_evaluations() const;
   void start();     // one iteration; call g.wait_for_all() after it
   void finished();  // after wait_for_all: the new iterate becomes the current one
   // After finished(): the scaled size of the last correction, whether it was at rounding
@@ -99,7 +104,7 @@ class TirkStages {
   const Eigen::VectorXd* fx_ = nullptr;
   const Eigen::VectorXd* scale_ = nullptr;
   // The graph.
-  std::unique_ptr<Start> start_, factor_start_;
+  std::unique_ptr<Start> start_, factor_start_, predict_start_;
   std::vector<std::unique_ptr<Node>> nodes_;
   long token_ = 0;  // ThreadSanitizer's view of the node order (tsan_annotations.hpp)
 };

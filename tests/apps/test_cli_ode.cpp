@@ -61,3 +61,44 @@ TEST_CASE("cli ode: bad input exits 2, a failed run exits 1", "[cli][ode]") {
   CHECK(fail.code == 1);
   CHECK(fail.err.find("step size underflow") != std::string::npos);
 }
+
+TEST_CASE("cli ode: tirk on heat reports the run, writes the file, and plots it", "[cli][ode][tirk]") {
+  const std::string dir = scratch("ode_tirk").string();
+  const Result r =
+      run("ode --problem heat --n 2000 --method tirk --tableau radau3 --iteration newton-triangular --tol 1e-6 --threads 2 -o tirk.h5", dir,
+          true);
+  INFO(r.err << r.out);
+  REQUIRE(r.code == 0);
+  CHECK(reported(r.out, "max error") <= 1e-5);
+  CHECK(r.out.find("(banded)") != std::string::npos);
+  const std::string python = MBSFLOW_PYTHON;
+  CHECK(std::system((python + " '" + MBSFLOW_SOURCE + "/scripts/plot.py' '" + dir + "/tirk.h5' -o '" + dir + "/tirk.png' >/dev/null").c_str()) == 0);
+  CHECK(fs::file_size(fs::path(dir) / "tirk.png") > 10000);
+  fs::remove_all(fs::path(dir).parent_path());
+}
+
+TEST_CASE("cli ode: tirk functional iteration reports its bound, diverging outside it exits 1", "[cli][ode][tirk]") {
+  const Result ok = run("ode --problem b1 --method tirk --iteration triangular --tol 1e-6 -q", ".", true);
+  INFO(ok.err << ok.out);
+  REQUIRE(ok.code == 0);
+  CHECK(ok.out.find("contraction bound tau < 1/(L M)") != std::string::npos);
+  CHECK(reported(ok.out, "factorizations") == 0);
+  const Result bad = run("ode --problem b1 --method tirk --iteration jacobi --fixed-step 0.05 -q", ".", true);
+  CHECK(bad.code == 1);
+  CHECK(bad.err.find("diverged") != std::string::npos);
+  CHECK(bad.err.find("tau < 1/(L M) = 9.90") != std::string::npos);  // L = 10100, M = 1
+}
+
+TEST_CASE("cli ode: --describe NAME prints the tableau and its splitting", "[cli][ode][tirk]") {
+  const Result r = run("ode --describe radau3", ".", true);
+  REQUIRE(r.code == 0);
+  CHECK(r.out.find("Radau IIA") != std::string::npos);
+  CHECK(r.out.find("T_L = L D") != std::string::npos);
+  CHECK(r.out.find("max |T_L T_U - A| = 1.11e-16") != std::string::npos);
+  CHECK(r.out.find("triangular") != std::string::npos);
+  const Result m = run("ode --method tirk --tableau block3 --describe", ".", true);
+  CHECK(m.out.find("stage 1 explicit") != std::string::npos);
+  CHECK(run("ode --describe radau4").code == 2);
+  CHECK(run("ode --problem b1 --method colloc --iteration jacobi").code == 2);
+  CHECK(run("ode --problem b1 --method tirk --iteration newton").code == 2);
+}

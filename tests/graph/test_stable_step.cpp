@@ -44,7 +44,7 @@ TEST_CASE("stable-step estimate bounds the fastest eigenvalue, not too loosely",
   }
 }
 
-TEST_CASE("RK4 at the estimated step stays bounded; far above it, it blows up", "[graph]") {
+TEST_CASE("RK4 at the estimated step stays bounded, far above it it blows up", "[graph]") {
   ChainParams p;
   p.bodies = 6;
   p.damping_ratio = 0.0;

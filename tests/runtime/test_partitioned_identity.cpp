@@ -116,7 +116,7 @@ TEST_CASE("decomposition: balanced band cuts, symmetric exchange plans, errors",
   CHECK_THROWS_WITH(decompose(m, part, 2), "partition: part 1 has no bodies");
 }
 
-TEST_CASE("METIS cuts a bushy tree far better than band cuts; best keeps the faster one", "[runtime]") {
+TEST_CASE("METIS cuts a bushy tree far better than band cuts, best keeps the faster one", "[runtime]") {
   RandomTreeParams p;
   p.bodies = 2000;
   p.cycles = 100;

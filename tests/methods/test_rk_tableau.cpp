@@ -1,0 +1,90 @@
+// The tableaux and their triangular splitting: known nodes, quadrature and stage order,
+// A = T_L T_U, the stiff limit of the triangular iteration, the embedded formula.
+#include <catch2/catch.hpp>
+#include <cmath>
+
+#include "mbsflow/methods/rk_tableau.hpp"
+#include "mbsflow/methods/tirk_integrator.hpp"
+
+using namespace mbsflow;
+
+TEST_CASE("tableaux: nodes of Radau IIA and Gauss in closed form", "[methods][tirk]") {
+  const RkTableau r3 = rk_tableau("radau3");
+  CHECK(r3.c(0) == Approx((4 - std::sqrt(6.0)) / 10).epsilon(1e-15));
+  CHECK(r3.c(1) == Approx((4 + std::sqrt(6.0)) / 10).epsilon(1e-15));
+  CHECK(r3.c(2) == 1.0);
+  const RkTableau g2 = rk_tableau("gauss2");
+  CHECK(g2.c(0) == Approx(0.5 - std::sqrt(3.0) / 6).epsilon(1e-15));
+  CHECK(g2.c(1) == Approx(0.5 + std::sqrt(3.0) / 6).epsilon(1e-15));
+  const RkTableau g3 = rk_tableau("gauss3");
+  CHECK(g3.b(1) == Approx(4.0 / 9).epsilon(1e-15));
+  CHECK(rk_tableau("radau2").a(0, 0) == Approx(5.0 / 12).epsilon(1e-15));
+  CHECK_THROWS_AS(rk_tableau("radau4"), std::invalid_argument);
+}
+
+TEST_CASE("tableaux: quadrature to the order, stage order of the collocation methods", "[methods][tirk]") {
+  for (const std::string& name : rk_tableau_names()) {
+    INFO(name);
+    const RkTableau t = rk_tableau(name);
+    CHECK(quadrature_residual(t, t.order) < 1e-14);
+    CHECK(quadrature_residual(t, t.order + 1) > 1e-6);  // and not one more
+    CHECK((t.a * Eigen::VectorXd::Ones(t.stages()) - t.c).cwiseAbs().maxCoeff() < 1e-14);  // rows sum to c
+  }
+  for (const char* name : {"radau2", "radau3", "radau5", "gauss2", "gauss3"})
+    CHECK(stage_order_residual(rk_tableau(name), rk_tableau(name).stages()) < 1e-13);
+}
+
+TEST_CASE("LDU: T_L T_U reproduces A, triangular shapes, the seed's L - I + D does not", "[methods][tirk]") {
+  for (const std::string& name : rk_tableau_names()) {
+    INFO(name);
+    const RkTableau t = rk_tableau(name);
+    const Eigen::MatrixXd a = t.implicit_block();
+    const TriangularSplitting s = ldu_splitting(a);
+    CHECK(s.reconstruction_error < 1e-14);
+    CHECK((s.t_lower * s.t_upper - a).cwiseAbs().maxCoeff() < 1e-14);
+    const Eigen::Index n = a.rows();
+    for (Eigen::Index i = 0; i < n; ++i) {
+      CHECK(s.l(i, i) == 1.0);
+      CHECK(s.u(i, i) == 1.0);
+      CHECK(s.t_lower(i, i) == s.d(i));
+      for (Eigen::Index j = i + 1; j < n; ++j) {
+        CHECK(s.t_lower(i, j) == 0.0);
+        CHECK(s.t_upper(j, i) == 0.0);
+      }
+    }
+    // The stiff limit of the triangular iteration, I - T_L^-1 A = I - T_U, is nilpotent.
+    Eigen::MatrixXd z = Eigen::MatrixXd::Identity(n, n) - s.t_lower.inverse() * a, power = z;
+    for (Eigen::Index k = 1; k < n; ++k) power = power * z;
+    CHECK(power.cwiseAbs().maxCoeff() < 1e-12);
+    if (n > 1) CHECK(s.seed_formula_error > 0.1);
+  }
+  Eigen::MatrixXd singular(2, 2);
+  singular << 0, 1, 1, 0;
+  CHECK_THROWS_AS(ldu_splitting(singular), std::invalid_argument);
+}
+
+TEST_CASE("embedded formula: its order conditions hold and it differs from b", "[methods][tirk]") {
+  for (const std::string& name : rk_tableau_names()) {
+    INFO(name);
+    const RkTableau t = rk_tableau(name);
+    const EmbeddedFormula e = embedded_formula(t, ldu_splitting(t.implicit_block()));
+    CHECK(e.order >= 1);
+    CHECK(e.order < t.order);
+    CHECK(e.gamma > 0);
+    for (int k = 1; k <= e.order; ++k) {
+      const double q = e.bhat.dot(t.c.array().pow(k - 1).matrix()) + (k == 1 ? e.gamma : 0.0);
+      CHECK(q == Approx(1.0 / k).epsilon(1e-13));
+    }
+    CHECK((e.bhat - t.b).cwiseAbs().maxCoeff() > 1e-3);
+  }
+}
+
+TEST_CASE("contraction constants: Jacobi is the row-sum norm of A", "[methods][tirk]") {
+  const RkTableau t = rk_tableau("radau3");
+  const TriangularSplitting s = ldu_splitting(t.a);
+  CHECK(contraction_constant(t.a, splitting_matrix(s, TirkIteration::jacobi)) ==
+        Approx(t.a.cwiseAbs().rowwise().sum().maxCoeff()));
+  CHECK(contraction_constant(t.a, splitting_matrix(s, TirkIteration::triangular)) >= t.a.cwiseAbs().rowwise().sum().maxCoeff());
+  CHECK(tirk_iteration_from_string("newton-diagonal") == TirkIteration::newton_diagonal);
+  CHECK_THROWS_AS(tirk_iteration_from_string("gauss-seidel"), std::invalid_argument);
+}

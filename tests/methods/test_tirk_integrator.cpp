@@ -1,0 +1,178 @@
+// Integration with the triangularised Runge-Kutta methods: order of every tableau with
+// converged iterations, the contraction bound of the functional iterations, Newton-type
+// iterations on a large stiff system, bitwise identity of parallel and sequential runs,
+// and the iteration trace.
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <map>
+#include <vector>
+
+#include "convergence.hpp"
+#include "mbsflow/methods/tirk_integrator.hpp"
+
+using namespace mbsflow;
+
+namespace {
+
+double fixed_step_slope(const OdeProblem& p, TirkSettings s, const std::vector<int>& steps) {
+  std::vector<double> h, e;
+  for (int n : steps) {
+    s.fixed_step = (p.t_end - p.t0) / n;
+    const TirkResult r = integrate_tirk(p, s);
+    h.push_back(s.fixed_step);
+    e.push_back((r.y - p.exact(r.t)).cwiseAbs().maxCoeff());
+  }
+  return mbsflow::test::convergence_slope(h, e);
+}
+
+double infinity_norm(const OdeProblem& p) {
+  Eigen::SparseMatrix<double> j = *p.sparsity;
+  p.jacobian(p.t0, p.y0, j);
+  Eigen::VectorXd rows = Eigen::VectorXd::Zero(j.rows());
+  for (Eigen::Index c = 0; c < j.outerSize(); ++c)
+    for (Eigen::SparseMatrix<double>::InnerIterator e(j, c); e; ++e) rows(e.row()) += std::abs(e.value());
+  return rows.maxCoeff();
+}
+
+}  // namespace
+
+TEST_CASE("tirk: every tableau reaches its order with converged iterations (eq. 10 on [0, 1])", "[methods][tirk]") {
+  OdeProblem p = hairer_wanner_problem();
+  p.t_end = 1;
+  // Steps in each method's asymptotic range, above rounding.
+  const std::map<std::string, std::vector<int>> steps = {
+      {"radau2", {16, 32, 64}},  {"radau3", {16, 24, 32}},    {"radau5", {14, 15, 16}}, {"gauss2", {16, 32, 64}},
+      {"gauss3", {16, 24, 32}},  {"lobatto3c", {32, 64, 128}}, {"block1", {8, 16, 32}},  {"block2", {8, 16, 32}},
+      {"block3", {8, 16, 32}},   {"block4", {16, 24, 32}},    {"block5", {16, 24, 32}}, {"block6", {12, 16, 24}}};
+  for (const auto& [name, n] : steps) {
+    TirkSettings s;
+    s.tableau = name;
+    s.iteration = TirkIteration::newton_triangular;
+    s.fixed_iterations = 40;  // converged: the simplified Newton iteration contracts at these steps
+    s.threads = 1;
+    const double slope = fixed_step_slope(p, s, n);
+    INFO(name << ": slope " << slope);
+    CHECK(std::abs(slope - rk_tableau(name).order) <= 0.3);
+  }
+}
+
+TEST_CASE("tirk: the functional iterations converge within tau < 1/(L M) and diverge far outside", "[methods][tirk]") {
+  OdeProblem p = heat_problem(30);  // linear: L = |J|_inf is a Lipschitz constant in the max norm
+  p.t_end = 0.02;
+  const double l = infinity_norm(p);
+  for (TirkIteration it : {TirkIteration::jacobi, TirkIteration::triangular, TirkIteration::diagonal}) {
+    TirkSettings s;
+    s.iteration = it;
+    s.threads = 1;
+    const TriangularSplitting split = ldu_splitting(rk_tableau(s.tableau).a);
+    const double m = contraction_constant(rk_tableau(s.tableau).a, splitting_matrix(split, it));
+    INFO(to_string(it) << ": L = " << l << ", M = " << m);
+    s.fixed_step = 0.5 / (l * m);
+    const TirkResult ok = integrate_tirk(p, s);
+    CHECK(ok.stats.iteration_failures == 0);
+    CHECK(ok.stats.contraction_m == Approx(m));
+    CHECK(ok.stats.lipschitz_start == Approx(l));
+    CHECK(ok.stats.lipschitz_observed <= l * (1 + 1e-12));
+    CHECK((ok.y - p.exact(ok.t)).cwiseAbs().maxCoeff() < 1e-6);
+    s.fixed_step = 40 / (l * m);
+    try {
+      integrate_tirk(p, s);
+      FAIL("no divergence reported");
+    } catch (const std::runtime_error& e) {
+      CHECK_THAT(e.what(), Catch::Contains("diverged") && Catch::Contains("tau < 1/(L M)"));
+    }
+  }
+}
+
+TEST_CASE("tirk: Newton-type iterations solve heat with N = 1e5 at large steps", "[methods][tirk][slow]") {
+  const OdeProblem p = heat_problem(100000);
+  const double explicit_limit = 2.0 / infinity_norm(p);
+  for (auto [tableau, it] : {std::pair{"radau3", TirkIteration::newton_triangular}, std::pair{"radau2", TirkIteration::newton_diagonal}}) {
+    TirkSettings s;
+    s.tableau = tableau;
+    s.iteration = it;
+    s.rtol = s.atol = 1e-5;
+    double err = 0;
+    const TirkResult r = integrate_tirk(p, s, [&](double t, const Eigen::VectorXd& y) {
+      err = std::max(err, (y - p.exact(t)).cwiseAbs().maxCoeff());
+    });
+    INFO(tableau << " " << to_string(it) << ": steps " << r.stats.steps << ", largest " << r.stats.largest_step << ", error " << err);
+    CHECK(r.t == p.t_end);
+    CHECK(err <= 1e-4);
+    CHECK(r.stats.largest_step > 1e8 * explicit_limit);
+    CHECK(r.stats.steps < 400);
+  }
+}
+
+TEST_CASE("tirk: step control keeps the error near the tolerance and follows it", "[methods][tirk]") {
+  const OdeProblem p = detest_b1_problem();
+  std::vector<double> errors;
+  for (double tol : {1e-5, 1e-7}) {
+    TirkSettings s;
+    s.rtol = s.atol = tol;
+    s.threads = 1;
+    double err = 0;
+    const TirkResult r = integrate_tirk(p, s, [&](double t, const Eigen::VectorXd& y) {
+      err = std::max(err, (y - p.exact(t)).cwiseAbs().maxCoeff());
+    });
+    INFO("tol " << tol << ": error " << err << ", rejected " << r.stats.rejected);
+    CHECK(err <= 100 * tol);
+    errors.push_back(err);
+  }
+  CHECK(errors[1] < errors[0] / 10);
+}
+
+TEST_CASE("tirk: parallel and sequential runs give bitwise the same numbers", "[methods][tirk]") {
+  for (TirkIteration it : {TirkIteration::newton_triangular, TirkIteration::newton_diagonal, TirkIteration::triangular,
+                           TirkIteration::jacobi}) {
+    OdeProblem p = heat_problem(20000);
+    TirkSettings s;
+    s.iteration = it;
+    s.slice_size = 1500;  // 14 slices per stage
+    if (is_newton(it)) {
+      s.rtol = s.atol = 1e-6;
+    } else {  // a short stretch at a step inside the functional iterations' range
+      s.fixed_step = 0.5 / infinity_norm(p);
+      p.t_end = 6 * s.fixed_step;
+    }
+    std::vector<TirkResult> runs;
+    for (int threads : {1, 2, 4}) {
+      s.threads = threads;
+      runs.push_back(integrate_tirk(p, s));
+    }
+    INFO(to_string(it));
+    REQUIRE(runs[0].steps.size() > 3);
+    for (std::size_t k = 1; k < runs.size(); ++k) {
+      CHECK((runs[0].y.array() == runs[k].y.array()).all());
+      REQUIRE(runs[0].steps.size() == runs[k].steps.size());
+      for (std::size_t i = 0; i < runs[0].steps.size(); ++i) {
+        CHECK(runs[0].steps[i].tau == runs[k].steps[i].tau);
+        CHECK(runs[0].steps[i].iterations_s == runs[k].steps[i].iterations_s);
+      }
+    }
+  }
+}
+
+TEST_CASE("tirk: the iteration trace converges to the stage values the integrator uses", "[methods][tirk]") {
+  const OdeProblem p = detest_b1_problem();
+  TirkSettings s;
+  s.threads = 1;
+  for (TirkIteration it : {TirkIteration::jacobi, TirkIteration::triangular, TirkIteration::newton_triangular}) {
+    s.iteration = it;
+    const IterationTrace tr = trace_tirk_iterations(p, s, 10.0, p.exact(10.0), 1e-4, 6);
+    INFO(to_string(it));
+    REQUIRE(tr.reference_ok);
+    CHECK(tr.reference_residual < 1e-14);
+    CHECK(tr.error[0] > 0);
+    CHECK(tr.error[3] < 1e-3 * tr.error[0]);
+    CHECK(tr.evaluations[1] == 2 * tr.evaluations[0]);
+  }
+  // Non-stiff regime: the triangular splitting gains on the diagonal one and on Jacobi
+  // after the first iteration (rho(A - T_L) < rho(A - D) < rho(A) for Radau IIA).
+  auto first = [&](TirkIteration it) {
+    s.iteration = it;
+    return trace_tirk_iterations(p, s, 10.0, p.exact(10.0), 1e-4, 1).error[0];
+  };
+  CHECK(first(TirkIteration::triangular) < first(TirkIteration::diagonal));
+  CHECK(first(TirkIteration::diagonal) < first(TirkIteration::jacobi));
+}
