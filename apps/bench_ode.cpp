@@ -1,5 +1,6 @@
-// mbsflow bench ode: work-precision of the block methods against SUNDIALS CVODE (BDF with
-// dense or band Newton) and Boost.Odeint (rk4, dopri5) on the seed's problems, in one run.
+// mbsflow bench ode: work-precision of the block methods and the triangularised Runge-Kutta
+// methods (Radau IIA s = 3, every iteration scheme) against SUNDIALS CVODE (BDF with dense
+// or band Newton) and Boost.Odeint (rk4, dopri5) on the seed's problems, in one run.
 #include <cvode/cvode.h>
 #include <nvector/nvector_serial.h>
 #include <sunlinsol/sunlinsol_band.h>
@@ -16,6 +17,7 @@
 #include "bench.hpp"
 #include "mbsflow/methods/block_integrator.hpp"
 #include "mbsflow/methods/shifted_solver.hpp"
+#include "mbsflow/methods/tirk_integrator.hpp"
 
 namespace mbsflow::cli {
 namespace {
@@ -140,26 +142,49 @@ Outcome run_odeint(const OdeProblem& p, double tol, long rk4_steps) {
   return o;
 }
 
-Outcome run_colloc(const OdeProblem& p, double tol, int s, int threads) {
+// Times one integration: `run` integrates (raising o.max_error on the way) and returns its
+// statistics; an integration that fails keeps its message.
+template <class Run>
+Outcome timed(Run run) {
   Outcome o;
-  BlockSettings st;
-  st.method = {1, s, 0};
-  st.rtol = st.atol = tol;
-  st.threads = threads;
   const auto start = Clock::now();
   try {
-    const BlockResult r = integrate_block(p, st, [&](const AcceptedBlock& b) {
-      for (int i = 0; i < b.points; ++i)
-        o.max_error = std::max(o.max_error, error_at(p, b.t0 + (i + 1) * b.tau, (*b.u)[static_cast<std::size_t>(i)].data()));
-    });
+    const auto stats = run(o);
     o.ok = true;
-    o.evaluations = r.stats.rhs_evaluations;
-    o.steps = r.stats.steps;
+    o.evaluations = stats.rhs_evaluations;
+    o.steps = stats.steps;
   } catch (const std::runtime_error& e) {
     o.note = e.what();
   }
   o.seconds = std::chrono::duration<double>(Clock::now() - start).count();
   return o;
+}
+
+Outcome run_colloc(const OdeProblem& p, double tol, int s, int threads) {
+  BlockSettings st;
+  st.method = {1, s, 0};
+  st.rtol = st.atol = tol;
+  st.threads = threads;
+  return timed([&](Outcome& o) {
+    return integrate_block(p, st, [&](const AcceptedBlock& b) {
+             for (int i = 0; i < b.points; ++i)
+               o.max_error = std::max(o.max_error, error_at(p, b.t0 + (i + 1) * b.tau, (*b.u)[static_cast<std::size_t>(i)].data()));
+           }).stats;
+  });
+}
+
+// The triangularised Runge-Kutta methods (seed 004) with Radau IIA, 3 stages.
+Outcome run_tirk(const OdeProblem& p, double tol, TirkIteration iteration, int threads) {
+  TirkSettings st;
+  st.tableau = "radau3";
+  st.iteration = iteration;
+  st.rtol = st.atol = tol;
+  st.threads = threads;
+  st.max_steps = 2'000'000;
+  return timed([&](Outcome& o) {
+    return integrate_tirk(p, st, [&](double t, const Eigen::VectorXd& y) { o.max_error = std::max(o.max_error, error_at(p, t, y.data())); })
+        .stats;
+  });
 }
 
 }  // namespace
@@ -170,14 +195,14 @@ int bench_ode(const BenchArgs& a) {
   const std::vector<double> tols = a.tolerances.empty() ? std::vector<double>{1e-4, 1e-6, 1e-8, 1e-10} : a.tolerances;
   BenchCsv csv = open_csv(a);
   csv.out << "problem,n,solver,threads,tol,ok,seconds,max_error,rhs_evaluations,steps,note\n";
-  std::printf("%-8s %8s %-18s %3s %7s %10s %10s %10s %8s\n", "problem", "N", "solver", "thr", "tol", "seconds", "max error",
+  std::printf("%-8s %8s %-22s %3s %7s %10s %10s %10s %8s\n", "problem", "N", "solver", "thr", "tol", "seconds", "max error",
               "f evals", "steps");
   for (const std::string& name : problems) {
     const bool heat = name.rfind("heat", 0) == 0;
     const long n = heat ? std::stol(name.substr(4)) : 4;
     const OdeProblem p = builtin_problem(heat ? "heat" : name, n);
     auto row = [&](const std::string& solver, int threads, double tol, const Outcome& o) {
-      std::printf("%-8s %8ld %-18s %3d %7.0e %10.4f %10.3e %10ld %8ld %s\n", p.name.c_str(), long(p.size), solver.c_str(), threads,
+      std::printf("%-8s %8ld %-22s %3d %7.0e %10.4f %10.3e %10ld %8ld %s\n", p.name.c_str(), long(p.size), solver.c_str(), threads,
                   tol, o.seconds, o.max_error, o.evaluations, o.steps, o.ok ? "" : ("failed: " + o.note).c_str());
       csv.out << p.name << ',' << p.size << ',' << solver << ',' << threads << ',' << tol << ',' << (o.ok ? 1 : 0) << ','
               << o.seconds << ',' << o.max_error << ',' << o.evaluations << ',' << o.steps << ",\"" << o.note << "\"\n";
@@ -188,6 +213,11 @@ int bench_ode(const BenchArgs& a) {
       row(std::string("cvode-bdf-") + (p.size > 100 ? "band" : "dense"), 1, tol, run_cvode(p, tol));
       for (int s : {2, 3})
         for (int threads : {1, 2}) row("colloc-s" + std::to_string(s), threads, tol, run_colloc(p, tol, s, threads));
+      for (TirkIteration it : {TirkIteration::newton_triangular, TirkIteration::newton_diagonal, TirkIteration::triangular,
+                               TirkIteration::diagonal, TirkIteration::jacobi}) {
+        if (!is_newton(it) && p.size > 100) continue;  // functional: the heat problem's contraction bound is out of reach
+        for (int threads : {1, 2}) row(std::string("tirk-") + to_string(it), threads, tol, run_tirk(p, tol, it, threads));
+      }
       if (p.size <= 100) {  // explicit methods: the heat problem's stability limit is out of reach
         row("odeint-dopri5", 1, tol, run_odeint(p, tol, 0));
         row("odeint-rk4", 1, tol, run_odeint(p, tol, 500L << (2 * k)));
