@@ -7,15 +7,11 @@
 #include <cstdio>
 
 #include "bench.hpp"
+#include "mbsflow/methods/jacobian.hpp"
 #include "mbsflow/methods/tirk_integrator.hpp"
 
 namespace mbsflow::cli {
 namespace {
-
-double infinity_norm(const Eigen::SparseMatrix<double>& j) {
-  Eigen::MatrixXd d(j);
-  return d.cwiseAbs().rowwise().sum().maxCoeff();
-}
 
 struct Scheme {
   const char* label;

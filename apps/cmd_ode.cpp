@@ -86,16 +86,10 @@ int run(const OdeArgs& a) {
     s.method = {a.m, a.s, a.order};
     generate_block_method(s.method);
     s.iteration = block_iteration_from_string(a.iteration.empty() ? "newton" : a.iteration);
-    s.linear_solver = linear_solver_from_string(a.solver);
+    apply_common_options(a, s);
   } catch (const std::invalid_argument& e) {
     throw InputError(std::string("ode: ") + e.what());
   }
-  s.finite_difference_jacobian = a.jacobian == "fd";
-  s.rtol = a.tol;
-  s.atol = a.atol > 0 ? a.atol : a.tol;
-  s.fixed_step = a.fixed_step;
-  s.initial_step = a.initial_step;
-  s.threads = a.threads;
 
   OdeRecorder rec(p, !a.output.empty());
   auto on_block = [&](const AcceptedBlock& b) {

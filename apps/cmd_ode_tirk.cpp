@@ -65,25 +65,19 @@ int describe_tableau(const std::string& name) {
 int run_tirk(const OdeArgs& a) {
   OdeProblem p;
   TirkSettings s;
+  RkTableau tab;
   try {
     p = builtin_problem(a.problem, a.n);
     s.tableau = a.tableau;
-    rk_tableau(a.tableau);
+    tab = rk_tableau(a.tableau);
     s.iteration = iteration_of(a);
-    s.linear_solver = linear_solver_from_string(a.solver);
+    apply_common_options(a, s);
   } catch (const std::invalid_argument& e) {
     throw InputError(std::string("ode: ") + e.what());
   }
-  s.finite_difference_jacobian = a.jacobian == "fd";
-  s.rtol = a.tol;
-  s.atol = a.atol > 0 ? a.atol : a.tol;
-  s.fixed_step = a.fixed_step;
-  s.initial_step = a.initial_step;
-  s.threads = a.threads;
   s.fixed_iterations = a.iterations;
   s.inner_iterations = a.inner;
   OdeRecorder rec(p, !a.output.empty());
-  const RkTableau tab = rk_tableau(a.tableau);
   if (!a.quiet)
     std::cerr << "mbsflow ode: " << p.name << " (N = " << p.size << ") on [" << p.t0 << ", " << p.t_end << "], tirk " << tab.name
               << " (order " << tab.order << "), " << to_string(s.iteration) << ", tol " << a.tol << "\n";

@@ -7,6 +7,7 @@
 
 #include "mbsflow/io/ode_results.hpp"
 #include "mbsflow/methods/ode_problem.hpp"
+#include "mbsflow/methods/shifted_solver.hpp"
 
 namespace mbsflow::cli {
 
@@ -35,6 +36,19 @@ class OdeRecorder {
   OdeResults out_;
   double max_error_ = 0;
 };
+
+// The settings both integrators share, from the arguments (the linear solver's name is
+// checked by the caller, which turns std::invalid_argument into an input error).
+template <class Settings>
+void apply_common_options(const OdeArgs& a, Settings& s) {
+  s.linear_solver = linear_solver_from_string(a.solver);
+  s.finite_difference_jacobian = a.jacobian == "fd";
+  s.rtol = a.tol;
+  s.atol = a.atol > 0 ? a.atol : a.tol;
+  s.fixed_step = a.fixed_step;
+  s.initial_step = a.initial_step;
+  s.threads = a.threads;
+}
 
 int run_tirk(const OdeArgs& a);
 int describe_tableau(const std::string& name);

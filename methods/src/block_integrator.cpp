@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "block_solve.hpp"
+#include "settings_checks.hpp"
 #include "starting_step.hpp"
 #include "mbsflow/methods/jacobian.hpp"
 #include "mbsflow/methods/tsan_annotations.hpp"
@@ -41,14 +42,8 @@ Eigen::VectorXd AcceptedBlock::interpolate(double t) const {
 namespace {
 
 void check_settings(const OdeProblem& p, const BlockSettings& s) {
-  auto bad = [](const std::string& what) { throw std::invalid_argument(what); };
-  if (p.size < 1 || p.y0.size() != p.size || !p.rhs) bad("the problem needs a size, y0 of that size and a right-hand side");
-  if (!(p.t_end > p.t0)) bad("the end time must be after the start time");
-  if (!(s.rtol > 0) || !(s.atol > 0)) bad("tolerances must be positive");
-  if (!(s.global_fraction > 0 && s.global_fraction <= 1)) bad("global_fraction must be in (0, 1]");
-  if (!(s.facmin > 0 && s.facmin < 1 && s.facmax > 1)) bad("facmin must be in (0, 1) and facmax above 1");
-  if (s.fixed_step < 0 || s.initial_step < 0) bad("steps must be positive");
-  if (s.threads < 0) bad("threads must be >= 0");
+  check_common_settings(p, s);
+  if (!(s.global_fraction > 0 && s.global_fraction <= 1)) throw std::invalid_argument("global_fraction must be in (0, 1]");
 }
 
 // The last accepted block (or the start-up block), kept for the dense output that

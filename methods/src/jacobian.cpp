@@ -71,4 +71,11 @@ const Eigen::SparseMatrix<double>& JacobianEvaluator::evaluate(double t, const E
   return jac_;
 }
 
+double infinity_norm(const Eigen::SparseMatrix<double>& j) {
+  Eigen::VectorXd rows = Eigen::VectorXd::Zero(j.rows());
+  for (Eigen::Index c = 0; c < j.outerSize(); ++c)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(j, c); it; ++it) rows(it.row()) += std::abs(it.value());
+  return rows.size() ? rows.maxCoeff() : 0.0;
+}
+
 }  // namespace mbsflow

@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "mbsflow/methods/jacobian.hpp"
+#include "settings_checks.hpp"
 #include "starting_step.hpp"
 #include "tirk_stages.hpp"
 
@@ -53,21 +54,9 @@ double contraction_constant(const Eigen::MatrixXd& a, const Eigen::MatrixXd& t) 
 namespace {
 
 void check_settings(const OdeProblem& p, const TirkSettings& s) {
-  auto bad = [](const std::string& what) { throw std::invalid_argument(what); };
-  if (p.size < 1 || p.y0.size() != p.size || !p.rhs) bad("the problem needs a size, y0 of that size and a right-hand side");
-  if (!(p.t_end > p.t0)) bad("the end time must be after the start time");
-  if (!(s.rtol > 0) || !(s.atol > 0)) bad("tolerances must be positive");
-  if (!(s.facmin > 0 && s.facmin < 1 && s.facmax > 1)) bad("facmin must be in (0, 1) and facmax above 1");
-  if (s.fixed_step < 0 || s.initial_step < 0) bad("steps must be positive");
-  if (s.threads < 0 || s.fixed_iterations < 0 || s.max_iterations < 0) bad("threads and iteration counts must be >= 0");
-  if (s.inner_iterations < 1) bad("inner_iterations must be at least 1");
-}
-
-double infinity_norm(const Eigen::SparseMatrix<double>& j) {
-  Eigen::VectorXd rows = Eigen::VectorXd::Zero(j.rows());
-  for (Eigen::Index c = 0; c < j.outerSize(); ++c)
-    for (Eigen::SparseMatrix<double>::InnerIterator it(j, c); it; ++it) rows(it.row()) += std::abs(it.value());
-  return rows.size() ? rows.maxCoeff() : 0.0;
+  check_common_settings(p, s);
+  if (s.fixed_iterations < 0 || s.max_iterations < 0) throw std::invalid_argument("iteration counts must be >= 0");
+  if (s.inner_iterations < 1) throw std::invalid_argument("inner_iterations must be at least 1");
 }
 
 class Driver {
@@ -108,7 +97,7 @@ class Driver {
   bool factorize(const Eigen::VectorXd& x, const Eigen::VectorXd& fx, double tau);
   bool iterate_once();
   bool iterate(int iterations);
-  Eigen::VectorXd step_end(const Eigen::VectorXd& x, const Eigen::VectorXd& fx, double tau) const;
+  Eigen::VectorXd step_end(const Eigen::VectorXd& x, double tau) const;
   double estimate(const Eigen::VectorXd& x, const Eigen::VectorXd& x_new, const Eigen::VectorXd& fx, double tau) const;
   [[noreturn]] void fail(const std::string& why, double tau) const;
 
@@ -218,21 +207,19 @@ bool Driver::iterate(int iterations) {
 
 // x_{n+1}: the last stage for a stiffly accurate method (Y_s, whose f is known), else
 // x_n + tau sum b_i F_i.
-Eigen::VectorXd Driver::step_end(const Eigen::VectorXd& x, const Eigen::VectorXd& fx, double tau) const {
+Eigen::VectorXd Driver::step_end(const Eigen::VectorXd& x, double tau) const {
   if (stiffly_accurate_) return stages_.y().back();
   Eigen::VectorXd out = x;
-  const int first = tableau_.first_implicit();
   for (int j = 0; j < tableau_.stages(); ++j)
-    if (tableau_.b(j) != 0) out += (tau * tableau_.b(j)) * (j < first ? fx : stages_.f()[static_cast<std::size_t>(j - first)]);
+    if (tableau_.b(j) != 0) out += (tau * tableau_.b(j)) * stages_.stage_f(j);
   return out;
 }
 
 double Driver::estimate(const Eigen::VectorXd& x, const Eigen::VectorXd& x_new, const Eigen::VectorXd& fx, double tau) const {
   Eigen::VectorXd e = (tau * embedded_.gamma) * fx;
-  const int first = tableau_.first_implicit();
   for (int j = 0; j < tableau_.stages(); ++j) {
     const double w = embedded_.bhat(j) - tableau_.b(j);
-    if (w != 0) e += (tau * w) * (j < first ? fx : stages_.f()[static_cast<std::size_t>(j - first)]);
+    if (w != 0) e += (tau * w) * stages_.stage_f(j);
   }
   if (newton()) stages_.solve_with(embedded_.gamma, e);  // the stiff filter
   const Eigen::ArrayXd sc = s_.atol + s_.rtol * x.array().abs().max(x_new.array().abs());
@@ -286,7 +273,7 @@ TirkResult Driver::run(const std::function<void(double, const Eigen::VectorXd&)>
       after_rejection = true;
       continue;
     }
-    Eigen::VectorXd x_new = step_end(x, fx, h);
+    Eigen::VectorXd x_new = step_end(x, h);
     double err = 0, fac = s_.facmax;
     if (!fixed) {
       err = estimate(x, x_new, fx, h);
@@ -368,7 +355,7 @@ IterationTrace trace_tirk_iterations(const OdeProblem& problem, const TirkSettin
     for (int i = 0; i < st.implicit(); ++i) {
       Eigen::VectorXd r = st.y()[static_cast<std::size_t>(i)] - x;
       for (int j = 0; j < tab.stages(); ++j)
-        r -= (tau * tab.a(first + i, j)) * (j < first ? fx : st.f()[static_cast<std::size_t>(j - first)]);
+        r -= (tau * tab.a(first + i, j)) * st.stage_f(j);
       res = std::max(res, r.cwiseAbs().maxCoeff());
       size = std::max(size, st.y()[static_cast<std::size_t>(i)].cwiseAbs().maxCoeff());
     }

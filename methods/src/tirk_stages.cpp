@@ -101,8 +101,7 @@ void TirkStages::assemble(int i, Eigen::Index r) {
   for (int j = 0; j < tableau_.stages(); ++j) {
     const double a = tableau_.a(row, j);
     if (a == 0) continue;
-    const Eigen::VectorXd& fj = j < first_ ? *fx_ : f_old_[static_cast<std::size_t>(j - first_)];
-    g += (tau_ * a) * fj.segment(lo, len);
+    g += (tau_ * a) * stage_f(j).segment(lo, len);
   }
   for (int j = 0; j < i; ++j)
     if (t_(i, j) != 0)

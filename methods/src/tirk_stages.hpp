@@ -63,6 +63,8 @@ class TirkStages {
   // The current stage values and their f, implicit stages only (index 0 = first implicit).
   const std::vector<Eigen::VectorXd>& y() const { return y_old_; }
   const std::vector<Eigen::VectorXd>& f() const { return f_old_; }
+  // K_j of tableau stage j (0-based over all stages): f(t_n, x_n) for an explicit first stage.
+  const Eigen::VectorXd& stage_f(int j) const { return j < first_ ? *fx_ : f_old_[static_cast<std::size_t>(j - first_)]; }
 
  private:
   using Node = tbb::flow::continue_node<tbb::flow::continue_msg>;

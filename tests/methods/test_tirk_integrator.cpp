@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "convergence.hpp"
+#include "mbsflow/methods/jacobian.hpp"
 #include "mbsflow/methods/tirk_integrator.hpp"
 
 using namespace mbsflow;
@@ -28,10 +29,7 @@ double fixed_step_slope(const OdeProblem& p, TirkSettings s, const std::vector<i
 double infinity_norm(const OdeProblem& p) {
   Eigen::SparseMatrix<double> j = *p.sparsity;
   p.jacobian(p.t0, p.y0, j);
-  Eigen::VectorXd rows = Eigen::VectorXd::Zero(j.rows());
-  for (Eigen::Index c = 0; c < j.outerSize(); ++c)
-    for (Eigen::SparseMatrix<double>::InnerIterator e(j, c); e; ++e) rows(e.row()) += std::abs(e.value());
-  return rows.maxCoeff();
+  return mbsflow::infinity_norm(j);
 }
 
 }  // namespace

@@ -13,6 +13,9 @@ namespace mbsflow {
 // common. Returns the colour of each column (0-based).
 std::vector<int> colour_columns(const Eigen::SparseMatrix<double>& pattern);
 
+// max_i sum_j |J_ij|: the Lipschitz constant of a linear f in the max norm.
+double infinity_norm(const Eigen::SparseMatrix<double>& j);
+
 class JacobianEvaluator {
  public:
   // finite_differences forces differences even when the problem has a Jacobian.

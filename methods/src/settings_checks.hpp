@@ -1,0 +1,22 @@
+#pragma once
+// The checks every implicit integrator makes of its problem and of the settings they share
+// (tolerances, step factors, steps, threads); throws std::invalid_argument.
+#include <stdexcept>
+#include <string>
+
+#include "mbsflow/methods/ode_problem.hpp"
+
+namespace mbsflow {
+
+template <class Settings>
+void check_common_settings(const OdeProblem& p, const Settings& s) {
+  auto bad = [](const std::string& what) { throw std::invalid_argument(what); };
+  if (p.size < 1 || p.y0.size() != p.size || !p.rhs) bad("the problem needs a size, y0 of that size and a right-hand side");
+  if (!(p.t_end > p.t0)) bad("the end time must be after the start time");
+  if (!(s.rtol > 0) || !(s.atol > 0)) bad("tolerances must be positive");
+  if (!(s.facmin > 0 && s.facmin < 1 && s.facmax > 1)) bad("facmin must be in (0, 1) and facmax above 1");
+  if (s.fixed_step < 0 || s.initial_step < 0) bad("steps must be positive");
+  if (s.threads < 0) bad("threads must be >= 0");
+}
+
+}  // namespace mbsflow
