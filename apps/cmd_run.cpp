@@ -49,7 +49,39 @@ struct RunArgs {
   std::optional<double> coupling_tol;
   double exchange_delay = 0.0;  // s, added to every boundary message between processes
   int max_lag = 0;
+  bool exact_lag = false;
+  std::string submodel_methods;  // comma-separated, one per submodel
 };
+
+std::vector<Method> parse_methods(const std::string& list) {
+  std::vector<Method> out;
+  std::size_t at = 0;
+  while (at <= list.size() && !list.empty()) {
+    const std::size_t comma = std::min(list.find(',', at), list.size());
+    const std::string name = list.substr(at, comma - at);
+    const std::optional<Method> m = parse_method(name);
+    if (!m) throw InputError("--submodel-methods: unknown method '" + name + "' (rk4 or dopri5)");
+    out.push_back(*m);
+    at = comma + 1;
+  }
+  return out;
+}
+
+// The closing lines of a loosely coupled run: its coupling errors, lags and macro steps.
+void print_coupling(LooseStats& ls, bool adaptive, int max_lag) {
+  summarise_records(ls);
+  char adapt[128] = "", lag[96] = "";
+  if (adaptive)
+    std::snprintf(adapt, sizeof adapt, "; macro step %.3g .. %.3g s, %ld taken again", ls.smallest_macro_step,
+                  ls.largest_macro_step, ls.rejected);
+  if (max_lag > 0) {
+    long lagged = 0;
+    for (int l : ls.lag) lagged += l > 0 ? 1 : 0;
+    std::snprintf(lag, sizeof lag, "; %ld macro steps from older values, at most %d steps old", lagged, ls.largest_lag);
+  }
+  std::fprintf(stderr, "mbsflow: coupling error over %ld macro steps: ghost positions off by at most %.3g m, last %.3g m%s%s\n",
+               ls.macro_steps, ls.max_position_error, ls.position_error.empty() ? 0.0 : ls.position_error.back(), adapt, lag);
+}
 
 // How the run is cut: a partition file, --partitions, or default_k submodels (none when
 // that is 1 and the run is in one process).
@@ -131,13 +163,15 @@ int run(const RunArgs& a) {
   const bool cluster = !a.cluster.empty() || a.processes > 0;
   const bool loose = a.coupling == "loose";
   if (a.exchange_delay > 0.0 && !cluster) throw InputError("--exchange-delay: only with --cluster or --processes");
-  if (!loose && (a.macro_step || a.coupling_tol || a.max_lag > 0))
-    throw InputError("--macro-step, --coupling-tol, --max-lag: only with --coupling loose");
+  if (!loose && (a.macro_step || a.coupling_tol || a.max_lag > 0 || a.exact_lag || !a.submodel_methods.empty()))
+    throw InputError("--macro-step, --coupling-tol, --max-lag, --exact-lag, --submodel-methods: only with --coupling loose");
+  if (a.exact_lag && a.max_lag == 0) throw InputError("--exact-lag: needs --max-lag L > 0");
   // A tenth of the RK4 stability estimate: explicit coupling of stiff joints over longer
   // macro steps can blow up (an undamped chain does at four tenths).
   const double macro_step = a.macro_step ? *a.macro_step : 0.1 * estimate_stable_step(m).step;
   if (loose && !std::isfinite(macro_step)) throw InputError("--coupling loose: no joints to estimate a macro step from; give --macro-step");
-  const LooseOptions lo{macro_step, a.extrapolation, threads, a.coupling_tol.value_or(0.0), a.max_lag};
+  const LooseOptions lo{macro_step,  a.extrapolation, threads, a.coupling_tol.value_or(0.0),
+                        a.max_lag,   a.exact_lag,     parse_methods(a.submodel_methods)};
   const ClusterCoupling coupling{loose ? &lo : nullptr, a.exchange_delay};
   if (cluster) check_cluster_run(o, coupling);  // before any worker is started
   std::optional<LocalWorkers> local;
@@ -170,18 +204,15 @@ int run(const RunArgs& a) {
   RunSummary r;
   try {
     if (cluster) {
-      r = run_cluster(m, model_to_json(m), *d, cc, o, sink.get(), nullptr, coupling);
+      ClusterStats cs;
+      r = run_cluster(m, model_to_json(m), *d, cc, o, sink.get(), &cs, coupling);
+      LooseStats ls;
+      ls.records = cs.coupling;
+      if (loose && !a.quiet) print_coupling(ls, false, a.max_lag);
     } else if (loose) {
       LooseStats ls;
       r = run_loose(m, *d, o, lo, sink.get(), &ls);
-      if (!a.quiet) {
-        char adapt[128] = "";
-        if (a.coupling_tol)
-          std::snprintf(adapt, sizeof adapt, "; macro step %.3g .. %.3g s, %ld taken again", ls.smallest_macro_step,
-                        ls.largest_macro_step, ls.rejected);
-        std::fprintf(stderr, "mbsflow: coupling error over %ld macro steps: ghost positions off by at most %.3g m, last %.3g m%s\n",
-                     ls.macro_steps, ls.max_position_error, ls.position_error.empty() ? 0.0 : ls.position_error.back(), adapt);
-      }
+      if (!a.quiet) print_coupling(ls, a.coupling_tol.has_value(), a.max_lag);
     } else if (d) {
       r = run_partitioned(m, *d, o, {threads, a.executor == "flow" ? Executor::flow_graph : Executor::barrier}, sink.get());
     } else {
@@ -262,10 +293,16 @@ Action add_run(CLI::App& app) {
                   "Loose coupling: adapt the macro step so that ghost positions are extrapolated within this many m")
       ->check(CLI::PositiveNumber);
   sub->add_option("--max-lag", a->max_lag,
-                  "Loose coupling: take neighbours' values L macro steps back, so that submodels run up to L steps ahead "
-                  "while messages travel (repeatable: always exactly L back)")
+                  "Loose coupling: a submodel may run up to L macro steps ahead of its slowest neighbour, taking the "
+                  "newest neighbour values it has, while messages travel (results then depend on timing)")
       ->check(CLI::Range(0, 1000))
       ->capture_default_str();
+  sub->add_flag("--exact-lag", a->exact_lag,
+                "With --max-lag L: take the neighbours' values exactly L macro steps back instead of the newest "
+                "(repeatable whatever the timing)");
+  sub->add_option("--submodel-methods", a->submodel_methods,
+                  "Loose coupling: each submodel's method, comma-separated in submodel order (rk4 with substeps of "
+                  "--step, dopri5 with its own steps), e.g. rk4,dopri5,rk4; default: --method for all");
   sub->add_option("--exchange-delay", a->exchange_delay,
                   "With --cluster or --processes: hold every boundary message back this many s (a slow network, for tests)")
       ->check(CLI::NonNegativeNumber);

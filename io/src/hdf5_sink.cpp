@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <optional>
+#include <type_traits>
 #include <array>
 #include <vector>
 
@@ -182,6 +183,30 @@ void Hdf5Sink::flush() {
   append(f.time, first);  // last: a reader never sees a time without its data
   rows_written_ += rows;
   h5::check(H5Fflush(f.file.get(), H5F_SCOPE_GLOBAL), "flush " + path_);
+}
+
+void Hdf5Sink::write_coupling(const std::vector<CouplingRecord>& records) {
+  if (!file_ || records.empty()) return;
+  const hsize_t n = records.size();
+  const h5::Handle lcpl(H5Pcreate(H5P_LINK_CREATE), H5Pclose, "create a link property list");
+  h5::check(H5Pset_create_intermediate_group(lcpl.get(), 1), "allow intermediate groups");
+  auto column = [&](const char* name, hid_t file_type, auto value) {
+    using T = decltype(value(records[0]));
+    std::vector<T> v;
+    for (const CouplingRecord& r : records) v.push_back(value(r));
+    const h5::Handle space(H5Screate_simple(1, &n, nullptr), H5Sclose, "create a coupling space");
+    const std::string path = std::string("/coupling/") + name;
+    const h5::Handle set(H5Dcreate2(file_->file.get(), path.c_str(), file_type, space.get(), lcpl.get(), H5P_DEFAULT, H5P_DEFAULT),
+                         H5Dclose, "create " + path);
+    const hid_t memory = std::is_same_v<T, double> ? H5T_NATIVE_DOUBLE : H5T_NATIVE_INT64;
+    h5::check(H5Dwrite(set.get(), memory, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()), "write " + path);
+  };
+  column("index", H5T_STD_I64LE, [](const CouplingRecord& r) { return static_cast<std::int64_t>(r.index); });
+  column("t_start", H5T_IEEE_F64LE, [](const CouplingRecord& r) { return r.t_start; });
+  column("t_end", H5T_IEEE_F64LE, [](const CouplingRecord& r) { return r.t_end; });
+  column("position_error", H5T_IEEE_F64LE, [](const CouplingRecord& r) { return r.position_error; });
+  column("velocity_error", H5T_IEEE_F64LE, [](const CouplingRecord& r) { return r.velocity_error; });
+  column("lag", H5T_STD_I64LE, [](const CouplingRecord& r) { return static_cast<std::int64_t>(r.lag); });
 }
 
 void Hdf5Sink::end() {

@@ -42,6 +42,8 @@ void AsyncSink::write(Snapshot&& snapshot) {
   not_empty_.notify_one();
 }
 
+void AsyncSink::write_coupling(const std::vector<CouplingRecord>& records) { coupling_ = records; }
+
 void AsyncSink::end() {
   if (writer_.joinable()) {
     {
@@ -50,6 +52,12 @@ void AsyncSink::end() {
     }
     not_empty_.notify_one();
     writer_.join();
+    try {
+      if (!coupling_.empty()) inner_->write_coupling(coupling_);
+    } catch (...) {
+      inner_->end();
+      throw;
+    }
     inner_->end();
   }
   rethrow_writer_error();

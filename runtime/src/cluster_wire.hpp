@@ -22,7 +22,10 @@ struct ExchangeHeader {
   std::int64_t step = 0;
 };
 
-enum class ResultKind : std::uint32_t { snapshot = 1, progress = 2, done = 3, failed = 4 };
+enum class ResultKind : std::uint32_t { snapshot = 1, progress = 2, done = 3, failed = 4, coupling = 5 };
+// A coupling message carries rows of (index, t_start, t_end, position error, velocity
+// error, lag) of CouplingRecord.
+constexpr std::size_t coupling_row = 6;
 
 // Worker -> coordinator on the results channel; a snapshot carries the own bodies of the
 // worker's submodels (ascending), a failure its message.

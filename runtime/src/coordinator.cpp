@@ -5,6 +5,7 @@
 #include "cluster_wire.hpp"
 #include "mbsflow/graph/error.hpp"
 #include "mbsflow/runtime/cluster.hpp"
+#include "coupling_log.hpp"
 #include "mbsflow/runtime/loose_coupling.hpp"
 #include "partitioned_state.hpp"
 #include "sink_runner.hpp"
@@ -174,10 +175,15 @@ json setup_message(const std::string& model_json, const Decomposition& d, const 
           {"results_address", results_address},
           {"threads", cw.threads},
           {"exchange_delay_s", coupling.exchange_delay_s}};
-  if (coupling.loose)
+  if (coupling.loose) {
+    json methods = json::array();
+    for (Method m : coupling.loose->methods) methods.push_back(method_name(m));
     j["loose"] = {{"macro_step", coupling.loose->macro_step},
                   {"extrapolation", coupling.loose->extrapolation},
-                  {"max_lag", coupling.loose->max_lag}};
+                  {"max_lag", coupling.loose->max_lag},
+                  {"exact_lag", coupling.loose->exact_lag},
+                  {"methods", methods}};
+  }
   return j;
 }
 
@@ -199,6 +205,7 @@ RunSummary run_cluster(const Model& model, const std::string& model_json, const 
                        const ClusterConfig& cluster, const RunOptions& o, ResultSink* sink, ClusterStats* stats,
                        ClusterCoupling coupling) {
   check_cluster_run(o, coupling);
+  if (coupling.loose) check_loose_options(*coupling.loose, d.submodels.size());
   const std::vector<int> worker_of = assign_submodels(cluster, static_cast<int>(d.submodels.size()));
   Coordinator co(cluster, o);
   auto& peers = co.peers();
@@ -213,6 +220,7 @@ RunSummary run_cluster(const Model& model, const std::string& model_json, const 
   if (sink) sink->begin(whole);
   const StepGrid grid = step_grid(o.t_start, o.t_end, o.step);
   long evaluations = 0;  // as the workers count them
+  loose::CouplingLog coupling_log;  // loose coupling: the workers' records, merged
   run_with_sink(sink, out, [&] {
     try {
       for (std::size_t w = 0; w < peers.size(); ++w)
@@ -280,6 +288,15 @@ RunSummary run_cluster(const Model& model, const std::string& model_json, const 
           }
           case wire::ResultKind::progress:
             break;
+          case wire::ResultKind::coupling: {
+            constexpr std::size_t row = wire::coupling_row * sizeof(double);
+            if (payload.size() % row != 0) throw RunError(co.who(w) + " sent coupling records of the wrong size");
+            std::vector<double> v(payload.size() / sizeof(double));
+            std::memcpy(v.data(), payload.data(), payload.size());
+            for (std::size_t i = 0; i < v.size(); i += wire::coupling_row)
+              coupling_log.add({static_cast<long>(v[i]), v[i + 1], v[i + 2], v[i + 3], v[i + 4], static_cast<int>(v[i + 5])});
+            break;
+          }
         }
         p.completed = std::max(p.completed, static_cast<long>(h.step));
       };
@@ -306,6 +323,11 @@ RunSummary run_cluster(const Model& model, const std::string& model_json, const 
       co.abort(e.what());
       throw;
     }
+  }, [&] {
+    if (!coupling.loose) return;
+    const std::vector<CouplingRecord> records = coupling_log.records();
+    if (stats) stats->coupling = records;
+    if (sink) sink->write_coupling(records);
   });
   out.steps = grid.steps;
   out.evaluations = coupling.loose ? evaluations : grid.steps * 4;  // loose: the submodels' own evaluations

@@ -51,6 +51,20 @@ std::string divergence_message(const Model& model, const Divergence& d, double t
   return buf;
 }
 
+std::string loose_divergence_message(const Model& model, const Divergence& d, double t, Method method, double step,
+                                     double macro_step, int lag) {
+  const StableStep s = estimate_stable_step(model);
+  if (method == Method::rk4 && step > s.step) return divergence_message(model, d, t, method, step);
+  char buf[512];
+  std::snprintf(buf, sizeof buf,
+                "run diverged at t = %.6g s: body '%s': %s. Loosely coupled with a macro step of %.3g s and neighbour "
+                "values up to %d macro steps old: explicit coupling of stiff joints needs a macro step well inside their "
+                "period (estimated stability limit %s); try --macro-step %.3g or a smaller --max-lag",
+                t, model.bodies.at(static_cast<std::size_t>(d.body)).name.c_str(), d.what.c_str(), macro_step, lag + 1,
+                s.describe(model).c_str(), 0.5 * macro_step);
+  return buf;
+}
+
 std::string step_collapsed_message(double h, double t, double rtol) {
   char buf[256];
   std::snprintf(buf, sizeof buf,

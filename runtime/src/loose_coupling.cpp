@@ -1,8 +1,5 @@
 #include "mbsflow/runtime/loose_coupling.hpp"
 
-#include <oneapi/tbb/info.h>
-#include <oneapi/tbb/task_arena.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -10,8 +7,8 @@
 #include <memory>
 
 #include "loose_part.hpp"
+#include "loose_rounds.hpp"
 #include "mbsflow/graph/error.hpp"
-#include "schedules.hpp"
 #include "sink_runner.hpp"
 #include "step_grid.hpp"
 
@@ -21,23 +18,86 @@ namespace {
 using loose::LoosePart;
 using Clock = std::chrono::steady_clock;
 
+// Takes the adaptive macro steps one at a time: each is taken again from its start with a
+// shorter H while its coupling error is above the tolerance.
+template <class AtEnd>
+void adaptive_macro_steps(const RunOptions& o, const LooseOptions& lo, std::vector<std::unique_ptr<LoosePart>>& parts,
+                          loose::LooseRounds& rounds, std::vector<double>& ends, LooseStats& st, AtEnd at_end) {
+  const StepGrid grid = step_grid(o.t_start, o.t_end, o.step);
+  const double order = lo.extrapolation + 1.0;
+  double t = o.t_start, H = lo.macro_step;
+  long next_out = 1, m = 0;
+  while (t < o.t_end) {
+    bool on_output = false;
+    const double t1 = loose::next_macro_end(grid, o.output_every, next_out, t, H, &on_output);
+    ends.resize(static_cast<std::size_t>(m + 1));
+    ends.push_back(t1);
+    for (auto& p : parts) p->save();
+    const std::string failure = rounds.run(m, 1);
+    if (!failure.empty()) throw RunError(failure);
+    const loose::CouplingError e = rounds.peek(m + 1);
+    // Step-size factor from the error model e ~ H^(order).
+    const double factor = std::clamp(0.9 * std::pow(lo.coupling_tol / std::max(e.position, 1e-300), 1.0 / order), 0.2, 2.0);
+    if (e.position > lo.coupling_tol) {  // too far off: back to t with a shorter macro step
+      for (auto& p : parts) p->restore(m + 1);
+      rounds.discard(m + 1);
+      H = (t1 - t) * factor;
+      ++st.rejected;
+      if (H < 1e-6 * lo.macro_step) {
+        char buf[160];
+        std::snprintf(buf, sizeof buf,
+                      "coupling error %.3g m above --coupling-tol %.3g m even with a macro step of %.3g s at t = %.6g s",
+                      e.position, lo.coupling_tol, t1 - t, t);
+        throw RunError(buf);
+      }
+      continue;
+    }
+    ++m;
+    at_end(m, on_output);
+    if (on_output) ++next_out;
+    H = on_output && factor >= 1.0 ? std::max(H, (t1 - t) * factor) : (t1 - t) * factor;
+    t = t1;
+  }
+}
+
 }  // namespace
 
-void check_loose_options(const LooseOptions& lo) {
+void check_loose_options(const LooseOptions& lo, std::size_t submodels) {
   if (!(lo.macro_step > 0.0) || !std::isfinite(lo.macro_step)) throw InputError("--macro-step: must be a positive time");
   if (lo.extrapolation < 0 || lo.extrapolation > 2) throw InputError("--extrapolation: must be 0, 1 or 2");
   if (lo.max_lag < 0) throw InputError("--max-lag: must be >= 0");
   if (lo.max_lag > 0 && lo.coupling_tol > 0.0) throw InputError("--max-lag: needs a fixed macro step (not with --coupling-tol)");
+  if (submodels > 0 && !lo.methods.empty() && lo.methods.size() != submodels)
+    throw InputError("--submodel-methods: one method per submodel: " + std::to_string(submodels) + " submodels, " +
+                     std::to_string(lo.methods.size()) + " methods");
+}
+
+void summarise_records(LooseStats& st) {
+  st.position_error.clear();
+  st.velocity_error.clear();
+  st.lag.clear();
+  st.max_position_error = 0.0;
+  st.largest_lag = 0;
+  st.macro_steps = static_cast<long>(st.records.size());
+  for (const CouplingRecord& r : st.records) {
+    st.position_error.push_back(r.position_error);
+    st.velocity_error.push_back(r.velocity_error);
+    st.lag.push_back(r.lag);
+    st.max_position_error = std::max(st.max_position_error, r.position_error);
+    st.largest_lag = std::max(st.largest_lag, r.lag);
+    const double H = r.t_end - r.t_start;
+    st.smallest_macro_step = r.index == 1 ? H : std::min(st.smallest_macro_step, H);
+    st.largest_macro_step = std::max(st.largest_macro_step, H);
+  }
 }
 
 RunSummary run_loose(const Model& model, const Decomposition& d, const RunOptions& o, const LooseOptions& lo,
                      ResultSink* sink, LooseStats* stats) {
   check_options(o);
-  check_loose_options(lo);
-  const int threads = lo.threads > 0 ? lo.threads : tbb::info::default_concurrency();
-  tbb::task_arena arena(threads);
+  check_loose_options(lo, d.submodels.size());
   std::vector<std::unique_ptr<LoosePart>> parts;
-  for (const Submodel& s : d.submodels) parts.push_back(std::make_unique<LoosePart>(model, s, o, lo.extrapolation, lo.max_lag));
+  for (std::size_t q = 0; q < d.submodels.size(); ++q)
+    parts.push_back(loose::make_part(model, d.submodels[q], o, lo, q));
   MultibodySystem whole(model);
   const StateLayout& global = whole.layout();
   RunSummary out;
@@ -46,79 +106,48 @@ RunSummary run_loose(const Model& model, const Decomposition& d, const RunOption
   const auto start = Clock::now();
   Eigen::VectorXd y = whole.initial_state();
   if (sink) sink->begin(whole);
-  // One flow-graph node per submodel per macro step, all independent within the step.
-  double t0 = 0.0, t1 = 0.0;
-  Scheduler schedule(d, 1, 1, [&](std::size_t p, int, int, Half) { parts[p]->integrate(t0, t1); });
   const bool adaptive = lo.coupling_tol > 0.0;
-  const double order = lo.extrapolation + 1.0;
-  const StepGrid grid = step_grid(o.t_start, o.t_end, o.step);
-  run_with_sink(sink, out, [&] {
-    if (sink) emit(whole, sink, o.t_start, y, out);
-    for (auto& p : parts) p->make_past(o.t_start, lo.macro_step);
-    for (int j = 1; j <= lo.extrapolation; ++j)
-      loose::copy_local_ghosts(parts, j, [j](const LoosePart& owner) -> const Eigen::VectorXd& {
-        return owner.part.x[static_cast<std::size_t>(j)];
-      });
-    for (auto& p : parts) p->start(o.t_start, lo.macro_step);
-    double t = o.t_start, H = lo.macro_step;
-    long next_out = 1;
-    while (t < o.t_end) {
-      bool on_output = false;
-      t0 = t;
-      t1 = loose::next_macro_end(grid, o.output_every, next_out, t, H, &on_output);
-      if (adaptive)
-        for (auto& p : parts) p->save();
-      arena.execute([&] { schedule.run(1); });
-      for (auto& p : parts)
-        if (auto dv = partitioned::check(p->part)) throw RunError(divergence_message(model, *dv, t1, o.method, o.step));
-      // The owners' values at the macro-step end L steps back (this one for L = 0).
-      for (auto& p : parts) p->keep(st.macro_steps + 1, t1);
-      const long lagged = st.macro_steps + 1 - lo.max_lag;
-      loose::CouplingError e;
-      if (lagged >= 1) {
-        loose::copy_local_ghosts(parts, 0, [lagged](const LoosePart& owner) -> const Eigen::VectorXd& { return owner.kept(lagged); });
-        for (auto& p : parts) {
-          const loose::CouplingError pe = p->error(p->kept_time(lagged));
-          e.position = std::max(e.position, pe.position);
-          e.velocity = std::max(e.velocity, pe.velocity);
-        }
-      }
-      // Step-size factor from the error model e ~ H^(order).
-      const double factor =
-          adaptive ? std::clamp(0.9 * std::pow(lo.coupling_tol / std::max(e.position, 1e-300), 1.0 / order), 0.2, 2.0) : 1.0;
-      if (adaptive && e.position > lo.coupling_tol) {  // too far off: back to t0 with a shorter macro step
-        for (auto& p : parts) p->restore(st.macro_steps + 1);
-        H = (t1 - t0) * factor;
-        ++st.rejected;
-        if (H < 1e-6 * lo.macro_step) {
-          char buf[160];
-          std::snprintf(buf, sizeof buf,
-                        "coupling error %.3g m above --coupling-tol %.3g m even with a macro step of %.3g s at t = %.6g s",
-                        e.position, lo.coupling_tol, t1 - t0, t0);
-          throw RunError(buf);
-        }
-        continue;
-      }
-      for (auto& p : parts) {
-        if (lagged >= 1) p->push(p->kept_time(lagged));
-        partitioned::gather(p->part, global, y);
-      }
-      st.position_error.push_back(e.position);
-      st.velocity_error.push_back(e.velocity);
-      st.max_position_error = std::max(st.max_position_error, e.position);
-      st.smallest_macro_step = st.macro_steps == 0 ? t1 - t0 : std::min(st.smallest_macro_step, t1 - t0);
-      st.largest_macro_step = std::max(st.largest_macro_step, t1 - t0);
-      ++st.macro_steps;
-      if (on_output) {
-        if (sink) emit(whole, sink, t1, y, out);
-        ++next_out;
-      }
-      if (adaptive) H = on_output && factor >= 1.0 ? std::max(H, (t1 - t0) * factor) : (t1 - t0) * factor;
-      t = t1;
-      check_stop(o, t);
-      if (o.progress) o.progress(t, st.macro_steps);
+  loose::MacroGrid grid = adaptive ? loose::MacroGrid{{o.t_start}, {1}, {0}} : loose::macro_grid(o, lo.macro_step);
+  loose::LooseRounds rounds(model, d, o, lo, parts, grid.ends, adaptive ? 1 : loose::steps_per_run(grid));
+  loose::CouplingLog log;
+  long done = 0;  // macro steps
+  // At macro-step end m: the snapshot, the stop request, the progress.
+  auto at_end = [&](long m, bool on_output) {
+    done = m;
+    const double t = grid.ends[static_cast<std::size_t>(m)];
+    if (on_output && sink) {
+      for (auto& p : parts) partitioned::gather(p->part, global, y);
+      emit(whole, sink, t, y, out);
     }
-  });
+    check_stop(o, t);
+    if (o.progress) o.progress(t, m);
+  };
+  run_with_sink(
+      sink, out,
+      [&] {
+        if (sink) emit(whole, sink, o.t_start, y, out);
+        for (auto& p : parts) p->make_past(o.t_start, lo.macro_step);
+        for (int j = 1; j <= lo.extrapolation; ++j) loose::copy_local_ghosts(parts, j);
+        for (auto& p : parts) p->start(o.t_start, lo.macro_step);
+        if (adaptive) {
+          adaptive_macro_steps(o, lo, parts, rounds, grid.ends, st, at_end);
+        } else {
+          loose::for_each_run(grid, [&](long m, int n) {
+            const std::string failure = rounds.run(m, n);
+            if (!failure.empty()) throw RunError(failure);
+            at_end(m + n, grid.output[static_cast<std::size_t>(m + n)] != 0);
+            return true;
+          });
+        }
+        rounds.catch_up(done);  // the coupling errors of the last macro steps
+      },
+      [&] {
+        rounds.drain(log);
+        st.records = log.records();
+        summarise_records(st);
+        if (sink) sink->write_coupling(st.records);
+      });
+  for (auto& p : parts) partitioned::gather(p->part, global, y);
   for (const auto& p : parts) {
     out.steps = std::max(out.steps, p->steps);
     out.rejected += p->rejected;

@@ -2,9 +2,23 @@
 
 #include "mbsflow/graph/error.hpp"
 #include "mbsflow/runtime/divergence.hpp"
-#include "step_grid.hpp"
 
 namespace mbsflow::loose {
+
+namespace {
+constexpr int numbers = partitioned::body_numbers;
+
+// Lagrange weights at t over the sample times (fewer samples at the start: lower order).
+template <class Samples>
+void lagrange_weights(const Samples& s, double t, double* w) {
+  const std::size_t n = s.size();
+  for (std::size_t j = 0; j < n; ++j) {
+    w[j] = 1.0;
+    for (std::size_t m = 0; m < n; ++m)
+      if (m != j) w[j] *= (t - s[m].t) / (s[j].t - s[m].t);
+  }
+}
+}  // namespace
 
 // The local system whose ghost bodies follow the extrapolation, whatever the integrator
 // puts in their places; their derivatives are zero.
@@ -24,9 +38,11 @@ struct LoosePart::Ghosted {
   }
 };
 
-LoosePart::LoosePart(const Model& model, const Submodel& sub, const RunOptions& o, int extrapolation, int max_lag)
-    : part(model, sub, extrapolation + 1), o_(o), order_(extrapolation), lag_(max_lag) {
-  if (o.method == Method::rk4) {
+LoosePart::LoosePart(const Model& model, const Submodel& sub, const RunOptions& o, Method method, int extrapolation,
+                     int retain)
+    : part(model, sub, extrapolation + 1), o_(o), order_(extrapolation), retain_(static_cast<std::size_t>(retain)),
+      history_(sub.exchanges.size()), predicted_(sub.exchanges.size()) {
+  if (method == Method::rk4) {
     rk4_ = std::make_unique<Rk4>(part.system.dimension());
   } else {
     Dopri5Settings s;
@@ -44,34 +60,38 @@ void LoosePart::make_past(double t0, double H) {
 }
 
 void LoosePart::start(double t0, double H) {
-  for (int j = order_; j >= 1; --j) samples_.emplace_front(t0 - j * H, part.x[static_cast<std::size_t>(j)]);
-  samples_.emplace_front(t0, part.x[0]);
-}
-
-// Lagrange weights at t over the samples held (fewer at the start: lower order).
-std::vector<double> LoosePart::weights(double t) const {
-  const std::size_t n = samples_.size();
-  std::vector<double> w(n, 1.0);
-  for (std::size_t j = 0; j < n; ++j)
-    for (std::size_t m = 0; m < n; ++m)
-      if (m != j) w[j] *= (t - samples_[m].first) / (samples_[j].first - samples_[m].first);
-  return w;
-}
-
-void LoosePart::extrapolate_ghosts(double t, Eigen::VectorXd& y) const {
-  const std::vector<double> w = weights(t);
   const StateLayout& l = part.system.layout();
-  const Eigen::Index own = part.own, ghosts = l.bodies - own;
-  auto field = [&](Eigen::Index (StateLayout::*offset)(Eigen::Index) const, int n) {
-    auto dst = y.segment((l.*offset)(own), n * ghosts);
-    dst.setZero();
-    for (std::size_t j = 0; j < w.size(); ++j) dst += w[j] * samples_[j].second.segment((l.*offset)(own), n * ghosts);
-  };
-  field(&StateLayout::position, 3);
-  field(&StateLayout::orientation, 4);
-  field(&StateLayout::velocity, 3);
-  field(&StateLayout::angular_velocity, 3);
-  for (Eigen::Index g = own; g < l.bodies; ++g) y.segment<4>(l.orientation(g)).normalize();
+  for (std::size_t e = 0; e < history_.size(); ++e) {
+    const std::vector<int>& to = part.sub->exchanges[e].to;
+    for (int j = order_; j >= 0; --j) {
+      Sample s{-j, t0 - j * H, std::vector<double>(to.size() * numbers)};
+      partitioned::pack_bodies(l, part.x[static_cast<std::size_t>(j)], to, s.bodies.data());
+      history_[e].push_front(std::move(s));
+    }
+  }
+  publish(0, t0);
+}
+
+void LoosePart::extrapolate(std::size_t e, double t, std::vector<double>& out) const {
+  const std::deque<Sample>& h = history_[e];
+  double w[3];
+  lagrange_weights(h, t, w);
+  const std::size_t n = h.front().bodies.size();
+  out.assign(n, 0.0);
+  for (std::size_t j = 0; j < h.size(); ++j) {
+    const double* s = h[j].bodies.data();
+    for (std::size_t i = 0; i < n; ++i) out[i] += w[j] * s[i];
+  }
+}
+
+void LoosePart::extrapolate_ghosts(double t, Eigen::VectorXd& y) {
+  const StateLayout& l = part.system.layout();
+  for (std::size_t e = 0; e < history_.size(); ++e) {
+    const std::vector<int>& to = part.sub->exchanges[e].to;
+    extrapolate(e, t, ghost_buffer_);
+    partitioned::unpack_bodies(l, y, to, ghost_buffer_.data());
+    for (int g : to) y.segment<4>(l.orientation(g)).normalize();
+  }
 }
 
 void LoosePart::integrate(double t0, double t1) {
@@ -105,21 +125,77 @@ void LoosePart::integrate(double t0, double t1) {
   evaluations = dp.stats().evaluations;
 }
 
-CouplingError LoosePart::error(double t1) {
-  guess_ = part.x[0];
-  extrapolate_ghosts(t1, guess_);
-  const StateLayout& l = part.system.layout();
-  CouplingError e;
-  for (Eigen::Index g = part.own; g < l.bodies; ++g) {
-    e.position = std::max(e.position, (guess_.segment<3>(l.position(g)) - part.x[0].segment<3>(l.position(g))).norm());
-    e.velocity = std::max(e.velocity, (guess_.segment<3>(l.velocity(g)) - part.x[0].segment<3>(l.velocity(g))).norm());
+namespace {
+CouplingError distance(const std::vector<double>& guess, const double* packed) {
+  CouplingError err;
+  for (std::size_t b = 0; b < guess.size(); b += numbers) {
+    const Eigen::Map<const Eigen::Vector3d> p(packed + b), v(packed + b + 7);
+    err.position = std::max(err.position, (Eigen::Map<const Eigen::Vector3d>(guess.data() + b) - p).norm());
+    err.velocity = std::max(err.velocity, (Eigen::Map<const Eigen::Vector3d>(guess.data() + b + 7) - v).norm());
   }
-  return e;
+  return err;
+}
+}  // namespace
+
+CouplingError LoosePart::error(std::size_t e, double t, const double* packed) const {
+  std::vector<double> guess;
+  extrapolate(e, t, guess);
+  return distance(guess, packed);
 }
 
-void LoosePart::push(double t1) {
-  samples_.emplace_front(t1, part.x[0]);
-  while (static_cast<int>(samples_.size()) > order_ + 1) samples_.pop_back();
+void LoosePart::predict(long index, double t) {
+  for (std::size_t e = 0; e < predicted_.size(); ++e) {
+    Sample s{index, t, {}};
+    extrapolate(e, t, s.bodies);
+    predicted_[e].push_back(std::move(s));
+  }
+}
+
+std::optional<CouplingError> LoosePart::take(std::size_t e, long index, double t, const double* packed) {
+  std::optional<CouplingError> err;
+  std::deque<Sample>& p = predicted_[e];
+  while (!p.empty() && p.front().index < index) p.pop_front();
+  if (!p.empty() && p.front().index == index) {
+    err = distance(p.front().bodies, packed);
+    p.pop_front();
+  }
+  std::deque<Sample>& h = history_[e];
+  Sample s = std::move(h.back());  // the oldest one goes (start() filled the history); its buffer is reused
+  h.pop_back();
+  s.index = index;
+  s.t = t;
+  std::copy(packed, packed + s.bodies.size(), s.bodies.begin());
+  h.push_front(std::move(s));
+  return err;
+}
+
+void LoosePart::publish(long index, double t) {
+  std::lock_guard lock(board_mutex_);
+  if (board_.size() >= retain_) {
+    Published p = std::move(board_.front());  // reuses the oldest one's vector
+    board_.pop_front();
+    p.index = index;
+    p.t = t;
+    p.x = part.x[0];
+    board_.push_back(std::move(p));
+  } else {
+    board_.push_back({index, t, part.x[0]});
+  }
+}
+
+long LoosePart::published() const {
+  std::lock_guard lock(board_mutex_);
+  return board_.back().index;
+}
+
+double LoosePart::pack_published(long index, const std::vector<int>& bodies, double* out) const {
+  std::lock_guard lock(board_mutex_);
+  for (const Published& p : board_)
+    if (p.index == index) {
+      partitioned::pack_bodies(part.system.layout(), p.x, bodies, out);
+      return p.t;
+    }
+  throw RunError("internal: macro-step end " + std::to_string(index) + " is no longer kept");
 }
 
 void LoosePart::save() {
@@ -130,24 +206,10 @@ void LoosePart::save() {
 void LoosePart::restore(long index) {
   part.x[0] = saved_;
   h_ = saved_h_;
-  while (!kept_.empty() && std::get<0>(kept_.back()) >= index) kept_.pop_back();
-}
-
-void LoosePart::keep(long index, double t) {
-  kept_.emplace_back(index, t, part.x[0]);
-  while (static_cast<int>(kept_.size()) > lag_ + 1) kept_.pop_front();
-}
-
-const Eigen::VectorXd& LoosePart::kept(long index) const {
-  for (const auto& [i, t, x] : kept_)
-    if (i == index) return x;
-  throw RunError("internal: the state of macro step " + std::to_string(index) + " is no longer kept");
-}
-
-double LoosePart::kept_time(long index) const {
-  for (const auto& [i, t, x] : kept_)
-    if (i == index) return t;
-  throw RunError("internal: the state of macro step " + std::to_string(index) + " is no longer kept");
+  for (auto& p : predicted_)
+    while (!p.empty() && p.back().index >= index) p.pop_back();
+  std::lock_guard lock(board_mutex_);
+  while (!board_.empty() && board_.back().index >= index) board_.pop_back();
 }
 
 double next_macro_end(const StepGrid& grid, long output_every, long next_out, double t, double H, bool* on_output) {
@@ -156,6 +218,35 @@ double next_macro_end(const StepGrid& grid, long output_every, long next_out, do
   const double t_out = grid.time(std::min(next_out * output_every, grid.steps));
   *on_output = t + H >= t_out - 1e-12 * std::max(1.0, std::abs(t_out));
   return *on_output ? t_out : t + H;
+}
+
+MacroGrid macro_grid(const RunOptions& o, double H) {
+  const StepGrid grid = step_grid(o.t_start, o.t_end, o.step);
+  MacroGrid g;
+  g.ends.push_back(o.t_start);
+  g.output.push_back(1);
+  g.tight_step.push_back(0);
+  long next_out = 1;
+  double t = o.t_start;
+  while (t < o.t_end) {
+    bool on_output = false;
+    t = next_macro_end(grid, o.output_every, next_out, t, H, &on_output);
+    g.ends.push_back(t);
+    g.output.push_back(on_output ? 1 : 0);
+    g.tight_step.push_back(on_output ? std::min(next_out * static_cast<long>(o.output_every), grid.steps)
+                                     : std::lround((t - o.t_start) / o.step));
+    if (on_output) ++next_out;
+  }
+  return g;
+}
+
+int steps_per_run(const MacroGrid& g) {
+  int most = 1, run = 0;
+  for (std::size_t m = 1; m < g.ends.size(); ++m) {
+    most = std::max(most, ++run);
+    if (g.output[m]) run = 0;
+  }
+  return std::min(most, 64);
 }
 
 }  // namespace mbsflow::loose

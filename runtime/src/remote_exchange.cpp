@@ -1,6 +1,7 @@
 #include "remote_exchange.hpp"
 
 #include <algorithm>
+#include <cstring>
 
 #include "cluster_wire.hpp"
 #include "mbsflow/graph/error.hpp"
@@ -71,7 +72,10 @@ bool RemoteExchange::store(zmq::message_t& header, zmq::message_t& payload) {
     if (e.neighbour == h->from) bodies = e.from.size(), known = true;
   if (!known || payload.size() != bodies * partitioned::body_numbers * sizeof(double)) return false;
   std::lock_guard lock(mutex_);
-  inbox_[{h->to, h->from, h->stage}].push_back({h->step, std::move(payload)});
+  const Slot slot{h->to, h->from, h->stage};
+  inbox_[slot].push_back({h->step, std::move(payload)});
+  auto [it, added] = newest_.try_emplace(slot, h->step);
+  if (!added) it->second = std::max(it->second, static_cast<long>(h->step));
   return true;
 }
 
@@ -86,30 +90,37 @@ bool RemoteExchange::read_inbox(int ms) {
 }
 
 void RemoteExchange::wait(long n, int s, int q, int p) {
-  if (n == 0 && s == 0) return;  // the initial state: every process has it
+  if (n <= 0 && s == 0) return;  // the initial state: every process has it
   std::unique_lock lock(mutex_);
-  const auto& queue = inbox_[{p, q, s}];
-  auto here = [&] { return std::any_of(queue.begin(), queue.end(), [n](const Message& m) { return m.step == n; }); };
+  // Messages of a slot arrive in step order; taken ones may be gone from the queue.
+  auto here = [&] {
+    const auto it = newest_.find({p, q, s});
+    return it != newest_.end() && it->second >= n;
+  };
   while (!aborted_ && !here()) {
     if (reading_) {  // another proxy reads the inbox and tells when it has stored something
       arrived_.wait_for(lock, std::chrono::milliseconds(50));
       continue;
     }
-    reading_ = true;
-    lock.unlock();
-    bool ok = false;
-    try {
-      ok = read_inbox(50);  // short, so that an abort is seen in time
-    } catch (const zmq::error_t&) {
-    }
-    lock.lock();
-    reading_ = false;
-    if (!ok && !aborted_) {
-      aborted_ = true;
-      why_ = "a malformed boundary message arrived, or the inbox failed";
-    }
-    arrived_.notify_all();
+    read_inbox_as_reader(lock, 50);  // short, so that an abort is seen in time
   }
+}
+
+void RemoteExchange::read_inbox_as_reader(std::unique_lock<std::mutex>& lock, int ms) {
+  reading_ = true;
+  lock.unlock();
+  bool ok = false;
+  try {
+    ok = read_inbox(ms);
+  } catch (const zmq::error_t&) {
+  }
+  lock.lock();
+  reading_ = false;
+  if (!ok && !aborted_) {
+    aborted_ = true;
+    why_ = "a malformed boundary message arrived, or the inbox failed";
+  }
+  arrived_.notify_all();
 }
 
 void RemoteExchange::receive(int p, long n, int s) {
@@ -128,6 +139,25 @@ void RemoteExchange::receive(int p, long n, int s) {
       queue.pop_front();
     }
     partitioned::unpack_bodies(me.system.layout(), me.x[static_cast<std::size_t>(s)], e.to, m.data());
+  }
+}
+
+void RemoteExchange::take_upto(int p, int q, int s, long cap, const std::function<void(long, const double*)>& take) {
+  std::vector<Message> in;
+  {
+    std::unique_lock lock(mutex_);
+    if (!reading_ && !aborted_) read_inbox_as_reader(lock, 0);
+    auto& queue = inbox_[{p, q, s}];
+    while (!queue.empty() && queue.front().step <= cap) {
+      in.push_back(std::move(queue.front()));
+      queue.pop_front();
+    }
+  }
+  std::vector<double> values;  // aligned for doubles, which a message need not be
+  for (const Message& m : in) {
+    values.resize(m.payload.size() / sizeof(double));
+    std::memcpy(values.data(), m.payload.data(), values.size() * sizeof(double));
+    take(m.step, values.data());
   }
 }
 

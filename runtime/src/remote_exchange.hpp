@@ -10,6 +10,7 @@
 #include <chrono>
 #include <condition_variable>
 #include <deque>
+#include <functional>
 #include <map>
 #include <mutex>
 #include <string>
@@ -37,6 +38,10 @@ class RemoteExchange {
   void wait(long n, int s, int q, int p);
   // From local p's stage: its remote ghosts of stage input s of step n, from their slots.
   void receive(int p, long n, int s);
+  // From local p (loose coupling): remote q's messages of stage input s with a step up to
+  // cap that are in, oldest first, to take(step, values); reads the inbox first unless
+  // another thread does.
+  void take_upto(int p, int q, int s, long cap, const std::function<void(long, const double*)>& take);
   // From local p's stage: its bodies of stage input s of step n to the remote submodels
   // that hold them as ghosts.
   void send(int p, long n, int s);
@@ -63,6 +68,8 @@ class RemoteExchange {
   bool store(zmq::message_t& header, zmq::message_t& payload);
   // Waits up to `ms` for the inbox, then stores everything in it; false on a malformed message.
   bool read_inbox(int ms);
+  // read_inbox as the one reading thread (reading_), with mutex_ held on entry and exit.
+  void read_inbox_as_reader(std::unique_lock<std::mutex>& lock, int ms);
 
   zmq::socket_t& inbox_socket_;
 
@@ -76,6 +83,7 @@ class RemoteExchange {
 
   mutable std::mutex mutex_;
   std::map<Slot, std::deque<Message>> inbox_;
+  std::map<Slot, long> newest_;  // the latest step stored per slot
   std::condition_variable arrived_;
   bool aborted_ = false;
   bool reading_ = false;  // a thread is reading the inbox

@@ -13,7 +13,7 @@ long start_token = 0;
 }  // namespace
 
 FlowGraphSchedule::FlowGraphSchedule(const std::vector<Submodel>& subs, int chunk, int stages, StageWork work,
-                                     bool barriers, const RemoteInputs* remote)
+                                     bool barriers, const RemoteInputs* remote, int lag)
     : start_(graph_), work_(std::move(work)) {
   const std::size_t k = subs.size();
   const auto n_stages = static_cast<std::size_t>(stages);
@@ -71,7 +71,7 @@ FlowGraphSchedule::FlowGraphSchedule(const std::vector<Submodel>& subs, int chun
       for (std::size_t q : inputs(p)) {
         if (!is_local(q)) continue;
         for (int s = 1; s < stages; ++s) flow::make_edge(last(c, q, s - 1), last(c, p, s));
-        if (c > 0) flow::make_edge(last(c - 1, q, stages - 1), last(c, p, 0));
+        if (c > lag) flow::make_edge(last(c - 1 - lag, q, stages - 1), last(c, p, 0));
       }
     }
     for (std::size_t p = 0; p < k; ++p) {
@@ -103,7 +103,7 @@ void FlowGraphSchedule::run(int steps) {
 }
 
 Scheduler::Scheduler(const Decomposition& d, int chunk, int stages, StageWork work, bool barriers,
-                     const RemoteInputs* remote)
+                     const RemoteInputs* remote, int lag)
     : subs_(d.submodels), tokens_(d.submodels.size()), work_([this, work](std::size_t p, int s, int c, Half half) {
         happens_after(&caller_);
         happens_after(&tokens_[p]);
@@ -111,7 +111,7 @@ Scheduler::Scheduler(const Decomposition& d, int chunk, int stages, StageWork wo
         work(p, s, c, half);
         happens_before(&tokens_[p]);
       }) {
-  graph_ = std::make_unique<FlowGraphSchedule>(d.submodels, chunk, stages, work_, barriers, remote);
+  graph_ = std::make_unique<FlowGraphSchedule>(d.submodels, chunk, stages, work_, barriers, remote, lag);
 }
 
 void Scheduler::run(int steps) {

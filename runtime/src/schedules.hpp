@@ -34,10 +34,12 @@ struct RemoteInputs {
 // are in; no barrier but the end of the chunk. With barriers, every node waits for the
 // previous stage of all submodels instead: the seed's scheme, a barrier per stage. With
 // remote inputs, only local submodels get nodes, and a remote neighbour is a proxy node.
+// With a lag L (loose coupling, one stage a step), step c waits for the neighbours' step
+// c - 1 - L only, so a submodel may run up to L steps ahead of them.
 class FlowGraphSchedule {
  public:
   FlowGraphSchedule(const std::vector<Submodel>& subs, int chunk, int stages, StageWork work, bool barriers = false,
-                    const RemoteInputs* remote = nullptr);
+                    const RemoteInputs* remote = nullptr, int lag = 0);
   void run(int steps);  // steps <= chunk; later steps' nodes do nothing
 
  private:
@@ -56,7 +58,7 @@ class FlowGraphSchedule {
 class Scheduler {
  public:
   Scheduler(const Decomposition& d, int chunk, int stages, StageWork work, bool barriers = false,
-            const RemoteInputs* remote = nullptr);
+            const RemoteInputs* remote = nullptr, int lag = 0);
   void run(int steps);
 
  private:

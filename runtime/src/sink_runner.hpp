@@ -24,9 +24,15 @@ inline void emit(MultibodySystem& sys, ResultSink* sink, double t, const Eigen::
 
 // Runs body(); closes the sink whatever happens; a RunError gets told how far the
 // results go.
-template <class F>
-void run_with_sink(ResultSink* sink, RunSummary& out, F body) {
-  auto close_quietly = [sink] {
+// before_end() runs first on every way out (a loosely coupled run's coupling records).
+template <class F, class G = void (*)()>
+void run_with_sink(ResultSink* sink, RunSummary& out, F body, G before_end = [] {}) {
+  bool before_end_ran = false;
+  auto close_quietly = [sink, &before_end, &before_end_ran] {
+    try {
+      if (!before_end_ran) before_end();
+    } catch (...) {
+    }
     try {
       if (sink) sink->end();
     } catch (...) {  // an error on close must not replace the one that ended the run
@@ -34,6 +40,8 @@ void run_with_sink(ResultSink* sink, RunSummary& out, F body) {
   };
   try {
     body();
+    before_end_ran = true;
+    before_end();
   } catch (const RunError& e) {
     close_quietly();
     if (!sink) throw;

@@ -57,7 +57,12 @@ Session read_setup(const WorkerOptions& wo, const json& setup) {
   if (setup.contains("loose")) {
     const json& l = setup.at("loose");
     s.loose = LooseOptions{l.at("macro_step").get<double>(), l.at("extrapolation").get<int>(), 0, 0.0,
-                           l.value("max_lag", 0)};
+                           l.value("max_lag", 0), l.value("exact_lag", false), {}};
+    for (const std::string& name : l.value("methods", std::vector<std::string>{})) {
+      const std::optional<Method> m = parse_method(name);
+      if (!m) throw InputError("the coordinator asked for an unknown method " + name);
+      s.loose->methods.push_back(*m);
+    }
   }
   s.exchange_delay_s = setup.value("exchange_delay_s", 0.0);
   return s;

@@ -63,6 +63,15 @@ void WorkerPart::report_state(long step, bool snapshot) {
   report(wire::ResultKind::snapshot, step, snapshot_.data(), snapshot_.size() * sizeof(double));
 }
 
+void WorkerPart::report_coupling(const std::vector<CouplingRecord>& records) {
+  if (records.empty()) return;
+  std::vector<double> rows;
+  for (const CouplingRecord& r : records)
+    rows.insert(rows.end(), {static_cast<double>(r.index), r.t_start, r.t_end, r.position_error, r.velocity_error,
+                             static_cast<double>(r.lag)});
+  report(wire::ResultKind::coupling, 0, rows.data(), rows.size() * sizeof(double));
+}
+
 Outcome WorkerPart::finish(std::string failure, long step, double evaluations) {
   if (failure.empty() && exchange.aborted()) failure = exchange.why();
   const double counts[3] = {static_cast<double>(exchange.messages_sent()), exchange.bytes_per_stage(), evaluations};

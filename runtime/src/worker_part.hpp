@@ -50,6 +50,8 @@ class WorkerPart {
   // Own bodies of the local submodels to the coordinator (snapshot at `step` of the tight
   // grid), or only the progress.
   void report_state(long step, bool snapshot);
+  // Loose coupling: macro-step records (loose_rounds.hpp) to the coordinator.
+  void report_coupling(const std::vector<CouplingRecord>& records);
   // Reports done or the failure, then waits for the coordinator's finish or abort.
   Outcome finish(std::string failure, long step, double evaluations);
 

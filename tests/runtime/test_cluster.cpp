@@ -154,7 +154,7 @@ TEST_CASE("cluster: an unreachable worker is an error within the connect timeout
   CHECK(std::chrono::steady_clock::now() - start < std::chrono::seconds(3));
 }
 
-TEST_CASE("loosely coupled cluster runs equal the one-process loose run bit for bit, with lag and delayed messages too",
+TEST_CASE("loosely coupled cluster runs equal the one-process loose run bit for bit, with an exact lag and delayed messages too",
           "[runtime][cluster][loose]") {
   ChainParams chain;
   chain.bodies = 30;
@@ -167,6 +167,7 @@ TEST_CASE("loosely coupled cluster runs equal the one-process loose run bit for 
     lo.macro_step = 3 * o.step;
     lo.extrapolation = 2;
     lo.max_lag = lag;
+    lo.exact_lag = true;
     const Decomposition d = decompose(m, 3);
     test::MemorySink reference;
     run_loose(m, d, o, lo, &reference);

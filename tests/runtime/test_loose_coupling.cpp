@@ -112,10 +112,20 @@ TEST_CASE("loose coupling: repeatable, DOPRI5 inside submodels, snapshots on the
   const RunSummary r = run_loose(m, d, o, lo, nullptr);
   CHECK(position_gap(sys, r.final_state, tight) < 1e-5);
   CHECK(r.evaluations > 0);
-  CHECK_THROWS_WITH(run_loose(m, d, o, LooseOptions{0.0, 1, 0}, nullptr), "--macro-step: must be a positive time");
-  CHECK_THROWS_WITH(run_loose(m, d, o, LooseOptions{h, 3, 0}, nullptr), "--extrapolation: must be 0, 1 or 2");
-  CHECK_THROWS_WITH(run_loose(m, d, o, LooseOptions{h, 1, 0, 1e-6, 1}, nullptr),
+  auto changed = [&lo](auto change) {  // lo with one setting changed
+    LooseOptions bad = lo;
+    change(bad);
+    return bad;
+  };
+  CHECK_THROWS_WITH(run_loose(m, d, o, changed([](LooseOptions& x) { x.macro_step = 0.0; }), nullptr),
+                    "--macro-step: must be a positive time");
+  CHECK_THROWS_WITH(run_loose(m, d, o, changed([](LooseOptions& x) { x.extrapolation = 3; }), nullptr),
+                    "--extrapolation: must be 0, 1 or 2");
+  CHECK_THROWS_WITH(run_loose(m, d, o, changed([](LooseOptions& x) { x.coupling_tol = 1e-6, x.max_lag = 1; }), nullptr),
                     "--max-lag: needs a fixed macro step (not with --coupling-tol)");
+  CHECK_THROWS_WITH(run_loose(m, d, o, changed([](LooseOptions& x) { x.methods = {Method::rk4, Method::dopri5, Method::rk4}; }),
+                              nullptr),
+                    "--submodel-methods: one method per submodel: 2 submodels, 3 methods");
 }
 
 TEST_CASE("loose coupling: the adaptive macro step keeps the coupling error below the tolerance", "[runtime][loose]") {
@@ -179,6 +189,7 @@ TEST_CASE("loose coupling with a lag: values L macro steps old, still converging
         lo.macro_step = substeps * k.h;
         lo.extrapolation = order;
         lo.max_lag = lag;
+        lo.exact_lag = true;
         (lag ? lag1 : lag0).push_back(k.gap(run_loose(k.m, k.d, k.o, lo, nullptr).final_state));
       }
     }
@@ -189,4 +200,57 @@ TEST_CASE("loose coupling with a lag: values L macro steps old, still converging
     CHECK(slope > order + 0.6);
     CHECK(slope < order + 1.4);
   }
+}
+
+TEST_CASE("loose coupling with the newest values: never older than the lag, no worse than the exact lag", "[runtime][loose]") {
+  const TightCase k(make_chain(chain_of(24)), 0.05, 256, 8);
+  LooseOptions lo;
+  lo.macro_step = 2 * k.h;
+  lo.extrapolation = 1;
+  lo.threads = 2;
+  LooseStats synchronous;
+  const double gap0 = k.gap(run_loose(k.m, k.d, k.o, lo, nullptr, &synchronous).final_state);
+  lo.max_lag = 2;
+  lo.exact_lag = true;
+  LooseStats exact;
+  const double gap_exact = k.gap(run_loose(k.m, k.d, k.o, lo, nullptr, &exact).final_state);
+  lo.exact_lag = false;
+  for (int run = 0; run < 3; ++run) {
+    LooseStats newest;
+    const double gap = k.gap(run_loose(k.m, k.d, k.o, lo, nullptr, &newest).final_state);
+    INFO("gaps: lag 0 " << gap0 << ", exact lag 2 " << gap_exact << ", newest " << gap << "; largest lag " << newest.largest_lag);
+    REQUIRE(newest.records.size() == 128);
+    CHECK(newest.largest_lag <= 2);
+    CHECK(gap <= 1.5 * gap_exact);
+    for (std::size_t i = 0; i < newest.records.size(); ++i) {
+      CHECK(newest.records[i].index == static_cast<long>(i) + 1);
+      CHECK(newest.records[i].t_end == exact.records[i].t_end);
+    }
+  }
+  // Records: one per macro step, lag 0 without a lag, exactly min(m, 2) with the exact one.
+  REQUIRE(synchronous.records.size() == 128);
+  CHECK(synchronous.largest_lag == 0);
+  CHECK(exact.largest_lag == 2);
+  CHECK(exact.lag[0] == 0);
+  CHECK(exact.lag[1] == 1);
+  CHECK(exact.lag[5] == 2);
+  CHECK(exact.max_position_error > synchronous.max_position_error);  // predicted 3 macro steps ahead, not 1
+  CHECK(std::abs(synchronous.records.back().t_end - k.o.t_end) < 1e-12);
+}
+
+TEST_CASE("loose coupling: a method per submodel", "[runtime][loose]") {
+  const TightCase k(make_chain(chain_of(24)), 0.05, 256, 8);
+  LooseOptions lo;
+  lo.macro_step = 2 * k.h;
+  lo.extrapolation = 2;
+  RunOptions o = k.o;
+  o.rtol = 1e-9;
+  o.atol = 1e-11;
+  const RunSummary rk4 = run_loose(k.m, k.d, o, lo, nullptr);
+  lo.methods = {Method::rk4, Method::dopri5, Method::rk4};
+  const RunSummary mixed = run_loose(k.m, k.d, o, lo, nullptr);
+  INFO("gaps: rk4 " << k.gap(rk4.final_state) << ", mixed " << k.gap(mixed.final_state));
+  CHECK(mixed.evaluations != rk4.evaluations);  // DOPRI5 in the middle took its own steps
+  CHECK(k.gap(mixed.final_state) < 10 * k.gap(rk4.final_state));
+  CHECK(k.gap(mixed.final_state) < 1e-6);
 }

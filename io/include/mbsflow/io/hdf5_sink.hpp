@@ -1,7 +1,9 @@
 #pragma once
 // Results as one HDF5 file per run, in global body order, plus an XDMF sidecar:
 //   /time (T), /bodies/names (N), /bodies/{position,orientation,velocity,angular_velocity}
-//   (T x N x k), /energy (T x 3), /joints/names (J), /joints/force (T x J x 6);
+//   (T x N x k), /energy (T x 3), /joints/names (J), /joints/force (T x J x 6), and for
+//   loosely coupled runs /coupling/{index,t_start,t_end,position_error,velocity_error,lag}
+//   (one row per macro step);
 // chunked and extendible along time, run settings as attributes of the root group.
 // Snapshots are buffered into whole chunk rows, so HDF5 writes full chunks.
 #include <cstdint>
@@ -29,6 +31,7 @@ class Hdf5Sink : public ResultSink {
   SnapshotContent content() const override { return {fields_.joint_force, fields_.energy}; }
   void begin(const MultibodySystem& system) override;
   void write(Snapshot&& snapshot) override;
+  void write_coupling(const std::vector<CouplingRecord>& records) override;
   void end() override;  // writes what is buffered and the XDMF sidecar, closes the file
   const std::string& path() const { return path_; }
   long snapshots_written() const { return rows_written_; }

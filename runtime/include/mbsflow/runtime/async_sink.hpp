@@ -31,6 +31,7 @@ class AsyncSink : public ResultSink {
   SnapshotContent content() const override { return {}; }  // the writer computes the rest
   void begin(const MultibodySystem& system) override;
   void write(Snapshot&& snapshot) override;
+  void write_coupling(const std::vector<CouplingRecord>& records) override;  // handed on at end()
   void end() override;
   const AsyncSinkStats& stats() const { return stats_; }
 
@@ -45,6 +46,7 @@ class AsyncSink : public ResultSink {
   std::mutex mutex_;
   std::condition_variable not_empty_, not_full_;
   std::deque<Snapshot> queue_;
+  std::vector<CouplingRecord> coupling_;
   bool closing_ = false;
   std::exception_ptr error_;
   std::thread writer_;

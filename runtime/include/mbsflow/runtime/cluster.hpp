@@ -15,7 +15,7 @@
 namespace mbsflow {
 
 // Raised with every incompatible change of the messages between processes.
-constexpr int cluster_protocol_version = 1;
+constexpr int cluster_protocol_version = 2;  // 2: loose coupling with coupling records, newest-value lag
 
 struct ClusterTimeouts {
   double connect_s = 10.0;   // every worker must answer the coordinator's hello within this
@@ -53,6 +53,7 @@ struct ClusterStats {
   long messages = 0;             // boundary messages between workers in the run
   double bytes_per_stage = 0.0;  // boundary payload sent by all workers per stage
   double setup_seconds = 0.0;    // hello to start: versions, model, sockets (not in RunSummary::wall_seconds)
+  std::vector<CouplingRecord> coupling;  // loose coupling: per macro step, over all workers
 };
 
 // The coordinator. model_json is the model as written by model_to_json, which every worker

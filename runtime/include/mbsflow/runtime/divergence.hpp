@@ -22,6 +22,10 @@ std::optional<Divergence> find_divergence(const StateLayout& layout, const Eigen
 
 // The message of a diverged run: time, body, and a step that would work.
 std::string divergence_message(const Model& model, const Divergence& d, double t, Method method, double step);
+// The same for a loosely coupled run (loose_coupling.hpp), where the coupling is the
+// likely cause unless the RK4 step itself is beyond the stability limit.
+std::string loose_divergence_message(const Model& model, const Divergence& d, double t, Method method, double step,
+                                     double macro_step, int lag);
 // The message of a DOPRI5 run whose step size fell below its minimum.
 std::string step_collapsed_message(double h, double t, double rtol);
 

@@ -2,9 +2,10 @@
 // Loose (GRID-style) coupling: every submodel integrates a macro step H on its own, with its
 // own method and step, taking its neighbours' boundary bodies from a polynomial
 // extrapolation of their last exchanged samples; at the end of the macro step the
-// submodels exchange their boundary values. Jacobi-type: all submodels step from the same
-// samples, so a run is repeatable. The difference between what a submodel extrapolated
-// and what its neighbour then sent is the coupling error, reported per macro step.
+// submodels exchange their boundary values. Jacobi-type: without a lag all submodels step
+// from the same samples, so a run is repeatable; with a lag they may run ahead of each
+// other. The difference between what a submodel extrapolated and what its neighbour then
+// sent is the coupling error, reported per macro step.
 #include <vector>
 
 #include "mbsflow/graph/decomposition.hpp"
@@ -19,29 +20,42 @@ struct LooseOptions {
   // > 0: adapt the macro step so that the coupling error (m, ghost positions) stays below
   // this; a macro step above it is taken again from its start with a shorter one.
   double coupling_tol = 0.0;
-  // L > 0: a macro step takes its neighbours' values from L macro steps further back, so a
-  // submodel may run L macro steps ahead of its neighbours and their messages may travel
-  // meanwhile. Always exactly L back (not the newest that happens to be in): runs stay
-  // repeatable. Fixed macro step only.
+  // L > 0: a submodel may run up to L macro steps ahead of its slowest neighbour, taking
+  // the newest neighbour values it has (asynchronous: the numbers depend on timing).
+  // Fixed macro step only.
   int max_lag = 0;
+  // With L > 0: take the neighbours' values exactly L macro steps back instead of the
+  // newest, so that runs are repeatable whatever the timing.
+  bool exact_lag = false;
+  // Per submodel, its method (RK4 with substeps of RunOptions::step, or DOPRI5 with its
+  // own steps); empty: RunOptions::method for all.
+  std::vector<Method> methods;
 };
 
 struct LooseStats {
   long macro_steps = 0;
   // Per macro step: the largest distance between a ghost body's extrapolated and sent
-  // position at the end of the step (m), and its largest relative velocity difference.
+  // position at its end (m), the largest velocity difference (m/s), and how many macro
+  // steps old the neighbour values were that a submodel stepped from (largest).
   std::vector<double> position_error, velocity_error;
+  std::vector<int> lag;
+  std::vector<CouplingRecord> records;  // the same, as written to the results file
   double max_position_error = 0.0;
+  int largest_lag = 0;
   long rejected = 0;  // macro steps taken again (adaptive)
   double smallest_macro_step = 0.0, largest_macro_step = 0.0;
 };
+
+// Fills the per-macro-step vectors and extremes of stats from its records.
+void summarise_records(LooseStats& stats);
 
 // RK4 (substeps of options.step) or DOPRI5 (its own steps, options.rtol/atol) inside each
 // submodel. Macro steps end on the output grid (every options.output_every * options.step,
 // shortened where needed), where the snapshots (global body order) are taken.
 // InputError for a macro step that is not a positive time, an order outside 0..2, a
-// negative lag or a lag with the adaptive macro step.
-void check_loose_options(const LooseOptions& loose);
+// negative lag, a lag with the adaptive macro step, or methods not one per submodel
+// (submodels = 0: the count is not known yet).
+void check_loose_options(const LooseOptions& loose, std::size_t submodels = 0);
 
 RunSummary run_loose(const Model& model, const Decomposition& d, const RunOptions& options, const LooseOptions& loose,
                      ResultSink* sink, LooseStats* stats = nullptr);

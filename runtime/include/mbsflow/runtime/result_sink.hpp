@@ -2,6 +2,7 @@
 // Where snapshots go. runtime/ knows no file format; io/ implements sinks.
 #include <Eigen/Core>
 #include <optional>
+#include <vector>
 
 #include "mbsflow/graph/multibody_system.hpp"
 
@@ -20,12 +21,25 @@ struct SnapshotContent {
   bool energy = false;
 };
 
+// One macro step of a loosely coupled run (loose_coupling.hpp), over all submodels: the
+// coupling error at its end (how far the neighbours' extrapolated boundary bodies were
+// from what they then sent) and how old the newest neighbour values were that a submodel
+// stepped from (macro steps; 0 in a synchronous run).
+struct CouplingRecord {
+  long index = 0;  // macro-step end 1, 2, ...
+  double t_start = 0.0, t_end = 0.0;
+  double position_error = 0.0, velocity_error = 0.0;  // m, m/s
+  int lag = 0;
+};
+
 class ResultSink {
  public:
   virtual ~ResultSink() = default;
   virtual SnapshotContent content() const { return {}; }
   virtual void begin(const MultibodySystem& system) = 0;
   virtual void write(Snapshot&& snapshot) = 0;
+  // Loosely coupled runs: the macro steps' records, once, before end() (failed runs too).
+  virtual void write_coupling(const std::vector<CouplingRecord>& records) { (void)records; }
   // Flushes and closes; called on every way out of a run, failed runs included.
   virtual void end() = 0;
 };

@@ -1,0 +1,89 @@
+#pragma once
+// The macro steps of a loosely coupled run as a oneTBB flow graph, shared by the one-process
+// run and the workers: node (m, p) integrates submodel p from macro-step end m to m + 1.
+// It first takes the neighbours' values it has: every end up to m (the newest), or with an
+// exact lag exactly up to m - L. It waits for end m - L at least: for a neighbour here,
+// through a graph edge from that neighbour's node (m - 1 - L); for one in another process,
+// through a proxy node that waits for its message. So a submodel runs up to L macro steps
+// ahead of its slowest neighbour, and with L = 0 (or an exact lag) the numbers do not
+// depend on timing. Each neighbour value taken is compared with what the submodel had
+// extrapolated for it: the coupling error, recorded per macro-step end.
+#include <oneapi/tbb/task_arena.h>
+
+#include <atomic>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "coupling_log.hpp"
+#include "loose_part.hpp"
+#include "mbsflow/runtime/loose_coupling.hpp"
+#include "schedules.hpp"
+
+namespace mbsflow::loose {
+
+// Submodel q's part with its method and as many published ends kept as a neighbour up to
+// L macro steps behind may still take (2 L + 3).
+std::unique_ptr<LoosePart> make_part(const Model& model, const Submodel& sub, const RunOptions& o, const LooseOptions& lo,
+                                     std::size_t q);
+
+// Neighbours in other processes (a worker's run).
+struct RemoteSamples {
+  // Returns once remote q's macro-step end `index` for local p is in, or the exchange stopped.
+  std::function<void(long index, int q, int p)> wait;
+  // Remote q's ends for local p with index <= cap that are in, oldest first, to take(index, packed).
+  std::function<void(int p, int q, long cap, const std::function<void(long, const double*)>& take)> take;
+  // Local p's state as macro-step end `index`, to the remote submodels that need it.
+  std::function<void(int p, long index)> send;
+  std::function<bool()> stopped;
+  std::function<void(const std::string&)> abort;
+};
+
+class LooseRounds {
+ public:
+  // parts[q]: local submodel q, null where it runs elsewhere (then remote is needed).
+  // ends: the macro-step ends (the caller may append between runs).
+  LooseRounds(const Model& model, const Decomposition& d, const RunOptions& o, const LooseOptions& lo,
+              std::vector<std::unique_ptr<LoosePart>>& parts, const std::vector<double>& ends, int chunk,
+              RemoteSamples* remote = nullptr);
+  ~LooseRounds();
+
+  // Macro steps first .. first + n - 1 (n <= chunk). A failure message, empty if none.
+  std::string run(long first, int n);
+  // Takes every neighbour value up to end `index` (waiting for remote ones).
+  void catch_up(long index);
+  // The largest coupling error that the neighbour values at end `index` would have; they
+  // are not taken (neighbours in this process only).
+  CouplingError peek(long index);
+  // The records since the last call, into log; discard(index) forgets those from
+  // macro-step end `index` on (a macro step to be taken again).
+  void drain(CouplingLog& log);
+  void discard(long index);
+
+ private:
+  void step(std::size_t p, long m);
+  void pull(std::size_t p, long cap);
+  void fail(const std::string& why);
+  bool stopped() const;
+
+  const Model& model_;
+  const RunOptions& o_;
+  int lag_;
+  bool exact_;
+  std::vector<std::unique_ptr<LoosePart>>& parts_;
+  const std::vector<double>& ends_;
+  RemoteSamples* remote_;
+  std::vector<std::vector<CouplingRecord>> logs_;  // per submodel, written by its nodes only
+  std::vector<std::vector<double>> scratch_;       // per submodel
+  long first_ = 0;
+  std::atomic<bool> failed_{false};
+  std::mutex failure_mutex_;
+  std::string failure_;
+  RemoteInputs inputs_;
+  tbb::task_arena arena_;
+  std::unique_ptr<Scheduler> schedule_;  // built in the arena; goes before it
+};
+
+}  // namespace mbsflow::loose
