@@ -8,6 +8,7 @@ packages=(
   libeigen3-dev nlohmann-json3-dev libcli11-dev catch2
   libtbb-dev libzmq3-dev cppzmq-dev libboost-graph-dev libmetis-dev libhdf5-dev hdf5-tools
   python3 python3-h5py python3-matplotlib
+  iproute2  # ip netns, for the test across two network namespaces
   libsundials-dev libboost-dev
 )
 missing=()

@@ -28,6 +28,7 @@ FlowGraphSchedule::FlowGraphSchedule(const std::vector<Submodel>& subs, int chun
           nodes_.push_back(!is_local(p) ? nullptr : std::make_unique<Node>(graph_, [this, c, p, s, half](const flow::continue_msg&) {
             happens_after(&start_token);
             if (c < steps_) work_(p, s, c, half);
+            happens_before(&finish_token_);
             return flow::continue_msg();
           }));
         }
@@ -41,6 +42,7 @@ FlowGraphSchedule::FlowGraphSchedule(const std::vector<Submodel>& subs, int chun
     proxies_.push_back(std::make_unique<Node>(graph_, [this, remote, c, q, p, s](const flow::continue_msg&) {
       happens_after(&start_token);
       if (c < steps_) remote->wait(c, q, p, s);
+      happens_before(&finish_token_);
       return flow::continue_msg();
     }));
     return *proxies_.back();
@@ -100,6 +102,7 @@ void FlowGraphSchedule::run(int steps) {
   happens_before(&start_token);
   start_.try_put(flow::continue_msg());
   graph_.wait_for_all();
+  happens_after(&finish_token_);  // every node's read of steps_ (also those past it) before the next run
 }
 
 Scheduler::Scheduler(const Decomposition& d, int chunk, int stages, StageWork work, bool barriers,

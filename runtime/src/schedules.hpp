@@ -50,6 +50,7 @@ class FlowGraphSchedule {
   std::vector<std::unique_ptr<Node>> proxies_;
   StageWork work_;
   int steps_ = 0;
+  long finish_token_ = 0;  // for ThreadSanitizer: every node ran before run() returns
 };
 
 // A FlowGraphSchedule whose stages tell ThreadSanitizer what they wait for: a stage of
