@@ -22,7 +22,7 @@ using Clock = std::chrono::steady_clock;
 // shorter H while its coupling error is above the tolerance.
 template <class AtEnd>
 void adaptive_macro_steps(const RunOptions& o, const LooseOptions& lo, std::vector<std::unique_ptr<LoosePart>>& parts,
-                          loose::LooseRounds& rounds, std::vector<double>& ends, LooseStats& st, AtEnd at_end) {
+                          loose::LooseRounds& rounds, loose::MacroGrid& ends, LooseStats& st, AtEnd at_end) {
   const StepGrid grid = step_grid(o.t_start, o.t_end, o.step);
   const double order = lo.extrapolation + 1.0;
   double t = o.t_start, H = lo.macro_step;
@@ -30,8 +30,7 @@ void adaptive_macro_steps(const RunOptions& o, const LooseOptions& lo, std::vect
   while (t < o.t_end) {
     bool on_output = false;
     const double t1 = loose::next_macro_end(grid, o.output_every, next_out, t, H, &on_output);
-    ends.resize(static_cast<std::size_t>(m + 1));
-    ends.push_back(t1);
+    ends.add(m, t1, on_output);
     for (auto& p : parts) p->save();
     const std::string failure = rounds.run(m, 1);
     if (!failure.empty()) throw RunError(failure);
@@ -54,6 +53,7 @@ void adaptive_macro_steps(const RunOptions& o, const LooseOptions& lo, std::vect
     }
     ++m;
     at_end(m, on_output);
+    ends.forget_before(m - 8);
     if (on_output) ++next_out;
     H = on_output && factor >= 1.0 ? std::max(H, (t1 - t) * factor) : (t1 - t) * factor;
     t = t1;
@@ -107,14 +107,14 @@ RunSummary run_loose(const Model& model, const Decomposition& d, const RunOption
   Eigen::VectorXd y = whole.initial_state();
   if (sink) sink->begin(whole);
   const bool adaptive = lo.coupling_tol > 0.0;
-  loose::MacroGrid grid = adaptive ? loose::MacroGrid{{o.t_start}, {1}, {0}} : loose::macro_grid(o, lo.macro_step);
-  loose::LooseRounds rounds(model, d, o, lo, parts, grid.ends, adaptive ? 1 : loose::steps_per_run(grid));
+  loose::MacroGrid grid(o, adaptive ? 0.0 : lo.macro_step);
+  loose::LooseRounds rounds(model, d, o, lo, parts, grid, grid.steps_per_run());
   loose::CouplingLog log;
   long done = 0;  // macro steps
   // At macro-step end m: the snapshot, the stop request, the progress.
   auto at_end = [&](long m, bool on_output) {
     done = m;
-    const double t = grid.ends[static_cast<std::size_t>(m)];
+    const double t = grid.end(m);
     if (on_output && sink) {
       for (auto& p : parts) partitioned::gather(p->part, global, y);
       emit(whole, sink, t, y, out);
@@ -130,12 +130,12 @@ RunSummary run_loose(const Model& model, const Decomposition& d, const RunOption
         for (int j = 1; j <= lo.extrapolation; ++j) loose::copy_local_ghosts(parts, j);
         for (auto& p : parts) p->start(o.t_start, lo.macro_step);
         if (adaptive) {
-          adaptive_macro_steps(o, lo, parts, rounds, grid.ends, st, at_end);
+          adaptive_macro_steps(o, lo, parts, rounds, grid, st, at_end);
         } else {
-          loose::for_each_run(grid, [&](long m, int n) {
+          loose::for_each_run(grid, loose::ends_kept(lo), [&](long m, int n) {
             const std::string failure = rounds.run(m, n);
             if (!failure.empty()) throw RunError(failure);
-            at_end(m + n, grid.output[static_cast<std::size_t>(m + n)] != 0);
+            at_end(m + n, grid.output(m + n));
             return true;
           });
         }

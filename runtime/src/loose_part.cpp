@@ -1,5 +1,8 @@
 #include "loose_part.hpp"
 
+#include <algorithm>
+#include <cmath>
+
 #include "mbsflow/graph/error.hpp"
 #include "mbsflow/runtime/divergence.hpp"
 
@@ -220,33 +223,37 @@ double next_macro_end(const StepGrid& grid, long output_every, long next_out, do
   return *on_output ? t_out : t + H;
 }
 
-MacroGrid macro_grid(const RunOptions& o, double H) {
-  const StepGrid grid = step_grid(o.t_start, o.t_end, o.step);
-  MacroGrid g;
-  g.ends.push_back(o.t_start);
-  g.output.push_back(1);
-  g.tight_step.push_back(0);
-  long next_out = 1;
-  double t = o.t_start;
-  while (t < o.t_end) {
-    bool on_output = false;
-    t = next_macro_end(grid, o.output_every, next_out, t, H, &on_output);
-    g.ends.push_back(t);
-    g.output.push_back(on_output ? 1 : 0);
-    g.tight_step.push_back(on_output ? std::min(next_out * static_cast<long>(o.output_every), grid.steps)
-                                     : std::lround((t - o.t_start) / o.step));
-    if (on_output) ++next_out;
-  }
-  return g;
+MacroGrid::MacroGrid(const RunOptions& o, double H) : o_(o), H_(H), grid_(step_grid(o.t_start, o.t_end, o.step)) {
+  ends_.push_back({o.t_start, true, 0});
 }
 
-int steps_per_run(const MacroGrid& g) {
-  int most = 1, run = 0;
-  for (std::size_t m = 1; m < g.ends.size(); ++m) {
-    most = std::max(most, ++run);
-    if (g.output[m]) run = 0;
+void MacroGrid::extend(long m) {
+  while (last() < m && !complete()) {
+    bool on_output = false;
+    const double t = next_macro_end(grid_, o_.output_every, next_out_, end(last()), H_, &on_output);
+    ends_.push_back({t, on_output,
+                     on_output ? std::min(next_out_ * static_cast<long>(o_.output_every), grid_.steps)
+                               : std::lround((t - o_.t_start) / o_.step)});
+    if (on_output) ++next_out_;
   }
-  return std::min(most, 64);
+}
+
+void MacroGrid::add(long m, double t, bool on_output) {
+  while (last() > m) ends_.pop_back();
+  ends_.push_back({t, on_output, std::lround((t - o_.t_start) / o_.step)});
+}
+
+void MacroGrid::forget_before(long m) {
+  while (base_ < m && ends_.size() > 1) {
+    ends_.pop_front();
+    ++base_;
+  }
+}
+
+int MacroGrid::steps_per_run() const {
+  if (!(H_ > 0.0)) return 1;
+  const double per_output = static_cast<double>(o_.output_every) * o_.step / H_;
+  return static_cast<int>(std::clamp(std::ceil(per_output - 1e-9) + 1.0, 1.0, 64.0));
 }
 
 }  // namespace mbsflow::loose

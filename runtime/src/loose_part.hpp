@@ -106,28 +106,53 @@ inline void copy_local_ghosts(std::vector<std::unique_ptr<LoosePart>>& parts, in
 // (grid.time of the output step, as the tight run has it) when it reaches that.
 double next_macro_end(const StepGrid& grid, long output_every, long next_out, double t, double H, bool* on_output);
 
-// The macro-step ends of a run with a fixed macro step H: ends[0] = t_start, and whether
-// a snapshot is taken at each.
-struct MacroGrid {
-  std::vector<double> ends;
-  std::vector<char> output;
-  std::vector<long> tight_step;  // the tight grid's step at each end (rounded where between steps)
-};
-MacroGrid macro_grid(const RunOptions& o, double H);
+// The macro-step ends of a run: end(0) = t_start, whether a snapshot is taken at each, and
+// the tight grid's step there. With a fixed macro step they are made as the run goes and
+// forgotten behind it (a long run has millions); an adaptive run adds them itself.
+class MacroGrid {
+ public:
+  MacroGrid(const RunOptions& o, double H);  // H = 0: adaptive, add() makes the ends
+  double end(long m) const { return at(m).t; }
+  bool output(long m) const { return at(m).output; }
+  long tight_step(long m) const { return at(m).tight_step; }
+  long last() const { return base_ + static_cast<long>(ends_.size()) - 1; }  // the latest end known
+  bool complete() const { return end(last()) >= o_.t_end; }
+  // Fixed macro step: makes the ends up to m known (or up to t_end, if it comes first).
+  void extend(long m);
+  // Adaptive: end m + 1 at t after end m (forgetting any later ones).
+  void add(long m, double t, bool output);
+  void forget_before(long m);
+  // Macro steps per flow-graph run: up to the next snapshot, at most 64.
+  int steps_per_run() const;
 
-// Macro steps per flow-graph run: up to the next snapshot, at most 64.
-int steps_per_run(const MacroGrid& g);
-// Walks the grid in runs of steps_per_run(g) at most that end at snapshots or earlier:
+ private:
+  struct End {
+    double t;
+    bool output;
+    long tight_step;
+  };
+  const End& at(long m) const { return ends_[static_cast<std::size_t>(m - base_)]; }
+  const RunOptions& o_;
+  double H_;
+  StepGrid grid_;
+  long next_out_ = 1, base_ = 0;
+  std::deque<End> ends_;
+};
+
+// Walks the run's macro steps in flow-graph runs that end at snapshots or earlier:
 // run(m, n) takes macro steps m .. m + n - 1, and stops the walk when it returns false.
+// Ends more than `keep` behind are forgotten.
 template <class Run>
-void for_each_run(const MacroGrid& g, Run run) {
-  const int most = steps_per_run(g);
-  const auto total = static_cast<long>(g.ends.size()) - 1;
-  for (long m = 0; m < total;) {
+void for_each_run(MacroGrid& g, long keep, Run run) {
+  const int most = g.steps_per_run();
+  for (long m = 0;;) {
+    g.extend(m + most);
+    if (m >= g.last()) return;
     int n = 1;
-    while (m + n < total && !g.output[static_cast<std::size_t>(m + n)] && n < most) ++n;
+    while (m + n < g.last() && !g.output(m + n) && n < most) ++n;
     if (!run(m, n)) return;
     m += n;
+    g.forget_before(m - keep);
   }
 }
 

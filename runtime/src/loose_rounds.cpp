@@ -25,9 +25,9 @@ int arena_threads(const LooseOptions& lo, const std::vector<std::unique_ptr<Loos
 }  // namespace
 
 LooseRounds::LooseRounds(const Model& model, const Decomposition& d, const RunOptions& o, const LooseOptions& lo,
-                         std::vector<std::unique_ptr<LoosePart>>& parts, const std::vector<double>& ends, int chunk,
+                         std::vector<std::unique_ptr<LoosePart>>& parts, const MacroGrid& grid, int chunk,
                          RemoteSamples* remote)
-    : model_(model), o_(o), lag_(lo.max_lag), exact_(lo.exact_lag), parts_(parts), ends_(ends), remote_(remote),
+    : model_(model), o_(o), lag_(lo.max_lag), exact_(lo.exact_lag), parts_(parts), grid_(grid), remote_(remote),
       logs_(parts.size()), scratch_(parts.size()), arena_(arena_threads(lo, parts, remote != nullptr)) {
   if (remote_) {
     inputs_.local.resize(parts.size());
@@ -75,9 +75,8 @@ void LooseRounds::pull(std::size_t p, long cap) {
     const Submodel::Exchange& x = exchanges[e];
     auto take = [&](long index, const double* packed) {
       if (index <= lp.taken(e)) return;
-      const auto i = static_cast<std::size_t>(index);
-      if (const std::optional<CouplingError> err = lp.take(e, index, ends_[i], packed))
-        logs_[p].push_back({index, ends_[i - 1], ends_[i], err->position, err->velocity, 0});
+      if (const std::optional<CouplingError> err = lp.take(e, index, grid_.end(index), packed))
+        logs_[p].push_back({index, grid_.end(index - 1), grid_.end(index), err->position, err->velocity, 0});
     };
     if (const LoosePart* owner = parts_[static_cast<std::size_t>(x.neighbour)].get()) {
       const long upto = std::min(cap, owner->published());
@@ -100,7 +99,7 @@ void LooseRounds::step(std::size_t p, long m) {
     pull(p, exact_ ? m - lag_ : m);
     long newest = m;
     for (std::size_t e = 0; e < lp.part.sub->exchanges.size(); ++e) newest = std::min(newest, lp.taken(e));
-    const double t0 = ends_[static_cast<std::size_t>(m)], t1 = ends_[static_cast<std::size_t>(m + 1)];
+    const double t0 = grid_.end(m), t1 = grid_.end(m + 1);
     logs_[p].push_back({m + 1, t0, t1, 0.0, 0.0, static_cast<int>(m - std::max(newest, 0L))});
     lp.predict(m + 1, t1);
     lp.integrate(t0, t1);
@@ -136,7 +135,7 @@ CouplingError LooseRounds::peek(long index) {
       std::vector<double>& buffer = scratch_[p];
       buffer.resize(exchanges[e].from.size() * partitioned::body_numbers);
       owner->pack_published(index, exchanges[e].from, buffer.data());
-      const CouplingError err = lp.error(e, ends_[static_cast<std::size_t>(index)], buffer.data());
+      const CouplingError err = lp.error(e, grid_.end(index), buffer.data());
       worst.position = std::max(worst.position, err.position);
       worst.velocity = std::max(worst.velocity, err.velocity);
     }

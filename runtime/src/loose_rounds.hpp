@@ -29,6 +29,10 @@ namespace mbsflow::loose {
 std::unique_ptr<LoosePart> make_part(const Model& model, const Submodel& sub, const RunOptions& o, const LooseOptions& lo,
                                      std::size_t q);
 
+// Macro-step ends to keep behind the run: a neighbour's value may be taken up to 2 L + 3
+// macro steps late.
+inline long ends_kept(const LooseOptions& lo) { return 2L * lo.max_lag + 8; }
+
 // Neighbours in other processes (a worker's run).
 struct RemoteSamples {
   // Returns once remote q's macro-step end `index` for local p is in, or the exchange stopped.
@@ -44,9 +48,9 @@ struct RemoteSamples {
 class LooseRounds {
  public:
   // parts[q]: local submodel q, null where it runs elsewhere (then remote is needed).
-  // ends: the macro-step ends (the caller may append between runs).
+  // grid: the macro-step ends (the caller may change it between runs).
   LooseRounds(const Model& model, const Decomposition& d, const RunOptions& o, const LooseOptions& lo,
-              std::vector<std::unique_ptr<LoosePart>>& parts, const std::vector<double>& ends, int chunk,
+              std::vector<std::unique_ptr<LoosePart>>& parts, const MacroGrid& grid, int chunk,
               RemoteSamples* remote = nullptr);
   ~LooseRounds();
 
@@ -73,7 +77,7 @@ class LooseRounds {
   int lag_;
   bool exact_;
   std::vector<std::unique_ptr<LoosePart>>& parts_;
-  const std::vector<double>& ends_;
+  const MacroGrid& grid_;
   RemoteSamples* remote_;
   std::vector<std::vector<CouplingRecord>> logs_;  // per submodel, written by its nodes only
   std::vector<std::vector<double>> scratch_;       // per submodel

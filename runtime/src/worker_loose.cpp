@@ -41,7 +41,7 @@ Outcome run_loose_part(Session& s, WorkerIo& io, zmq::context_t& ctx, zmq::socke
   for (std::size_t q = 0; q < k; ++q)
     if (s.worker_of[q] == s.me) parts[q] = &(lp[q] = loose::make_part(s.model, s.d.submodels[q], s.o, lo, q))->part;
   WorkerPart w(s, io, ctx, inbox, start, parts, stop);
-  const loose::MacroGrid grid = loose::macro_grid(s.o, lo.macro_step);
+  loose::MacroGrid grid(s.o, lo.macro_step);
   loose::RemoteSamples remote;
   remote.wait = [&](long index, int q, int p) { w.exchange.wait(index, 0, q, p); };
   remote.take = [&](int p, int q, long cap, const std::function<void(long, const double*)>& take) {
@@ -50,7 +50,7 @@ Outcome run_loose_part(Session& s, WorkerIo& io, zmq::context_t& ctx, zmq::socke
   remote.send = [&](int p, long index) { w.exchange.send(p, index, 0); };
   remote.stopped = [&] { return w.exchange.aborted(); };
   remote.abort = [&](const std::string& why) { w.exchange.abort(why); };
-  loose::LooseRounds rounds(s.model, s.d, s.o, lo, lp, grid.ends, loose::steps_per_run(grid), &remote);
+  loose::LooseRounds rounds(s.model, s.d, s.o, lo, lp, grid, grid.steps_per_run(), &remote);
   // The coupling records since the last report, to the coordinator.
   auto report_coupling = [&] {
     loose::CouplingLog batch;
@@ -65,23 +65,23 @@ Outcome run_loose_part(Session& s, WorkerIo& io, zmq::context_t& ctx, zmq::socke
   for (int p : w.mine) lp[static_cast<std::size_t>(p)]->start(s.o.t_start, lo.macro_step);
   long done = 0;  // macro steps
   if (failure.empty())
-    loose::for_each_run(grid, [&](long m, int n) {
+    loose::for_each_run(grid, loose::ends_kept(lo), [&](long m, int n) {
       failure = rounds.run(m, n);
-      if (failure.empty()) failure = w.check(grid.ends[static_cast<std::size_t>(m + n)]);
+      if (failure.empty()) failure = w.check(grid.end(m + n));
       if (!failure.empty()) return false;
       done = m + n;
       report_coupling();
-      w.report_state(grid.tight_step[static_cast<std::size_t>(done)], grid.output[static_cast<std::size_t>(done)] != 0);
+      w.report_state(grid.tight_step(done), grid.output(done));
       return true;
     });
   if (failure.empty()) {
     rounds.catch_up(done);  // the coupling errors of the last macro steps
-    failure = w.check(grid.ends.back());
+    failure = w.check(grid.end(done));
     report_coupling();
   }
   double evaluations = 0.0;
   for (int p : w.mine) evaluations += static_cast<double>(lp[static_cast<std::size_t>(p)]->evaluations);
-  return w.finish(failure, grid.tight_step[static_cast<std::size_t>(done)], evaluations);
+  return w.finish(failure, grid.tight_step(done), evaluations);
 }
 
 }  // namespace mbsflow

@@ -54,7 +54,7 @@ cat > cluster.json <<JSON
    {"name": "a", "listen": "tcp://$net.1:5560", "data_bind": "tcp://$net.1:5561", "threads": 1},
    {"name": "b", "listen": "tcp://$net.2:5560", "data_bind": "tcp://$net.2:5561", "threads": 1}]}
 JSON
-common="--t-end 0.05 --step 1e-4 --every 100 --partitions 3 --coupling loose --macro-step 2e-4 --extrapolation 2"
+common="--t-end 0.05 --step 1e-4 --every 100 --partitions 3 --coupling loose --extrapolation 2"
 
 # One run on the two namespaces' workers (each serves one run and exits).
 across() {
@@ -68,16 +68,16 @@ across() {
   return $rc
 }
 
-"$exe" run chain.json $common --threads 2 --max-lag 2 --exact-lag -q -o local_exact.h5 || fail "one-process exact-lag run"
+"$exe" run chain.json $common --macro-step 2e-4 --threads 2 --max-lag 2 --exact-lag -q -o local_exact.h5 || fail "one-process exact-lag run"
 start=$(date +%s%N)
-across --max-lag 2 --exact-lag -o netns_exact.h5 2>exact.err || { cat exact.err; fail "exact-lag run across the namespaces"; }
+across --macro-step 2e-4 --max-lag 2 --exact-lag -o netns_exact.h5 2>exact.err || { cat exact.err; fail "exact-lag run across the namespaces"; }
 echo "exact lag 2 across the namespaces: $(( ($(date +%s%N) - start) / 1000000 )) ms wall"
 tail -2 exact.err
 h5diff netns_exact.h5 local_exact.h5 /bodies/position || fail "exact lag: positions differ from the one-process run"
 h5diff netns_exact.h5 local_exact.h5 /coupling/position_error || fail "exact lag: coupling errors differ"
 
-"$exe" run chain.json $common --threads 2 -q -o local_sync.h5 || fail "one-process run"
-across --max-lag 2 -o netns_newest.h5 2>newest.err || { cat newest.err; fail "newest-value run across the namespaces"; }
+"$exe" run chain.json $common --macro-step 1e-4 --threads 2 -q -o local_sync.h5 || fail "one-process run"
+across --max-lag 2 --macro-step 1e-4 -o netns_newest.h5 2>newest.err || { cat newest.err; fail "newest-value run across the namespaces"; }
 tail -2 newest.err
 grep -q "at most 2 steps old" newest.err || fail "newest values: the submodels never ran ahead (or more than 2 steps)"
 /usr/bin/python3 - <<'PY' || fail "newest values: too far from the one-process run"
