@@ -68,8 +68,7 @@ std::vector<Method> parse_methods(const std::string& list) {
 }
 
 // The closing lines of a loosely coupled run: its coupling errors, lags and macro steps.
-void print_coupling(LooseStats& ls, bool adaptive, int max_lag) {
-  summarise_records(ls);
+void print_coupling(const LooseStats& ls, bool adaptive, int max_lag) {
   char adapt[128] = "", lag[96] = "";
   if (adaptive)
     std::snprintf(adapt, sizeof adapt, "; macro step %.3g .. %.3g s, %ld taken again", ls.smallest_macro_step,
@@ -208,6 +207,7 @@ int run(const RunArgs& a) {
       r = run_cluster(m, model_to_json(m), *d, cc, o, sink.get(), &cs, coupling);
       LooseStats ls;
       ls.records = cs.coupling;
+      summarise_records(ls);
       if (loose && !a.quiet) print_coupling(ls, false, a.max_lag);
     } else if (loose) {
       LooseStats ls;

@@ -10,7 +10,6 @@
 #include "loose_rounds.hpp"
 #include "mbsflow/graph/error.hpp"
 #include "sink_runner.hpp"
-#include "step_grid.hpp"
 
 namespace mbsflow {
 namespace {
@@ -23,14 +22,13 @@ using Clock = std::chrono::steady_clock;
 template <class AtEnd>
 void adaptive_macro_steps(const RunOptions& o, const LooseOptions& lo, std::vector<std::unique_ptr<LoosePart>>& parts,
                           loose::LooseRounds& rounds, loose::MacroGrid& ends, LooseStats& st, AtEnd at_end) {
-  const StepGrid grid = step_grid(o.t_start, o.t_end, o.step);
   const double order = lo.extrapolation + 1.0;
   double t = o.t_start, H = lo.macro_step;
-  long next_out = 1, m = 0;
+  long m = 0;
   while (t < o.t_end) {
-    bool on_output = false;
-    const double t1 = loose::next_macro_end(grid, o.output_every, next_out, t, H, &on_output);
-    ends.add(m, t1, on_output);
+    ends.add(m, H);
+    const double t1 = ends.end(m + 1);
+    const bool on_output = ends.output(m + 1);
     for (auto& p : parts) p->save();
     const std::string failure = rounds.run(m, 1);
     if (!failure.empty()) throw RunError(failure);
@@ -54,7 +52,6 @@ void adaptive_macro_steps(const RunOptions& o, const LooseOptions& lo, std::vect
     ++m;
     at_end(m, on_output);
     ends.forget_before(m - 8);
-    if (on_output) ++next_out;
     H = on_output && factor >= 1.0 ? std::max(H, (t1 - t) * factor) : (t1 - t) * factor;
     t = t1;
   }

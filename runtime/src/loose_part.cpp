@@ -215,32 +215,27 @@ void LoosePart::restore(long index) {
   while (!board_.empty() && board_.back().index >= index) board_.pop_back();
 }
 
-double next_macro_end(const StepGrid& grid, long output_every, long next_out, double t, double H, bool* on_output) {
-  // Macro steps land on the output grid (and the end), so snapshots fall on it; the output
-  // times are the tight run's step times, to the bit.
-  const double t_out = grid.time(std::min(next_out * output_every, grid.steps));
-  *on_output = t + H >= t_out - 1e-12 * std::max(1.0, std::abs(t_out));
-  return *on_output ? t_out : t + H;
-}
-
 MacroGrid::MacroGrid(const RunOptions& o, double H) : o_(o), H_(H), grid_(step_grid(o.t_start, o.t_end, o.step)) {
   ends_.push_back({o.t_start, true, 0});
 }
 
 void MacroGrid::extend(long m) {
-  while (last() < m && !complete()) {
-    bool on_output = false;
-    const double t = next_macro_end(grid_, o_.output_every, next_out_, end(last()), H_, &on_output);
-    ends_.push_back({t, on_output,
-                     on_output ? std::min(next_out_ * static_cast<long>(o_.output_every), grid_.steps)
-                               : std::lround((t - o_.t_start) / o_.step)});
-    if (on_output) ++next_out_;
-  }
+  while (last() < m && !complete()) add(last(), H_);
 }
 
-void MacroGrid::add(long m, double t, bool on_output) {
-  while (last() > m) ends_.pop_back();
-  ends_.push_back({t, on_output, std::lround((t - o_.t_start) / o_.step)});
+void MacroGrid::add(long m, double H) {
+  while (last() > m) {
+    if (ends_.back().output) --next_out_;
+    ends_.pop_back();
+  }
+  const long out_step = std::min(next_out_ * static_cast<long>(o_.output_every), grid_.steps);
+  const double t_out = grid_.time(out_step), t = end(m) + H;
+  if (t >= t_out - 1e-12 * std::max(1.0, std::abs(t_out))) {
+    ends_.push_back({t_out, true, out_step});
+    ++next_out_;
+  } else {
+    ends_.push_back({t, false, std::lround((t - o_.t_start) / o_.step)});
+  }
 }
 
 void MacroGrid::forget_before(long m) {

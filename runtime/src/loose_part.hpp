@@ -102,16 +102,12 @@ inline void copy_local_ghosts(std::vector<std::unique_ptr<LoosePart>>& parts, in
   }
 }
 
-// Where the macro step from t with length H ends: at t + H, or on the next output time
-// (grid.time of the output step, as the tight run has it) when it reaches that.
-double next_macro_end(const StepGrid& grid, long output_every, long next_out, double t, double H, bool* on_output);
-
 // The macro-step ends of a run: end(0) = t_start, whether a snapshot is taken at each, and
 // the tight grid's step there. With a fixed macro step they are made as the run goes and
 // forgotten behind it (a long run has millions); an adaptive run adds them itself.
 class MacroGrid {
  public:
-  MacroGrid(const RunOptions& o, double H);  // H = 0: adaptive, add() makes the ends
+  MacroGrid(const RunOptions& o, double H);  // H = 0: adaptive, the run add()s the ends
   double end(long m) const { return at(m).t; }
   bool output(long m) const { return at(m).output; }
   long tight_step(long m) const { return at(m).tight_step; }
@@ -119,8 +115,10 @@ class MacroGrid {
   bool complete() const { return end(last()) >= o_.t_end; }
   // Fixed macro step: makes the ends up to m known (or up to t_end, if it comes first).
   void extend(long m);
-  // Adaptive: end m + 1 at t after end m (forgetting any later ones).
-  void add(long m, double t, bool output);
+  // End m + 1, a macro step H after end m, or on the next output time (the tight run's
+  // step time, to the bit) when it reaches that; any later ends are forgotten (a macro
+  // step taken again).
+  void add(long m, double H);
   void forget_before(long m);
   // Macro steps per flow-graph run: up to the next snapshot, at most 64.
   int steps_per_run() const;
@@ -135,7 +133,7 @@ class MacroGrid {
   const RunOptions& o_;
   double H_;
   StepGrid grid_;
-  long next_out_ = 1, base_ = 0;
+  long next_out_ = 1, base_ = 0;  // the output step to come after the last end
   std::deque<End> ends_;
 };
 
