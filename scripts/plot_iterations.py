@@ -5,34 +5,24 @@ Jacobi contraction bound), one line per scheme.
 
 usage: scripts/plot_iterations.py bench_iterations.csv [-o bench_iterations.png]
 """
-import argparse
-import csv
 import math
 from collections import defaultdict
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+from bench_csv import plt, read_rows, save
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("csv")
-    parser.add_argument("-o", "--output", default="")
-    args = parser.parse_args()
-    out = args.output or args.csv.rsplit(".", 1)[0] + ".png"
+    rows, out = read_rows(__doc__)
     data = defaultdict(lambda: defaultdict(list))  # (problem, factor) -> scheme -> [(nu, error)]
     problems, factors = [], defaultdict(list)
-    with open(args.csv) as f:
-        for row in csv.DictReader(f):
-            p, k = f"{row['problem']} N={row['n']}", float(row["tau_over_jacobi_bound"])
-            if p not in problems:
-                problems.append(p)
-            if k not in factors[p]:
-                factors[p].append(k)
-            e = float(row["error"])
-            data[(p, k)][row["scheme"]].append((int(row["iteration"]), e if math.isfinite(e) else float("nan")))
+    for row in rows:
+        p, k = f"{row['problem']} N={row['n']}", float(row["tau_over_jacobi_bound"])
+        if p not in problems:
+            problems.append(p)
+        if k not in factors[p]:
+            factors[p].append(k)
+        e = float(row["error"])
+        data[(p, k)][row["scheme"]].append((int(row["iteration"]), e if math.isfinite(e) else float("nan")))
     cols = max(len(v) for v in factors.values())
     fig, axes = plt.subplots(len(problems), cols, figsize=(3.2 * cols, 2.8 * len(problems)), squeeze=False)
     for r, p in enumerate(problems):
@@ -53,9 +43,7 @@ def main():
                 ax.set_ylabel("error to converged stages")
             ax.grid(True, which="both", alpha=0.3)
     axes[0][0].legend(fontsize=6)
-    fig.tight_layout()
-    fig.savefig(out, dpi=110)
-    print(out)
+    save(fig, out)
 
 
 if __name__ == "__main__":

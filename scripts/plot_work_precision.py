@@ -4,31 +4,21 @@ one panel per problem, one line per solver and thread count.
 
 usage: scripts/plot_work_precision.py bench_ode.csv [-o bench_ode.png]
 """
-import argparse
-import csv
 from collections import defaultdict
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+from bench_csv import plt, read_rows, save
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("csv")
-    parser.add_argument("-o", "--output", default="")
-    args = parser.parse_args()
-    out = args.output or args.csv.rsplit(".", 1)[0] + ".png"
+    rows, out = read_rows(__doc__)
     series = defaultdict(list)
     problems = []
-    with open(args.csv) as f:
-        for row in csv.DictReader(f):
-            key = f"{row['problem']} N={row['n']}"
-            if key not in problems:
-                problems.append(key)
-            if row["ok"] == "1" and float(row["max_error"]) > 0:
-                series[(key, f"{row['solver']} x{row['threads']}")].append((float(row["max_error"]), float(row["seconds"])))
+    for row in rows:
+        key = f"{row['problem']} N={row['n']}"
+        if key not in problems:
+            problems.append(key)
+        if row["ok"] == "1" and float(row["max_error"]) > 0:
+            series[(key, f"{row['solver']} x{row['threads']}")].append((float(row["max_error"]), float(row["seconds"])))
     fig, axes = plt.subplots(1, len(problems), figsize=(5 * len(problems), 4.5), squeeze=False)
     for ax, problem in zip(axes[0], problems):
         for (p, label), points in sorted(series.items()):
@@ -39,9 +29,7 @@ def main():
         ax.set(xlabel="max error", ylabel="seconds", title=problem)
         ax.invert_xaxis()
         ax.legend(fontsize="x-small")
-    fig.tight_layout()
-    fig.savefig(out, dpi=110)
-    print(out)
+    save(fig, out)
 
 
 if __name__ == "__main__":
