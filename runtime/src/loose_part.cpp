@@ -140,10 +140,10 @@ CouplingError distance(const std::vector<double>& guess, const double* packed) {
 }
 }  // namespace
 
-CouplingError LoosePart::error(std::size_t e, double t, const double* packed) const {
-  std::vector<double> guess;
-  extrapolate(e, t, guess);
-  return distance(guess, packed);
+std::optional<CouplingError> LoosePart::prediction_error(std::size_t e, long index, const double* packed) const {
+  for (const Sample& p : predicted_[e])
+    if (p.index == index) return distance(p.bodies, packed);
+  return std::nullopt;
 }
 
 void LoosePart::predict(long index, double t) {
@@ -155,13 +155,9 @@ void LoosePart::predict(long index, double t) {
 }
 
 std::optional<CouplingError> LoosePart::take(std::size_t e, long index, double t, const double* packed) {
-  std::optional<CouplingError> err;
+  const std::optional<CouplingError> err = prediction_error(e, index, packed);
   std::deque<Sample>& p = predicted_[e];
-  while (!p.empty() && p.front().index < index) p.pop_front();
-  if (!p.empty() && p.front().index == index) {
-    err = distance(p.front().bodies, packed);
-    p.pop_front();
-  }
+  while (!p.empty() && p.front().index <= index) p.pop_front();
   std::deque<Sample>& h = history_[e];
   Sample s = std::move(h.back());  // the oldest one goes (start() filled the history); its buffer is reused
   h.pop_back();

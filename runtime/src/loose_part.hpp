@@ -44,9 +44,9 @@ class LoosePart {
   // Neighbour exchange e's sample: its bodies e.from at macro-step end `index` (time t),
   // packed (partitioned::pack_bodies, in the order of e.to). take() makes it the newest
   // and returns how far the prediction for that end was from it (the coupling error),
-  // if one was made; error() is how far the extrapolation from the samples taken so far is.
+  // if one was made; prediction_error() tells the same without taking it.
   std::optional<CouplingError> take(std::size_t e, long index, double t, const double* packed);
-  CouplingError error(std::size_t e, double t, const double* packed) const;
+  std::optional<CouplingError> prediction_error(std::size_t e, long index, const double* packed) const;
   long taken(std::size_t e) const { return history_[e].front().index; }
 
   // The own state at macro-step end `index`, for the neighbours in this process (any thread).

@@ -135,7 +135,8 @@ CouplingError LooseRounds::peek(long index) {
       std::vector<double>& buffer = scratch_[p];
       buffer.resize(exchanges[e].from.size() * partitioned::body_numbers);
       owner->pack_published(index, exchanges[e].from, buffer.data());
-      const CouplingError err = lp.error(e, grid_.end(index), buffer.data());
+      // The node of the macro step to `index` made the prediction.
+      const CouplingError err = lp.prediction_error(e, index, buffer.data()).value();
       worst.position = std::max(worst.position, err.position);
       worst.velocity = std::max(worst.velocity, err.velocity);
     }

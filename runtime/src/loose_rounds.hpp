@@ -58,8 +58,8 @@ class LooseRounds {
   std::string run(long first, int n);
   // Takes every neighbour value up to end `index` (waiting for remote ones).
   void catch_up(long index);
-  // The largest coupling error that the neighbour values at end `index` would have; they
-  // are not taken (neighbours in this process only).
+  // The largest coupling error of the neighbour values at end `index` against what was
+  // predicted for it; they are not taken (neighbours in this process only).
   CouplingError peek(long index);
   // The records since the last call, into log; discard(index) forgets those from
   // macro-step end `index` on (a macro step to be taken again).
