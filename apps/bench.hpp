@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "mbsflow/graph/error.hpp"
+#include "mbsflow/error.hpp"
 
 namespace mbsflow::cli {
 

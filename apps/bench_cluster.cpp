@@ -11,7 +11,7 @@
 
 #include "bench.hpp"
 #include "local_workers.hpp"
-#include "mbsflow/graph/error.hpp"
+#include "mbsflow/error.hpp"
 #include "mbsflow/graph/generators.hpp"
 #include "mbsflow/io/model_writer.hpp"
 #include "mbsflow/runtime/cluster.hpp"

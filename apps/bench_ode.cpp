@@ -153,7 +153,7 @@ Outcome timed(Run run) {
     o.ok = true;
     o.evaluations = stats.rhs_evaluations;
     o.steps = stats.steps;
-  } catch (const std::runtime_error& e) {
+  } catch (const Error& e) {
     o.note = e.what();
   }
   o.seconds = std::chrono::duration<double>(Clock::now() - start).count();

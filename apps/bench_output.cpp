@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "bench.hpp"
-#include "mbsflow/graph/error.hpp"
+#include "mbsflow/error.hpp"
 #include "mbsflow/graph/generators.hpp"
 #include "mbsflow/io/hdf5_sink.hpp"
 #include "mbsflow/runtime/async_sink.hpp"

@@ -9,7 +9,7 @@
 #include <thread>
 
 #include "bench.hpp"
-#include "mbsflow/graph/error.hpp"
+#include "mbsflow/error.hpp"
 #include "mbsflow/graph/generators.hpp"
 #include "mbsflow/runtime/partitioned_run.hpp"
 

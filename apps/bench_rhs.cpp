@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "bench.hpp"
-#include "mbsflow/graph/error.hpp"
+#include "mbsflow/error.hpp"
 #include "mbsflow/graph/generators.hpp"
 #include "mbsflow/graph/multibody_system.hpp"
 

@@ -8,7 +8,7 @@
 
 #include "commands.hpp"
 #include "ode_common.hpp"
-#include "mbsflow/graph/error.hpp"
+#include "mbsflow/error.hpp"
 #include "mbsflow/io/ode_results.hpp"
 #include "mbsflow/methods/block_integrator.hpp"
 
@@ -87,7 +87,7 @@ int run(const OdeArgs& a) {
     generate_block_method(s.method);
     s.iteration = block_iteration_from_string(a.iteration.empty() ? "newton" : a.iteration);
     apply_common_options(a, s);
-  } catch (const std::invalid_argument& e) {
+  } catch (const InputError& e) {
     throw InputError(std::string("ode: ") + e.what());
   }
 
@@ -103,9 +103,9 @@ int run(const OdeArgs& a) {
   BlockResult r;
   try {
     r = integrate_block(p, s, on_block);
-  } catch (const std::invalid_argument& e) {
+  } catch (const InputError& e) {
     throw InputError(std::string("ode: ") + e.what());
-  } catch (const std::runtime_error& e) {
+  } catch (const RunError& e) {
     throw RunError(std::string("ode: ") + e.what() + " (try a smaller --tol, or --iteration newton for a stiff problem)");
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -175,7 +175,7 @@ Action add_ode(CLI::App& app) {
         if (!describe_name->empty()) return describe_tableau(*describe_name);
         return a->method == "tirk" ? describe_tableau(a->tableau) : describe(*a);
       }
-    } catch (const std::invalid_argument& e) {
+    } catch (const InputError& e) {
       throw InputError(std::string("ode: ") + e.what());
     }
     return run(*a);

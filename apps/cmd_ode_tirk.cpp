@@ -6,7 +6,7 @@
 #include <stdexcept>
 
 #include "commands.hpp"
-#include "mbsflow/graph/error.hpp"
+#include "mbsflow/error.hpp"
 #include "mbsflow/methods/tirk_integrator.hpp"
 #include "ode_common.hpp"
 
@@ -72,7 +72,7 @@ int run_tirk(const OdeArgs& a) {
     tab = rk_tableau(a.tableau);
     s.iteration = iteration_of(a);
     apply_common_options(a, s);
-  } catch (const std::invalid_argument& e) {
+  } catch (const InputError& e) {
     throw InputError(std::string("ode: ") + e.what());
   }
   s.fixed_iterations = a.iterations;
@@ -85,9 +85,9 @@ int run_tirk(const OdeArgs& a) {
   TirkResult r;
   try {
     r = integrate_tirk(p, s, [&](double t, const Eigen::VectorXd& y) { rec.add(t, y); });
-  } catch (const std::invalid_argument& e) {
+  } catch (const InputError& e) {
     throw InputError(std::string("ode: ") + e.what());
-  } catch (const std::runtime_error& e) {
+  } catch (const RunError& e) {
     throw RunError(std::string("ode: ") + e.what());
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -5,7 +5,7 @@
 
 #include "commands.hpp"
 #include "mbsflow/graph/decomposition.hpp"
-#include "mbsflow/graph/error.hpp"
+#include "mbsflow/error.hpp"
 #include "mbsflow/io/model_reader.hpp"
 #include "mbsflow/io/partition_file.hpp"
 

@@ -8,7 +8,8 @@
 #include <thread>
 
 #include "commands.hpp"
-#include "mbsflow/graph/error.hpp"
+#include "mbsflow/error.hpp"
+#include "mbsflow/methods/stepper.hpp"
 #include "mbsflow/graph/stable_step.hpp"
 #include "local_workers.hpp"
 #include "mbsflow/io/cluster_file.hpp"
@@ -59,8 +60,8 @@ std::vector<Method> parse_methods(const std::string& list) {
   while (at <= list.size() && !list.empty()) {
     const std::size_t comma = std::min(list.find(',', at), list.size());
     const std::string name = list.substr(at, comma - at);
-    const std::optional<Method> m = parse_method(name);
-    if (!m) throw InputError("--submodel-methods: unknown method '" + name + "' (rk4 or dopri5)");
+    const std::optional<Method> m = find_method(name);
+    if (!m) throw InputError("--submodel-methods: unknown method '" + name + "' (" + method_list() + ")");
     out.push_back(*m);
     at = comma + 1;
   }
@@ -145,7 +146,7 @@ int run(const RunArgs& a) {
     if (!(*a.t_end > m.simulation.t_start)) throw InputError("--t-end: must be > t_start of the model");
     m.simulation.t_end = *a.t_end;
   }
-  if (!a.method.empty()) m.simulation.method = *parse_method(a.method);
+  if (!a.method.empty()) m.simulation.method = *find_method(a.method);
   if (a.every) m.simulation.output_every = *a.every;
   if (a.rtol) m.simulation.rtol = *a.rtol;
   if (a.atol) m.simulation.atol = *a.atol;
@@ -182,8 +183,10 @@ int run(const RunArgs& a) {
     cc = local->cluster();
   }
   // Loose coupling cuts the model even into one submodel (then it is a plain run).
-  const std::optional<Decomposition> d =
-      choose_decomposition(m, a, cluster ? cluster_submodels(cc) : default_partitions(m, threads), !cluster && !loose);
+  // The implicit methods integrate a tight run whole: their stages are parallel inside the step.
+  const bool stage_split = o.method == Method::rk4 || o.method == Method::dopri5;
+  const int default_k = cluster ? cluster_submodels(cc) : stage_split || loose ? default_partitions(m, threads) : 1;
+  const std::optional<Decomposition> d = choose_decomposition(m, a, default_k, !cluster && !loose);
   if (cluster && !a.quiet) {
     char coupling[96] = "";
     if (loose) std::snprintf(coupling, sizeof coupling, ", loosely coupled: macro step %.4g s", macro_step);
@@ -249,7 +252,9 @@ Action add_run(CLI::App& app) {
   sub->add_option("--t-end", a->t_end, "End time in s (overrides simulation.t_end)");
   sub->add_option("--step", a->step, "Step in s; RK4 default: the stability estimate from the stiffest joint")
       ->check(CLI::PositiveNumber);
-  sub->add_option("--method", a->method, "Integration method")->check(CLI::IsMember({"rk4", "dopri5"}));
+  std::vector<std::string> methods;
+  for (const StepperEntry& e : stepper_entries()) methods.push_back(e.method.name());
+  sub->add_option("--method", a->method, "Integration method")->check(CLI::IsMember(methods));
   sub->add_option("--every", a->every, "Write every K-th step (overrides simulation.output_every)")
       ->check(CLI::Range(1, 1 << 30));
   sub->add_option("--rtol", a->rtol, "DOPRI5 relative tolerance")->check(CLI::PositiveNumber);

@@ -3,7 +3,7 @@
 #include <memory>
 
 #include "commands.hpp"
-#include "mbsflow/graph/error.hpp"
+#include "mbsflow/error.hpp"
 #include "mbsflow/io/model_reader.hpp"
 #include "mbsflow/runtime/cluster.hpp"
 #include "signals.hpp"

@@ -12,7 +12,7 @@
 #include <filesystem>
 #include <thread>
 
-#include "mbsflow/graph/error.hpp"
+#include "mbsflow/error.hpp"
 
 namespace mbsflow::cli {
 namespace {

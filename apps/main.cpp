@@ -3,7 +3,7 @@
 #include <vector>
 
 #include "commands.hpp"
-#include "mbsflow/graph/error.hpp"
+#include "mbsflow/error.hpp"
 #include "mbsflow/version.hpp"
 
 int main(int argc, char** argv) {

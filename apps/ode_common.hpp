@@ -38,7 +38,7 @@ class OdeRecorder {
 };
 
 // The settings both integrators share, from the arguments (the linear solver's name is
-// checked by the caller, which turns std::invalid_argument into an input error).
+// checked by the caller, which turns InputError into an input error).
 template <class Settings>
 void apply_common_options(const OdeArgs& a, Settings& s) {
   s.linear_solver = linear_solver_from_string(a.solver);

@@ -9,7 +9,7 @@
 #include <set>
 #include <sstream>
 
-#include "mbsflow/graph/error.hpp"
+#include "mbsflow/error.hpp"
 #include "metis_partition.hpp"
 
 namespace mbsflow {

@@ -4,7 +4,7 @@
 #include <random>
 #include <string>
 
-#include "mbsflow/graph/error.hpp"
+#include "mbsflow/error.hpp"
 
 namespace mbsflow {
 namespace {

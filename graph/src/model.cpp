@@ -11,14 +11,6 @@ std::optional<int> find_body(const Model& model, const std::string& name) {
   return std::nullopt;
 }
 
-const char* method_name(Method m) { return m == Method::rk4 ? "rk4" : "dopri5"; }
-
-std::optional<Method> parse_method(const std::string& name) {
-  if (name == "rk4") return Method::rk4;
-  if (name == "dopri5") return Method::dopri5;
-  return std::nullopt;
-}
-
 namespace {
 // Reduced value a*b/(a+b); ground (infinite mass) leaves the other side's value.
 double reduced(std::optional<double> a, double b) { return a ? (*a * b) / (*a + b) : b; }

@@ -3,7 +3,7 @@
 #include <set>
 
 #include "json_node.hpp"
-#include "mbsflow/graph/error.hpp"
+#include "mbsflow/error.hpp"
 
 namespace mbsflow {
 namespace {

@@ -6,7 +6,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "mbsflow/graph/error.hpp"
+#include "mbsflow/error.hpp"
 
 namespace mbsflow {
 namespace {

@@ -10,7 +10,8 @@
 #include <sstream>
 
 #include "json_node.hpp"
-#include "mbsflow/graph/error.hpp"
+#include "mbsflow/error.hpp"
+#include "mbsflow/methods/stepper.hpp"
 
 namespace mbsflow {
 namespace {
@@ -278,8 +279,8 @@ class Reader {
     }
     if (auto v = n.find("step")) s.step = v->positive();
     if (auto v = n.find("method")) {
-      const auto m = parse_method(v->string());
-      if (!m) v->fail("must be one of rk4, dopri5 (got '" + v->string() + "')");
+      const auto m = find_method(v->string());
+      if (!m) v->fail("must be one of " + method_list() + " (got '" + v->string() + "')");
       s.method = *m;
     }
     if (auto v = n.find("output_every")) s.output_every = static_cast<int>(v->integer(1));

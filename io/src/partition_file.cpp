@@ -4,7 +4,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
-#include "mbsflow/graph/error.hpp"
+#include "mbsflow/error.hpp"
 
 namespace mbsflow {
 

@@ -2,7 +2,7 @@
 
 #include <sstream>
 
-#include "mbsflow/graph/error.hpp"
+#include "mbsflow/error.hpp"
 
 namespace mbsflow {
 

@@ -7,7 +7,7 @@
 #include <type_traits>
 
 #include "hdf5_handle.hpp"
-#include "mbsflow/graph/error.hpp"
+#include "mbsflow/error.hpp"
 #include "mbsflow/io/result_fields.hpp"
 
 namespace mbsflow {

@@ -4,7 +4,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "mbsflow/graph/error.hpp"
+#include "mbsflow/error.hpp"
 #include "mbsflow/io/result_fields.hpp"
 
 namespace mbsflow {

@@ -1,5 +1,6 @@
 // The driver of the block methods: start-up, the window of past points, the Jacobian and
 // factorisations, and the seed's step control from the s- and (s+1)-point blocks.
+#include "mbsflow/error.hpp"
 #include "mbsflow/methods/block_integrator.hpp"
 
 #include <oneapi/tbb/task_arena.h>
@@ -8,7 +9,6 @@
 #include <limits>
 #include <memory>
 #include <sstream>
-#include <stdexcept>
 
 #include "block_solve.hpp"
 #include "settings_checks.hpp"
@@ -23,7 +23,7 @@ const char* to_string(BlockIteration i) { return i == BlockIteration::newton ? "
 BlockIteration block_iteration_from_string(const std::string& name) {
   if (name == "newton") return BlockIteration::newton;
   if (name == "functional") return BlockIteration::functional;
-  throw std::invalid_argument("unknown iteration '" + name + "' (newton or functional)");
+  throw InputError("unknown iteration '" + name + "' (newton or functional)");
 }
 
 Eigen::VectorXd AcceptedBlock::interpolate(double t) const {
@@ -43,7 +43,7 @@ namespace {
 
 void check_settings(const OdeProblem& p, const BlockSettings& s) {
   check_common_settings(p, s);
-  if (!(s.global_fraction > 0 && s.global_fraction <= 1)) throw std::invalid_argument("global_fraction must be in (0, 1]");
+  if (!(s.global_fraction > 0 && s.global_fraction <= 1)) throw InputError("global_fraction must be in (0, 1]");
 }
 
 // The last accepted block (or the start-up block), kept for the dense output that
@@ -64,10 +64,13 @@ BlockMethodSpec start_up_method(const BlockMethodSpec& s) {
   return {1, std::max({s.s, s.m - 1, s.effective_order() - 1}), 0};
 }
 
-class Driver {
+}  // namespace
+
+class BlockIntegrator::Driver {
  public:
-  Driver(const OdeProblem& p, const BlockSettings& s, const std::function<void(const AcceptedBlock&)>& on_block)
-      : p_(p), s_(s), on_block_(on_block),
+  Driver(const OdeProblem& p, const BlockSettings& s, std::function<void(const AcceptedBlock&)> on_block,
+         std::function<void(double, Eigen::VectorXd&)> project)
+      : p_(p), s_(s), on_block_(std::move(on_block)), project_(std::move(project)),
         fixed_(s.fixed_step > 0),
         slice_(s.slice_size > 0 ? s.slice_size : p.size >= 8192 ? 4096 : p.size),
         arena_(s.threads > 0 ? s.threads : tbb::task_arena::automatic),
@@ -84,7 +87,15 @@ class Driver {
     if (s.iteration == BlockIteration::newton) jacobian_ = std::make_unique<JacobianEvaluator>(p, s.finite_difference_jacobian);
   }
 
-  BlockResult run();
+  // From problem.t0 and y0 (read again at every begin) towards problem.t_end.
+  void begin();
+  // One accepted block; false when the end is reached. RunError when the step falls below
+  // the minimum or max_steps is reached.
+  bool advance();
+  BlockResult& result() { return result_; }
+  double t() const { return t_; }
+  double tau() const { return tau_; }
+  const Eigen::VectorXd& y() const { return past_u_.back(); }
 
  private:
   int m() const { return s_.method.m; }
@@ -98,7 +109,8 @@ class Driver {
 
   const OdeProblem& p_;
   const BlockSettings& s_;
-  const std::function<void(const AcceptedBlock&)>& on_block_;
+  std::function<void(const AcceptedBlock&)> on_block_;
+  std::function<void(double, Eigen::VectorXd&)> project_;
   bool fixed_;
   Eigen::Index slice_;
   tbb::task_arena arena_;
@@ -109,6 +121,7 @@ class Driver {
   Eigen::SparseMatrix<double> jac_;
   BlockResult result_;
   double t_ = 0;
+  double tau_ = 0;  // the step (point spacing) to try next
   double window_tau_ = 0;
   std::vector<Eigen::VectorXd> past_u_, past_f_;  // the window: m points, oldest first
   Eigen::VectorXd scale_;
@@ -119,7 +132,7 @@ class Driver {
   double factorized_tau_ = std::numeric_limits<double>::quiet_NaN();
 };
 
-void Driver::record(double tau, int taken, double error, const BlockSolve& a, const BlockSolve* b) {
+void BlockIntegrator::Driver::record(double tau, int taken, double error, const BlockSolve& a, const BlockSolve* b) {
   BlockStepRecord r;
   r.t = t_;
   r.tau = tau;
@@ -134,7 +147,7 @@ void Driver::record(double tau, int taken, double error, const BlockSolve& a, co
 // Factorises I - tau mu_e J for every system of the blocks (in parallel), evaluating J
 // first when it is stale (or not yet taken). Kept while tau and J stay the same. False when
 // a matrix is singular (or J is not finite): the step is then retried smaller.
-bool Driver::factorize(std::initializer_list<BlockSolve*> blocks, double tau) {
+bool BlockIntegrator::Driver::factorize(std::initializer_list<BlockSolve*> blocks, double tau) {
   BlockStats& st = result_.stats;
   if (jacobian_stale_) {
     jac_ = jacobian_->evaluate(t_, past_u_.back(), past_f_.back(), st.rhs_evaluations);
@@ -166,7 +179,7 @@ bool Driver::factorize(std::initializer_list<BlockSolve*> blocks, double tau) {
   return true;
 }
 
-bool Driver::solve(std::initializer_list<BlockSolve*> blocks, double tau) {
+bool BlockIntegrator::Driver::solve(std::initializer_list<BlockSolve*> blocks, double tau) {
   ++result_.stats.steps;
   scale_ = s_.atol + s_.rtol * past_u_.back().array().abs();
   for (BlockSolve* b : blocks) b->setup(t_, tau, past_u_, past_f_, scale_);
@@ -189,7 +202,7 @@ bool Driver::solve(std::initializer_list<BlockSolve*> blocks, double tau) {
 }
 
 // Largest scaled difference of the two blocks over their s shared points.
-double Driver::block_difference() const {
+double BlockIntegrator::Driver::block_difference() const {
   double err = 0;
   for (int i = 0; i < small_.points(); ++i) {
     const Eigen::ArrayXd sc = s_.atol + s_.rtol * past_u_.back().array().abs().max(large_.u[i].array().abs());
@@ -198,7 +211,7 @@ double Driver::block_difference() const {
   return err;
 }
 
-void Driver::accept(const BlockSolve& b, double tau) {
+void BlockIntegrator::Driver::accept(const BlockSolve& b, double tau) {
   const int k = b.points();
   if (on_block_) on_block_({t_, tau, k, &b.method(), &past_u_, &past_f_, &b.u, &b.f});
   if (m() > 1) {  // kept for rebuilding the window when the step changes
@@ -223,6 +236,7 @@ void Driver::accept(const BlockSolve& b, double tau) {
     past_f_[at] = c < w ? past_f_[static_cast<std::size_t>(c)] : b.f[static_cast<std::size_t>(c - w)];
   }
   t_ += k * tau;
+  if (project_) project_(t_, past_u_.back());
   window_tau_ = tau;
   jacobian_at_point_ = false;
   ++result_.stats.accepted;
@@ -230,7 +244,7 @@ void Driver::accept(const BlockSolve& b, double tau) {
 
 // A multistep method whose step changed: its past points at the new spacing from the
 // last block's collocation polynomial, and f evaluated there.
-void Driver::rebuild_window(double tau) {
+void BlockIntegrator::Driver::rebuild_window(double tau) {
   const AcceptedBlock view = last_.view();
   for (int j = 1; j < m(); ++j) {
     const double tj = t_ - j * tau;
@@ -242,24 +256,34 @@ void Driver::rebuild_window(double tau) {
   window_tau_ = tau;
 }
 
-BlockResult Driver::run() {
+void BlockIntegrator::Driver::begin() {
   BlockStats& st = result_.stats;
   t_ = p_.t0;
   past_u_ = {p_.y0};
   past_f_ = {Eigen::VectorXd(p_.size)};
   p_.evaluate(t_, past_u_[0], past_f_[0]);
   ++st.rhs_evaluations;
-  const int s = s_.method.s, q = small_.method().order;
-  double tau = s_.fixed_step;
+  window_tau_ = 0;
+  jacobian_stale_ = true;
+  jacobian_at_point_ = false;
+  factorized_for_ = nullptr;
+  tau_ = s_.fixed_step;
   if (!fixed_) {
     scale_ = s_.atol + s_.rtol * p_.y0.array().abs();
-    tau = s_.initial_step > 0 ? s_.initial_step : starting_step(p_, p_.y0, past_f_[0], scale_, q, st.rhs_evaluations);
+    tau_ = s_.initial_step > 0 ? s_.initial_step
+                               : starting_step(p_, p_.y0, past_f_[0], scale_, small_.method().order, st.rhs_evaluations);
   }
+}
+
+bool BlockIntegrator::Driver::advance() {
+  BlockStats& st = result_.stats;
+  const int s = s_.method.s, q = small_.method().order;
+  double& tau = tau_;
   const double t_end = p_.t_end, eps_t = 1e-12 * std::max(1.0, std::abs(t_end));
   auto fail = [&](const std::string& why) {
     std::ostringstream os;
     os << why << " at t = " << t_ << " (step " << tau << ")";
-    throw std::runtime_error(os.str());
+    throw RunError(os.str());
   };
   // After an iteration that did not converge: a fresh Jacobian first, then a smaller step.
   auto iteration_failed = [&] {
@@ -283,7 +307,7 @@ BlockResult Driver::run() {
       }
       record(tau, starter_->points(), 0, *starter_);
       accept(*starter_, tau);
-      continue;
+      return true;
     }
     bool allow_large = !fixed_;
     const double left = t_end - t_;
@@ -303,7 +327,7 @@ BlockResult Driver::run() {
     if (fixed_) {
       record(tau, s, 0, small_);
       accept(small_, tau);
-      continue;
+      return true;
     }
     const double err = block_difference(), gf = s_.global_fraction;
     const double fac = err == 0 ? s_.facmax
@@ -327,19 +351,35 @@ BlockResult Driver::run() {
       accept(small_, tau);
     }
     tau = tau_new;
+    return true;
   }
-  result_.t = t_;
-  result_.y = past_u_.back();
-  return result_;
+  return false;
 }
 
-}  // namespace
+BlockIntegrator::BlockIntegrator(const OdeProblem& problem, const BlockSettings& settings,
+                                 std::function<void(const AcceptedBlock&)> on_block,
+                                 std::function<void(double, Eigen::VectorXd&)> project) {
+  check_settings(problem, settings);
+  d_ = std::make_unique<Driver>(problem, settings, std::move(on_block), std::move(project));
+}
+BlockIntegrator::~BlockIntegrator() = default;
+void BlockIntegrator::begin() { d_->begin(); }
+bool BlockIntegrator::advance() { return d_->advance(); }
+double BlockIntegrator::t() const { return d_->t(); }
+double BlockIntegrator::next_step() const { return d_->tau(); }
+const Eigen::VectorXd& BlockIntegrator::y() const { return d_->y(); }
+const BlockStats& BlockIntegrator::stats() const { return d_->result().stats; }
 
 BlockResult integrate_block(const OdeProblem& problem, const BlockSettings& settings,
                             const std::function<void(const AcceptedBlock&)>& on_block) {
-  check_settings(problem, settings);
-  Driver d(problem, settings, on_block);
-  return d.run();
+  BlockIntegrator integrator(problem, settings, on_block);
+  integrator.begin();
+  while (integrator.advance()) {
+  }
+  BlockResult& r = integrator.d_->result();
+  r.t = integrator.t();
+  r.y = integrator.y();
+  return std::move(r);
 }
 
 }  // namespace mbsflow

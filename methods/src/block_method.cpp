@@ -1,12 +1,12 @@
 // Generation of collocation block methods in exact rational arithmetic
 // (Boost.Multiprecision's cpp_rational: header-only, part of libboost-dev).
+#include "mbsflow/error.hpp"
 #include "mbsflow/methods/block_method.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 #include <boost/multiprecision/cpp_int.hpp>
 #include <cmath>
-#include <stdexcept>
 
 namespace mbsflow {
 namespace {
@@ -70,7 +70,7 @@ std::vector<Rational> solve_exact(std::vector<std::vector<Rational>> a, std::vec
   for (std::size_t c = 0; c < n; ++c) {
     std::size_t p = c;
     while (p < n && a[p][c] == 0) ++p;
-    if (p == n) throw std::invalid_argument("the order conditions of this block method are singular");
+    if (p == n) throw InputError("the order conditions of this block method are singular");
     std::swap(a[p], a[c]);
     std::swap(b[p], b[c]);
     for (std::size_t r = 0; r < n; ++r) {
@@ -105,12 +105,12 @@ Rational determinant(std::vector<std::vector<Rational>> a) {
 }
 
 void check_spec(const BlockMethodSpec& spec) {
-  if (spec.m < 1 || spec.s < 1) throw std::invalid_argument("a block method needs m >= 1 and s >= 1");
+  if (spec.m < 1 || spec.s < 1) throw InputError("a block method needs m >= 1 and s >= 1");
   if (spec.order < 0 || spec.order > spec.maximal_order())
-    throw std::invalid_argument("order " + std::to_string(spec.order) + " is outside 1.." +
+    throw InputError("order " + std::to_string(spec.order) + " is outside 1.." +
                                 std::to_string(spec.maximal_order()) + " (the maximal order 2m+s-1)");
   if (spec.order > 0 && spec.order < spec.s)
-    throw std::invalid_argument("order " + std::to_string(spec.order) + " is below s = " + std::to_string(spec.s) +
+    throw InputError("order " + std::to_string(spec.order) + " is below s = " + std::to_string(spec.s) +
                                 ": a block method of s points keeps its s f-values, so its order is at least s");
 }
 
@@ -217,7 +217,7 @@ std::string order_condition_residual(const BlockCoefficients& method) {
 
 StabilityFunction stability_function(const BlockCoefficients& method) {
   const int s = method.spec.s;
-  if (method.spec.m != 1) throw std::invalid_argument("a stability function is given for one-step methods (m = 1) only");
+  if (method.spec.m != 1) throw InputError("a stability function is given for one-step methods (m = 1) only");
   // u = (I - z G)^{-1} (1 + z d) u0; u_s by Cramer's rule. P and Q have degree <= s: take
   // them at z = 0..s and interpolate.
   std::vector<Rational> qv, pv;

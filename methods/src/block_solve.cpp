@@ -1,3 +1,4 @@
+#include "mbsflow/error.hpp"
 #include "block_solve.hpp"
 
 #include <Eigen/Eigenvalues>
@@ -5,7 +6,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <stdexcept>
 
 #include "annotated_node.hpp"
 
@@ -35,7 +35,7 @@ BlockSolve::BlockSolve(const BlockCoefficients& method, const OdeProblem& proble
   // g = T diag(mu) T^-1, with real columns for real eigenvalues and conjugate columns for
   // a complex pair, so that only one system per pair is solved.
   Eigen::EigenSolver<Eigen::MatrixXd> eig(method_.g);
-  if (eig.info() != Eigen::Success) throw std::invalid_argument("cannot diagonalise the block method's matrix g");
+  if (eig.info() != Eigen::Success) throw InputError("cannot diagonalise the block method's matrix g");
   const Eigen::VectorXcd mu = eig.eigenvalues();
   Eigen::MatrixXcd v = eig.eigenvectors();
   t_.resize(k, k);
@@ -61,15 +61,15 @@ BlockSolve::BlockSolve(const BlockCoefficients& method, const OdeProblem& proble
           partner = o;
           break;
         }
-      if (partner < 0) throw std::invalid_argument("block method matrix g: complex eigenvalue without its conjugate");
+      if (partner < 0) throw InputError("block method matrix g: complex eigenvalue without its conjugate");
       done[partner] = true;
       t_.col(partner) = t_.col(e).conjugate();
     }
-    if (std::abs(sys.mu) == 0) throw std::invalid_argument("block method matrix g is singular");
+    if (std::abs(sys.mu) == 0) throw InputError("block method matrix g is singular");
     systems_.push_back(std::move(sys));
   }
   Eigen::FullPivLU<Eigen::MatrixXcd> lu(t_);
-  if (!lu.isInvertible()) throw std::invalid_argument("block method matrix g is not diagonalisable");
+  if (!lu.isInvertible()) throw InputError("block method matrix g is not diagonalisable");
   t_inv_ = lu.inverse();
   for (System& sys : systems_) {
     if (sys.complex)
@@ -102,7 +102,7 @@ void BlockSolve::factorize(int system) {
       sys.complex_solver.factorize(*factor_jac_, factor_tau_ * sys.mu, factor_kind_);
     else
       sys.real_solver.factorize(*factor_jac_, factor_tau_ * sys.mu.real(), factor_kind_);
-  } catch (const std::runtime_error&) {
+  } catch (const RunError&) {
     factor_failed_[static_cast<std::size_t>(system)] = 1;
   }
 }

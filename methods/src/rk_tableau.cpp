@@ -1,12 +1,12 @@
 // The tableaux: Gauss and Radau IIA as collocation methods at the roots of (shifted)
 // Legendre polynomials, computed in long double; Lobatto IIIC exactly; the one-step block
 // methods of seed 001 rewritten as Runge-Kutta methods.
+#include "mbsflow/error.hpp"
 #include "mbsflow/methods/rk_tableau.hpp"
 
 #include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
-#include <stdexcept>
 
 #include "mbsflow/methods/block_method.hpp"
 
@@ -152,7 +152,7 @@ TriangularSplitting ldu_splitting(const Eigen::MatrixXd& a) {
   const double scale = std::max(1e-300, a.cwiseAbs().maxCoeff());
   for (Eigen::Index k = 0; k < n; ++k) {
     if (std::abs(upper(k, k)) <= 1e-13 * scale)
-      throw std::invalid_argument("the matrix has no LDU factorisation without pivoting (leading minor " + std::to_string(k + 1) +
+      throw InputError("the matrix has no LDU factorisation without pivoting (leading minor " + std::to_string(k + 1) +
                                   " vanishes)");
     for (Eigen::Index i = k + 1; i < n; ++i) {
       s.l(i, k) = upper(i, k) / upper(k, k);
@@ -175,7 +175,7 @@ TriangularSplitting ldu_splitting(const Eigen::MatrixXd& a) {
 EmbeddedFormula embedded_formula(const RkTableau& t, const TriangularSplitting& split) {
   EmbeddedFormula e;
   e.gamma = split.d.maxCoeff();
-  if (!(e.gamma > 0)) throw std::invalid_argument(t.name + ": no positive pivot for the embedded formula");
+  if (!(e.gamma > 0)) throw InputError(t.name + ": no positive pivot for the embedded formula");
   const int s = t.stages();
   std::vector<double> distinct;
   for (int i = 0; i < s; ++i)
@@ -204,7 +204,7 @@ RkTableau rk_tableau(const std::string& name) {
   if (name.size() == 6 && name.rfind("block", 0) == 0 && name[5] >= '1' && name[5] <= '6') return block(name[5] - '0');
   std::string all;
   for (const std::string& n : rk_tableau_names()) all += (all.empty() ? "" : ", ") + n;
-  throw std::invalid_argument("unknown tableau '" + name + "' (" + all + ")");
+  throw InputError("unknown tableau '" + name + "' (" + all + ")");
 }
 
 std::vector<std::string> rk_tableau_names() {

@@ -1,7 +1,7 @@
 #pragma once
 // The checks every implicit integrator makes of its problem and of the settings they share
-// (tolerances, step factors, steps, threads); throws std::invalid_argument.
-#include <stdexcept>
+// (tolerances, step factors, steps, threads); throws InputError.
+#include "mbsflow/error.hpp"
 #include <string>
 
 #include "mbsflow/methods/ode_problem.hpp"
@@ -10,7 +10,7 @@ namespace mbsflow {
 
 template <class Settings>
 void check_common_settings(const OdeProblem& p, const Settings& s) {
-  auto bad = [](const std::string& what) { throw std::invalid_argument(what); };
+  auto bad = [](const std::string& what) { throw InputError(what); };
   if (p.size < 1 || p.y0.size() != p.size || !p.rhs) bad("the problem needs a size, y0 of that size and a right-hand side");
   if (!(p.t_end > p.t0)) bad("the end time must be after the start time");
   if (!(s.rtol > 0) || !(s.atol > 0)) bad("tolerances must be positive");

@@ -1,6 +1,6 @@
+#include "mbsflow/error.hpp"
 #include "mbsflow/methods/shifted_solver.hpp"
 
-#include <stdexcept>
 
 namespace mbsflow {
 
@@ -17,7 +17,7 @@ LinearSolverKind linear_solver_from_string(const std::string& name) {
   for (LinearSolverKind k : {LinearSolverKind::automatic, LinearSolverKind::dense, LinearSolverKind::banded,
                              LinearSolverKind::sparse})
     if (name == to_string(k)) return k;
-  throw std::invalid_argument("unknown linear solver '" + name + "' (auto, dense, banded or sparse)");
+  throw InputError("unknown linear solver '" + name + "' (auto, dense, banded or sparse)");
 }
 
 Bandwidth bandwidth_of(const Eigen::SparseMatrix<double>& j) {
@@ -48,7 +48,7 @@ void ShiftedSolver<Scalar>::factorize(const Eigen::SparseMatrix<double>& j, Scal
       for (Eigen::Index c = 0; c < j.outerSize(); ++c)
         for (Eigen::SparseMatrix<double>::InnerIterator it(j, c); it; ++it) m(it.row(), it.col()) -= gamma * it.value();
       dense_.compute(m);
-      if (!(std::abs(dense_.determinant()) > 0)) throw std::runtime_error("Newton matrix is singular");
+      if (!(std::abs(dense_.determinant()) > 0)) throw RunError("Newton matrix is singular");
       break;
     }
     case LinearSolverKind::banded: {
@@ -68,7 +68,7 @@ void ShiftedSolver<Scalar>::factorize(const Eigen::SparseMatrix<double>& j, Scal
       m.makeCompressed();
       sparse_ = std::make_shared<Eigen::SparseLU<Eigen::SparseMatrix<Scalar>, Eigen::COLAMDOrdering<int>>>();
       sparse_->compute(m);
-      if (sparse_->info() != Eigen::Success) throw std::runtime_error("Newton matrix is singular (sparse LU failed)");
+      if (sparse_->info() != Eigen::Success) throw RunError("Newton matrix is singular (sparse LU failed)");
       break;
     }
   }

@@ -1,8 +1,8 @@
 // The test problems of seed 001 (eqs. 10-12), with exact solutions and Jacobians.
+#include "mbsflow/error.hpp"
 #include <cmath>
 #include <memory>
 #include <numbers>
-#include <stdexcept>
 #include <vector>
 
 #include "mbsflow/methods/ode_problem.hpp"
@@ -90,7 +90,7 @@ OdeProblem detest_b1_problem() {
 }
 
 OdeProblem heat_problem(Eigen::Index n) {
-  if (n < 1) throw std::invalid_argument("heat: N must be at least 1");
+  if (n < 1) throw InputError("heat: N must be at least 1");
   OdeProblem p;
   p.name = "heat";
   p.size = n;
@@ -130,7 +130,7 @@ OdeProblem builtin_problem(const std::string& name, Eigen::Index n) {
   if (name == "hnw") return hairer_wanner_problem();
   if (name == "b1") return detest_b1_problem();
   if (name == "heat") return heat_problem(n);
-  throw std::invalid_argument("unknown problem '" + name + "' (hnw, b1 or heat)");
+  throw InputError("unknown problem '" + name + "' (hnw, b1 or heat)");
 }
 
 }  // namespace mbsflow

@@ -1,5 +1,6 @@
 // The driver of the triangularised Runge-Kutta methods: iterations, Jacobian and
 // factorisations, the embedded error estimate and the step control.
+#include "mbsflow/error.hpp"
 #include "mbsflow/methods/tirk_integrator.hpp"
 
 #include <oneapi/tbb/task_arena.h>
@@ -8,7 +9,6 @@
 #include <limits>
 #include <memory>
 #include <sstream>
-#include <stdexcept>
 
 #include "mbsflow/methods/jacobian.hpp"
 #include "settings_checks.hpp"
@@ -32,7 +32,7 @@ TirkIteration tirk_iteration_from_string(const std::string& name) {
   for (TirkIteration i : {TirkIteration::jacobi, TirkIteration::triangular, TirkIteration::diagonal,
                           TirkIteration::newton_triangular, TirkIteration::newton_diagonal})
     if (name == to_string(i)) return i;
-  throw std::invalid_argument("unknown iteration '" + name +
+  throw InputError("unknown iteration '" + name +
                               "' (jacobi, triangular, diagonal, newton-triangular or newton-diagonal)");
 }
 
@@ -55,14 +55,16 @@ namespace {
 
 void check_settings(const OdeProblem& p, const TirkSettings& s) {
   check_common_settings(p, s);
-  if (s.fixed_iterations < 0 || s.max_iterations < 0) throw std::invalid_argument("iteration counts must be >= 0");
-  if (s.inner_iterations < 1) throw std::invalid_argument("inner_iterations must be at least 1");
+  if (s.fixed_iterations < 0 || s.max_iterations < 0) throw InputError("iteration counts must be >= 0");
+  if (s.inner_iterations < 1) throw InputError("inner_iterations must be at least 1");
 }
 
-class Driver {
+}  // namespace
+
+class TirkIntegrator::Driver {
  public:
-  Driver(const OdeProblem& p, const TirkSettings& s)
-      : p_(p), s_(s),
+  Driver(const OdeProblem& p, const TirkSettings& s, std::function<void(double, Eigen::VectorXd&)> project = {})
+      : p_(p), s_(s), project_(std::move(project)),
         tableau_(rk_tableau(s.tableau)),
         split_(ldu_splitting(tableau_.implicit_block())),
         embedded_(embedded_formula(tableau_, split_)),
@@ -82,7 +84,19 @@ class Driver {
     result_.stats.contraction_m = contraction_constant(tableau_.implicit_block(), t_matrix_);
   }
 
-  TirkResult run(const std::function<void(double, const Eigen::VectorXd&)>& on_step);
+  // From problem.t0 and y0 (read again at every begin) towards problem.t_end.
+  void begin();
+  // One accepted step; false when the end is reached.
+  bool advance();
+  TirkResult& result() { return result_; }
+  double t() const { return t_now_; }
+  double tau() const { return tau_; }
+  const Eigen::VectorXd& y() const { return x_; }
+  const Eigen::VectorXd& f() const { return fx_; }
+  // The last accepted step: its start, start value and derivative there.
+  double t_old() const { return t_old_; }
+  const Eigen::VectorXd& x_old() const { return x_old_; }
+  const Eigen::VectorXd& f_old() const { return f_old_; }
   // One step from (t, x) iterated at most `count` times from the trivial predictor;
   // after(k) sees the stages after iteration k and returns false to stop. False when the
   // factorisation failed or an iterate was not finite.
@@ -103,6 +117,7 @@ class Driver {
 
   const OdeProblem& p_;
   const TirkSettings& s_;
+  std::function<void(double, Eigen::VectorXd&)> project_;
   RkTableau tableau_;
   TriangularSplitting split_;
   EmbeddedFormula embedded_;
@@ -120,9 +135,13 @@ class Driver {
   bool jacobian_at_point_ = false, jacobian_stale_ = true;
   double factorized_tau_ = std::numeric_limits<double>::quiet_NaN();
   int iterations_ = 0;
+  // The stepping state: time, solution and f there, the step to try, and the last step's start.
+  double t_now_ = 0, tau_ = 0, t_old_ = 0;
+  Eigen::VectorXd x_, fx_, x_old_, f_old_;
+  bool fixed_ = false, after_rejection_ = false;
 };
 
-void Driver::fail(const std::string& why, double tau) const {
+void TirkIntegrator::Driver::fail(const std::string& why, double tau) const {
   std::ostringstream os;
   os << why << " at t = " << t_ << " (step " << tau << ")";
   if (!newton()) {
@@ -132,12 +151,12 @@ void Driver::fail(const std::string& why, double tau) const {
     if (l > 0) os << " = " << 1.0 / (l * st.contraction_m);
     os << " (M = " << st.contraction_m << ", L >= " << l << " from |J(t0, y0)| and the iterates)";
   }
-  throw std::runtime_error(os.str());
+  throw RunError(os.str());
 }
 
 // I - tau t_ii J for every distinct t_ii, J evaluated first when stale. Kept while tau and
 // J stay the same. False when a matrix is singular.
-bool Driver::factorize(const Eigen::VectorXd& x, const Eigen::VectorXd& fx, double tau) {
+bool TirkIntegrator::Driver::factorize(const Eigen::VectorXd& x, const Eigen::VectorXd& fx, double tau) {
   TirkStats& st = result_.stats;
   if (!jacobian_stale_ && tau == factorized_tau_) return true;
   if (jacobian_stale_) {
@@ -159,7 +178,7 @@ bool Driver::factorize(const Eigen::VectorXd& x, const Eigen::VectorXd& fx, doub
   return stages_.factorization_ok();
 }
 
-void Driver::begin_step(double t, const Eigen::VectorXd& x, const Eigen::VectorXd& fx, double tau) {
+void TirkIntegrator::Driver::begin_step(double t, const Eigen::VectorXd& x, const Eigen::VectorXd& fx, double tau) {
   ++result_.stats.steps;
   t_ = t;
   scale_ = s_.atol + s_.rtol * x.array().abs();
@@ -174,7 +193,7 @@ void Driver::begin_step(double t, const Eigen::VectorXd& x, const Eigen::VectorX
 }
 
 // One iteration through the graph; false when f was not finite.
-bool Driver::iterate_once() {
+bool TirkIntegrator::Driver::iterate_once() {
   arena_.execute([&] {
     stages_.start();
     graph_->wait_for_all();
@@ -188,7 +207,7 @@ bool Driver::iterate_once() {
 }
 
 // Until converged, or exactly `iterations` times (> 0). False: diverged or failed.
-bool Driver::iterate(int iterations) {
+bool TirkIntegrator::Driver::iterate(int iterations) {
   for (;;) {
     if (!iterate_once()) return false;
     const double norm = stages_.correction();
@@ -207,7 +226,7 @@ bool Driver::iterate(int iterations) {
 
 // x_{n+1}: the last stage for a stiffly accurate method (Y_s, whose f is known), else
 // x_n + tau sum b_i F_i.
-Eigen::VectorXd Driver::step_end(const Eigen::VectorXd& x, double tau) const {
+Eigen::VectorXd TirkIntegrator::Driver::step_end(const Eigen::VectorXd& x, double tau) const {
   if (stiffly_accurate_) return stages_.y().back();
   Eigen::VectorXd out = x;
   for (int j = 0; j < tableau_.stages(); ++j)
@@ -215,7 +234,7 @@ Eigen::VectorXd Driver::step_end(const Eigen::VectorXd& x, double tau) const {
   return out;
 }
 
-double Driver::estimate(const Eigen::VectorXd& x, const Eigen::VectorXd& x_new, const Eigen::VectorXd& fx, double tau) const {
+double TirkIntegrator::Driver::estimate(const Eigen::VectorXd& x, const Eigen::VectorXd& x_new, const Eigen::VectorXd& fx, double tau) const {
   Eigen::VectorXd e = (tau * embedded_.gamma) * fx;
   for (int j = 0; j < tableau_.stages(); ++j) {
     const double w = embedded_.bhat(j) - tableau_.b(j);
@@ -226,11 +245,14 @@ double Driver::estimate(const Eigen::VectorXd& x, const Eigen::VectorXd& x_new, 
   return (e.array().abs() / sc).maxCoeff();
 }
 
-TirkResult Driver::run(const std::function<void(double, const Eigen::VectorXd&)>& on_step) {
+void TirkIntegrator::Driver::begin() {
   TirkStats& st = result_.stats;
   double t = p_.t0;
   t_ = t;
-  Eigen::VectorXd x = p_.y0, fx(p_.size);
+  x_ = p_.y0;
+  fx_.resize(p_.size);
+  Eigen::VectorXd& x = x_;
+  Eigen::VectorXd& fx = fx_;
   p_.evaluate(t, x, fx);
   ++st.rhs_evaluations;
   // L at the start, for the contraction bound of the functional iterations.
@@ -239,14 +261,26 @@ TirkResult Driver::run(const std::function<void(double, const Eigen::VectorXd&)>
   st.lipschitz_start = infinity_norm(jac_);
   jacobian_stale_ = false;
   jacobian_at_point_ = true;
-  const bool fixed = s_.fixed_step > 0;
-  double tau = s_.fixed_step;
-  if (!fixed) {
+  factorized_tau_ = std::numeric_limits<double>::quiet_NaN();
+  fixed_ = s_.fixed_step > 0;
+  tau_ = s_.fixed_step;
+  if (!fixed_) {
     const Eigen::VectorXd scale = s_.atol + s_.rtol * x.array().abs();
-    tau = s_.initial_step > 0 ? s_.initial_step : starting_step(p_, x, fx, scale, tableau_.order, st.rhs_evaluations);
+    tau_ = s_.initial_step > 0 ? s_.initial_step : starting_step(p_, x, fx, scale, tableau_.order, st.rhs_evaluations);
   }
+  t_now_ = t_old_ = t;
+  after_rejection_ = false;  // the step after a rejected one does not grow (Hairer & Wanner, IV.8)
+}
+
+bool TirkIntegrator::Driver::advance() {
+  TirkStats& st = result_.stats;
+  double& t = t_now_;
+  double& tau = tau_;
+  Eigen::VectorXd& x = x_;
+  Eigen::VectorXd& fx = fx_;
+  const bool fixed = fixed_;
+  bool& after_rejection = after_rejection_;
   const double t_end = p_.t_end, eps_t = 1e-12 * std::max(1.0, std::abs(t_end));
-  bool after_rejection = false;  // the step after a rejected one does not grow (Hairer & Wanner, IV.8)
   while (t_end - t > eps_t) {
     if (st.steps >= s_.max_steps) fail("reached the maximum number of steps", tau);
     const double min_step = s_.min_step > 0 ? s_.min_step : 1e-14 * std::max(1.0, std::abs(t));
@@ -295,24 +329,27 @@ TirkResult Driver::run(const std::function<void(double, const Eigen::VectorXd&)>
     ++st.accepted;
     st.largest_step = std::max(st.largest_step, h);
     if (newton() && monitor_.theta > 0.3) jacobian_stale_ = true;
+    t_old_ = t;
+    x_old_.swap(x);
+    f_old_.swap(fx);
+    fx.resize(p_.size);
     t = lands ? t_end : t + h;
     x = std::move(x_new);
-    if (stiffly_accurate_) {
+    if (project_) project_(t, x);
+    if (stiffly_accurate_ && !project_) {
       fx = stages_.f().back();
     } else {
       p_.evaluate(t, x, fx);
       ++st.rhs_evaluations;
     }
     jacobian_at_point_ = false;
-    if (on_step) on_step(t, x);
     if (!fixed) tau = newton() && fac >= 1 && fac <= 1.2 ? h : h * fac;  // kept: no new factorisation
+    return true;
   }
-  result_.t = t;
-  result_.y = x;
-  return result_;
+  return false;
 }
 
-bool Driver::iterate_step(double t, const Eigen::VectorXd& x, const Eigen::VectorXd& fx, double tau, int count,
+bool TirkIntegrator::Driver::iterate_step(double t, const Eigen::VectorXd& x, const Eigen::VectorXd& fx, double tau, int count,
                           const std::function<bool(int)>& after) {
   begin_step(t, x, fx, tau);
   if (newton()) {
@@ -326,26 +363,49 @@ bool Driver::iterate_step(double t, const Eigen::VectorXd& x, const Eigen::Vecto
   return true;
 }
 
-}  // namespace
+TirkIntegrator::TirkIntegrator(const OdeProblem& problem, const TirkSettings& settings,
+                               std::function<void(double, Eigen::VectorXd&)> project) {
+  check_settings(problem, settings);
+  d_ = std::make_unique<Driver>(problem, settings, std::move(project));
+}
+TirkIntegrator::~TirkIntegrator() = default;
+void TirkIntegrator::begin() { d_->begin(); }
+bool TirkIntegrator::advance() { return d_->advance(); }
+double TirkIntegrator::t() const { return d_->t(); }
+double TirkIntegrator::next_step() const { return d_->tau(); }
+const Eigen::VectorXd& TirkIntegrator::y() const { return d_->y(); }
+const TirkStats& TirkIntegrator::stats() const { return d_->result().stats; }
+
+void TirkIntegrator::dense(double t, Eigen::VectorXd& out) const {
+  // Cubic Hermite interpolation between the last step's ends (values and derivatives).
+  const double h = d_->t() - d_->t_old(), th = h > 0 ? (t - d_->t_old()) / h : 1.0, th1 = th - 1.0;
+  const double h00 = (1 + 2 * th) * th1 * th1, h10 = th * th1 * th1, h01 = th * th * (3 - 2 * th), h11 = th * th * th1;
+  out = h00 * d_->x_old() + (h10 * h) * d_->f_old() + h01 * d_->y() + (h11 * h) * d_->f();
+}
 
 TirkResult integrate_tirk(const OdeProblem& problem, const TirkSettings& settings,
                           const std::function<void(double t, const Eigen::VectorXd& y)>& on_step) {
-  check_settings(problem, settings);
-  Driver d(problem, settings);
-  return d.run(on_step);
+  TirkIntegrator integrator(problem, settings);
+  integrator.begin();
+  while (integrator.advance())
+    if (on_step) on_step(integrator.t(), integrator.y());
+  TirkResult& r = integrator.d_->result();
+  r.t = integrator.t();
+  r.y = integrator.y();
+  return std::move(r);
 }
 
 IterationTrace trace_tirk_iterations(const OdeProblem& problem, const TirkSettings& settings, double t,
                                      const Eigen::VectorXd& x, double tau, int count) {
   check_settings(problem, settings);
-  if (!(tau > 0) || count < 1) throw std::invalid_argument("trace: the step and the iteration count must be positive");
+  if (!(tau > 0) || count < 1) throw InputError("trace: the step and the iteration count must be positive");
   IterationTrace out;
   Eigen::VectorXd fx(problem.size);
   problem.evaluate(t, x, fx);
   // The converged stage values: newton-triangular until the corrections reach rounding.
   TirkSettings rs = settings;
   rs.iteration = TirkIteration::newton_triangular;
-  Driver reference(problem, rs);
+  TirkIntegrator::Driver reference(problem, rs);
   std::vector<Eigen::VectorXd> y_star;
   if (reference.iterate_step(t, x, fx, tau, 400, [&](int) { return !reference.stages().at_rounding(); })) {
     const TirkStages& st = reference.stages();
@@ -368,7 +428,7 @@ IterationTrace trace_tirk_iterations(const OdeProblem& problem, const TirkSettin
   if (!out.reference_ok) return out;
   double size = 1;
   for (const Eigen::VectorXd& y : y_star) size = std::max(size, y.cwiseAbs().maxCoeff());
-  Driver scheme(problem, settings);
+  TirkIntegrator::Driver scheme(problem, settings);
   std::fill(out.error.begin(), out.error.end(), std::numeric_limits<double>::infinity());
   scheme.iterate_step(t, x, fx, tau, count, [&](int k) {
     double e = 0;

@@ -1,8 +1,8 @@
+#include "mbsflow/error.hpp"
 #include "tirk_stages.hpp"
 
 #include <algorithm>
 #include <cmath>
-#include <stdexcept>
 
 #include "annotated_node.hpp"
 
@@ -30,7 +30,7 @@ TirkStages::TirkStages(const RkTableau& tableau, const Eigen::MatrixXd& t, TirkI
   if (!newton()) return;
   for (int i = 0; i < si_; ++i) {
     const double v = t_(i, i);
-    if (!(v > 0)) throw std::invalid_argument("Newton-type iteration: the diagonal of T must be positive");
+    if (!(v > 0)) throw InputError("Newton-type iteration: the diagonal of T must be positive");
     auto same = std::find_if(diagonal_values_.begin(), diagonal_values_.end(),
                              [v](double w) { return std::abs(v - w) <= 1e-14 * std::max(v, w); });
     if (same == diagonal_values_.end()) {
@@ -171,7 +171,7 @@ void TirkStages::build(flow::graph& g) {
                       try {
                         solvers_[static_cast<std::size_t>(k)].factorize(*factor_jac_, factor_tau_ * diagonal_values_[static_cast<std::size_t>(k)],
                                                                         factor_kind_);
-                      } catch (const std::runtime_error&) {
+                      } catch (const RunError&) {
                         factor_failed_[static_cast<std::size_t>(k)] = 1;
                       }
                     }));

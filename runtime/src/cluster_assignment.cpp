@@ -1,7 +1,7 @@
 // Which worker of a cluster runs which submodel.
 #include <numeric>
 
-#include "mbsflow/graph/error.hpp"
+#include "mbsflow/error.hpp"
 #include "mbsflow/runtime/cluster.hpp"
 
 namespace mbsflow {

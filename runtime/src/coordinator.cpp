@@ -3,13 +3,13 @@
 #include <map>
 
 #include "cluster_wire.hpp"
-#include "mbsflow/graph/error.hpp"
+#include "mbsflow/error.hpp"
 #include "mbsflow/runtime/cluster.hpp"
 #include "coupling_log.hpp"
 #include "mbsflow/runtime/loose_coupling.hpp"
 #include "partitioned_state.hpp"
 #include "sink_runner.hpp"
-#include "step_grid.hpp"
+#include "mbsflow/methods/step_grid.hpp"
 
 namespace mbsflow {
 namespace {

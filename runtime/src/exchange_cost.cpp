@@ -5,7 +5,7 @@
 #include <unistd.h>
 
 #include "cluster_wire.hpp"
-#include "mbsflow/graph/error.hpp"
+#include "mbsflow/error.hpp"
 #include "mbsflow/runtime/cluster.hpp"
 
 namespace mbsflow {

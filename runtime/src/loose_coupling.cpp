@@ -8,7 +8,7 @@
 
 #include "loose_part.hpp"
 #include "loose_rounds.hpp"
-#include "mbsflow/graph/error.hpp"
+#include "mbsflow/error.hpp"
 #include "sink_runner.hpp"
 
 namespace mbsflow {

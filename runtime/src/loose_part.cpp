@@ -3,8 +3,9 @@
 #include <algorithm>
 #include <cmath>
 
-#include "mbsflow/graph/error.hpp"
+#include "mbsflow/error.hpp"
 #include "mbsflow/runtime/divergence.hpp"
+#include "sink_runner.hpp"
 
 namespace mbsflow::loose {
 
@@ -25,35 +26,28 @@ void lagrange_weights(const Samples& s, double t, double* w) {
 
 // The local system whose ghost bodies follow the extrapolation, whatever the integrator
 // puts in their places; their derivatives are zero.
-struct LoosePart::Ghosted {
-  LoosePart& lp;
-  Eigen::Index dimension() const { return lp.part.system.dimension(); }
-  void rhs(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) {
-    lp.work_ = y;
-    lp.extrapolate_ghosts(t, lp.work_);
-    lp.part.system.rhs(t, lp.work_, dydt);
-    const StateLayout& l = lp.part.system.layout();
-    const Eigen::Index own = lp.part.own, ghosts = l.bodies - own;
-    dydt.segment(l.position(own), 3 * ghosts).setZero();
-    dydt.segment(l.orientation(own), 4 * ghosts).setZero();
-    dydt.segment(l.velocity(own), 3 * ghosts).setZero();
-    dydt.segment(l.angular_velocity(own), 3 * ghosts).setZero();
-  }
-};
+void LoosePart::ghosted_rhs(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) {
+  work_ = y;
+  extrapolate_ghosts(t, work_);
+  part.system.rhs(t, work_, dydt);
+  const StateLayout& l = part.system.layout();
+  const Eigen::Index own = part.own, ghosts = l.bodies - own;
+  dydt.segment(l.position(own), 3 * ghosts).setZero();
+  dydt.segment(l.orientation(own), 4 * ghosts).setZero();
+  dydt.segment(l.velocity(own), 3 * ghosts).setZero();
+  dydt.segment(l.angular_velocity(own), 3 * ghosts).setZero();
+}
 
 LoosePart::LoosePart(const Model& model, const Submodel& sub, const RunOptions& o, Method method, int extrapolation,
                      int retain)
     : part(model, sub, extrapolation + 1), o_(o), order_(extrapolation), retain_(static_cast<std::size_t>(retain)),
       history_(sub.exchanges.size()), predicted_(sub.exchanges.size()) {
-  if (method == Method::rk4) {
-    rk4_ = std::make_unique<Rk4>(part.system.dimension());
-  } else {
-    Dopri5Settings s;
-    s.rtol = o.rtol;
-    s.atol = o.atol;
-    dopri5_ = std::make_unique<Dopri5>(part.system.dimension(), s);
-    h_ = o.step;
-  }
+  system_.size = part.system.dimension();
+  system_.rhs = [this](double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) { ghosted_rhs(t, y, dydt); };
+  system_.after_step = [this](double t, Eigen::VectorXd& y) { part.system.after_step(t, y); };
+  RunOptions mine = o;
+  mine.method = method;
+  stepper_ = stepper_entry(method).make(system_, stepper_settings(mine));
 }
 
 void LoosePart::make_past(double t0, double H) {
@@ -98,34 +92,14 @@ void LoosePart::extrapolate_ghosts(double t, Eigen::VectorXd& y) {
 }
 
 void LoosePart::integrate(double t0, double t1) {
-  Ghosted sys{*this};
-  Eigen::VectorXd& y = part.x[0];
-  if (rk4_) {
-    const StepGrid grid = step_grid(t0, t1, o_.step);
-    for (long k = 0; k < grid.steps; ++k) {
-      rk4_->step(sys, grid.time(k), grid.time(k + 1) - grid.time(k), y);
-      part.system.after_step(grid.time(k + 1), y);
-    }
-    steps += grid.steps;
-    evaluations += 4 * grid.steps;
-    return;
-  }
-  Dopri5& dp = *dopri5_;
-  dp.invalidate();  // the ghosts moved on: the stored derivative is stale
-  const long before_rejected = dp.stats().rejected, before_accepted = dp.stats().accepted;
-  double t = t0;
-  while (t < t1) {
-    h_ = std::min(h_, t1 - t);
-    double taken = 0.0;
-    if (!dp.step(sys, t, h_, y, taken)) throw RunError(step_collapsed_message(h_, t, o_.rtol));
-    const double t_new = landed_time(t, taken, t1);
-    part.system.after_step(t_new, y);
-    dp.invalidate();
-    t = t_new;
-  }
-  steps += dp.stats().accepted - before_accepted;
-  rejected += dp.stats().rejected - before_rejected;
-  evaluations = dp.stats().evaluations;
+  const StepperStats before = stepper_->stats();
+  stepper_->start(t0, part.x[0], t1);  // the ghosts moved on: what the method kept of f is stale
+  while (!stepper_->done()) stepper_->step();
+  part.x[0] = stepper_->y();
+  const StepperStats& after = stepper_->stats();
+  steps += after.accepted - before.accepted;
+  rejected += after.rejected - before.rejected;
+  evaluations += after.evaluations - before.evaluations;
 }
 
 namespace {
@@ -199,12 +173,12 @@ double LoosePart::pack_published(long index, const std::vector<int>& bodies, dou
 
 void LoosePart::save() {
   saved_ = part.x[0];
-  saved_h_ = h_;
+  saved_h_ = stepper_->next_step();
 }
 
 void LoosePart::restore(long index) {
   part.x[0] = saved_;
-  h_ = saved_h_;
+  stepper_->set_next_step(saved_h_);
   for (auto& p : predicted_)
     while (!p.empty() && p.back().index >= index) p.pop_back();
   std::lock_guard lock(board_mutex_);

@@ -11,11 +11,10 @@
 #include <optional>
 #include <vector>
 
-#include "mbsflow/methods/dopri5.hpp"
-#include "mbsflow/methods/rk4.hpp"
+#include "mbsflow/methods/step_grid.hpp"
+#include "mbsflow/methods/stepper.hpp"
 #include "mbsflow/runtime/simulation.hpp"
 #include "partitioned_state.hpp"
-#include "step_grid.hpp"
 
 namespace mbsflow::loose {
 
@@ -35,7 +34,8 @@ class LoosePart {
   // After the ghost slots of x[1..k] and x[0] hold the owners' past and initial values:
   // they become the first samples (macro-step ends -k..0), and x[0] is published as end 0.
   void start(double t0, double H);
-  // Integrates the own bodies from t0 to t1 with the ghosts extrapolated.
+  // Integrates the own bodies from t0 to t1 with the ghosts extrapolated: the submodel's
+  // stepper (any registered method) takes its own steps inside the macro step.
   void integrate(double t0, double t1);
 
   // Before the macro step to end `index` (time t): what the ghosts are extrapolated to
@@ -61,7 +61,8 @@ class LoosePart {
   long steps = 0, rejected = 0, evaluations = 0;
 
  private:
-  struct Ghosted;  // the local system with extrapolated ghosts (loose_part.cpp)
+  // The local system with extrapolated ghosts: what the stepper integrates.
+  void ghosted_rhs(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt);
   struct Sample {
     long index;
     double t;
@@ -83,9 +84,8 @@ class LoosePart {
   std::vector<std::deque<Sample>> predicted_;  // per exchange, oldest first
   mutable std::mutex board_mutex_;
   std::deque<Published> board_;  // oldest first
-  std::unique_ptr<Rk4> rk4_;
-  std::unique_ptr<Dopri5> dopri5_;
-  double h_ = 0.0;  // DOPRI5's next step
+  StepperSystem system_;
+  std::unique_ptr<Stepper> stepper_;
   Eigen::VectorXd saved_, work_;
   std::vector<double> ghost_buffer_;
   double saved_h_ = 0.0;

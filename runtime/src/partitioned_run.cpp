@@ -9,12 +9,12 @@
 #include <memory>
 #include <numeric>
 
-#include "mbsflow/graph/error.hpp"
+#include "mbsflow/error.hpp"
 #include "mbsflow/methods/dopri5.hpp"
 #include "partitioned_state.hpp"
 #include "schedules.hpp"
 #include "sink_runner.hpp"
-#include "step_grid.hpp"
+#include "mbsflow/methods/step_grid.hpp"
 
 namespace mbsflow {
 namespace {
@@ -150,6 +150,12 @@ int default_partitions(const Model& model, int threads) {
 RunSummary run_partitioned(const Model& model, const Decomposition& d, const RunOptions& o, const ParallelOptions& par,
                            ResultSink* sink, ParallelStats* stats) {
   check_options(o);
+  stepper_entry(o.method);  // a method that exists
+  if (!(o.method == Method::rk4 || o.method == Method::dopri5))
+    throw InputError(std::string("a tightly coupled run of several submodels exchanges RK4 or DOPRI5 stages; ") +
+                     method_name(o.method) +
+                     " integrates a whole model (its stages run in parallel inside the step) or each submodel of a "
+                     "loosely coupled run");
   const int threads = par.threads > 0 ? par.threads : tbb::info::default_concurrency();
   tbb::task_arena arena(threads);
   RunSummary out;

@@ -4,7 +4,7 @@
 #include <cstring>
 
 #include "cluster_wire.hpp"
-#include "mbsflow/graph/error.hpp"
+#include "mbsflow/error.hpp"
 
 namespace mbsflow {
 

@@ -4,13 +4,12 @@
 #include <cmath>
 #include <cstdio>
 
-#include "mbsflow/graph/error.hpp"
+#include "mbsflow/error.hpp"
 #include "mbsflow/graph/stable_step.hpp"
-#include "mbsflow/methods/dopri5.hpp"
-#include "mbsflow/methods/rk4.hpp"
+#include "mbsflow/methods/stepper.hpp"
 #include "mbsflow/runtime/divergence.hpp"
 #include "sink_runner.hpp"
-#include "step_grid.hpp"
+#include "multibody_stepper.hpp"
 
 namespace mbsflow {
 namespace {
@@ -22,57 +21,38 @@ void check(const MultibodySystem& sys, const Eigen::VectorXd& y, double t, const
   check_stop(o, t);
 }
 
-void run_rk4(MultibodySystem& sys, const RunOptions& o, ResultSink* sink, RunSummary& out, Eigen::VectorXd& y) {
-  Rk4 rk(sys.dimension());
-  const StepGrid grid = step_grid(o.t_start, o.t_end, o.step);
-  const long n = grid.steps;
-  double t = o.t_start;
-  for (long k = 1; k <= n; ++k) {
-    const double t_next = grid.time(k);
-    rk.step(sys, t, t_next - t, y);
-    sys.after_step(t_next, y);
-    t = t_next;
-    check(sys, y, t, o);
-    if (sink && (k % o.output_every == 0 || k == n)) emit(sys, sink, t, y, out);
+// Fixed-step methods: a snapshot every output_every steps and at the end.
+void run_fixed(MultibodySystem& sys, Stepper& stepper, const RunOptions& o, ResultSink* sink, RunSummary& out) {
+  for (long k = 1; !stepper.done(); ++k) {
+    stepper.step();
+    const double t = stepper.t();
+    check(sys, stepper.y(), t, o);
+    if (sink && (k % o.output_every == 0 || stepper.done())) emit(sys, sink, t, stepper.y(), out);
     if (o.progress && (k & 15) == 0) o.progress(t, k);
   }
-  out.steps = n;
-  out.evaluations = n * Rk4::evaluations_per_step;
 }
 
-void run_dopri5(MultibodySystem& sys, const RunOptions& o, ResultSink* sink, RunSummary& out, Eigen::VectorXd& y) {
-  Dopri5Settings s;
-  s.rtol = o.rtol;
-  s.atol = o.atol;
-  Dopri5 dp(sys.dimension(), s);
+// Adaptive methods: snapshots on the uniform grid of output_every * step seconds from the
+// dense output, and at the end.
+void run_adaptive(MultibodySystem& sys, Stepper& stepper, const RunOptions& o, ResultSink* sink, RunSummary& out) {
   const double dt_out = o.step * o.output_every;
   long next_out = 1;
-  double t = o.t_start, h = o.step;
   Eigen::VectorXd dense(sys.dimension());
-  while (t < o.t_end) {
-    h = std::min(h, o.t_end - t);
-    double taken = 0.0;
-    if (!dp.step(sys, t, h, y, taken)) throw RunError(step_collapsed_message(h, t, o.rtol));
-    const double t_new = landed_time(t, taken, o.t_end);
-    // Snapshots on the uniform output grid inside this step, from the dense output.
+  while (!stepper.done()) {
+    stepper.step();
+    const double t_new = stepper.t();
     while (sink) {
       const double t_out = o.t_start + static_cast<double>(next_out) * dt_out;
       if (t_out > t_new || t_out >= o.t_end) break;
-      dp.dense(t_out, dense);
+      stepper.dense(t_out, dense);
       sys.after_step(t_out, dense);
       emit(sys, sink, t_out, dense, out);
       ++next_out;
     }
-    sys.after_step(t_new, y);
-    dp.invalidate();
-    t = t_new;
-    check(sys, y, t, o);
-    if (o.progress && (dp.stats().accepted & 15) == 0) o.progress(t, dp.stats().accepted);
+    check(sys, stepper.y(), t_new, o);
+    if (o.progress && (stepper.stats().accepted & 15) == 0) o.progress(t_new, stepper.stats().accepted);
   }
-  if (sink) emit(sys, sink, t, y, out);
-  out.steps = dp.stats().accepted;
-  out.rejected = dp.stats().rejected;
-  out.evaluations = dp.stats().evaluations;
+  if (sink) emit(sys, sink, stepper.t(), stepper.y(), out);
 }
 
 }  // namespace
@@ -92,19 +72,26 @@ RunOptions options_from_model(const Model& model) {
 
 RunSummary run_simulation(MultibodySystem& sys, const RunOptions& o, ResultSink* sink) {
   check_options(o);
+  const StepperEntry& entry = stepper_entry(o.method);
   RunSummary out;
   const auto start = Clock::now();
   Eigen::VectorXd y = sys.initial_state();
+  const StepperSystem system = stepper_system(sys);
+  std::unique_ptr<Stepper> stepper = entry.make(system, stepper_settings(o));
+  stepper->start(o.t_start, y, o.t_end);
   if (sink) sink->begin(sys);
   run_with_sink(sink, out, [&] {
     if (sink) emit(sys, sink, o.t_start, y, out);
-    if (o.method == Method::rk4)
-      run_rk4(sys, o, sink, out, y);
+    if (entry.adaptive)
+      run_adaptive(sys, *stepper, o, sink, out);
     else
-      run_dopri5(sys, o, sink, out, y);
+      run_fixed(sys, *stepper, o, sink, out);
   });
+  out.steps = stepper->stats().accepted;
+  out.rejected = stepper->stats().rejected;
+  out.evaluations = stepper->stats().evaluations;
   out.wall_seconds = std::chrono::duration<double>(Clock::now() - start).count();
-  out.final_state = std::move(y);
+  out.final_state = stepper->y();
   return out;
 }
 

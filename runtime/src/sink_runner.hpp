@@ -5,7 +5,8 @@
 #include <cstdio>
 #include <string>
 
-#include "mbsflow/graph/error.hpp"
+#include "mbsflow/error.hpp"
+#include "mbsflow/methods/stepper.hpp"
 #include "mbsflow/runtime/simulation.hpp"
 
 namespace mbsflow {
@@ -60,6 +61,22 @@ inline void check_options(const RunOptions& o) {
   if (!(o.t_end > o.t_start)) throw InputError("t_end must be greater than t_start");
   if (!(o.step > 0.0) || !std::isfinite(o.step)) throw InputError("the step must be a positive finite number");
   if (o.output_every < 1) throw InputError("output_every must be >= 1");
+}
+
+// The registry entry of the run's method (InputError naming the methods there are).
+inline const StepperEntry& stepper_entry(Method m) {
+  if (const StepperEntry* e = find_stepper(m.name())) return *e;
+  throw InputError("unknown method '" + std::string(m.name()) + "' (" + method_list() + ")");
+}
+
+inline StepperSettings stepper_settings(const RunOptions& o) {
+  StepperSettings s;
+  s.step = o.step;
+  s.rtol = o.rtol;
+  s.atol = o.atol;
+  s.threads = 0;
+  s.variant = o.variant;
+  return s;
 }
 
 inline void check_stop(const RunOptions& o, double t) {

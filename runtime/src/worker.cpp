@@ -2,7 +2,8 @@
 #include <cstdio>
 
 #include "cluster_wire.hpp"
-#include "mbsflow/graph/error.hpp"
+#include "mbsflow/error.hpp"
+#include "mbsflow/methods/stepper.hpp"
 #include "mbsflow/runtime/cluster.hpp"
 #include "worker_part.hpp"
 
@@ -46,7 +47,10 @@ Session read_setup(const WorkerOptions& wo, const json& setup) {
   s.worker_of = setup.at("worker_of").get<std::vector<int>>();
   s.me = setup.at("worker").get<int>();
   const json& o = setup.at("options");
-  s.o.method = *parse_method(o.value("method", std::string("rk4")));
+  const std::string method = o.value("method", std::string("rk4"));
+  const std::optional<Method> known = find_method(method);
+  if (!known) throw InputError("the coordinator asked for an unknown method " + method);
+  s.o.method = *known;
   s.o.rtol = o.value("rtol", 1e-6);
   s.o.atol = o.value("atol", 1e-8);
   s.o.t_start = o.at("t_start").get<double>();
@@ -59,7 +63,7 @@ Session read_setup(const WorkerOptions& wo, const json& setup) {
     s.loose = LooseOptions{l.at("macro_step").get<double>(), l.at("extrapolation").get<int>(), 0, 0.0,
                            l.value("max_lag", 0), l.value("exact_lag", false), {}};
     for (const std::string& name : l.value("methods", std::vector<std::string>{})) {
-      const std::optional<Method> m = parse_method(name);
+      const std::optional<Method> m = find_method(name);
       if (!m) throw InputError("the coordinator asked for an unknown method " + name);
       s.loose->methods.push_back(*m);
     }

@@ -1,7 +1,7 @@
 #include "worker_io.hpp"
 
 #include "cluster_wire.hpp"
-#include "mbsflow/graph/error.hpp"
+#include "mbsflow/error.hpp"
 #include "remote_exchange.hpp"
 
 namespace mbsflow {

@@ -7,7 +7,7 @@
 #include <memory>
 
 #include "schedules.hpp"
-#include "step_grid.hpp"
+#include "mbsflow/methods/step_grid.hpp"
 #include "worker_part.hpp"
 
 namespace mbsflow {

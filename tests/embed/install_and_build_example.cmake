@@ -14,4 +14,5 @@ step("configure the example" ${CMAKE_COMMAND} -S "${SOURCE_DIR}/examples/embed" 
 step("build the example" ${CMAKE_COMMAND} --build "${WORK_DIR}/build")
 step("run the example" "${WORK_DIR}/build/embed_example" "${WORK_DIR}/embed.h5")
 step("run the ODE example" "${WORK_DIR}/build/ode_example")
+step("run the controller example" "${WORK_DIR}/build/controller_example")
 file(REMOVE_RECURSE "${WORK_DIR}")

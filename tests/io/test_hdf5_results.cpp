@@ -3,7 +3,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "mbsflow/graph/error.hpp"
+#include "mbsflow/error.hpp"
 #include "mbsflow/graph/generators.hpp"
 #include "mbsflow/io/hdf5_sink.hpp"
 #include "mbsflow/io/results_file.hpp"

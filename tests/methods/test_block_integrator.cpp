@@ -225,11 +225,11 @@ TEST_CASE("block integrator: bad settings are refused", "[methods][block]") {
   const OdeProblem p = detest_b1_problem();
   BlockSettings s;
   s.rtol = 0;
-  CHECK_THROWS_AS(integrate_block(p, s), std::invalid_argument);
+  CHECK_THROWS_AS(integrate_block(p, s), InputError);
   s = {};
   s.method = {1, 3, 2};
-  CHECK_THROWS_AS(integrate_block(p, s), std::invalid_argument);
+  CHECK_THROWS_AS(integrate_block(p, s), InputError);
   s = {};
   s.max_steps = 3;
-  CHECK_THROWS_AS(integrate_block(p, s), std::runtime_error);
+  CHECK_THROWS_AS(integrate_block(p, s), RunError);
 }

@@ -76,7 +76,7 @@ TEST_CASE("tirk: the functional iterations converge within tau < 1/(L M) and div
     try {
       integrate_tirk(p, s);
       FAIL("no divergence reported");
-    } catch (const std::runtime_error& e) {
+    } catch (const RunError& e) {
       CHECK_THAT(e.what(), Catch::Contains("diverged") && Catch::Contains("tau < 1/(L M)"));
     }
   }

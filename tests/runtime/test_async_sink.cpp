@@ -2,7 +2,7 @@
 #include <chrono>
 #include <thread>
 
-#include "mbsflow/graph/error.hpp"
+#include "mbsflow/error.hpp"
 #include "mbsflow/runtime/async_sink.hpp"
 #include "mbsflow/runtime/simulation.hpp"
 #include "memory_sink.hpp"

@@ -8,7 +8,7 @@
 #include <future>
 #include <thread>
 
-#include "mbsflow/graph/error.hpp"
+#include "mbsflow/error.hpp"
 #include "mbsflow/graph/generators.hpp"
 #include "mbsflow/graph/stable_step.hpp"
 #include "mbsflow/io/model_reader.hpp"

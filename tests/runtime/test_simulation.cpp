@@ -2,7 +2,7 @@
 #include <cmath>
 #include <vector>
 
-#include "mbsflow/graph/error.hpp"
+#include "mbsflow/error.hpp"
 #include "mbsflow/graph/generators.hpp"
 #include "mbsflow/graph/stable_step.hpp"
 #include "mbsflow/runtime/simulation.hpp"

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "mbsflow/graph/force_table.hpp"
+#include "mbsflow/method.hpp"
 #include "mbsflow/graph/time_function.hpp"
 
 namespace mbsflow {
@@ -71,8 +72,6 @@ struct Driver {
                                            TimeFunction::constant(0.0)};
 };
 
-enum class Method { rk4, dopri5 };
-
 struct SimulationSettings {
   double t_start = 0.0;
   double t_end = 1.0;
@@ -95,8 +94,6 @@ struct Model {
 
 // Index of the body called name, ground for "ground", nullopt if unknown.
 std::optional<int> find_body(const Model& model, const std::string& name);
-const char* method_name(Method m);
-std::optional<Method> parse_method(const std::string& name);
 
 // The seed's natural-frequency form of a bushing: stiffness m*Omega^2 and damping
 // 2*mu*Omega*m per axis, with m the reduced mass (translations) or the reduced

@@ -2,10 +2,10 @@
 // LU factorisation with partial pivoting of a band matrix (kl sub-, ku superdiagonals),
 // stored as LAPACK's dgbtrf does: row interchanges widen the upper band to kl + ku.
 // Eigen has band storage but no band solver; this is the unblocked algorithm (gbtf2).
+#include "mbsflow/error.hpp"
 #include <Eigen/Core>
 #include <cmath>
 #include <complex>
-#include <stdexcept>
 #include <vector>
 
 namespace mbsflow {
@@ -33,7 +33,7 @@ class BandedLU {
   }
   Eigen::Index size() const { return n_; }
 
-  // Throws std::runtime_error when a pivot is exactly zero (singular matrix).
+  // Throws RunError when a pivot is exactly zero (singular matrix).
   void factorize() {
     const Eigen::Index upper = kl_ + ku_;
     for (Eigen::Index j = 0; j < n_; ++j) {
@@ -46,7 +46,7 @@ class BandedLU {
           p = r;
         }
       pivot_[static_cast<std::size_t>(j)] = j + p;
-      if (best == 0) throw std::runtime_error("band matrix is singular");
+      if (best == 0) throw RunError("band matrix is singular");
       if (p != 0)
         for (Eigen::Index c = j; c <= j + right; ++c) std::swap(at(j, c), at(j + p, c));
       const Scalar inv = Scalar(1) / at(j, j);

@@ -5,7 +5,9 @@
 // slice of equations); their difference at the s shared points decides: within the global
 // tolerance the (s+1)-point solution is taken, within the local tolerance the s-point one,
 // otherwise the step is cut.
+#include "mbsflow/error.hpp"
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -17,7 +19,7 @@ namespace mbsflow {
 
 enum class BlockIteration { functional, newton };
 const char* to_string(BlockIteration i);
-BlockIteration block_iteration_from_string(const std::string& name);  // throws std::invalid_argument
+BlockIteration block_iteration_from_string(const std::string& name);  // throws InputError
 
 struct BlockSettings {
   BlockMethodSpec method;  // the s-point method; the (s+1)-point one has order + 1 (or its maximal order)
@@ -74,9 +76,33 @@ struct BlockResult {
 };
 
 // Integrates from problem.t0 to problem.t_end. on_block (optional) sees every accepted
-// block. Throws std::invalid_argument for bad settings and std::runtime_error when the
+// block. Throws InputError for bad settings and RunError when the
 // step falls below the minimum or max_steps is reached.
 BlockResult integrate_block(const OdeProblem& problem, const BlockSettings& settings,
                             const std::function<void(const AcceptedBlock&)>& on_block = {});
+
+// integrate_block block by block, with the same numbers: the engine of the "colloc"
+// stepper. The problem and settings are kept by reference; begin() reads the problem's
+// t0, y0 and t_end (and the settings' initial_step) again, so a caller may change them
+// and begin anew. project (optional) maps every accepted block's end point onto the
+// state's manifold before the next block starts from it.
+class BlockIntegrator {
+ public:
+  BlockIntegrator(const OdeProblem& problem, const BlockSettings& settings,
+                  std::function<void(const AcceptedBlock&)> on_block = {},
+                  std::function<void(double t, Eigen::VectorXd& y)> project = {});
+  ~BlockIntegrator();
+  void begin();
+  bool advance();  // one accepted block; false when problem.t_end is reached
+  double t() const;
+  const Eigen::VectorXd& y() const;
+  double next_step() const;  // the point spacing the next block tries
+  const BlockStats& stats() const;
+
+ private:
+  class Driver;
+  std::unique_ptr<Driver> d_;
+  friend BlockResult integrate_block(const OdeProblem&, const BlockSettings&, const std::function<void(const AcceptedBlock&)>&);
+};
 
 }  // namespace mbsflow

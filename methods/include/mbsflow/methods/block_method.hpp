@@ -8,6 +8,7 @@
 // The coefficients are generated in exact rational arithmetic from exactness on
 // polynomials (order conditions below); the doubles used by the solvers are rounded from
 // the exact values.
+#include "mbsflow/error.hpp"
 #include <Eigen/Core>
 #include <complex>
 #include <string>
@@ -39,7 +40,7 @@ struct BlockCoefficients {
   std::vector<bool> keep_u, keep_f;  // m and m + s flags: which data the method uses
 };
 
-// Throws std::invalid_argument for m < 1, s < 1, order outside 1..2m+s-1, or an order
+// Throws InputError for m < 1, s < 1, order outside 1..2m+s-1, or an order
 // that the kept data cannot reach.
 BlockCoefficients generate_block_method(const BlockMethodSpec& spec);
 

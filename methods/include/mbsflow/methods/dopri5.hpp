@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <string>
 
 #include "mbsflow/methods/ode_system.hpp"
 
@@ -126,6 +127,9 @@ class Controller {
 };
 
 }  // namespace dopri5
+
+// The message of a run whose DOPRI5 step size fell below its minimum.
+std::string step_collapsed_message(double h, double t, double rtol);
 
 class Dopri5 {
  public:

@@ -1,6 +1,7 @@
 #pragma once
 // An initial value problem y' = f(t, y), y(t0) = y0, for the implicit methods: the user
 // system of the library API and the built-in test problems.
+#include "mbsflow/error.hpp"
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 #include <functional>
@@ -66,7 +67,7 @@ OdeProblem make_ode_problem(std::string name, double t0, double t_end, Eigen::Ve
 OdeProblem hairer_wanner_problem();  // eq. 10 on [0, 2.5]
 OdeProblem detest_b1_problem();      // eq. 11 on [0, 20]
 OdeProblem heat_problem(Eigen::Index n);  // eq. 12 on [0, 4]
-// By name: "hnw", "b1", "heat" (n used by heat); throws std::invalid_argument otherwise.
+// By name: "hnw", "b1", "heat" (n used by heat); throws InputError otherwise.
 OdeProblem builtin_problem(const std::string& name, Eigen::Index n);
 
 }  // namespace mbsflow

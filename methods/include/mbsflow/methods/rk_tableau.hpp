@@ -7,6 +7,7 @@
 // diagonal), giving the triangular T_L = L D and T_U = U with A = T_L T_U, and the
 // diagonal approximation D. These are the matrices T of the iterations in
 // tirk_integrator.hpp.
+#include "mbsflow/error.hpp"
 #include <Eigen/Core>
 #include <string>
 #include <vector>
@@ -42,7 +43,7 @@ struct TriangularSplitting {
   double seed_formula_error = 0;
 };
 
-// Throws std::invalid_argument when a leading minor vanishes (no LDU without pivoting).
+// Throws InputError when a leading minor vanishes (no LDU without pivoting).
 TriangularSplitting ldu_splitting(const Eigen::MatrixXd& a);
 
 // An embedded solution for step control, one order lower than the stage values can
@@ -56,7 +57,7 @@ struct EmbeddedFormula {
 };
 EmbeddedFormula embedded_formula(const RkTableau& t, const TriangularSplitting& split);
 
-// By name; throws std::invalid_argument with the list of names otherwise.
+// By name; throws InputError with the list of names otherwise.
 RkTableau rk_tableau(const std::string& name);
 std::vector<std::string> rk_tableau_names();
 

@@ -3,6 +3,7 @@
 // linear systems of the simplified Newton iterations. The storage follows J's structure:
 // dense LU for small systems, band LU when J is banded, sparse LU (Eigen's SparseLU with
 // COLAMD ordering) otherwise.
+#include "mbsflow/error.hpp"
 #include <Eigen/Core>
 #include <Eigen/LU>
 #include <Eigen/SparseCore>
@@ -17,7 +18,7 @@ namespace mbsflow {
 
 enum class LinearSolverKind { automatic, dense, banded, sparse };
 const char* to_string(LinearSolverKind k);
-LinearSolverKind linear_solver_from_string(const std::string& name);  // throws std::invalid_argument
+LinearSolverKind linear_solver_from_string(const std::string& name);  // throws InputError
 
 struct Bandwidth {
   Eigen::Index lower = 0, upper = 0;
@@ -31,7 +32,7 @@ template <class Scalar>
 class ShiftedSolver {
  public:
   using Vector = Eigen::Matrix<Scalar, Eigen::Dynamic, 1>;
-  // Throws std::runtime_error when the matrix is singular.
+  // Throws RunError when the matrix is singular.
   void factorize(const Eigen::SparseMatrix<double>& j, Scalar gamma, LinearSolverKind kind);
   void solve(Vector& b) const;  // in place
   LinearSolverKind kind() const { return kind_; }

@@ -17,7 +17,9 @@
 //     factorisation per distinct t_ii, for stiff problems.
 // Stages (and slices of equations) are nodes of a oneTBB flow graph; the numbers do not
 // depend on the thread count.
+#include "mbsflow/error.hpp"
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -28,7 +30,7 @@ namespace mbsflow {
 
 enum class TirkIteration { jacobi, triangular, diagonal, newton_triangular, newton_diagonal };
 const char* to_string(TirkIteration i);
-TirkIteration tirk_iteration_from_string(const std::string& name);  // throws std::invalid_argument
+TirkIteration tirk_iteration_from_string(const std::string& name);  // throws InputError
 bool is_newton(TirkIteration i);
 
 // The approximation T of the implicit block of A that an iteration uses.
@@ -75,7 +77,7 @@ struct TirkResult {
 };
 
 // Integrates from problem.t0 to problem.t_end; on_step (optional) sees every accepted
-// step's end point. Throws std::invalid_argument for bad settings, std::runtime_error when
+// step's end point. Throws InputError for bad settings, RunError when
 // the step falls below the minimum (a functional iteration that diverges at a fixed step
 // says so, with its contraction bound) or max_steps is reached.
 TirkResult integrate_tirk(const OdeProblem& problem, const TirkSettings& settings,
@@ -92,6 +94,31 @@ struct IterationTrace {
   bool reference_ok = false;
   double reference_residual = 0;
 };
+// integrate_tirk step by step, with the same numbers: the engine of the "tirk" stepper.
+// As BlockIntegrator: begin() reads the problem's t0, y0 and t_end again; project maps
+// every accepted step's end onto the state's manifold.
+class TirkIntegrator {
+ public:
+  TirkIntegrator(const OdeProblem& problem, const TirkSettings& settings,
+                 std::function<void(double t, Eigen::VectorXd& y)> project = {});
+  ~TirkIntegrator();
+  void begin();
+  bool advance();  // one accepted step; false when problem.t_end is reached
+  double t() const;
+  const Eigen::VectorXd& y() const;
+  double next_step() const;
+  const TirkStats& stats() const;
+  // Cubic Hermite dense output in the last accepted step (third order).
+  void dense(double t, Eigen::VectorXd& out) const;
+
+  class Driver;
+
+ private:
+  std::unique_ptr<Driver> d_;
+  friend TirkResult integrate_tirk(const OdeProblem&, const TirkSettings&,
+                                   const std::function<void(double, const Eigen::VectorXd&)>&);
+};
+
 IterationTrace trace_tirk_iterations(const OdeProblem& problem, const TirkSettings& settings, double t,
                                      const Eigen::VectorXd& x, double tau, int count);
 

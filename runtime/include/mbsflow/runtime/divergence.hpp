@@ -4,6 +4,7 @@
 #include <string>
 
 #include "mbsflow/graph/multibody_system.hpp"
+#include "mbsflow/methods/dopri5.hpp"  // step_collapsed_message
 
 namespace mbsflow {
 
@@ -26,7 +27,5 @@ std::string divergence_message(const Model& model, const Divergence& d, double t
 // likely cause unless the RK4 step itself is beyond the stability limit.
 std::string loose_divergence_message(const Model& model, const Divergence& d, double t, Method method, double step,
                                      double macro_step, int lag);
-// The message of a DOPRI5 run whose step size fell below its minimum.
-std::string step_collapsed_message(double h, double t, double rtol);
 
 }  // namespace mbsflow

@@ -1,20 +1,27 @@
 #pragma once
-// Runs a multibody system from t_start to t_end with RK4 or DOPRI5 and hands
+// Runs a multibody system from t_start to t_end with any registered method and hands
 // snapshots to a sink. Throws RunError if the state diverges or the step collapses.
 #include <atomic>
 #include <functional>
+#include <string>
+
+#include <Eigen/Geometry>
+#include <memory>
+#include <vector>
 
 #include "mbsflow/graph/multibody_system.hpp"
+#include "mbsflow/methods/stepper.hpp"
 #include "mbsflow/runtime/result_sink.hpp"
 
 namespace mbsflow {
 
 struct RunOptions {
-  Method method = Method::rk4;
+  Method method = Method::rk4;  // any method of the stepper registry (mbsflow/methods/stepper.hpp)
+  std::string variant;           // its variant (colloc: "m,s[,order]", tirk: the tableau); empty: default
   double t_start = 0.0;
   double t_end = 1.0;
-  double step = 1e-3;    // RK4: the step; DOPRI5: first step and output grid unit
-  int output_every = 1;  // snapshot every k steps (RK4) or every k*step of time (DOPRI5)
+  double step = 1e-3;    // fixed-step methods (RK4): the step; adaptive ones: first step and output grid unit
+  int output_every = 1;  // snapshot every k steps (RK4) or every k*step of time (adaptive methods)
   double rtol = 1e-6, atol = 1e-8;
   // Called now and then with the time reached and the steps taken; may be empty.
   std::function<void(double t, long steps)> progress;
@@ -37,5 +44,55 @@ struct RunSummary {
 RunOptions options_from_model(const Model& model);
 
 RunSummary run_simulation(MultibodySystem& system, const RunOptions& options, ResultSink* sink);
+
+// One body's state, world frame (angular velocity too).
+struct BodyState {
+  Eigen::Vector3d position, velocity, angular_velocity;
+  Eigen::Quaterniond orientation;  // body to world
+};
+
+// A model stepped by the embedding program, with any registered method: read states and
+// set loads between steps (a controller in the loop). The numbers are those of
+// run_simulation with the same options (until a load or an input changes).
+class Simulation {
+ public:
+  explicit Simulation(const Model& model);  // options from the model's simulation block
+  Simulation(const Model& model, const RunOptions& options);
+  ~Simulation();
+
+  // A user force element (force_element.hpp). An element whose inputs the program changes
+  // between steps: call inputs_changed() after changing them.
+  void add_force_element(std::shared_ptr<const ForceElement> element);
+  // A force and torque (world frame, at the centre of mass) on a body, held until set
+  // again; replaces what was set before for that body.
+  void set_load(int body, const Eigen::Vector3d& force, const Eigen::Vector3d& torque = Eigen::Vector3d::Zero());
+  // The method starts anew from the current state (what it kept of f is stale).
+  void inputs_changed() { restart_ = true; }
+
+  // One step of the method towards the options' t_end; false (and nothing done) once there.
+  bool step();
+  // Steps until time t exactly (the last step shortened), t_end or not.
+  void advance_to(double t);
+
+  double time() const;
+  const Eigen::VectorXd& state() const;  // in system().layout()
+  BodyState body(int index) const;
+  // Sets the whole state between steps (quaternions renormalised, prescribed motion imposed).
+  void set_state(const Eigen::VectorXd& y);
+  const StepperStats& stats() const;
+  MultibodySystem& system() { return *system_; }
+  const RunOptions& options() const { return o_; }
+
+ private:
+  struct HeldLoad;
+  void ready(double t_end);
+
+  std::unique_ptr<MultibodySystem> system_;  // not moved: the stepper's system refers to it
+  RunOptions o_;
+  StepperSystem stepper_system_;
+  std::unique_ptr<Stepper> stepper_;
+  std::vector<std::shared_ptr<HeldLoad>> loads_;  // per body, made on the first set_load
+  bool restart_ = false;
+};
 
 }  // namespace mbsflow

@@ -1,0 +1,100 @@
+#pragma once
+// One interface for advancing a system by one step, whatever the method: the explicit
+// Runge-Kutta methods, the collocation block methods and the triangularised implicit
+// Runge-Kutta methods all come behind it. A stepper owns its state, reports what it did
+// and gives dense output inside its last step. Every run mode drives steppers: a whole
+// model, a loosely coupled submodel (a macro step is steps of a stepper between
+// exchanges) or a plain ODE.
+//
+// Adding a method is one file that implements Stepper and one line in the registry
+// (methods/src/stepper_registry.cpp); the model format, the CLI (--method NAME) and the
+// embedding API then know it by its name.
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+
+#include "mbsflow/error.hpp"
+#include "mbsflow/method.hpp"
+
+namespace mbsflow {
+
+// What a stepper integrates: y' = f(t, y).
+struct StepperSystem {
+  Eigen::Index size = 0;
+  std::function<void(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt)> rhs;
+  // Optional: after every accepted step, puts the state back on its manifold (a multibody
+  // model renormalises quaternions and imposes prescribed motion).
+  std::function<void(double t, Eigen::VectorXd& y)> after_step;
+  // Optional: the Jacobian df/dy in a matrix of pattern `sparsity` (implicit methods;
+  // without it they take finite differences, grouped by the pattern's column colouring).
+  std::function<void(double t, const Eigen::VectorXd& y, Eigen::SparseMatrix<double>& jac)> jacobian;
+  std::optional<Eigen::SparseMatrix<double>> sparsity;
+};
+
+struct StepperSettings {
+  double step = 0.0;  // fixed-step methods: the step; adaptive ones: the first step (0: their own choice)
+  double rtol = 1e-6, atol = 1e-8;
+  int threads = 1;      // threads inside one step (the implicit methods' stage nodes); 0: all cores
+  std::string variant;  // method-specific: tirk's tableau, colloc's "m,s[,order]"; empty: the default
+};
+
+struct StepperStats {
+  long accepted = 0, rejected = 0, evaluations = 0;
+};
+
+class Stepper {
+ public:
+  virtual ~Stepper() = default;
+  // (Re)starts at (t, y); no step goes past t_end. Called again whenever the state or the
+  // system's inputs changed between steps (a controller, the next macro step of loose
+  // coupling): an adaptive method keeps the step size it had reached.
+  virtual void start(double t, const Eigen::VectorXd& y, double t_end) = 0;
+  // One accepted step (rejected attempts happen inside). RunError when the step size
+  // collapses or an implicit iteration cannot be made to converge.
+  virtual void step() = 0;
+  // Dense output anywhere in the last accepted step [t_previous(), t()], before the
+  // after_step projection.
+  virtual void dense(double t, Eigen::VectorXd& out) const = 0;
+  // Adaptive methods: the step size the next step starts from, kept and put back to take
+  // a stretch again (loose coupling's rollback).
+  virtual double next_step() const { return 0.0; }
+  virtual void set_next_step(double /*h*/) {}
+
+  double t() const { return t_; }
+  double t_previous() const { return t_previous_; }
+  double t_end() const { return t_end_; }
+  bool done() const { return t_ >= t_end_; }
+  const Eigen::VectorXd& y() const { return y_; }
+  // Sets the state between steps (the next step starts from it; adaptive methods forget
+  // what they kept of f).
+  void set_state(const Eigen::VectorXd& y) { start(t_, y, t_end_); }
+  const StepperStats& stats() const { return stats_; }
+
+ protected:
+  double t_ = 0.0, t_previous_ = 0.0, t_end_ = 0.0;
+  Eigen::VectorXd y_;
+  StepperStats stats_;
+};
+
+// The registry: one entry per method.
+using StepperFactory = std::unique_ptr<Stepper> (*)(const StepperSystem& system, const StepperSettings& settings);
+struct StepperEntry {
+  Method method;
+  const char* summary;
+  bool adaptive;  // false: fixed steps of StepperSettings::step (snapshots every k steps)
+  StepperFactory make;
+};
+std::span<const StepperEntry> stepper_entries();
+// The entry of a method; nullopt for a name no entry has.
+const StepperEntry* find_stepper(std::string_view name);
+std::optional<Method> find_method(std::string_view name);
+std::string method_list();  // "rk4, dopri5, ..." for messages
+// InputError naming the methods there are for an unknown method.
+std::unique_ptr<Stepper> make_stepper(Method method, const StepperSystem& system, const StepperSettings& settings);
+
+}  // namespace mbsflow

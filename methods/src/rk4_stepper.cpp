@@ -1,0 +1,58 @@
+// The "rk4" stepper: classic Runge-Kutta with fixed steps on the grid t_start + k h (the
+// last step shortened to land on t_end), the arithmetic of mbsflow::Rk4.
+#include "mbsflow/methods/rk4.hpp"
+#include "mbsflow/methods/step_grid.hpp"
+#include "stepper_registry.hpp"
+#include "stepper_system.hpp"
+
+namespace mbsflow {
+namespace {
+
+class Rk4Stepper final : public Stepper {
+ public:
+  Rk4Stepper(const StepperSystem& s, const StepperSettings& o) : sys_(s), h_(o.step), rk_(s.size) {
+    check_system(s);
+    if (!(h_ > 0.0)) throw InputError("rk4 needs a positive step");
+  }
+  void start(double t, const Eigen::VectorXd& y, double t_end) override {
+    grid_ = step_grid(t, t_end, h_);
+    k_ = 0;
+    t_ = t_previous_ = t;
+    t_end_ = t_end;
+    y_ = y;
+  }
+  void step() override {
+    if (done()) return;
+    y_previous_ = y_;
+    const double t_next = grid_.time(k_ + 1);
+    StepperOde ode{sys_};
+    rk_.step(ode, t_, t_next - t_, y_);
+    if (sys_.after_step) sys_.after_step(t_next, y_);
+    t_previous_ = t_;
+    t_ = t_next;
+    ++k_;
+    ++stats_.accepted;
+    stats_.evaluations += Rk4::evaluations_per_step;
+  }
+  // Linear between the step's ends: RK4 output falls on its steps.
+  void dense(double t, Eigen::VectorXd& out) const override {
+    const double th = t_ > t_previous_ ? (t - t_previous_) / (t_ - t_previous_) : 1.0;
+    out = (1.0 - th) * y_previous_ + th * y_;
+  }
+
+ private:
+  const StepperSystem& sys_;
+  double h_;
+  Rk4 rk_;
+  StepGrid grid_;
+  long k_ = 0;
+  Eigen::VectorXd y_previous_;
+};
+
+}  // namespace
+
+std::unique_ptr<Stepper> make_rk4_stepper(const StepperSystem& s, const StepperSettings& o) {
+  return std::make_unique<Rk4Stepper>(s, o);
+}
+
+}  // namespace mbsflow

@@ -1,0 +1,17 @@
+#pragma once
+// A multibody system as what a stepper integrates: its rhs, and after every step the
+// renormalised quaternions and prescribed motions.
+#include "mbsflow/graph/multibody_system.hpp"
+#include "mbsflow/methods/stepper.hpp"
+
+namespace mbsflow {
+
+inline StepperSystem stepper_system(MultibodySystem& sys) {
+  StepperSystem s;
+  s.size = sys.dimension();
+  s.rhs = [&sys](double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) { sys.rhs(t, y, dydt); };
+  s.after_step = [&sys](double t, Eigen::VectorXd& y) { sys.after_step(t, y); };
+  return s;
+}
+
+}  // namespace mbsflow
