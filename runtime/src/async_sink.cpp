@@ -42,6 +42,11 @@ void AsyncSink::write(Snapshot&& snapshot) {
   not_empty_.notify_one();
 }
 
+long AsyncSink::waits() const {
+  std::lock_guard lock(mutex_);
+  return stats_.waits;
+}
+
 void AsyncSink::write_coupling(const std::vector<CouplingRecord>& records) { coupling_ = records; }
 
 void AsyncSink::end() {

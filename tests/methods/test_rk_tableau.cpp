@@ -76,6 +76,36 @@ TEST_CASE("embedded formula: its order conditions hold and it differs from b", "
       CHECK(q == Approx(1.0 / k).epsilon(1e-13));
     }
     CHECK((e.bhat - t.b).cwiseAbs().maxCoeff() > 1e-3);
+    // All its order conditions, not only the quadrature ones: one step of the embedded
+    // formula, x_n + tau (gamma f(x_n) + sum bhat_i F_i) with the method's own converged
+    // stages, has a local error of order e.order + 1 on y' = -y^2 + t (y(0) = 1).
+    auto f = [](double s, double y) { return -y * y + s; };
+    auto local_error = [&](double tau) {
+      // Exact solution at tau: a very fine RK4 reference.
+      double y = 1.0;
+      const int n = 4000;
+      for (int k = 0; k < n; ++k) {
+        const double h = tau / n, s = k * h;
+        const double k1 = f(s, y), k2 = f(s + h / 2, y + h / 2 * k1), k3 = f(s + h / 2, y + h / 2 * k2), k4 = f(s + h, y + h * k3);
+        y += h / 6 * (k1 + 2 * k2 + 2 * k3 + k4);
+      }
+      Eigen::VectorXd stage = Eigen::VectorXd::Ones(t.stages()), fs(t.stages());
+      for (int it = 0; it < 200; ++it) {  // fixed-point iteration: contracts for these steps
+        for (int i = 0; i < t.stages(); ++i) fs(i) = f(t.c(i) * tau, stage(i));
+        stage = Eigen::VectorXd::Ones(t.stages()) + tau * t.a * fs;
+      }
+      for (int i = 0; i < t.stages(); ++i) fs(i) = f(t.c(i) * tau, stage(i));
+      return std::abs(1.0 + tau * (e.gamma * f(0.0, 1.0) + e.bhat.dot(fs)) - y);
+    };
+    // Slopes between halved steps, where the error is above rounding: a missed condition
+    // would leave at most slope e.order; the high orders reach theirs only at larger steps.
+    double best = 0.0, previous = local_error(0.4);
+    for (double tau : {0.2, 0.1, 0.05, 0.025}) {
+      const double err = local_error(tau);
+      if (err > 1e-13) best = std::max(best, std::log2(previous / err));
+      previous = err;
+    }
+    CHECK(best > e.order + 1 - 0.3);
   }
 }
 

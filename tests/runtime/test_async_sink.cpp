@@ -12,12 +12,14 @@ using namespace mbsflow;
 
 namespace {
 
-// Its first write holds the writer thread for 300 ms: long enough, in any build, for the
-// computation to fill the queue behind it.
+// Its first write holds the writer thread until the computation has found the queue full
+// (AsyncSink::waits), whatever the timing of the build.
 struct SlowSink : test::MemorySink {
   int fail_at = -1;
+  const AsyncSink* owner = nullptr;
   void write(Snapshot&& s) override {
-    if (times.empty()) std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    if (times.empty() && owner)
+      while (owner->waits() == 0) std::this_thread::sleep_for(std::chrono::milliseconds(1));
     if (static_cast<int>(times.size()) == fail_at) throw Error("disk full");
     test::MemorySink::write(std::move(s));
   }
@@ -45,6 +47,7 @@ TEST_CASE("asynchronous sink keeps every snapshot in order and waits only when f
   auto inner = std::make_unique<SlowSink>();
   SlowSink* seen = inner.get();
   AsyncSink sink(std::move(inner), 1);  // room for 2 snapshots only
+  seen->owner = &sink;
   run_free_fall(sink);
   REQUIRE(seen->times.size() == 201);
   for (std::size_t i = 0; i < seen->times.size(); ++i) CHECK(seen->times[i] == Approx(0.005 * static_cast<double>(i)));

@@ -33,7 +33,8 @@ class AsyncSink : public ResultSink {
   void write(Snapshot&& snapshot) override;
   void write_coupling(const std::vector<CouplingRecord>& records) override;  // handed on at end()
   void end() override;
-  const AsyncSinkStats& stats() const { return stats_; }
+  const AsyncSinkStats& stats() const { return stats_; }  // after end()
+  long waits() const;  // times the computation found the queue full so far (any thread)
 
  private:
   void run();
@@ -43,7 +44,7 @@ class AsyncSink : public ResultSink {
   std::unique_ptr<MultibodySystem> system_;  // the writer's copy, for energies and joint wrenches
   std::size_t capacity_bytes_;
   std::size_t capacity_ = 2;
-  std::mutex mutex_;
+  mutable std::mutex mutex_;
   std::condition_variable not_empty_, not_full_;
   std::deque<Snapshot> queue_;
   std::vector<CouplingRecord> coupling_;
