@@ -5,7 +5,7 @@
 
 #include "mbsflow/methods/block_integrator.hpp"
 #include "stepper_registry.hpp"
-#include "stepper_system.hpp"
+#include "implicit_stepper.hpp"
 
 namespace mbsflow {
 namespace {
@@ -21,42 +21,15 @@ BlockMethodSpec parse_spec(const std::string& v) {
   return spec;
 }
 
-class CollocStepper final : public Stepper {
+class CollocStepper final : public ImplicitStepper<BlockIntegrator, BlockSettings> {
  public:
-  CollocStepper(const StepperSystem& s, const StepperSettings& o) : problem_(problem_of(s)) {
-    check_system(s);
+  CollocStepper(const StepperSystem& s, const StepperSettings& o) : ImplicitStepper(s, o) {
     settings_.method = parse_spec(o.variant);
     generate_block_method(settings_.method);  // InputError for a method that does not exist
-    settings_.rtol = o.rtol;
-    settings_.atol = o.atol;
-    settings_.threads = o.threads;
-    settings_.initial_step = o.step;
-    settings_.finite_difference_jacobian = !s.jacobian;
     integrator_ = std::make_unique<BlockIntegrator>(
         problem_, settings_, [this](const AcceptedBlock& b) { keep(b); }, s.after_step);
   }
-  void start(double t, const Eigen::VectorXd& y, double t_end) override {
-    problem_.t0 = t;
-    problem_.t_end = t_end;
-    problem_.y0 = y;
-    if (started_) settings_.initial_step = integrator_->next_step();
-    started_ = true;
-    integrator_->begin();
-    t_ = t_previous_ = t;
-    t_end_ = t_end;
-    y_ = y;
-    count();
-  }
-  void step() override {
-    if (!integrator_->advance()) return;
-    t_previous_ = t_;
-    t_ = integrator_->t();
-    y_ = integrator_->y();
-    count();
-  }
   void dense(double t, Eigen::VectorXd& out) const override { out = last_.view().interpolate(t); }
-  double next_step() const override { return integrator_->next_step(); }
-  void set_next_step(double h) override { settings_.initial_step = h; }
 
  private:
   struct Block {  // a copy of the last accepted block, for dense output
@@ -65,21 +38,9 @@ class CollocStepper final : public Stepper {
     std::vector<Eigen::VectorXd> past_u, past_f, u, f;
     AcceptedBlock view() const { return {t0, tau, static_cast<int>(u.size()), method, &past_u, &past_f, &u, &f}; }
   };
-  void keep(const AcceptedBlock& b) {
-    last_ = {b.method, b.t0, b.tau, *b.past_u, *b.past_f, *b.u, *b.f};
-  }
-  void count() {
-    const BlockStats& st = integrator_->stats();
-    stats_.accepted = st.accepted;
-    stats_.rejected = st.rejected;
-    stats_.evaluations = st.rhs_evaluations;
-  }
+  void keep(const AcceptedBlock& b) { last_ = {b.method, b.t0, b.tau, *b.past_u, *b.past_f, *b.u, *b.f}; }
 
-  OdeProblem problem_;
-  BlockSettings settings_;
-  std::unique_ptr<BlockIntegrator> integrator_;
   Block last_;
-  bool started_ = false;
 };
 
 }  // namespace

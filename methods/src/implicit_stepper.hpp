@@ -1,0 +1,62 @@
+#pragma once
+// What the colloc and tirk steppers share: the problem they hand their integrator (its
+// t0, y0 and t_end set at every start), the settings, restarts that keep the step size,
+// and the counters.
+#include <memory>
+
+#include "stepper_system.hpp"
+
+namespace mbsflow {
+
+// Integrator: BlockIntegrator or TirkIntegrator (begin, advance, t, y, next_step, stats).
+template <class Integrator, class Settings>
+class ImplicitStepper : public Stepper {
+ public:
+  void start(double t, const Eigen::VectorXd& y, double t_end) override {
+    problem_.t0 = t;
+    problem_.t_end = t_end;
+    problem_.y0 = y;
+    if (started_) settings_.initial_step = integrator_->next_step();
+    started_ = true;
+    integrator_->begin();
+    t_ = t_previous_ = t;
+    t_end_ = t_end;
+    y_ = y;
+    count();
+  }
+  void step() override {
+    if (!integrator_->advance()) return;
+    t_previous_ = t_;
+    t_ = integrator_->t();
+    y_ = integrator_->y();
+    count();
+  }
+  double next_step() const override { return integrator_->next_step(); }
+  void set_next_step(double h) override { settings_.initial_step = h; }
+
+ protected:
+  // The settings every implicit method takes from StepperSettings.
+  ImplicitStepper(const StepperSystem& s, const StepperSettings& o) : problem_(problem_of(s)) {
+    check_system(s);
+    settings_.rtol = o.rtol;
+    settings_.atol = o.atol;
+    settings_.threads = o.threads;
+    settings_.initial_step = o.step;
+    settings_.finite_difference_jacobian = !s.jacobian;
+  }
+  void count() {
+    const auto& st = integrator_->stats();
+    stats_.accepted = st.accepted;
+    stats_.rejected = st.rejected;
+    stats_.evaluations = st.rhs_evaluations;
+  }
+
+  OdeProblem problem_;
+  Settings settings_;
+  std::unique_ptr<Integrator> integrator_;
+
+ private:
+  bool started_ = false;
+};
+
+}  // namespace mbsflow
