@@ -52,12 +52,16 @@ void Simulation::ready(double t_end) {
   restart_ = false;
 }
 
-bool Simulation::step() {
-  ready(std::max(o_.t_end, stepper_->t()));
-  if (stepper_->done()) return false;
+void Simulation::take_step() {
   stepper_->step();
   if (auto d = find_divergence(system_->layout(), stepper_->y()))
     throw RunError(divergence_message(system_->model(), *d, stepper_->t(), o_.method, o_.step));
+}
+
+bool Simulation::step() {
+  ready(std::max(o_.t_end, stepper_->t()));
+  if (stepper_->done()) return false;
+  take_step();
   return true;
 }
 
@@ -65,11 +69,7 @@ void Simulation::advance_to(double t) {
   if (!(t >= stepper_->t()) || !std::isfinite(t)) throw InputError("advance_to: the time must be finite and not in the past");
   if (t == stepper_->t()) return;
   ready(t);
-  while (!stepper_->done()) {
-    stepper_->step();
-    if (auto d = find_divergence(system_->layout(), stepper_->y()))
-      throw RunError(divergence_message(system_->model(), *d, stepper_->t(), o_.method, o_.step));
-  }
+  while (!stepper_->done()) take_step();
 }
 
 double Simulation::time() const { return stepper_->t(); }

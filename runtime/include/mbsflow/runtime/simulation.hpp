@@ -86,6 +86,7 @@ class Simulation {
  private:
   struct HeldLoad;
   void ready(double t_end);
+  void take_step();  // one step, then the divergence check
 
   std::unique_ptr<MultibodySystem> system_;  // not moved: the stepper's system refers to it
   RunOptions o_;
