@@ -15,6 +15,7 @@
 #include "mbsflow/graph/generators.hpp"
 #include "mbsflow/io/model_writer.hpp"
 #include "mbsflow/runtime/cluster.hpp"
+#include "exchange_cost.hpp"
 #include "mbsflow/runtime/partitioned_run.hpp"
 
 namespace mbsflow::cli {

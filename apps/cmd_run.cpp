@@ -30,7 +30,7 @@ namespace {
 
 struct RunArgs {
   std::string model;
-  std::optional<double> t_end, step, rtol, atol;
+  std::optional<double> t_end, step, rtol, atol, output_interval;
   std::string method;
   std::optional<int> every;
   std::string output;
@@ -105,21 +105,32 @@ std::string human_bytes(double b) {
   return buf;
 }
 
-// Chooses the step: the given one (warning above the RK4 stability estimate) or the estimate.
-double choose_step(const Model& m, const RunArgs& a, bool quiet) {
+// The run's options from the model and the flags; says which step was chosen (a warning
+// for a given RK4 step above the stability estimate).
+RunOptions choose_options(Model& m, const RunArgs& a) {
+  if (a.step) m.simulation.step = *a.step;
+  if (a.every) {
+    m.simulation.output_every = *a.every;
+    m.simulation.output_interval.reset();
+  }
+  if (a.output_interval) m.simulation.output_interval = *a.output_interval;
+  const RunOptions o = options_from_model(m);
   const StableStep s = estimate_stable_step(m);
-  const std::optional<double> given = a.step ? a.step : m.simulation.step;
-  if (given) {
-    if (m.simulation.method == Method::rk4 && *given > s.step)
-      std::fprintf(stderr, "mbsflow: warning: step %.3g s is above the estimated RK4 stability limit %s\n", *given,
-                   s.describe(m).c_str());
-    return *given;
+  if (m.simulation.step) {
+    if (m.simulation.method == Method::rk4 && *m.simulation.step > s.step)
+      std::fprintf(stderr, "mbsflow: warning: step %.3g s is above the estimated RK4 stability limit %s\n",
+                   *m.simulation.step, s.describe(m).c_str());
+    return o;
   }
   if (!std::isfinite(s.step)) throw InputError(a.model + ": no joints to estimate a step from; give --step");
-  if (!quiet)
-    std::fprintf(stderr, "mbsflow: no step given; using the RK4 stability estimate %s%s\n", s.describe(m).c_str(),
-                 m.simulation.method == Method::dopri5 ? " as DOPRI5's first step and output-grid unit" : "");
-  return s.step;
+  if (a.quiet) return o;
+  char use[96] = "";
+  if (o.step != s.step)
+    std::snprintf(use, sizeof use, ", shortened to %.4g s to fit the output interval", o.step);
+  else if (find_stepper(o.method.name())->adaptive)
+    std::snprintf(use, sizeof use, " as the first step");
+  std::fprintf(stderr, "mbsflow: no step given; using the RK4 stability estimate %s%s\n", s.describe(m).c_str(), use);
+  return o;
 }
 
 void print_summary(const Model& m, MultibodySystem& sys, const RunOptions& o, const RunSummary& r) {
@@ -147,15 +158,14 @@ int run(const RunArgs& a) {
     m.simulation.t_end = *a.t_end;
   }
   if (!a.method.empty()) m.simulation.method = *find_method(a.method);
-  if (a.every) m.simulation.output_every = *a.every;
   if (a.rtol) m.simulation.rtol = *a.rtol;
   if (a.atol) m.simulation.atol = *a.atol;
-  RunOptions o = options_from_model(m);
-  o.step = choose_step(m, a, a.quiet);
+  RunOptions o = choose_options(m, a);
   std::unique_ptr<AsyncSink> sink;
   if (!a.output.empty()) {
     const FieldSet fields = parse_fields(a.fields);
     RunInfo info{model_to_json(m), method_name(o.method), o.step, o.t_start, o.t_end, o.output_every, invocation()};
+    info.output_interval = o.output_interval;
     sink = std::make_unique<AsyncSink>(std::make_unique<Hdf5Sink>(a.output, fields, std::move(info)));
   }
   MultibodySystem sys(m);
@@ -257,6 +267,11 @@ Action add_run(CLI::App& app) {
   sub->add_option("--method", a->method, "Integration method")->check(CLI::IsMember(methods));
   sub->add_option("--every", a->every, "Write every K-th step (overrides simulation.output_every)")
       ->check(CLI::Range(1, 1 << 30));
+  sub->add_option("--output-interval", a->output_interval,
+                  "Write every S s of model time, whatever the method's steps (overrides simulation.output_every and "
+                  "simulation.output_interval)")
+      ->check(CLI::PositiveNumber);
+  sub->get_option("--every")->excludes(sub->get_option("--output-interval"));
   sub->add_option("--rtol", a->rtol, "DOPRI5 relative tolerance")->check(CLI::PositiveNumber);
   sub->add_option("--atol", a->atol, "DOPRI5 absolute tolerance")->check(CLI::PositiveNumber);
   sub->add_option("-o,--output", a->output,

@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "mbsflow/error.hpp"
+#include "mbsflow/graph/force_element.hpp"
 #include "metis_partition.hpp"
 
 namespace mbsflow {
@@ -20,6 +21,22 @@ using Graph = boost::adjacency_list<boost::vecS, boost::vecS, boost::undirectedS
                                                     boost::property<boost::vertex_degree_t, int>>>;
 
 bool is_body(int b) { return b != ground; }
+
+// A model's force element in a submodel: the same element, its bodies at local indices.
+class LocalForceElement final : public ForceElement {
+ public:
+  LocalForceElement(std::shared_ptr<const ForceElement> e, std::vector<int> model_bodies, std::vector<int> local_bodies)
+      : e_(std::move(e)), model_(std::move(model_bodies)), local_(std::move(local_bodies)) {}
+  std::vector<int> bodies() const override { return local_; }
+  void evaluate(double t, const Kinematics& k, std::span<Wrench> out) const override {
+    e_->evaluate(t, Kinematics(k, model_, local_), out);
+  }
+  double energy(double t, const Kinematics& k) const override { return e_->energy(t, Kinematics(k, model_, local_)); }
+
+ private:
+  std::shared_ptr<const ForceElement> e_;
+  std::vector<int> model_, local_;
+};
 
 }  // namespace
 
@@ -142,6 +159,16 @@ Decomposition decompose(const Model& m, const std::vector<int>& part, int k) {
       ++d.cut_joints;
     }
   }
+  // A force element joins its bodies like a joint: each submodel with one of them sees
+  // the others as ghosts.
+  for (const auto& e : m.force_elements) {
+    const std::vector<int> bodies = e->bodies();
+    for (int a : bodies)
+      for (int b : bodies) {
+        const auto pa = static_cast<std::size_t>(part[static_cast<std::size_t>(a)]);
+        if (part[static_cast<std::size_t>(b)] != part[static_cast<std::size_t>(a)]) ghosts[pa].insert(b);
+      }
+  }
   for (std::size_t p = 0; p < d.submodels.size(); ++p) {
     Submodel& s = d.submodels[p];
     std::sort(s.joints.begin(), s.joints.end());
@@ -197,6 +224,17 @@ Model submodel_model(const Model& m, const Submodel& s) {
       copy.body = i;
       local.drivers.push_back(copy);
     }
+  }
+  // Force elements on own bodies, in model order, reading their bodies at local indices.
+  const auto n_own = static_cast<int>(s.own.size());
+  for (const auto& e : m.force_elements) {
+    std::vector<int> bodies = e->bodies(), at;
+    for (int b : bodies) at.push_back(s.local_index(b));
+    if (std::none_of(at.begin(), at.end(), [n_own](int i) { return i >= 0 && i < n_own; })) continue;
+    if (std::find(at.begin(), at.end(), -1) != at.end())  // a decomposition made without the element
+      throw InputError("a force element's bodies are not all in the submodel of its body " + std::to_string(bodies[0]) +
+                       ": the decomposition was not made for this model");
+    local.force_elements.push_back(std::make_shared<LocalForceElement>(e, std::move(bodies), std::move(at)));
   }
   return local;
 }

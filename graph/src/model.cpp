@@ -34,7 +34,7 @@ void set_bushing_from_frequency(const Model& model, Joint& joint, double omega, 
 
 }  // namespace mbsflow
 
-#include "mbsflow/graph/rotation.hpp"
+#include "rotation.hpp"
 
 namespace mbsflow {
 

@@ -6,7 +6,7 @@
 #include <cmath>
 
 #include "mbsflow/error.hpp"
-#include "mbsflow/graph/rotation.hpp"
+#include "rotation.hpp"
 
 namespace mbsflow {
 namespace {
@@ -106,6 +106,7 @@ MultibodySystem::MultibodySystem(const Model& model, int active) : model_(model)
   quat_ = Eigen::Matrix4Xd::Zero(4, n + 1);
   quat_(0, n) = 1.0;
   joint_out_.setZero(9, nj);
+  for (const auto& e : model.force_elements) add_force_element(e);
 }
 
 Eigen::VectorXd MultibodySystem::initial_state() const {

@@ -147,6 +147,7 @@ void Hdf5Sink::begin(const MultibodySystem& system) {
   h5::write_number_attribute(root, "t_start", info_.t_start);
   h5::write_number_attribute(root, "t_end", info_.t_end);
   h5::write_number_attribute(root, "output_every", info_.output_every);
+  if (info_.output_interval > 0.0) h5::write_number_attribute(root, "output_interval", info_.output_interval);
   h5::write_string_attribute(root, "command_line", info_.command_line);
   h5::write_string_attribute(root, "fields", fields_text(fields_));
   file_ = std::move(f);

@@ -1,4 +1,4 @@
-#include "mbsflow/io/json_locations.hpp"
+#include "json_locations.hpp"
 
 namespace mbsflow {
 

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "mbsflow/io/json_locations.hpp"
+#include "json_locations.hpp"
 
 namespace mbsflow {
 

@@ -8,7 +8,7 @@
 #include <memory>
 #include <vector>
 
-#include "mbsflow/methods/tsan_annotations.hpp"
+#include "tsan_annotations.hpp"
 
 namespace mbsflow {
 

@@ -14,7 +14,7 @@
 #include "settings_checks.hpp"
 #include "starting_step.hpp"
 #include "mbsflow/methods/jacobian.hpp"
-#include "mbsflow/methods/tsan_annotations.hpp"
+#include "tsan_annotations.hpp"
 
 namespace mbsflow {
 

@@ -6,6 +6,7 @@
 #include "mbsflow/error.hpp"
 #include "mbsflow/runtime/cluster.hpp"
 #include "coupling_log.hpp"
+#include "options_json.hpp"
 #include "mbsflow/runtime/loose_coupling.hpp"
 #include "partitioned_state.hpp"
 #include "sink_runner.hpp"
@@ -162,28 +163,13 @@ json setup_message(const std::string& model_json, const Decomposition& d, const 
           {"submodels", d.submodels.size()},
           {"worker_of", worker_of},
           {"worker", w},
-          {"options",
-           {{"t_start", o.t_start},
-            {"t_end", o.t_end},
-            {"step", o.step},
-            {"output_every", o.output_every},
-            {"method", method_name(o.method)},
-            {"rtol", o.rtol},
-            {"atol", o.atol}}},
+          {"options", options_to_json(o)},
           {"data_bind", cw.data_bind},
           {"data_address", cw.data_address},
           {"results_address", results_address},
           {"threads", cw.threads},
           {"exchange_delay_s", coupling.exchange_delay_s}};
-  if (coupling.loose) {
-    json methods = json::array();
-    for (Method m : coupling.loose->methods) methods.push_back(method_name(m));
-    j["loose"] = {{"macro_step", coupling.loose->macro_step},
-                  {"extrapolation", coupling.loose->extrapolation},
-                  {"max_lag", coupling.loose->max_lag},
-                  {"exact_lag", coupling.loose->exact_lag},
-                  {"methods", methods}};
-  }
+  if (coupling.loose) j["loose"] = loose_to_json(*coupling.loose);
   return j;
 }
 
@@ -205,6 +191,10 @@ RunSummary run_cluster(const Model& model, const std::string& model_json, const 
                        const ClusterConfig& cluster, const RunOptions& o, ResultSink* sink, ClusterStats* stats,
                        ClusterCoupling coupling) {
   check_cluster_run(o, coupling);
+  if (!model.force_elements.empty())
+    throw InputError("the model has " + std::to_string(model.force_elements.size()) +
+                     " force elements of this program, which worker processes do not have; run it in this process "
+                     "(threads, tight or loose coupling)");
   if (coupling.loose) check_loose_options(*coupling.loose, d.submodels.size());
   const std::vector<int> worker_of = assign_submodels(cluster, static_cast<int>(d.submodels.size()));
   Coordinator co(cluster, o);

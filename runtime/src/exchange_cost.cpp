@@ -6,7 +6,7 @@
 
 #include "cluster_wire.hpp"
 #include "mbsflow/error.hpp"
-#include "mbsflow/runtime/cluster.hpp"
+#include "exchange_cost.hpp"
 
 namespace mbsflow {
 

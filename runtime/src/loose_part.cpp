@@ -198,7 +198,10 @@ void MacroGrid::add(long m, double H) {
     if (ends_.back().output) --next_out_;
     ends_.pop_back();
   }
-  const long out_step = std::min(next_out_ * static_cast<long>(o_.output_every), grid_.steps);
+  // Macro-step ends lie on the grid of o.step: an output interval that is not a whole
+  // number of steps (adaptive methods) is rounded onto it.
+  const long every = o_.output_interval > 0.0 ? std::max(1L, std::lround(o_.output_interval / o_.step)) : o_.output_every;
+  const long out_step = std::min(next_out_ * every, grid_.steps);
   const double t_out = grid_.time(out_step), t = end(m) + H;
   if (t >= t_out - 1e-12 * std::max(1.0, std::abs(t_out))) {
     ends_.push_back({t_out, true, out_step});
@@ -217,7 +220,7 @@ void MacroGrid::forget_before(long m) {
 
 int MacroGrid::steps_per_run() const {
   if (!(H_ > 0.0)) return 1;
-  const double per_output = static_cast<double>(o_.output_every) * o_.step / H_;
+  const double per_output = output_dt(o_) / H_;
   return static_cast<int>(std::clamp(std::ceil(per_output - 1e-9) + 1.0, 1.0, 64.0));
 }
 

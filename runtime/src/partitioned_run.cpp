@@ -57,7 +57,7 @@ void check_parts(const Context& c, double t) {
 void run_rk4(Context& c, Eigen::VectorXd& y) {
   const StepGrid grid = step_grid(c.o.t_start, c.o.t_end, c.o.step);
   long first = 0;
-  Scheduler schedule(c.d, chunk_length(c.o.output_every), 4, [&](std::size_t p, int s, int step, Half) {
+  Scheduler schedule(c.d, chunk_length(output_steps(c.o)), 4, [&](std::size_t p, int s, int step, Half) {
     c.clock.time([&] {
       partitioned::pull_ghosts(c.parts, p, s);
       const long n = first + step;
@@ -65,7 +65,7 @@ void run_rk4(Context& c, Eigen::VectorXd& y) {
     });
   }, c.executor == Executor::barrier);
   step_in_chunks(
-      grid, chunk_length(c.o.output_every), 0,
+      grid, chunk_length(output_steps(c.o)), 0,
       [&](long from, int steps) {
         first = from;
         schedule.run(steps);
@@ -73,7 +73,7 @@ void run_rk4(Context& c, Eigen::VectorXd& y) {
       [&](long done) {
         const double t = grid.time(done);
         check_parts(c, t);
-        if (c.sink && (done % c.o.output_every == 0 || done == grid.steps)) {
+        if (c.sink && (done % output_steps(c.o) == 0 || done == grid.steps)) {
           partitioned::gather(c.parts, c.whole.layout(), y);
           emit(c.whole, c.sink, t, y, c.out);
         }
@@ -100,7 +100,7 @@ void run_dopri5(Context& c, Eigen::VectorXd& y) {
       partitioned::dopri5_stage(c.parts[p], s, t, h, need_k0, o.atol, o.rtol, squares);
     });
   }, c.executor == Executor::barrier);
-  const double dt_out = o.step * o.output_every;
+  const double dt_out = output_dt(o);
   long next_out = 1;
   while (t < o.t_end) {
     h = std::min(h, o.t_end - t);

@@ -1,6 +1,6 @@
 #include "schedules.hpp"
 
-#include "mbsflow/methods/tsan_annotations.hpp"
+#include "tsan_annotations.hpp"
 
 namespace mbsflow {
 

@@ -21,21 +21,21 @@ void check(const MultibodySystem& sys, const Eigen::VectorXd& y, double t, const
   check_stop(o, t);
 }
 
-// Fixed-step methods: a snapshot every output_every steps and at the end.
+// Fixed-step methods: a snapshot every output_steps(o) steps and at the end.
 void run_fixed(MultibodySystem& sys, Stepper& stepper, const RunOptions& o, ResultSink* sink, RunSummary& out) {
+  const int every = output_steps(o);
   for (long k = 1; !stepper.done(); ++k) {
     stepper.step();
     const double t = stepper.t();
     check(sys, stepper.y(), t, o);
-    if (sink && (k % o.output_every == 0 || stepper.done())) emit(sys, sink, t, stepper.y(), out);
+    if (sink && (k % every == 0 || stepper.done())) emit(sys, sink, t, stepper.y(), out);
     if (o.progress && (k & 15) == 0) o.progress(t, k);
   }
 }
 
-// Adaptive methods: snapshots on the uniform grid of output_every * step seconds from the
-// dense output, and at the end.
+// Adaptive methods: snapshots on the uniform output grid from the dense output, and at the end.
 void run_adaptive(MultibodySystem& sys, Stepper& stepper, const RunOptions& o, ResultSink* sink, RunSummary& out) {
-  const double dt_out = o.step * o.output_every;
+  const double dt_out = output_dt(o);
   long next_out = 1;
   Eigen::VectorXd dense(sys.dimension());
   while (!stepper.done()) {
@@ -63,8 +63,19 @@ RunOptions options_from_model(const Model& model) {
   o.method = s.method;
   o.t_start = s.t_start;
   o.t_end = s.t_end;
-  o.step = s.step ? *s.step : estimate_stable_step(model).step;
+  const bool adaptive = stepper_entry(o.method).adaptive;
   o.output_every = s.output_every;
+  if (s.step) {
+    o.step = *s.step;
+  } else {
+    o.step = estimate_stable_step(model).step;
+    if (s.output_interval && !adaptive && std::isfinite(o.step))  // fit a whole number of steps into it
+      o.step = *s.output_interval / std::ceil(*s.output_interval / o.step * (1.0 - 1e-12));
+  }
+  if (s.output_interval)
+    o.output_interval = *s.output_interval;
+  else if (adaptive && !s.step)
+    o.output_interval = s.output_every * (s.t_end - s.t_start) / 1000.0;
   o.rtol = s.rtol;
   o.atol = s.atol;
   return o;

@@ -56,17 +56,39 @@ void run_with_sink(ResultSink* sink, RunSummary& out, F body, G before_end = [] 
   if (sink) sink->end();
 }
 
+// The registry entry of the run's method (InputError naming the methods there are).
+inline const StepperEntry& stepper_entry(Method m) {
+  if (const StepperEntry* e = find_stepper(m.name())) return *e;
+  throw InputError("unknown method '" + std::string(m.name()) + "' (" + method_list() + ")");
+}
+
+// The output grid in s of model time (see RunOptions).
+inline double output_dt(const RunOptions& o) {
+  return o.output_interval > 0.0 ? o.output_interval : o.step * o.output_every;
+}
+
+// Fixed-step methods: the steps between snapshots.
+inline int output_steps(const RunOptions& o) {
+  if (!(o.output_interval > 0.0)) return o.output_every;
+  return static_cast<int>(std::llround(o.output_interval / o.step));
+}
+
 // The checks every run loop makes of its options before it starts.
 inline void check_options(const RunOptions& o) {
   if (!(o.t_end > o.t_start)) throw InputError("t_end must be greater than t_start");
   if (!(o.step > 0.0) || !std::isfinite(o.step)) throw InputError("the step must be a positive finite number");
   if (o.output_every < 1) throw InputError("output_every must be >= 1");
-}
-
-// The registry entry of the run's method (InputError naming the methods there are).
-inline const StepperEntry& stepper_entry(Method m) {
-  if (const StepperEntry* e = find_stepper(m.name())) return *e;
-  throw InputError("unknown method '" + std::string(m.name()) + "' (" + method_list() + ")");
+  if (o.output_interval < 0.0 || !std::isfinite(o.output_interval))
+    throw InputError("the output interval must be a positive finite number");
+  if (o.output_interval > 0.0 && !stepper_entry(o.method).adaptive) {
+    const double k = std::round(o.output_interval / o.step);
+    if (k < 1.0 || k > 1e9 || std::abs(k * o.step - o.output_interval) > 1e-9 * o.output_interval) {
+      char buf[200];
+      std::snprintf(buf, sizeof buf, "the output interval %.6g s is not a whole number of %s steps of %.6g s",
+                    o.output_interval, o.method.name(), o.step);
+      throw InputError(buf);
+    }
+  }
 }
 
 inline StepperSettings stepper_settings(const RunOptions& o) {

@@ -5,6 +5,7 @@
 #include "mbsflow/error.hpp"
 #include "mbsflow/methods/stepper.hpp"
 #include "mbsflow/runtime/cluster.hpp"
+#include "options_json.hpp"
 #include "worker_part.hpp"
 
 namespace mbsflow {
@@ -46,28 +47,9 @@ Session read_setup(const WorkerOptions& wo, const json& setup) {
   s.d = decompose(s.model, setup.at("part_of_body").get<std::vector<int>>(), setup.at("submodels").get<int>());
   s.worker_of = setup.at("worker_of").get<std::vector<int>>();
   s.me = setup.at("worker").get<int>();
-  const json& o = setup.at("options");
-  const std::string method = o.value("method", std::string("rk4"));
-  const std::optional<Method> known = find_method(method);
-  if (!known) throw InputError("the coordinator asked for an unknown method " + method);
-  s.o.method = *known;
-  s.o.rtol = o.value("rtol", 1e-6);
-  s.o.atol = o.value("atol", 1e-8);
-  s.o.t_start = o.at("t_start").get<double>();
-  s.o.t_end = o.at("t_end").get<double>();
-  s.o.step = o.at("step").get<double>();
-  s.o.output_every = o.at("output_every").get<int>();
+  s.o = options_from_json(setup.at("options"));
   s.results_address = setup.at("results_address").get<std::string>();
-  if (setup.contains("loose")) {
-    const json& l = setup.at("loose");
-    s.loose = LooseOptions{l.at("macro_step").get<double>(), l.at("extrapolation").get<int>(), 0, 0.0,
-                           l.value("max_lag", 0), l.value("exact_lag", false), {}};
-    for (const std::string& name : l.value("methods", std::vector<std::string>{})) {
-      const std::optional<Method> m = find_method(name);
-      if (!m) throw InputError("the coordinator asked for an unknown method " + name);
-      s.loose->methods.push_back(*m);
-    }
-  }
+  if (setup.contains("loose")) s.loose = loose_from_json(setup.at("loose"));
   s.exchange_delay_s = setup.value("exchange_delay_s", 0.0);
   return s;
 }

@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "schedules.hpp"
+#include "sink_runner.hpp"
 #include "mbsflow/methods/step_grid.hpp"
 #include "worker_part.hpp"
 
@@ -30,7 +31,7 @@ Outcome run_tight(Session& s, WorkerIo& io, zmq::context_t& ctx, zmq::socket_t& 
   remote.wait = [&](int c, std::size_t q, std::size_t p, int st) {
     w.exchange.wait(first + c, st, static_cast<int>(q), static_cast<int>(p));
   };
-  const int chunk = chunk_length(s.o.output_every);
+  const int chunk = chunk_length(output_steps(s.o));
   Scheduler schedule(
       s.d, chunk, 4,
       [&](std::size_t p, int st, int c, Half half) {
@@ -69,7 +70,7 @@ Outcome run_tight(Session& s, WorkerIo& io, zmq::context_t& ctx, zmq::socket_t& 
         [&](long done) {
           if (!failure.empty()) return;
           failure = w.check(grid.time(done));
-          if (failure.empty()) w.report_state(done, done % s.o.output_every == 0 || done == grid.steps);
+          if (failure.empty()) w.report_state(done, done % output_steps(s.o) == 0 || done == grid.steps);
         });
   });
   return w.finish(failure, failure.empty() ? grid.steps : first, 4.0 * static_cast<double>(grid.steps * static_cast<long>(w.mine.size())));

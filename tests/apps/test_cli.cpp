@@ -56,6 +56,25 @@ TEST_CASE("generated chain, grid and train models run to the end", "[apps]") {
   fs::remove_all(d.parent_path());
 }
 
+TEST_CASE("run --output-interval: the snapshots follow model time, whatever the method", "[apps]") {
+  const fs::path d = scratch("interval");
+  const std::string dir = d.string();
+  REQUIRE(run("generate chain --bodies 8 -o chain.json", dir).code == 0);
+  for (const char* method : {"rk4", "dopri5"}) {
+    INFO(method);
+    const Result r = run(std::string("run chain.json --t-end 0.1 --output-interval 0.01 -o out.h5 --method ") + method, dir);
+    CHECK(r.code == 0);
+    CHECK(r.err.find(", 11 snapshots,") != std::string::npos);
+  }
+  const Result rk4 = run("run chain.json --t-end 0.1 --output-interval 0.01", dir);
+  CHECK(rk4.err.find("to fit the output interval") != std::string::npos);
+  CHECK(run("run chain.json --t-end 0.1 --output-interval 0.01 --every 3", dir).code == 2);
+  const Result odd = run("run chain.json --t-end 0.1 --step 3e-4 --output-interval 0.001", dir);
+  CHECK(odd.code == 2);
+  CHECK(odd.err.find("not a whole number of rk4 steps") != std::string::npos);
+  fs::remove_all(d.parent_path());
+}
+
 TEST_CASE("a run that diverges exits with 1 and names time, body and a step that works", "[apps]") {
   const fs::path d = scratch("diverge");
   const std::string dir = d.string();

@@ -1,7 +1,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 
-#include "mbsflow/graph/rotation.hpp"
+#include "rotation.hpp"
 #include "test_support.hpp"
 
 using namespace mbsflow;

@@ -4,7 +4,7 @@
 #include <cmath>
 
 #include "mbsflow/graph/generators.hpp"
-#include "mbsflow/graph/rotation.hpp"
+#include "rotation.hpp"
 #include "test_support.hpp"
 
 using namespace mbsflow;

@@ -1,7 +1,7 @@
 #include <Eigen/Geometry>
 #include <catch2/catch.hpp>
 
-#include "mbsflow/graph/rotation.hpp"
+#include "rotation.hpp"
 
 using namespace mbsflow;
 

@@ -1,6 +1,6 @@
 #include <catch2/catch.hpp>
 
-#include "mbsflow/io/json_locations.hpp"
+#include "json_locations.hpp"
 
 using namespace mbsflow;
 

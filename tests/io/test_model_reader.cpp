@@ -43,10 +43,13 @@ TEST_CASE("models written and read back are the same model", "[io]") {
   GridParams gp;
   gp.rows = 3;
   gp.cols = 4;
-  for (const Model& m : {read_model_file(examples + "/features.json"), make_chain(ChainParams{}), make_grid(gp), make_train(tp)}) {
+  Model with_interval = make_chain(ChainParams{});
+  with_interval.simulation.output_interval = 0.0025;
+  for (const Model& m : {read_model_file(examples + "/features.json"), with_interval, make_grid(gp), make_train(tp)}) {
     const std::string once = model_to_json(m);
     const Model back = read_model_text(once, m.name);
     CHECK(model_to_json(back) == once);
+    CHECK(back.simulation.output_interval == m.simulation.output_interval);
     CHECK(back.bodies.size() == m.bodies.size());
     CHECK(back.joints.size() == m.joints.size());
     for (std::size_t j = 0; j < m.joints.size(); ++j) {

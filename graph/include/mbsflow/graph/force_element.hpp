@@ -3,21 +3,28 @@
 // model format does not describe (tyres, contact, aerodynamics, controllers...).
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <span>
+#include <stdexcept>
 #include <vector>
 
 namespace mbsflow {
 
-// Read-only kinematics of every body at the current evaluation, world frame.
+// Read-only kinematics of the bodies at the current evaluation, world frame, by model body
+// index. A force element reads only its own bodies(): in a partitioned run it is evaluated
+// in a submodel that holds just those (and then asking for another body throws).
 class Kinematics {
  public:
   Kinematics(const std::vector<Eigen::Matrix3d>& rotation, const Eigen::Matrix3Xd& position,
              const Eigen::Matrix3Xd& velocity, const Eigen::Matrix3Xd& angular_velocity)
       : rot_(rotation), pos_(position), vel_(velocity), omega_(angular_velocity) {}
-  const Eigen::Matrix3d& rotation(int body) const { return rot_[static_cast<std::size_t>(body)]; }  // body to world
-  Eigen::Vector3d position(int body) const { return pos_.col(body); }          // centre of mass
-  Eigen::Vector3d velocity(int body) const { return vel_.col(body); }
-  Eigen::Vector3d angular_velocity(int body) const { return omega_.col(body); }  // world frame
+  // A view of k in which model body model_bodies[i] is k's body local_bodies[i] (a submodel).
+  Kinematics(const Kinematics& k, std::span<const int> model_bodies, std::span<const int> local_bodies)
+      : rot_(k.rot_), pos_(k.pos_), vel_(k.vel_), omega_(k.omega_), from_(model_bodies), to_(local_bodies) {}
+  const Eigen::Matrix3d& rotation(int body) const { return rot_[static_cast<std::size_t>(at(body))]; }  // body to world
+  Eigen::Vector3d position(int body) const { return pos_.col(at(body)); }  // centre of mass
+  Eigen::Vector3d velocity(int body) const { return vel_.col(at(body)); }
+  Eigen::Vector3d angular_velocity(int body) const { return omega_.col(at(body)); }  // world frame
   // World position and velocity of a point given in the body frame.
   Eigen::Vector3d point(int body, const Eigen::Vector3d& local) const { return position(body) + rotation(body) * local; }
   Eigen::Vector3d point_velocity(int body, const Eigen::Vector3d& local) const {
@@ -25,8 +32,16 @@ class Kinematics {
   }
 
  private:
+  int at(int body) const {
+    if (from_.empty()) return body;
+    const auto i = std::find(from_.begin(), from_.end(), body);
+    if (i == from_.end())
+      throw std::logic_error("force element: read body " + std::to_string(body) + ", which is not one of its bodies()");
+    return to_[static_cast<std::size_t>(i - from_.begin())];
+  }
   const std::vector<Eigen::Matrix3d>& rot_;
   const Eigen::Matrix3Xd &pos_, &vel_, &omega_;
+  std::span<const int> from_, to_;  // model body -> index here; empty: the same
 };
 
 struct Wrench {
@@ -37,7 +52,7 @@ struct Wrench {
 class ForceElement {
  public:
   virtual ~ForceElement() = default;
-  // The bodies it acts on (model body indices), fixed for the life of the system.
+  // The bodies it acts on and reads (model body indices), fixed for the life of the system.
   virtual std::vector<int> bodies() const = 0;
   // Sets out[i] to the wrench on bodies()[i]. Must depend only on t and k, so that a run is
   // deterministic. Each body adds element wrenches after its joints, in element order.

@@ -3,6 +3,7 @@
 // Readers (io/), generators and embedding programs fill it; MultibodySystem compiles it.
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -78,9 +79,13 @@ struct SimulationSettings {
   std::optional<double> step;  // none: RK4 picks a stable step
   Method method = Method::rk4;
   int output_every = 1;        // write every k-th step (RK4) or every k*step (DOPRI5)
+  // The output grid in s of model time, whatever the method's steps; overrides output_every.
+  std::optional<double> output_interval;
   double rtol = 1e-6;
   double atol = 1e-8;
 };
+
+class ForceElement;  // force_element.hpp
 
 struct Model {
   std::string name = "model";
@@ -90,6 +95,10 @@ struct Model {
   std::vector<Load> loads;
   std::vector<Driver> drivers;
   SimulationSettings simulation;
+  // User force elements (code of this program, not part of a model file): every run in
+  // this process applies them, partitioned and loosely coupled ones included; a run
+  // across worker processes refuses them.
+  std::vector<std::shared_ptr<const ForceElement>> force_elements;
 };
 
 // Index of the body called name, ground for "ground", nullopt if unknown.

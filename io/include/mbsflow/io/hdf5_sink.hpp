@@ -22,6 +22,7 @@ struct RunInfo {
   double t_start = 0.0, t_end = 0.0;
   int output_every = 1;
   std::string command_line;
+  double output_interval = 0.0;  // s; 0: the grid is output_every steps
 };
 
 class Hdf5Sink : public ResultSink {

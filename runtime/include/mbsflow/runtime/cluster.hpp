@@ -93,25 +93,3 @@ struct WorkerOptions {
 void serve_worker(const WorkerOptions& options);
 
 }  // namespace mbsflow
-
-namespace mbsflow {
-
-// The cost of the boundary exchange on this host: one-way time of messages of each size
-// between two threads over tcp on 127.0.0.1 or ipc, with the sockets the exchange uses
-// (PUSH to PULL), from `round_trips` round trips each (the median).
-struct ExchangeSample {
-  std::size_t bytes = 0;
-  double seconds = 0.0;
-};
-std::vector<ExchangeSample> measure_exchange(const std::string& transport, const std::vector<std::size_t>& sizes,
-                                             int round_trips);
-
-// Hockney's model t(m) = alpha + m / beta, fitted by least squares.
-struct Hockney {
-  double alpha = 0.0;  // s
-  double beta = 0.0;   // bytes/s
-  double time(double bytes) const { return alpha + bytes / beta; }
-};
-Hockney fit_hockney(const std::vector<ExchangeSample>& samples);
-
-}  // namespace mbsflow

@@ -49,9 +49,10 @@ struct LooseStats {
 // Fills the per-macro-step vectors and extremes of stats from its records.
 void summarise_records(LooseStats& stats);
 
-// RK4 (substeps of options.step) or DOPRI5 (its own steps, options.rtol/atol) inside each
-// submodel. Macro steps end on the output grid (every options.output_every * options.step,
-// shortened where needed), where the snapshots (global body order) are taken.
+// Any registered method inside each submodel (RK4: substeps of options.step; adaptive
+// methods: their own steps, options.rtol/atol). Macro steps end on the output grid (see
+// RunOptions; rounded onto the grid of options.step, macro steps shortened where needed),
+// where the snapshots (global body order) are taken.
 // InputError for a macro step that is not a positive time, an order outside 0..2, a
 // negative lag, a lag with the adaptive macro step, or methods not one per submodel
 // (submodels = 0: the count is not known yet).

@@ -20,8 +20,12 @@ struct RunOptions {
   std::string variant;           // its variant (colloc: "m,s[,order]", tirk: the tableau); empty: default
   double t_start = 0.0;
   double t_end = 1.0;
-  double step = 1e-3;    // fixed-step methods (RK4): the step; adaptive ones: first step and output grid unit
-  int output_every = 1;  // snapshot every k steps (RK4) or every k*step of time (adaptive methods)
+  double step = 1e-3;    // fixed-step methods (RK4): the step; adaptive ones: the first step
+  // The output grid: a snapshot every output_interval s of model time when it is > 0 (for
+  // fixed-step methods a whole number of steps), else every output_every steps (fixed-step
+  // methods) or every output_every * step s (adaptive ones); and one at the end.
+  int output_every = 1;
+  double output_interval = 0.0;
   double rtol = 1e-6, atol = 1e-8;
   // Called now and then with the time reached and the steps taken; may be empty.
   std::function<void(double t, long steps)> progress;
@@ -40,7 +44,10 @@ struct RunSummary {
   Eigen::VectorXd final_state;
 };
 
-// Options from the model's simulation block; step from the stable-step estimate if unset.
+// Options from the model's simulation block. Without a step, the stable-step estimate
+// (shortened for fixed-step methods so that the output interval is a whole number of
+// steps). Adaptive methods with neither a step nor an output interval write 1000
+// snapshots per output_every over the run, so the output does not follow the estimate.
 RunOptions options_from_model(const Model& model);
 
 RunSummary run_simulation(MultibodySystem& system, const RunOptions& options, ResultSink* sink);
