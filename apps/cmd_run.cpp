@@ -234,7 +234,7 @@ int run(const RunArgs& a) {
   } catch (const RunError& e) {
     progress.finish();
     const int sig = stop_signal();
-    throw RunError(std::string(e.what()) + (sig == SIGTERM ? " (SIGTERM)" : sig == SIGINT ? " (SIGINT)" : "") +
+    throw RunError(e.text() + (sig == SIGTERM ? " (SIGTERM)" : sig == SIGINT ? " (SIGINT)" : "") +
                    (sink ? " in " + a.output : ""));
   }
   progress.finish();

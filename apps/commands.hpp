@@ -17,6 +17,10 @@ Action add_export(CLI::App& app);
 Action add_worker(CLI::App& app);
 Action add_ode(CLI::App& app);
 
+// How the CLI names a setting that a library message mentions (mbsflow/error.hpp): its
+// flag, "--step 1e-05"; the per-submodel methods are --submodel-methods.
+std::string flag_for(const std::string& setting, const std::string* value);
+
 // The command line as typed, for the results file.
 const std::string& invocation();
 void set_invocation(int argc, char** argv);

@@ -1,4 +1,5 @@
 // mbsflow command line. Exit codes: 0 done, 1 the run failed, 2 bad input or usage.
+#include <algorithm>
 #include <iostream>
 #include <vector>
 
@@ -34,10 +35,10 @@ int main(int argc, char** argv) {
     for (auto& [sub, action] : commands)
       if (sub->parsed()) return action();
   } catch (const mbsflow::InputError& e) {
-    std::cerr << e.what() << '\n';
+    std::cerr << mbsflow::render(e.text(), mbsflow::cli::flag_for) << '\n';
     return 2;
   } catch (const mbsflow::RunError& e) {
-    std::cerr << "mbsflow: " << e.what() << '\n';
+    std::cerr << "mbsflow: " << mbsflow::render(e.text(), mbsflow::cli::flag_for) << '\n';
     return 1;
   } catch (const std::exception& e) {
     std::cerr << "mbsflow: internal error: " << e.what() << '\n';
@@ -51,6 +52,11 @@ namespace {
 std::string command_line;
 }
 const std::string& invocation() { return command_line; }
+std::string flag_for(const std::string& setting, const std::string* value) {
+  std::string flag = setting == "methods" ? "submodel-methods" : setting;
+  std::replace(flag.begin(), flag.end(), '_', '-');
+  return "--" + flag + (value ? " " + *value : "");
+}
 void set_invocation(int argc, char** argv) {
   command_line.clear();
   for (int i = 0; i < argc; ++i) command_line += (i ? " " : "") + std::string(argv[i]);

@@ -51,7 +51,7 @@ void require(bool ok, const char* what) {
 }  // namespace
 
 Model make_chain(const ChainParams& p) {
-  require(p.bodies >= 1, "chain: --bodies must be >= 1");
+  require(p.bodies >= 1, "chain: {bodies} must be >= 1");
   Model m;
   m.name = "chain-" + std::to_string(p.bodies);
   m.gravity = {0.0, -9.81, 0.0};
@@ -69,7 +69,7 @@ Model make_chain(const ChainParams& p) {
 }
 
 Model make_grid(const GridParams& p) {
-  require(p.rows >= 1 && p.cols >= 1, "grid: --rows and --cols must be >= 1");
+  require(p.rows >= 1 && p.cols >= 1, "grid: {rows} and {cols} must be >= 1");
   Model m;
   m.name = "grid-" + std::to_string(p.rows) + "x" + std::to_string(p.cols);
   m.gravity = {0.0, -9.81, 0.0};
@@ -96,7 +96,7 @@ Model make_grid(const GridParams& p) {
 }
 
 Model make_train(const TrainParams& p) {
-  require(p.wagons >= 1, "train: --wagons must be >= 1");
+  require(p.wagons >= 1, "train: {wagons} must be >= 1");
   Model m;
   m.name = "train-" + std::to_string(p.wagons);
   const double g = 9.81;
@@ -152,8 +152,8 @@ Model make_train(const TrainParams& p) {
 }
 
 Model make_random_tree(const RandomTreeParams& p) {
-  require(p.bodies >= 1, "random: --bodies must be >= 1");
-  require(p.cycles >= 0, "random: --cycles must be >= 0");
+  require(p.bodies >= 1, "random: {bodies} must be >= 1");
+  require(p.cycles >= 0, "random: {cycles} must be >= 0");
   Model m;
   m.name = "random-" + std::to_string(p.bodies) + "-" + std::to_string(p.cycles);
   m.gravity = {0.0, -9.81, 0.0};

@@ -22,10 +22,10 @@ FieldSet parse_fields(const std::string& list) {
     if (name == "energy" || name == "all") f.energy = known = true;
     if (name == "joint_force" || name == "all") f.joint_force = known = true;
     if (!known)
-      throw InputError("--fields: unknown field '" + name +
+      throw InputError("{fields}: unknown field '" + name +
                        "' (expected position, orientation, velocity, angular_velocity, energy, joint_force or all)");
   }
-  if (!any) throw InputError("--fields: name at least one field");
+  if (!any) throw InputError("{fields}: name at least one field");
   return f;
 }
 

@@ -136,7 +136,7 @@ std::vector<std::string> export_csv(const ResultsFile& r, const std::string& dir
   } else {
     for (const std::string& w : wanted) {
       const auto it = std::find(names.begin(), names.end(), w);
-      if (it == names.end()) throw InputError("--bodies: no body '" + w + "' in " + r.path());
+      if (it == names.end()) throw InputError("{bodies}: no body '" + w + "' in " + r.path());
       bodies.push_back(static_cast<std::size_t>(it - names.begin()));
     }
   }

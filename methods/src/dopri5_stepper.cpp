@@ -14,7 +14,7 @@ std::string step_collapsed_message(double h, double t, double rtol) {
   char buf[256];
   std::snprintf(buf, sizeof buf,
                 "DOPRI5 step size fell to %.3g s at t = %.6g s: the model is too stiff for an explicit method "
-                "at rtol %.3g; loosen --rtol or check the model",
+                "at rtol %.3g; loosen {rtol} or check the model",
                 h, t, rtol);
   return buf;
 }

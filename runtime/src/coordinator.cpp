@@ -180,7 +180,7 @@ void check_cluster_run(const RunOptions& o, const ClusterCoupling& coupling) {
   if (coupling.loose) {
     check_loose_options(*coupling.loose);
     if (coupling.loose->coupling_tol > 0.0)
-      throw InputError("--coupling-tol: the adaptive macro step runs in one process for now");
+      throw InputError("{coupling_tol}: the adaptive macro step runs in one process for now");
   }
   if (!coupling.loose && o.method != Method::rk4)
     throw InputError(std::string("tightly coupled runs across processes use RK4 for now (") + method_name(o.method) +
@@ -310,7 +310,7 @@ RunSummary run_cluster(const Model& model, const std::string& model_json, const 
       out.wall_seconds = std::chrono::duration<double>(Clock::now() - start_clock).count();
       co.finish();
     } catch (const std::exception& e) {
-      co.abort(e.what());
+      co.abort(error_text(e));
       throw;
     }
   }, [&] {

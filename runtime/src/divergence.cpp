@@ -39,13 +39,13 @@ std::string divergence_message(const Model& model, const Divergence& d, double t
     const double suggest = step > s.step ? s.step : 0.5 * step;
     std::snprintf(buf, sizeof buf,
                   "run diverged at t = %.6g s: body '%s': %s. The RK4 step %.3g s %s the estimated stability limit %s; "
-                  "try --step %.3g (or --method dopri5)",
+                  "try {step=%.3g} (or {method=dopri5})",
                   t, body, d.what.c_str(), step, step > s.step ? "exceeds" : "is within", s.describe(model).c_str(),
                   suggest);
   } else {
     std::snprintf(buf, sizeof buf,
-                  "run diverged at t = %.6g s: body '%s': %s. Try tighter tolerances (--rtol) or --method rk4 "
-                  "--step %.3g (estimated stability limit %s)",
+                  "run diverged at t = %.6g s: body '%s': %s. Try tighter tolerances ({rtol}) or {method=rk4} "
+                  "with {step=%.3g} (estimated stability limit %s)",
                   t, body, d.what.c_str(), 0.5 * s.step, s.describe(model).c_str());
   }
   return buf;
@@ -59,7 +59,7 @@ std::string loose_divergence_message(const Model& model, const Divergence& d, do
   std::snprintf(buf, sizeof buf,
                 "run diverged at t = %.6g s: body '%s': %s. Loosely coupled with a macro step of %.3g s and neighbour "
                 "values up to %d macro steps old: explicit coupling of stiff joints needs a macro step well inside their "
-                "period (estimated stability limit %s); try --macro-step %.3g or a smaller --max-lag",
+                "period (estimated stability limit %s); try {macro_step=%.3g} or a smaller {max_lag}",
                 t, model.bodies.at(static_cast<std::size_t>(d.body)).name.c_str(), d.what.c_str(), macro_step, lag + 1,
                 s.describe(model).c_str(), 0.5 * macro_step);
   return buf;

@@ -43,7 +43,7 @@ void adaptive_macro_steps(const RunOptions& o, const LooseOptions& lo, std::vect
       if (H < 1e-6 * lo.macro_step) {
         char buf[160];
         std::snprintf(buf, sizeof buf,
-                      "coupling error %.3g m above --coupling-tol %.3g m even with a macro step of %.3g s at t = %.6g s",
+                      "coupling error %.3g m above {coupling_tol} %.3g m even with a macro step of %.3g s at t = %.6g s",
                       e.position, lo.coupling_tol, t1 - t, t);
         throw RunError(buf);
       }
@@ -60,12 +60,12 @@ void adaptive_macro_steps(const RunOptions& o, const LooseOptions& lo, std::vect
 }  // namespace
 
 void check_loose_options(const LooseOptions& lo, std::size_t submodels) {
-  if (!(lo.macro_step > 0.0) || !std::isfinite(lo.macro_step)) throw InputError("--macro-step: must be a positive time");
-  if (lo.extrapolation < 0 || lo.extrapolation > 2) throw InputError("--extrapolation: must be 0, 1 or 2");
-  if (lo.max_lag < 0) throw InputError("--max-lag: must be >= 0");
-  if (lo.max_lag > 0 && lo.coupling_tol > 0.0) throw InputError("--max-lag: needs a fixed macro step (not with --coupling-tol)");
+  if (!(lo.macro_step > 0.0) || !std::isfinite(lo.macro_step)) throw InputError("{macro_step}: must be a positive time");
+  if (lo.extrapolation < 0 || lo.extrapolation > 2) throw InputError("{extrapolation}: must be 0, 1 or 2");
+  if (lo.max_lag < 0) throw InputError("{max_lag}: must be >= 0");
+  if (lo.max_lag > 0 && lo.coupling_tol > 0.0) throw InputError("{max_lag}: needs a fixed macro step (not with {coupling_tol})");
   if (submodels > 0 && !lo.methods.empty() && lo.methods.size() != submodels)
-    throw InputError("--submodel-methods: one method per submodel: " + std::to_string(submodels) + " submodels, " +
+    throw InputError("{methods}: one method per submodel: " + std::to_string(submodels) + " submodels, " +
                      std::to_string(lo.methods.size()) + " methods");
 }
 

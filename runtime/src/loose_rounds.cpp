@@ -108,7 +108,7 @@ void LooseRounds::step(std::size_t p, long m) {
     lp.publish(m + 1, t1);
     if (remote_) remote_->send(static_cast<int>(p), m + 1);
   } catch (const std::exception& e) {
-    fail(e.what());
+    fail(error_text(e));
   }
 }
 

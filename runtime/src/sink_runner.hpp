@@ -48,7 +48,7 @@ void run_with_sink(ResultSink* sink, RunSummary& out, F body, G before_end = [] 
     if (!sink) throw;
     char buf[128];
     std::snprintf(buf, sizeof buf, "; results keep %ld snapshots up to t = %.6g s", out.snapshots, out.t_last_snapshot);
-    throw RunError(e.what() + std::string(buf));
+    throw RunError(e.text() + buf);
   } catch (...) {
     close_quietly();
     throw;

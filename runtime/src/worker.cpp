@@ -81,7 +81,7 @@ void serve_worker(const WorkerOptions& wo) {
   try {
     s = read_setup(wo, setup);
   } catch (const std::exception& e) {
-    refuse(io, std::string("cannot set up the run: ") + e.what());
+    refuse(io, "cannot set up the run: " + error_text(e));
   }
   zmq::socket_t inbox = wire::make_socket(ctx, zmq::socket_type::pull);
   std::string data_address;
@@ -90,7 +90,7 @@ void serve_worker(const WorkerOptions& wo) {
     wire::bind(inbox, bind, "the worker's inbox for boundary values");
     data_address = wire::reachable_address(inbox, setup.value("data_address", std::string()), "the worker's inbox " + bind);
   } catch (const std::exception& e) {
-    refuse(io, e.what());
+    refuse(io, error_text(e));
   }
   io.send({{"type", "ready"}, {"data_address", data_address}});
   const json start = expect(io, "start", 0.0, wo.stop);

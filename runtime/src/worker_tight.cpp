@@ -51,7 +51,7 @@ Outcome run_tight(Session& s, WorkerIo& io, zmq::context_t& ctx, zmq::socket_t& 
           const long n_next = st == 3 ? n + 1 : n;
           if (n_next < grid.steps) w.exchange.send(static_cast<int>(p), n_next, (st + 1) % 4);
         } catch (const std::exception& e) {
-          w.exchange.abort(e.what());
+          w.exchange.abort(error_text(e));
         }
       },
       false, &remote);

@@ -80,6 +80,9 @@ TEST_CASE("run --coupling loose writes results close to the tight run and report
   CHECK(mbsflow::ResultsFile((d / "lag-threads.h5").string()).read("/bodies/position") ==
         mbsflow::ResultsFile((d / "lag-procs.h5").string()).read("/bodies/position"));
   CHECK(run("run chain.json --coupling loose --macro-step 1e-3 --extrapolation 3", dir).code == 2);
+  const Result lag_tol = run("run chain.json --coupling loose --max-lag 1 --coupling-tol 1e-6", dir);
+  CHECK(lag_tol.code == 2);  // the library names its settings; the CLI shows them as flags
+  CHECK(lag_tol.err.find("\n--max-lag: needs a fixed macro step (not with --coupling-tol)\n") != std::string::npos);
   fs::remove_all(d.parent_path());
 }
 

@@ -118,14 +118,14 @@ TEST_CASE("loose coupling: repeatable, DOPRI5 inside submodels, snapshots on the
     return bad;
   };
   CHECK_THROWS_WITH(run_loose(m, d, o, changed([](LooseOptions& x) { x.macro_step = 0.0; }), nullptr),
-                    "--macro-step: must be a positive time");
+                    "macro_step: must be a positive time");
   CHECK_THROWS_WITH(run_loose(m, d, o, changed([](LooseOptions& x) { x.extrapolation = 3; }), nullptr),
-                    "--extrapolation: must be 0, 1 or 2");
+                    "extrapolation: must be 0, 1 or 2");
   CHECK_THROWS_WITH(run_loose(m, d, o, changed([](LooseOptions& x) { x.coupling_tol = 1e-6, x.max_lag = 1; }), nullptr),
-                    "--max-lag: needs a fixed macro step (not with --coupling-tol)");
+                    "max_lag: needs a fixed macro step (not with coupling_tol)");
   CHECK_THROWS_WITH(run_loose(m, d, o, changed([](LooseOptions& x) { x.methods = {Method::rk4, Method::dopri5, Method::rk4}; }),
                               nullptr),
-                    "--submodel-methods: one method per submodel: 2 submodels, 3 methods");
+                    "methods: one method per submodel: 2 submodels, 3 methods");
 }
 
 TEST_CASE("loose coupling: the adaptive macro step keeps the coupling error below the tolerance", "[runtime][loose]") {
