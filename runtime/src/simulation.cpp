@@ -17,7 +17,7 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 void check(const MultibodySystem& sys, const Eigen::VectorXd& y, double t, const RunOptions& o) {
-  if (auto d = find_divergence(sys.layout(), y)) throw RunError(divergence_message(sys.model(), *d, t, o.method, o.step));
+  check_diverged(sys, y, t, o);
   check_stop(o, t);
 }
 

@@ -7,6 +7,7 @@
 
 #include "mbsflow/error.hpp"
 #include "mbsflow/methods/stepper.hpp"
+#include "mbsflow/runtime/divergence.hpp"
 #include "mbsflow/runtime/simulation.hpp"
 
 namespace mbsflow {
@@ -99,6 +100,11 @@ inline StepperSettings stepper_settings(const RunOptions& o) {
   s.threads = 0;
   s.variant = o.variant;
   return s;
+}
+
+// RunError if the state y at t has diverged (naming the body and a step that works).
+inline void check_diverged(const MultibodySystem& sys, const Eigen::VectorXd& y, double t, const RunOptions& o) {
+  if (auto d = find_divergence(sys.layout(), y)) throw RunError(divergence_message(sys.model(), *d, t, o.method, o.step));
 }
 
 inline void check_stop(const RunOptions& o, double t) {

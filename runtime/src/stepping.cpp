@@ -54,8 +54,7 @@ void Simulation::ready(double t_end) {
 
 void Simulation::take_step() {
   stepper_->step();
-  if (auto d = find_divergence(system_->layout(), stepper_->y()))
-    throw RunError(divergence_message(system_->model(), *d, stepper_->t(), o_.method, o_.step));
+  check_diverged(*system_, stepper_->y(), stepper_->t(), o_);
 }
 
 bool Simulation::step() {
