@@ -106,16 +106,15 @@ std::string human_bytes(double b) {
 }
 
 // The run's options from the model and the flags; says which step was chosen (a warning
-// for a given RK4 step above the stability estimate).
-RunOptions choose_options(Model& m, const RunArgs& a) {
+// for a given RK4 step above the stability estimate s of the model).
+RunOptions choose_options(Model& m, const RunArgs& a, const StableStep& s) {
   if (a.step) m.simulation.step = *a.step;
   if (a.every) {
     m.simulation.output_every = *a.every;
     m.simulation.output_interval.reset();
   }
   if (a.output_interval) m.simulation.output_interval = *a.output_interval;
-  const RunOptions o = options_from_model(m);
-  const StableStep s = estimate_stable_step(m);
+  const RunOptions o = options_from_model(m, s.step);
   if (m.simulation.step) {
     if (m.simulation.method == Method::rk4 && *m.simulation.step > s.step)
       std::fprintf(stderr, "mbsflow: warning: step %.3g s is above the estimated RK4 stability limit %s\n",
@@ -160,7 +159,8 @@ int run(const RunArgs& a) {
   if (!a.method.empty()) m.simulation.method = *find_method(a.method);
   if (a.rtol) m.simulation.rtol = *a.rtol;
   if (a.atol) m.simulation.atol = *a.atol;
-  RunOptions o = choose_options(m, a);
+  const StableStep stable = estimate_stable_step(m);
+  RunOptions o = choose_options(m, a, stable);
   std::unique_ptr<AsyncSink> sink;
   if (!a.output.empty()) {
     const FieldSet fields = parse_fields(a.fields);
@@ -178,7 +178,7 @@ int run(const RunArgs& a) {
   if (a.exact_lag && a.max_lag == 0) throw InputError("--exact-lag: needs --max-lag L > 0");
   // A tenth of the RK4 stability estimate: explicit coupling of stiff joints over longer
   // macro steps can blow up (an undamped chain does at four tenths).
-  const double macro_step = a.macro_step ? *a.macro_step : 0.1 * estimate_stable_step(m).step;
+  const double macro_step = a.macro_step ? *a.macro_step : 0.1 * stable.step;
   if (loose && !std::isfinite(macro_step)) throw InputError("--coupling loose: no joints to estimate a macro step from; give --macro-step");
   const LooseOptions lo{macro_step,  a.extrapolation, threads, a.coupling_tol.value_or(0.0),
                         a.max_lag,   a.exact_lag,     parse_methods(a.submodel_methods)};

@@ -200,7 +200,7 @@ void MacroGrid::add(long m, double H) {
   }
   // Macro-step ends lie on the grid of o.step: an output interval that is not a whole
   // number of steps (adaptive methods) is rounded onto it.
-  const long every = o_.output_interval > 0.0 ? std::max(1L, std::lround(o_.output_interval / o_.step)) : o_.output_every;
+  const long every = std::max(1, output_steps(o_));
   const long out_step = std::min(next_out_ * every, grid_.steps);
   const double t_out = grid_.time(out_step), t = end(m) + H;
   if (t >= t_out - 1e-12 * std::max(1.0, std::abs(t_out))) {

@@ -57,7 +57,7 @@ void run_adaptive(MultibodySystem& sys, Stepper& stepper, const RunOptions& o, R
 
 }  // namespace
 
-RunOptions options_from_model(const Model& model) {
+RunOptions options_from_model(const Model& model, std::optional<double> stable_step) {
   RunOptions o;
   const SimulationSettings& s = model.simulation;
   o.method = s.method;
@@ -68,7 +68,7 @@ RunOptions options_from_model(const Model& model) {
   if (s.step) {
     o.step = *s.step;
   } else {
-    o.step = estimate_stable_step(model).step;
+    o.step = stable_step ? *stable_step : estimate_stable_step(model).step;
     if (s.output_interval && !adaptive && std::isfinite(o.step))  // fit a whole number of steps into it
       o.step = *s.output_interval / std::ceil(*s.output_interval / o.step * (1.0 - 1e-12));
   }

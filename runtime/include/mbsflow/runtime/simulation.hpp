@@ -7,6 +7,7 @@
 
 #include <Eigen/Geometry>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "mbsflow/graph/multibody_system.hpp"
@@ -48,7 +49,8 @@ struct RunSummary {
 // (shortened for fixed-step methods so that the output interval is a whole number of
 // steps). Adaptive methods with neither a step nor an output interval write 1000
 // snapshots per output_every over the run, so the output does not follow the estimate.
-RunOptions options_from_model(const Model& model);
+// stable_step: estimate_stable_step(model).step when the caller has it already.
+RunOptions options_from_model(const Model& model, std::optional<double> stable_step = std::nullopt);
 
 RunSummary run_simulation(MultibodySystem& system, const RunOptions& options, ResultSink* sink);
 
