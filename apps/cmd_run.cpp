@@ -183,7 +183,7 @@ int run(const RunArgs& a) {
   const LooseOptions lo{macro_step,  a.extrapolation, threads, a.coupling_tol.value_or(0.0),
                         a.max_lag,   a.exact_lag,     parse_methods(a.submodel_methods)};
   const ClusterCoupling coupling{loose ? &lo : nullptr, a.exchange_delay};
-  if (cluster) check_cluster_run(o, coupling);  // before any worker is started
+  if (cluster) check_cluster_run(m, o, coupling);  // before any worker is started
   std::optional<LocalWorkers> local;
   ClusterConfig cc;
   if (!a.cluster.empty()) cc = read_cluster_file(a.cluster);

@@ -22,20 +22,27 @@ struct ExchangeHeader {
   std::int64_t step = 0;
 };
 
-enum class ResultKind : std::uint32_t { snapshot = 1, progress = 2, done = 3, failed = 4, coupling = 5 };
+// A dense snapshot (DOPRI5's dense output between steps) still needs the drivers imposed
+// and the orientations renormalised, which the coordinator does on the whole state.
+enum class ResultKind : std::uint32_t { snapshot = 1, progress = 2, done = 3, failed = 4, coupling = 5, dense = 6 };
 // A coupling message carries rows of (index, t_start, t_end, position error, velocity
 // error, lag) of CouplingRecord.
 constexpr std::size_t coupling_row = 6;
 
 // Worker -> coordinator on the results channel; a snapshot carries the own bodies of the
-// worker's submodels (ascending), a failure its message.
+// worker's submodels (ascending), a failure its message, done the counts of done_counts.
 struct ResultHeader {
   std::uint32_t magic = wire::magic;
   ResultKind kind = ResultKind::progress;
   std::int32_t worker = 0;
   std::int32_t pad = 0;
-  std::int64_t step = 0;  // steps completed
+  std::int64_t step = 0;   // steps completed
+  std::int64_t index = 0;  // a snapshot's number: they complete in increasing order
+  double t = 0.0;          // model time reached, or of the snapshot
 };
+// Boundary messages sent, boundary bytes per stage, right-hand side evaluations, steps,
+// rejected steps.
+constexpr std::size_t done_counts = 5;
 
 using Clock = std::chrono::steady_clock;
 inline double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }

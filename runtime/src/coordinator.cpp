@@ -11,6 +11,7 @@
 #include "partitioned_state.hpp"
 #include "sink_runner.hpp"
 #include "mbsflow/methods/step_grid.hpp"
+#include "tight_coupling.hpp"
 
 namespace mbsflow {
 namespace {
@@ -25,6 +26,7 @@ struct Peer {
   std::string data_address;
   std::vector<int> bodies;  // global indices of its own bodies, in the order it sends them
   long completed = 0;       // steps it has reported done
+  double reached = 0.0;     // the model time it has reported
   bool answered = false, done = false;
 };
 
@@ -34,7 +36,7 @@ class Coordinator {
     wire::bind(results_, c.results_bind, "the coordinator's results inbox");
     results_address_ = wire::reachable_address(results_, c.results_address, "the coordinator's results inbox " + c.results_bind);
     for (const ClusterWorker& w : c.workers) {
-      Peer p{&w, wire::make_socket(ctx_, zmq::socket_type::dealer), Clock::now(), {}, {}, 0, false, false};
+      Peer p{&w, wire::make_socket(ctx_, zmq::socket_type::dealer), Clock::now(), {}, {}, 0, o.t_start, false, false};
       wire::connect(p.control, w.address, "worker " + w.name);
       peers_.push_back(std::move(p));
     }
@@ -175,26 +177,24 @@ json setup_message(const std::string& model_json, const Decomposition& d, const 
 
 }  // namespace
 
-void check_cluster_run(const RunOptions& o, const ClusterCoupling& coupling) {
+void check_cluster_run(const Model& model, const RunOptions& o, const ClusterCoupling& coupling) {
   check_options(o);
   if (coupling.loose) {
     check_loose_options(*coupling.loose);
     if (coupling.loose->coupling_tol > 0.0)
       throw InputError("{coupling_tol}: the adaptive macro step runs in one process for now");
   }
-  if (!coupling.loose && o.method != Method::rk4)
-    throw InputError(std::string("tightly coupled runs across processes use RK4 for now (") + method_name(o.method) +
-                     " needs a global error norm at every step attempt)");
+  if (!coupling.loose) tight_stages(o.method);  // a method whose stages the workers exchange
+  if (!model.force_elements.empty())
+    throw InputError("the model has " + std::to_string(model.force_elements.size()) +
+                     " force elements of this program, which worker processes do not have; run it in this process "
+                     "(threads, tight or loose coupling)");
 }
 
 RunSummary run_cluster(const Model& model, const std::string& model_json, const Decomposition& d,
                        const ClusterConfig& cluster, const RunOptions& o, ResultSink* sink, ClusterStats* stats,
                        ClusterCoupling coupling) {
-  check_cluster_run(o, coupling);
-  if (!model.force_elements.empty())
-    throw InputError("the model has " + std::to_string(model.force_elements.size()) +
-                     " force elements of this program, which worker processes do not have; run it in this process "
-                     "(threads, tight or loose coupling)");
+  check_cluster_run(model, o, coupling);
   if (coupling.loose) check_loose_options(*coupling.loose, d.submodels.size());
   const std::vector<int> worker_of = assign_submodels(cluster, static_cast<int>(d.submodels.size()));
   Coordinator co(cluster, o);
@@ -208,8 +208,7 @@ RunSummary run_cluster(const Model& model, const std::string& model_json, const 
   auto start_clock = Clock::now();
   Eigen::VectorXd y = whole.initial_state();
   if (sink) sink->begin(whole);
-  const StepGrid grid = step_grid(o.t_start, o.t_end, o.step);
-  long evaluations = 0;  // as the workers count them
+  long evaluations = 0, steps = 0, rejected = 0;  // as the workers count them
   loose::CouplingLog coupling_log;  // loose coupling: the workers' records, merged
   run_with_sink(sink, out, [&] {
     try {
@@ -243,7 +242,7 @@ RunSummary run_cluster(const Model& model, const std::string& model_json, const 
         std::size_t parts = 0;
       };
       std::map<long, Pending> pending;  // snapshots still missing some workers' bodies
-      long reported = 0;                // steps every worker has completed
+      double reached = o.t_start;       // the model time every worker has reached
       const StateLayout& layout = whole.layout();
       auto on_result = [&](const wire::ResultHeader& h, zmq::message_t& payload) {
         const auto w = static_cast<std::size_t>(h.worker);
@@ -251,28 +250,35 @@ RunSummary run_cluster(const Model& model, const std::string& model_json, const 
         switch (h.kind) {
           case wire::ResultKind::failed:
             throw RunError(co.who(w) + ": " + payload.to_string());
-          case wire::ResultKind::done:
+          case wire::ResultKind::done: {
+            if (payload.size() != wire::done_counts * sizeof(double))
+              throw RunError(co.who(w) + " sent counts of the wrong size");
             p.done = true;
-            if (payload.size() == 3 * sizeof(double)) {
-              double counts[3];
-              std::memcpy(counts, payload.data(), sizeof counts);
-              evaluations += static_cast<long>(counts[2]);
-              if (stats) {
-                stats->messages += static_cast<long>(counts[0]);
-                stats->bytes_per_stage += counts[1];
-              }
+            double counts[wire::done_counts];
+            std::memcpy(counts, payload.data(), sizeof counts);
+            // Loose: each worker counts its submodels' evaluations; tight: every worker
+            // counts the whole model's steps, as one process does.
+            evaluations = coupling.loose ? evaluations + static_cast<long>(counts[2]) : static_cast<long>(counts[2]);
+            steps = static_cast<long>(counts[3]);
+            rejected = static_cast<long>(counts[4]);
+            if (stats) {
+              stats->messages += static_cast<long>(counts[0]);
+              stats->bytes_per_stage += counts[1];
             }
             break;
-          case wire::ResultKind::snapshot: {
+          }
+          case wire::ResultKind::snapshot:
+          case wire::ResultKind::dense: {
             if (payload.size() != p.bodies.size() * partitioned::body_numbers * sizeof(double))
               throw RunError(co.who(w) + " sent a snapshot of the wrong size");
-            Pending& s = pending[h.step];
+            Pending& s = pending[h.index];
             if (s.y.size() == 0) s.y = y;
             partitioned::unpack_bodies(layout, s.y, p.bodies, payload.data());
             if (++s.parts == peers.size()) {
               y = std::move(s.y);
-              pending.erase(h.step);
-              if (sink) emit(whole, sink, grid.time(h.step), y, out);
+              pending.erase(h.index);
+              if (h.kind == wire::ResultKind::dense) whole.after_step(h.t, y);
+              if (sink) emit(whole, sink, h.t, y, out);
             }
             break;
           }
@@ -289,6 +295,7 @@ RunSummary run_cluster(const Model& model, const std::string& model_json, const 
           }
         }
         p.completed = std::max(p.completed, static_cast<long>(h.step));
+        p.reached = std::max(p.reached, h.t);
       };
       char where[96] = "";
       while (std::any_of(peers.begin(), peers.end(), [](const Peer& p) { return !p.done; })) {
@@ -297,15 +304,19 @@ RunSummary run_cluster(const Model& model, const std::string& model_json, const 
               if (j.value("type", "") == "error") throw RunError(co.who(w) + ": " + j.value("message", std::string()));
             },
             on_result);
-        long all = grid.steps;
-        for (const Peer& p : peers) all = std::min(all, p.completed);
-        if (all > reported) {
-          reported = all;
-          std::snprintf(where, sizeof where, "; every worker had completed t = %.6g s", grid.time(all));
-          if (o.progress) o.progress(grid.time(all), all);
+        long all = peers.front().completed;
+        double t_all = peers.front().reached;
+        for (const Peer& p : peers) {
+          all = std::min(all, p.completed);
+          t_all = std::min(t_all, p.reached);
+        }
+        if (t_all > reached) {
+          reached = t_all;
+          std::snprintf(where, sizeof where, "; every worker had completed t = %.6g s", t_all);
+          if (o.progress) o.progress(t_all, all);
         }
         co.check_alive(where);
-        check_stop(o, grid.time(reported));
+        check_stop(o, reached);
       }
       out.wall_seconds = std::chrono::duration<double>(Clock::now() - start_clock).count();
       co.finish();
@@ -319,8 +330,10 @@ RunSummary run_cluster(const Model& model, const std::string& model_json, const 
     if (stats) stats->coupling = records;
     if (sink) sink->write_coupling(records);
   });
-  out.steps = grid.steps;
-  out.evaluations = coupling.loose ? evaluations : grid.steps * 4;  // loose: the submodels' own evaluations
+  // Loose: the steps of the output grid's step, as run_loose counts them.
+  out.steps = coupling.loose ? step_grid(o.t_start, o.t_end, o.step).steps : steps;
+  out.rejected = rejected;
+  out.evaluations = evaluations;
   out.final_state = std::move(y);
   return out;
 }

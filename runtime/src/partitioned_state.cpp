@@ -23,16 +23,7 @@ Part::Part(const Model& model, const Submodel& s, int stages)
     : sub(&s), system(submodel_model(model, s), static_cast<int>(s.own.size())), own(static_cast<Eigen::Index>(s.own.size())) {
   x.assign(static_cast<std::size_t>(stages), system.initial_state());
   k.assign(static_cast<std::size_t>(stages), Eigen::VectorXd::Zero(system.dimension()));
-  // Global places of own elements, in the order for_own_blocks visits them.
-  const StateLayout global{static_cast<Eigen::Index>(model.bodies.size())};
-  const struct {
-    Eigen::Index (StateLayout::*offset)(Eigen::Index) const;
-    int n;
-  } fields[4] = {{&StateLayout::position, 3}, {&StateLayout::orientation, 4}, {&StateLayout::velocity, 3},
-                 {&StateLayout::angular_velocity, 3}};
-  for (const auto& f : fields)
-    for (Eigen::Index i = 0; i < own; ++i)
-      for (int c = 0; c < f.n; ++c) global_element.push_back((global.*f.offset)(s.own[static_cast<std::size_t>(i)]) + c);
+  global_element = own_elements(s, StateLayout{static_cast<Eigen::Index>(model.bodies.size())});
   const auto n_own = static_cast<int>(own);
   std::vector<char> edge(static_cast<std::size_t>(n_own), 0);
   const std::vector<Joint>& joints = system.model().joints;
@@ -62,9 +53,23 @@ void copy_ghosts(const Part& owner, const Submodel::Exchange& e, Part& me, int s
   copy_ghosts(owner.system.layout(), owner.x[static_cast<std::size_t>(s)], e, me, s);
 }
 
-void pull_ghosts(std::vector<Part>& parts, std::size_t p, int s) {
-  for (const Submodel::Exchange& e : parts[p].sub->exchanges)
-    copy_ghosts(parts[static_cast<std::size_t>(e.neighbour)], e, parts[p], s);
+void copy_local_ghosts(const std::vector<Part*>& parts, std::size_t p, int s) {
+  for (const Submodel::Exchange& e : parts[p]->sub->exchanges)
+    if (const Part* owner = parts[static_cast<std::size_t>(e.neighbour)]) copy_ghosts(*owner, e, *parts[p], s);
+}
+
+std::vector<Eigen::Index> own_elements(const Submodel& sub, const StateLayout& global) {
+  const struct {
+    Eigen::Index (StateLayout::*offset)(Eigen::Index) const;
+    int n;
+  } fields[4] = {{&StateLayout::position, 3}, {&StateLayout::orientation, 4}, {&StateLayout::velocity, 3},
+                 {&StateLayout::angular_velocity, 3}};
+  std::vector<Eigen::Index> out;
+  out.reserve(sub.own.size() * body_numbers);
+  for (const auto& f : fields)
+    for (int body : sub.own)
+      for (int c = 0; c < f.n; ++c) out.push_back((global.*f.offset)(body) + c);
+  return out;
 }
 
 // Through memcpy: a message buffer need not be aligned for doubles.

@@ -24,8 +24,9 @@ struct Part {
   std::vector<int> own_bodies, inner_bodies, edge_bodies, ghost_bodies, inner_joints, ghost_joints;
 };
 
-// Copies the ghost bodies' values of stage input s from their owners.
-void pull_ghosts(std::vector<Part>& parts, std::size_t p, int s);
+// Copies the ghost bodies' values of stage input s of parts[p] from their owners in this
+// process (parts[q] null: q runs elsewhere).
+void copy_local_ghosts(const std::vector<Part*>& parts, std::size_t p, int s);
 // The same for one exchange, from an owner in this process, or from an owner's state
 // vector `from` (in its layout) kept from earlier.
 void copy_ghosts(const Part& owner, const Submodel::Exchange& e, Part& me, int s);
@@ -37,6 +38,10 @@ void copy_ghosts(const StateLayout& owner_layout, const Eigen::VectorXd& from, c
 constexpr int body_numbers = 13;
 void pack_bodies(const StateLayout& l, const Eigen::VectorXd& x, const std::vector<int>& bodies, void* out);
 void unpack_bodies(const StateLayout& l, Eigen::VectorXd& x, const std::vector<int>& bodies, const void* in);
+
+// The places in the global state of a submodel's own entries, field block by field block
+// (position, orientation, velocity, angular velocity), bodies in order within each.
+std::vector<Eigen::Index> own_elements(const Submodel& sub, const StateLayout& global);
 
 // Calls f(offset, length) for the own entries of each field block of the local state.
 template <class F>

@@ -5,6 +5,7 @@
 
 #include "cluster_wire.hpp"
 #include "mbsflow/error.hpp"
+#include "mbsflow/methods/dopri5.hpp"
 
 namespace mbsflow {
 
@@ -12,8 +13,20 @@ RemoteExchange::RemoteExchange(zmq::context_t& ctx, zmq::socket_t& inbox, const 
                                std::vector<int> worker_of, const std::vector<std::string>& worker_names,
                                const std::vector<std::string>& data_addresses, int stages, double send_timeout_s,
                                double delay_s)
-    : inbox_socket_(inbox), d_(d), parts_(std::move(parts)), worker_of_(std::move(worker_of)), worker_names_(worker_names), stages_(stages),
+    : ctx_(ctx), inbox_socket_(inbox), data_addresses_(data_addresses), send_timeout_s_(send_timeout_s), d_(d), parts_(std::move(parts)), worker_of_(std::move(worker_of)), worker_names_(worker_names), stages_(stages),
       outgoing_(d.submodels.size()), delay_s_(delay_s) {
+  const std::size_t workers = worker_names.size();
+  first_of_.assign(workers, -1);
+  elements_of_.resize(workers);
+  const StateLayout global{static_cast<Eigen::Index>(d.part_of_body.size())};
+  for (std::size_t q = 0; q < d.submodels.size(); ++q) {
+    local_.push_back(parts_[q] ? 1 : 0);
+    const auto w = static_cast<std::size_t>(worker_of_[q]);
+    if (parts_[q]) me_ = static_cast<int>(w);
+    if (first_of_[w] < 0) first_of_[w] = static_cast<int>(q);
+    const std::vector<Eigen::Index> e = partitioned::own_elements(d.submodels[q], global);
+    elements_of_[w].insert(elements_of_[w].end(), e.begin(), e.end());
+  }
   // Remote submodel r takes the bodies e.from of its neighbour p: p sends them to r.
   for (std::size_t r = 0; r < d.submodels.size(); ++r) {
     if (parts_[r]) continue;
@@ -62,15 +75,22 @@ void RemoteExchange::deliver_delayed() {
 bool RemoteExchange::store(zmq::message_t& header, zmq::message_t& payload) {
   const auto h = wire::read_header<wire::ExchangeHeader>(header);
   const auto k = static_cast<int>(d_.submodels.size());
-  if (!h || h->to < 0 || h->to >= k || h->from < 0 || h->from >= k || h->stage < 0 || h->stage >= stages_ ||
+  if (!h || h->to < 0 || h->to >= k || h->from < 0 || h->from >= k || h->stage < 0 || h->stage > stages_ ||
       !parts_[static_cast<std::size_t>(h->to)] || parts_[static_cast<std::size_t>(h->from)])
     return false;
-  const Submodel& to = d_.submodels[static_cast<std::size_t>(h->to)];
-  std::size_t bodies = 0;
-  bool known = false;
-  for (const Submodel::Exchange& e : to.exchanges)
-    if (e.neighbour == h->from) bodies = e.from.size(), known = true;
-  if (!known || payload.size() != bodies * partitioned::body_numbers * sizeof(double)) return false;
+  if (h->stage == stages_) {  // a worker's error squares, from its first submodel to ours
+    const auto w = static_cast<std::size_t>(worker_of_[static_cast<std::size_t>(h->from)]);
+    if (h->from != first_of_[w] || h->to != first_of_[static_cast<std::size_t>(me_)] ||
+        payload.size() != elements_of_[w].size() * sizeof(double))
+      return false;
+  } else {
+    const Submodel& to = d_.submodels[static_cast<std::size_t>(h->to)];
+    std::size_t bodies = 0;
+    bool known = false;
+    for (const Submodel::Exchange& e : to.exchanges)
+      if (e.neighbour == h->from) bodies = e.from.size(), known = true;
+    if (!known || payload.size() != bodies * partitioned::body_numbers * sizeof(double)) return false;
+  }
   std::lock_guard lock(mutex_);
   const Slot slot{h->to, h->from, h->stage};
   inbox_[slot].push_back({h->step, std::move(payload)});
@@ -128,18 +148,78 @@ void RemoteExchange::receive(int p, long n, int s) {
   partitioned::Part& me = *parts_[static_cast<std::size_t>(p)];
   for (const Submodel::Exchange& e : d_.submodels[static_cast<std::size_t>(p)].exchanges) {
     if (parts_[static_cast<std::size_t>(e.neighbour)]) continue;
-    zmq::message_t m;
-    {
-      std::lock_guard lock(mutex_);
-      auto& queue = inbox_[{p, e.neighbour, s}];
-      if (queue.empty() || queue.front().step != n)
-        throw RunError("boundary values of submodel " + std::to_string(e.neighbour) + " for step " + std::to_string(n) +
-                       " stage " + std::to_string(s) + " are missing");
-      m = std::move(queue.front().payload);
-      queue.pop_front();
-    }
+    const zmq::message_t m = pop({p, e.neighbour, s}, n, "boundary values of submodel " + std::to_string(e.neighbour));
     partitioned::unpack_bodies(me.system.layout(), me.x[static_cast<std::size_t>(s)], e.to, m.data());
   }
+}
+
+zmq::message_t RemoteExchange::pop(const Slot& slot, long n, const std::string& what) {
+  std::lock_guard lock(mutex_);
+  auto& queue = inbox_[slot];
+  if (queue.empty() || queue.front().step != n)
+    throw RunError(what + " for step " + std::to_string(n) + " stage " + std::to_string(std::get<2>(slot)) +
+                   " are missing");
+  zmq::message_t m = std::move(queue.front().payload);
+  queue.pop_front();
+  return m;
+}
+
+void RemoteExchange::take(std::size_t p, long n, int s) {
+  partitioned::copy_local_ghosts(parts_, p, s);
+  receive(static_cast<int>(p), n, s);
+}
+
+double RemoteExchange::error_sum(long n, Eigen::VectorXd& squares) {
+  const auto me = static_cast<std::size_t>(me_);
+  const int mine = first_of_[me];
+  for (std::size_t w = 0; w < first_of_.size(); ++w) {
+    if (w == me || first_of_[w] < 0) continue;
+    auto [it, added] = senders_.try_emplace({mine, static_cast<int>(w)}, wire::make_socket(ctx_, zmq::socket_type::push));
+    if (added) {
+      it->second.set(zmq::sockopt::sndtimeo, static_cast<int>(send_timeout_s_ * 1000.0));
+      wire::connect(it->second, data_addresses_[w], "worker " + worker_names_[w]);
+    }
+    zmq::message_t payload(elements_of_[me].size() * sizeof(double));
+    auto* out = static_cast<unsigned char*>(payload.data());
+    for (const Eigen::Index e : elements_of_[me]) {
+      std::memcpy(out, &squares[e], sizeof(double));
+      out += sizeof(double);
+    }
+    wire::ExchangeHeader h;
+    h.from = mine;
+    h.to = first_of_[w];
+    h.stage = stages_;
+    h.step = n;
+    if (!post(it->second, h, std::move(payload))) throw RunError(why());
+  }
+  for (std::size_t w = 0; w < first_of_.size(); ++w) {
+    if (w == me || first_of_[w] < 0) continue;
+    wait(n, stages_, first_of_[w], mine);
+    if (aborted()) throw RunError(why());
+    const zmq::message_t m = pop({mine, first_of_[w], stages_}, n, "the error norm's terms of worker " + worker_names_[w]);
+    const auto* in = static_cast<const unsigned char*>(m.data());
+    for (const Eigen::Index e : elements_of_[w]) {
+      std::memcpy(&squares[e], in, sizeof(double));
+      in += sizeof(double);
+    }
+  }
+  return dopri5::ordered_sum(squares);
+}
+
+void RemoteExchange::fail(std::exception_ptr e) {
+  BoundaryExchange::fail(e);
+  try {
+    std::rethrow_exception(e);
+  } catch (const std::exception& x) {
+    abort(error_text(x));
+  } catch (...) {
+    abort("a stage failed");
+  }
+}
+
+void RemoteExchange::check() const {
+  BoundaryExchange::check();
+  if (aborted()) throw RunError(why());
 }
 
 void RemoteExchange::take_upto(int p, int q, int s, long cap, const std::function<void(long, const double*)>& take) {
@@ -171,21 +251,26 @@ void RemoteExchange::send(int p, long n, int s) {
     h.to = o.to;
     h.stage = s;
     h.step = n;
-    if (delay_s_ > 0.0) {
-      {
-        std::lock_guard lock(delay_mutex_);
-        if (!delayer_.joinable()) delayer_ = std::thread([this] { deliver_delayed(); });
-        const auto due = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                                                                 std::chrono::duration<double>(delay_s_));
-        delayed_.push_back({due, o.socket, h, std::move(payload)});
-      }
-      delay_changed_.notify_all();
-      ++sent_;
-      continue;
-    }
-    if (!transmit(*o.socket, h, payload)) return;
-    ++sent_;
+    if (!post(*o.socket, h, std::move(payload))) return;
   }
+}
+
+bool RemoteExchange::post(zmq::socket_t& socket, const wire::ExchangeHeader& h, zmq::message_t payload) {
+  if (delay_s_ > 0.0) {
+    {
+      std::lock_guard lock(delay_mutex_);
+      if (!delayer_.joinable()) delayer_ = std::thread([this] { deliver_delayed(); });
+      const auto due = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                                               std::chrono::duration<double>(delay_s_));
+      delayed_.push_back({due, &socket, h, std::move(payload)});
+    }
+    delay_changed_.notify_all();
+    ++sent_;
+    return true;
+  }
+  if (!transmit(socket, h, payload)) return false;
+  ++sent_;
+  return true;
 }
 
 bool RemoteExchange::transmit(zmq::socket_t& socket, const wire::ExchangeHeader& h, zmq::message_t& payload) {

@@ -5,7 +5,10 @@
 // receiver, step and stage; a received message waits in its slot until the receiving
 // stage takes it, so none is dropped or taken for another stage. The inbox is read by
 // whichever waiting proxy gets to it first (one at a time): no thread between the socket
-// and the stage that needs the values.
+// and the stage that needs the values. As a BoundaryExchange it also copies the ghosts
+// whose owners run in this worker, and sums DOPRI5's error norm over every worker (each
+// sends the squares of its own entries to all others, tagged with the stage number
+// `stages`, and adds them all in global order).
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
@@ -20,22 +23,33 @@
 #include <zmq.hpp>
 
 #include "mbsflow/graph/decomposition.hpp"
+#include "boundary_exchange.hpp"
 #include "cluster_wire.hpp"
 #include "partitioned_state.hpp"
 
 namespace mbsflow {
 
-class RemoteExchange {
+class RemoteExchange final : public BoundaryExchange {
  public:
   // parts[q]: local submodel q's state, null where q runs elsewhere; worker_of[q] its worker.
   RemoteExchange(zmq::context_t& ctx, zmq::socket_t& inbox, const Decomposition& d, std::vector<partitioned::Part*> parts,
                  std::vector<int> worker_of, const std::vector<std::string>& worker_names,
                  const std::vector<std::string>& data_addresses, int stages, double send_timeout_s, double delay_s = 0.0);
-  ~RemoteExchange();
+  ~RemoteExchange() override;
+
+  // BoundaryExchange: local ghosts copied, remote ones received; values sent; the error
+  // norm summed over every worker.
+  void take(std::size_t p, long n, int s) override;
+  void offer(std::size_t p, long n, int s) override { send(static_cast<int>(p), n, s); }
+  double error_sum(long n, Eigen::VectorXd& squares) override;
+  const std::vector<char>* local_submodels() const override { return &local_; }
+  void fail(std::exception_ptr e) override;
+  bool stopped() const override { return BoundaryExchange::stopped() || aborted(); }
+  void check() const override;
 
   // From a proxy node: returns once remote q's values of stage input s of step n for local
   // p are in, or the exchange was aborted.
-  void wait(long n, int s, int q, int p);
+  void wait(long n, int s, int q, int p) override;
   // From local p's stage: its remote ghosts of stage input s of step n, from their slots.
   void receive(int p, long n, int s);
   // From local p (loose coupling): remote q's messages of stage input s with a step up to
@@ -66,15 +80,28 @@ class RemoteExchange {
   using Slot = std::tuple<int, int, int>;  // to (local), from (remote), stage
   // Stores a two-frame message from the inbox; false if it is malformed.
   bool store(zmq::message_t& header, zmq::message_t& payload);
+  // Sends one message, or queues it for the delayer; false if the exchange stopped.
+  bool post(zmq::socket_t& socket, const wire::ExchangeHeader& h, zmq::message_t payload);
+  // The first message of a slot, which must be of step n (RunError if it is not).
+  zmq::message_t pop(const Slot& slot, long n, const std::string& what);
   // Waits up to `ms` for the inbox, then stores everything in it; false on a malformed message.
   bool read_inbox(int ms);
   // read_inbox as the one reading thread (reading_), with mutex_ held on entry and exit.
   void read_inbox_as_reader(std::unique_lock<std::mutex>& lock, int ms);
 
+  zmq::context_t& ctx_;
   zmq::socket_t& inbox_socket_;
+  std::vector<std::string> data_addresses_;
+  double send_timeout_s_;
 
   const Decomposition& d_;
   std::vector<partitioned::Part*> parts_;
+  std::vector<char> local_;  // per submodel: 1 if it runs here
+  // The error-norm reduction: per worker its lowest submodel (the messages' sender and
+  // receiver) and the global places of its submodels' own entries, in the order it sends them.
+  std::vector<int> first_of_;
+  std::vector<std::vector<Eigen::Index>> elements_of_;
+  int me_ = -1;
   std::vector<int> worker_of_;
   std::vector<std::string> worker_names_;
   int stages_;

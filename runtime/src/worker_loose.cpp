@@ -7,6 +7,7 @@
 
 #include "loose_part.hpp"
 #include "loose_rounds.hpp"
+#include "mbsflow/methods/step_grid.hpp"
 #include "worker_part.hpp"
 
 namespace mbsflow {
@@ -40,8 +41,9 @@ Outcome run_loose_part(Session& s, WorkerIo& io, zmq::context_t& ctx, zmq::socke
   std::vector<partitioned::Part*> parts(k, nullptr);
   for (std::size_t q = 0; q < k; ++q)
     if (s.worker_of[q] == s.me) parts[q] = &(lp[q] = loose::make_part(s.model, s.d.submodels[q], s.o, lo, q))->part;
-  WorkerPart w(s, io, ctx, inbox, start, parts, stop);
+  WorkerPart w(s, io, ctx, inbox, start, parts, 4, stop);
   loose::MacroGrid grid(s.o, lo.macro_step);
+  const StepGrid tight = step_grid(s.o.t_start, s.o.t_end, s.o.step);  // the coordinator's snapshot times
   loose::RemoteSamples remote;
   remote.wait = [&](long index, int q, int p) { w.exchange.wait(index, 0, q, p); };
   remote.take = [&](int p, int q, long cap, const std::function<void(long, const double*)>& take) {
@@ -71,7 +73,8 @@ Outcome run_loose_part(Session& s, WorkerIo& io, zmq::context_t& ctx, zmq::socke
       if (!failure.empty()) return false;
       done = m + n;
       report_coupling();
-      w.report_state(grid.tight_step(done), grid.output(done));
+      const long step = grid.tight_step(done);
+      w.report_state(step, tight.time(step), grid.output(done) ? step : -1);
       return true;
     });
   if (failure.empty()) {
@@ -81,7 +84,7 @@ Outcome run_loose_part(Session& s, WorkerIo& io, zmq::context_t& ctx, zmq::socke
   }
   double evaluations = 0.0;
   for (int p : w.mine) evaluations += static_cast<double>(lp[static_cast<std::size_t>(p)]->evaluations);
-  return w.finish(failure, grid.tight_step(done), evaluations);
+  return w.finish(failure, grid.tight_step(done), grid.end(done), evaluations);
 }
 
 }  // namespace mbsflow

@@ -9,13 +9,16 @@ namespace mbsflow {
 using nlohmann::json;
 
 WorkerPart::WorkerPart(Session& session, WorkerIo& io, zmq::context_t& ctx, zmq::socket_t& inbox, const json& start,
-                       std::vector<partitioned::Part*> local, const std::atomic<bool>* stop)
+                       std::vector<partitioned::Part*> local, int stages, const std::atomic<bool>* stop)
     : s(session), parts(std::move(local)),
       exchange(ctx, inbox, s.d, parts, s.worker_of, start.at("names").get<std::vector<std::string>>(),
-               start.at("data_addresses").get<std::vector<std::string>>(), 4, io.timeouts().lost_s, s.exchange_delay_s),
+               start.at("data_addresses").get<std::vector<std::string>>(), stages, io.timeouts().lost_s, s.exchange_delay_s),
       io_(io), results_(wire::make_socket(ctx, zmq::socket_type::push)), stop_(stop) {
   for (std::size_t q = 0; q < parts.size(); ++q)
-    if (parts[q]) mine.push_back(static_cast<int>(q));
+    if (parts[q]) {
+      mine.push_back(static_cast<int>(q));
+      bodies_.insert(bodies_.end(), parts[q]->sub->own.begin(), parts[q]->sub->own.end());
+    }
   io.attach(&exchange);
   results_.set(zmq::sockopt::sndtimeo, static_cast<int>(io.timeouts().lost_s * 1000.0));
   wire::connect(results_, s.results_address, "the coordinator's results inbox");
@@ -23,11 +26,13 @@ WorkerPart::WorkerPart(Session& session, WorkerIo& io, zmq::context_t& ctx, zmq:
 
 WorkerPart::~WorkerPart() { io_.attach(nullptr); }
 
-void WorkerPart::report(wire::ResultKind kind, long step, const void* data, std::size_t bytes) {
+void WorkerPart::report(wire::ResultKind kind, long steps, double t, long index, const void* data, std::size_t bytes) {
   wire::ResultHeader h;
   h.kind = kind;
   h.worker = s.me;
-  h.step = step;
+  h.step = steps;
+  h.index = index;
+  h.t = t;
   bool ok = false;
   try {
     ok = wire::send_framed(results_, h, data, bytes);
@@ -49,18 +54,22 @@ std::string WorkerPart::check(double t) const {
   return "";
 }
 
-void WorkerPart::report_state(long step, bool snapshot) {
-  if (!snapshot) return report(wire::ResultKind::progress, step, nullptr, 0);
+void WorkerPart::report_state(long steps, double t, long snapshot) {
+  if (snapshot < 0) return report(wire::ResultKind::progress, steps, t, 0, nullptr, 0);
   snapshot_.clear();
   for (int q : mine) {
     const partitioned::Part& part = *parts[static_cast<std::size_t>(q)];
     const std::size_t at = snapshot_.size();
     snapshot_.resize(at + static_cast<std::size_t>(part.own) * partitioned::body_numbers);
-    std::vector<int> own(static_cast<std::size_t>(part.own));
-    for (std::size_t i = 0; i < own.size(); ++i) own[i] = static_cast<int>(i);
-    partitioned::pack_bodies(part.system.layout(), part.x[0], own, snapshot_.data() + at);
+    partitioned::pack_bodies(part.system.layout(), part.x[0], part.own_bodies, snapshot_.data() + at);
   }
-  report(wire::ResultKind::snapshot, step, snapshot_.data(), snapshot_.size() * sizeof(double));
+  report(wire::ResultKind::snapshot, steps, t, snapshot, snapshot_.data(), snapshot_.size() * sizeof(double));
+}
+
+void WorkerPart::report_dense(long steps, double t, long index, const Eigen::VectorXd& y) {
+  snapshot_.resize(bodies_.size() * partitioned::body_numbers);
+  partitioned::pack_bodies(StateLayout{static_cast<Eigen::Index>(s.model.bodies.size())}, y, bodies_, snapshot_.data());
+  report(wire::ResultKind::dense, steps, t, index, snapshot_.data(), snapshot_.size() * sizeof(double));
 }
 
 void WorkerPart::report_coupling(const std::vector<CouplingRecord>& records) {
@@ -69,17 +78,18 @@ void WorkerPart::report_coupling(const std::vector<CouplingRecord>& records) {
   for (const CouplingRecord& r : records)
     rows.insert(rows.end(), {static_cast<double>(r.index), r.t_start, r.t_end, r.position_error, r.velocity_error,
                              static_cast<double>(r.lag)});
-  report(wire::ResultKind::coupling, 0, rows.data(), rows.size() * sizeof(double));
+  report(wire::ResultKind::coupling, 0, records.back().t_end, 0, rows.data(), rows.size() * sizeof(double));
 }
 
-Outcome WorkerPart::finish(std::string failure, long step, double evaluations) {
+Outcome WorkerPart::finish(std::string failure, long steps, double t, double evaluations, long rejected) {
   if (failure.empty() && exchange.aborted()) failure = exchange.why();
-  const double counts[3] = {static_cast<double>(exchange.messages_sent()), exchange.bytes_per_stage(), evaluations};
+  const double counts[wire::done_counts] = {static_cast<double>(exchange.messages_sent()), exchange.bytes_per_stage(),
+                                            evaluations, static_cast<double>(steps), static_cast<double>(rejected)};
   if (failure.empty()) {
-    report(wire::ResultKind::done, step, counts, sizeof counts);
+    report(wire::ResultKind::done, steps, t, 0, counts, sizeof counts);
     if (exchange.aborted()) failure = exchange.why();
   } else if (failure.rfind("stopped by the coordinator", 0) != 0 && failure.rfind("the coordinator", 0) != 0) {
-    report(wire::ResultKind::failed, step, failure.data(), failure.size());
+    report(wire::ResultKind::failed, steps, t, 0, failure.data(), failure.size());
   }
   // The sockets stay open until the coordinator's word: the last results and boundary
   // values may still be on their way (linger 0).

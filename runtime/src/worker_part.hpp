@@ -35,9 +35,10 @@ struct Outcome {
 
 class WorkerPart {
  public:
-  // parts[q]: local submodel q's state, null where q runs elsewhere.
+  // parts[q]: local submodel q's state, null where q runs elsewhere; stages: the stage
+  // inputs exchanged per step.
   WorkerPart(Session& s, WorkerIo& io, zmq::context_t& ctx, zmq::socket_t& inbox, const nlohmann::json& start,
-             std::vector<partitioned::Part*> parts, const std::atomic<bool>* stop);
+             std::vector<partitioned::Part*> parts, int stages, const std::atomic<bool>* stop);
   ~WorkerPart();
 
   Session& s;
@@ -47,24 +48,28 @@ class WorkerPart {
 
   // A failure message when the run must stop at time t (aborted, diverged, interrupted).
   std::string check(double t) const;
-  // Own bodies of the local submodels to the coordinator (snapshot at `step` of the tight
-  // grid), or only the progress.
-  void report_state(long step, bool snapshot);
+  // Own bodies of the local submodels (x[0]) to the coordinator as snapshot number
+  // `snapshot` at t, after `steps` steps; or with snapshot < 0 only the progress.
+  void report_state(long steps, double t, long snapshot);
+  // Own bodies of the local submodels from y (global layout): dense output at t.
+  void report_dense(long steps, double t, long index, const Eigen::VectorXd& y);
   // Loose coupling: macro-step records (loose_rounds.hpp) to the coordinator.
   void report_coupling(const std::vector<CouplingRecord>& records);
-  // Reports done or the failure, then waits for the coordinator's finish or abort.
-  Outcome finish(std::string failure, long step, double evaluations);
+  // Reports done (with the counts) or the failure, then waits for the coordinator's
+  // finish or abort.
+  Outcome finish(std::string failure, long steps, double t, double evaluations, long rejected = 0);
 
  private:
-  void report(wire::ResultKind kind, long step, const void* data, std::size_t bytes);
+  void report(wire::ResultKind kind, long steps, double t, long index, const void* data, std::size_t bytes);
   WorkerIo& io_;
   zmq::socket_t results_;
   const std::atomic<bool>* stop_;
   std::vector<double> snapshot_;
+  std::vector<int> bodies_;  // global indices of the local submodels' own bodies, as the coordinator expects them
 };
 
-// The loops, each with its local submodels' state: RK4 with values exchanged every stage
-// (tight), or macro steps (loose).
+// The loops, each with its local submodels' state: RK4 or DOPRI5 with values exchanged
+// every stage (tight), or macro steps (loose).
 Outcome run_tight(Session& s, WorkerIo& io, zmq::context_t& ctx, zmq::socket_t& inbox, const nlohmann::json& start,
                   int threads, const std::atomic<bool>* stop);
 Outcome run_loose_part(Session& s, WorkerIo& io, zmq::context_t& ctx, zmq::socket_t& inbox, const nlohmann::json& start,

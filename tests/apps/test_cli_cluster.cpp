@@ -65,6 +65,15 @@ TEST_CASE("runs on 2, 3 and 4 processes write the one-process results bit for bi
       CHECK(same_results(d / (model + "-1.h5"), d / out));
     }
   }
+  // DOPRI5: the workers take the same steps (one error norm over all of them) and write
+  // the same dense output.
+  const std::string dopri5 = "run chain.json --method dopri5 --rtol 1e-7 --t-end 0.05 --output-interval 0.005 -q -o ";
+  REQUIRE(run(dopri5 + "chain-d1.h5 --threads 1 --partitions 1", dir).code == 0);
+  const Result rd = run(dopri5 + "chain-d3.h5 --processes 3", dir);
+  INFO(rd.err);
+  REQUIRE(rd.code == 0);
+  CHECK(same_results(d / "chain-d1.h5", d / "chain-d3.h5"));
+  CHECK(mbsflow::ResultsFile((d / "chain-d3.h5").string()).time().size() == 11);
   // A cluster file with workers started by hand, two submodels on the first.
   Workers w(2, d);
   write_cluster(d / "cluster.json", w.endpoints);
@@ -166,10 +175,11 @@ TEST_CASE("cluster set-up errors: unreachable worker, port in use, bad cluster f
   CHECK(unreachable.err.find("worker w0 (tcp://127.0.0.1:1) did not answer within 1 s") != std::string::npos);
   CHECK(std::chrono::duration<double>(Clock::now() - start).count() < 5.0);
 
-  // DOPRI5 runs in one process only, for now.
-  const Result dopri5 = run("run chain.json --processes 2 --method dopri5", dir);
-  CHECK(dopri5.code == 2);
-  CHECK(dopri5.err.find("runs across processes use RK4 for now (dopri5") != std::string::npos);
+  // The implicit methods integrate whole models, not submodels whose stages are exchanged.
+  const Result colloc = run("run chain.json --processes 2 --method colloc", dir);
+  CHECK(colloc.code == 2);
+  CHECK(colloc.err.find("a tightly coupled run of several submodels exchanges RK4 or DOPRI5 stages; colloc") !=
+        std::string::npos);
 
   // A second worker on a port that is taken.
   Workers first(1, d);

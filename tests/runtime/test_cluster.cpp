@@ -15,6 +15,7 @@
 #include "mbsflow/io/model_writer.hpp"
 #include "mbsflow/runtime/cluster.hpp"
 #include "mbsflow/runtime/loose_coupling.hpp"
+#include "mbsflow/runtime/partitioned_run.hpp"
 #include "mbsflow/runtime/simulation.hpp"
 #include "memory_sink.hpp"
 
@@ -121,6 +122,44 @@ TEST_CASE("cluster runs over tcp and ipc equal the one-process run bit for bit",
         for (const std::string& e : pool.errors) CHECK(e.empty());
       }
     std::filesystem::remove_all(dir);
+  }
+}
+
+TEST_CASE("tight DOPRI5 across processes equals the one-process run bit for bit, rejected attempts included",
+          "[runtime][cluster]") {
+  ChainParams chain;
+  chain.bodies = 30;
+  Model m = short_run(make_chain(chain), 45);
+  m.simulation.method = Method::dopri5;
+  RunOptions o = options_from_model(m);
+  o.rtol = o.atol = 1e-8;
+  o.step *= 32;  // a first step far too long: the first attempts are rejected
+  o.output_interval = (o.t_end - o.t_start) / 10;  // dense output between steps
+  MultibodySystem sys(m);
+  test::MemorySink reference;
+  run_simulation(sys, o, &reference);
+  REQUIRE(reference.states.size() == 11);
+  REQUIRE(reference.states.back() != reference.states.front());
+  for (auto [workers, delay] : {std::pair{2, 0.0}, std::pair{3, 0.0}, std::pair{3, 0.001}}) {
+    ThreadWorkers pool(std::vector<std::string>(static_cast<std::size_t>(workers), "tcp://127.0.0.1:*"));
+    ClusterConfig c = cluster_of(pool.endpoints, "", "tcp://127.0.0.1:*");
+    for (auto& w : c.workers) w.data_bind = "tcp://127.0.0.1:*";
+    c.workers[0].weight = 2;  // the first worker runs two submodels
+    const Decomposition d = decompose(m, cluster_submodels(c));
+    test::MemorySink in_process;
+    const RunSummary one = run_partitioned(m, d, o, {2, Executor::flow_graph}, &in_process);
+    REQUIRE(one.rejected > 0);
+    test::MemorySink sink;
+    const RunSummary r = run_cluster(m, model_to_json(m), d, c, o, &sink, nullptr, {nullptr, delay});
+    INFO(workers << " workers, exchange delay " << delay << " s");
+    CHECK(sink.times == reference.times);
+    CHECK(sink.states == reference.states);
+    CHECK(r.final_state == reference.states.back());
+    CHECK(in_process.states == reference.states);
+    CHECK(r.steps == one.steps);
+    CHECK(r.rejected == one.rejected);
+    CHECK(r.evaluations == one.evaluations);
+    for (const std::string& e : pool.errors) CHECK(e.empty());
   }
 }
 

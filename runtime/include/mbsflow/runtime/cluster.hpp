@@ -15,7 +15,7 @@
 namespace mbsflow {
 
 // Raised with every incompatible change of the messages between processes.
-constexpr int cluster_protocol_version = 2;  // 2: loose coupling with coupling records, newest-value lag
+constexpr int cluster_protocol_version = 3;  // 2: loose coupling records, newest-value lag; 3: tight DOPRI5
 
 struct ClusterTimeouts {
   double connect_s = 10.0;   // every worker must answer the coordinator's hello within this
@@ -74,7 +74,7 @@ RunSummary run_cluster(const Model& model, const std::string& model_json, const 
                        ClusterStats* stats = nullptr, ClusterCoupling coupling = {});
 // The checks run_cluster makes of its settings before it contacts anyone (InputError);
 // callers that start workers first call it before.
-void check_cluster_run(const RunOptions& options, const ClusterCoupling& coupling);
+void check_cluster_run(const Model& model, const RunOptions& options, const ClusterCoupling& coupling);
 
 struct WorkerOptions {
   std::string listen;  // control endpoint to bind; a tcp port of * picks a free one
