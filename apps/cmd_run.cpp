@@ -21,6 +21,7 @@
 #include "mbsflow/runtime/cluster.hpp"
 #include "mbsflow/runtime/loose_coupling.hpp"
 #include "mbsflow/runtime/partitioned_run.hpp"
+#include "mbsflow/runtime/run.hpp"
 #include "mbsflow/runtime/simulation.hpp"
 #include "progress.hpp"
 #include "signals.hpp"
@@ -168,7 +169,6 @@ int run(const RunArgs& a) {
     info.output_interval = o.output_interval;
     sink = std::make_unique<AsyncSink>(std::make_unique<Hdf5Sink>(a.output, fields, std::move(info)));
   }
-  MultibodySystem sys(m);
   const int threads = a.threads > 0 ? a.threads : static_cast<int>(std::thread::hardware_concurrency());
   const bool cluster = !a.cluster.empty() || a.processes > 0;
   const bool loose = a.coupling == "loose";
@@ -213,24 +213,25 @@ int run(const RunArgs& a) {
   ProgressLine progress(o.t_start, o.t_end, !a.quiet);
   o.progress = [&](double t, long steps) { progress.update(t, steps); };
   o.stop = install_stop_handlers();
+  RunPlan plan;
+  plan.options = o;
+  plan.partition = d;
+  if (loose) plan.loose = lo;
+  plan.parallel = {threads, a.executor == "flow" ? Executor::flow_graph : Executor::barrier};
+  if (cluster) {
+    plan.cluster = cc;
+    plan.model_json = model_to_json(m);
+    plan.exchange_delay_s = a.exchange_delay;
+  }
   RunSummary r;
   try {
+    RunStats stats;
+    r = mbsflow::run(m, plan, sink.get(), &stats);
     if (cluster) {
-      ClusterStats cs;
-      r = run_cluster(m, model_to_json(m), *d, cc, o, sink.get(), &cs, coupling);
-      LooseStats ls;
-      ls.records = cs.coupling;
-      summarise_records(ls);
-      if (loose && !a.quiet) print_coupling(ls, false, a.max_lag);
-    } else if (loose) {
-      LooseStats ls;
-      r = run_loose(m, *d, o, lo, sink.get(), &ls);
-      if (!a.quiet) print_coupling(ls, a.coupling_tol.has_value(), a.max_lag);
-    } else if (d) {
-      r = run_partitioned(m, *d, o, {threads, a.executor == "flow" ? Executor::flow_graph : Executor::barrier}, sink.get());
-    } else {
-      r = run_simulation(sys, o, sink.get());
+      stats.loose.records = stats.cluster.coupling;
+      summarise_records(stats.loose);
     }
+    if (loose && !a.quiet) print_coupling(stats.loose, !cluster && a.coupling_tol.has_value(), a.max_lag);
   } catch (const RunError& e) {
     progress.finish();
     const int sig = stop_signal();
@@ -238,7 +239,10 @@ int run(const RunArgs& a) {
                    (sink ? " in " + a.output : ""));
   }
   progress.finish();
-  if (!a.quiet && !sink) print_summary(m, sys, o, r);
+  if (!a.quiet && !sink) {
+    MultibodySystem sys(m);
+    print_summary(m, sys, o, r);
+  }
   const double body_steps = static_cast<double>(r.steps) * static_cast<double>(m.bodies.size());
   std::string output;
   if (sink) {

@@ -1,7 +1,7 @@
 #pragma once
 // Runs across processes and hosts over ZeroMQ. A coordinator (run_cluster) hands the model
 // and the assignment of submodels to workers (serve_worker), which exchange boundary values
-// peer to peer at every RK4 stage and stream their bodies' snapshots back; the results are
+// peer to peer at every RK4 or DOPRI5 stage and stream their bodies' snapshots back; the results are
 // bitwise those of the one-process run. See docs/cluster.md for the cluster file and the
 // protocol.
 #include <atomic>
@@ -57,11 +57,11 @@ struct ClusterStats {
 };
 
 // The coordinator. model_json is the model as written by model_to_json, which every worker
-// reads back to the same Model. Tight coupling: RK4 only. Throws RunError naming the
+// reads back to the same Model. Tight coupling: RK4 or DOPRI5. Throws RunError naming the
 // worker when one is lost or fails; InputError for bad settings.
 struct LooseOptions;
 
-// How the workers are coupled: tight (every RK4 stage) unless loose is set (macro steps,
+// How the workers are coupled: tight (every stage) unless loose is set (macro steps,
 // RK4 or DOPRI5 inside; a fixed macro step). exchange_delay_s holds every boundary message
 // back that long (a slow network, for tests and the benchmark).
 struct ClusterCoupling {

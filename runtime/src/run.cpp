@@ -1,0 +1,42 @@
+#include "mbsflow/runtime/run.hpp"
+
+#include "mbsflow/error.hpp"
+#include "sink_runner.hpp"
+#include "tight_coupling.hpp"
+
+namespace mbsflow {
+
+void check_plan(const Model& model, const RunPlan& plan) {
+  const RunOptions& o = plan.options;
+  check_options(o);
+  stepper_entry(o.method);  // a method that exists
+  if (plan.exchange_delay_s != 0.0 && !plan.cluster)
+    throw InputError("{exchange_delay}: only for runs on worker processes");
+  if (plan.loose) {
+    if (!plan.partition) throw InputError("loose coupling needs a partition of the model into submodels");
+    check_loose_options(*plan.loose, plan.partition->submodels.size());
+  }
+  if (plan.cluster) {
+    if (!plan.partition) throw InputError("a run on worker processes needs a partition of the model into submodels");
+    if (plan.model_json.empty()) throw InputError("a run on worker processes needs the model's JSON for the workers");
+    check_cluster_run(model, o, {plan.loose ? &*plan.loose : nullptr, plan.exchange_delay_s});
+  } else if (plan.partition && !plan.loose) {
+    tight_stages(o.method);  // a method whose stages the submodels exchange
+  }
+}
+
+RunSummary run(const Model& model, const RunPlan& plan, ResultSink* sink, RunStats* stats) {
+  check_plan(model, plan);
+  RunStats local;
+  RunStats& st = stats ? *stats : local;
+  const LooseOptions* loose = plan.loose ? &*plan.loose : nullptr;
+  if (plan.cluster)
+    return run_cluster(model, plan.model_json, *plan.partition, *plan.cluster, plan.options, sink, &st.cluster,
+                       {loose, plan.exchange_delay_s});
+  if (loose) return run_loose(model, *plan.partition, plan.options, *loose, sink, &st.loose);
+  if (plan.partition) return run_partitioned(model, *plan.partition, plan.options, plan.parallel, sink, &st.parallel);
+  MultibodySystem system(model);
+  return run_simulation(system, plan.options, sink);
+}
+
+}  // namespace mbsflow
