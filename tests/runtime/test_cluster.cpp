@@ -30,30 +30,35 @@ Model short_run(Model m, int steps) {
   return m;
 }
 
-// Workers on threads of this process; each serves one run.
+// Workers on threads of this process; each serves one run. The promises that hand back
+// the bound endpoints live here, not in the threads: none is destroyed by one thread while
+// another reads its future.
 struct ThreadWorkers {
   std::vector<std::thread> threads;
   std::vector<std::string> endpoints;
   std::vector<std::string> errors;
+  std::vector<std::promise<std::string>> bound;
 
-  ThreadWorkers(const std::vector<std::string>& listen) : errors(listen.size()) {
+  ThreadWorkers(const std::vector<std::string>& listen) : errors(listen.size()), bound(listen.size()) {
     for (std::size_t i = 0; i < listen.size(); ++i) {
-      auto bound = std::make_shared<std::promise<std::string>>();
-      auto got = bound->get_future();
-      threads.emplace_back([this, i, l = listen[i], bound] {
+      threads.emplace_back([this, i, l = listen[i]] {
         WorkerOptions o;
         o.listen = l;
         o.threads = 1;
         o.idle_timeout_s = 30.0;
         o.read_model = [](const std::string& text) { return read_model_text(text, "model from the coordinator"); };
-        o.listening = [bound](const std::string& e) { bound->set_value(e); };
+        o.listening = [this, i](const std::string& e) { bound[i].set_value(e); };
         try {
           serve_worker(o);
         } catch (const std::exception& e) {
           errors[i] = e.what();
+          try {  // a worker that never listened: the constructor's get() throws instead of waiting
+            bound[i].set_exception(std::current_exception());
+          } catch (const std::future_error&) {
+          }
         }
       });
-      endpoints.push_back(got.get());
+      endpoints.push_back(bound[i].get_future().get());
     }
   }
   ~ThreadWorkers() {
