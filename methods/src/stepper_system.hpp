@@ -1,6 +1,9 @@
 #pragma once
 // A StepperSystem seen as the methods' OdeSystem (dimension(), rhs()) and as an
 // OdeProblem for the implicit integrators.
+#include <memory>
+#include <mutex>
+
 #include "mbsflow/methods/ode_problem.hpp"
 #include "mbsflow/methods/stepper.hpp"
 
@@ -12,9 +15,17 @@ struct StepperOde {
   void rhs(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) { s.rhs(t, y, dydt); }
 };
 
-// The problem the implicit integrators read; start() sets t0, y0 and t_end.
+// The problem the implicit integrators read; start() sets t0, y0 and t_end. They evaluate
+// stages (and finite-difference columns) from several flow-graph nodes at once, but a
+// StepperSystem's rhs is called by one thread at a time (a multibody system and a loose
+// submodel work in their own scratch), so the calls are serialised here.
 inline OdeProblem problem_of(const StepperSystem& s) {
-  OdeProblem p = make_ode_problem("system", 0.0, 1.0, Eigen::VectorXd::Zero(s.size), s.rhs);
+  auto rhs = [f = s.rhs, busy = std::make_shared<std::mutex>()](double t, const Eigen::VectorXd& y,
+                                                                Eigen::VectorXd& dydt) {
+    std::lock_guard lock(*busy);
+    f(t, y, dydt);
+  };
+  OdeProblem p = make_ode_problem("system", 0.0, 1.0, Eigen::VectorXd::Zero(s.size), rhs);
   p.jacobian = s.jacobian;
   p.sparsity = s.sparsity;
   return p;

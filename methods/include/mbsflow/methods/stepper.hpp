@@ -23,7 +23,8 @@
 
 namespace mbsflow {
 
-// What a stepper integrates: y' = f(t, y).
+// What a stepper integrates: y' = f(t, y). Every stepper calls rhs from one thread at a
+// time, so it may work in scratch of its own.
 struct StepperSystem {
   Eigen::Index size = 0;
   std::function<void(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt)> rhs;
