@@ -172,6 +172,8 @@ void RemoteExchange::take(std::size_t p, long n, int s) {
 double RemoteExchange::error_sum(long n, Eigen::VectorXd& squares) {
   const auto me = static_cast<std::size_t>(me_);
   const int mine = first_of_[me];
+  std::vector<double> own(elements_of_[me].size());  // the same message for every other worker
+  for (std::size_t i = 0; i < own.size(); ++i) own[i] = squares[elements_of_[me][i]];
   for (std::size_t w = 0; w < first_of_.size(); ++w) {
     if (w == me || first_of_[w] < 0) continue;
     auto [it, added] = senders_.try_emplace({mine, static_cast<int>(w)}, wire::make_socket(ctx_, zmq::socket_type::push));
@@ -179,12 +181,7 @@ double RemoteExchange::error_sum(long n, Eigen::VectorXd& squares) {
       it->second.set(zmq::sockopt::sndtimeo, static_cast<int>(send_timeout_s_ * 1000.0));
       wire::connect(it->second, data_addresses_[w], "worker " + worker_names_[w]);
     }
-    zmq::message_t payload(elements_of_[me].size() * sizeof(double));
-    auto* out = static_cast<unsigned char*>(payload.data());
-    for (const Eigen::Index e : elements_of_[me]) {
-      std::memcpy(out, &squares[e], sizeof(double));
-      out += sizeof(double);
-    }
+    zmq::message_t payload(own.data(), own.size() * sizeof(double));
     wire::ExchangeHeader h;
     h.from = mine;
     h.to = first_of_[w];
