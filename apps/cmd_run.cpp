@@ -122,10 +122,12 @@ RunOptions choose_options(Model& m, const RunArgs& a, const StableStep& s) {
                    *m.simulation.step, s.describe(m).c_str());
     return o;
   }
-  if (!std::isfinite(s.step)) throw InputError(a.model + ": no joints to estimate a step from; give --step");
+  if (!std::isfinite(o.step)) throw InputError(a.model + ": no joints to estimate a step from; give --step");
   if (a.quiet) return o;
   char use[96] = "";
-  if (o.step != s.step)
+  if (!std::isfinite(s.step))
+    std::snprintf(use, sizeof use, "; %s starts with %.4g s", o.method.name(), o.step);
+  else if (o.step != s.step)
     std::snprintf(use, sizeof use, ", shortened to %.4g s to fit the output interval", o.step);
   else if (find_stepper(o.method.name())->adaptive)
     std::snprintf(use, sizeof use, " as the first step");

@@ -2,6 +2,7 @@
 // Helpers shared by the tests: single bodies and joints, fixed-step integration.
 #include <Eigen/Core>
 #include <cmath>
+#include <string>
 #include <vector>
 
 #include "mbsflow/graph/model.hpp"
@@ -30,6 +31,35 @@ inline Joint make_bushing(int body1, int body2, Vec3 p1, Vec3 p2, Vec6 k, Vec6 c
   j.stiffness = k;
   j.damping = c;
   return j;
+}
+
+inline Joint make_joint(JointType type, int body1, int body2, Vec3 p1, Vec3 p2) {
+  Joint j = make_bushing(body1, body2, p1, p2, {});
+  j.name = std::string(joint_type_name(type)) + std::to_string(body2);
+  j.type = type;
+  return j;
+}
+
+// theta'' = accel(theta) from t = 0 by classic RK4 with step h, sampled at the given
+// times (multiples of h): the reduced model of a one-degree-of-freedom mechanism.
+template <class F>
+std::vector<double> reduced_rk4(F accel, double theta, double rate, const std::vector<double>& times, double h) {
+  std::vector<double> out;
+  double t = 0.0;
+  for (double target : times) {
+    const long n = std::lround((target - t) / h);
+    for (long k = 0; k < n; ++k) {
+      const double k1 = rate, l1 = accel(theta);
+      const double k2 = rate + 0.5 * h * l1, l2 = accel(theta + 0.5 * h * k1);
+      const double k3 = rate + 0.5 * h * l2, l3 = accel(theta + 0.5 * h * k2);
+      const double k4 = rate + h * l3, l4 = accel(theta + h * k3);
+      theta += h / 6 * (k1 + 2 * k2 + 2 * k3 + k4);
+      rate += h / 6 * (l1 + 2 * l2 + 2 * l3 + l4);
+    }
+    t += static_cast<double>(n) * h;
+    out.push_back(theta);
+  }
+  return out;
 }
 
 // Integrates with RK4 and the mechanics' after-step projection; calls f(t, y) after each step.

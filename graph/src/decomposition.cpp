@@ -103,11 +103,85 @@ std::vector<int> band_partition(const Model& m, const std::vector<double>& cost,
 
 }  // namespace
 
+std::vector<int> rigid_pieces(const Model& m) {
+  const std::size_t n = m.bodies.size();
+  std::vector<int> parent(n);
+  std::iota(parent.begin(), parent.end(), 0);
+  auto root = [&](int i) {
+    while (parent[static_cast<std::size_t>(i)] != i) i = parent[static_cast<std::size_t>(i)] = parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(i)])];
+    return i;
+  };
+  for (const Joint& j : m.joints)
+    if (is_kinematic(j.type) && j.rigid && is_body(j.body1)) parent[static_cast<std::size_t>(root(j.body1))] = root(j.body2);
+  std::vector<int> piece(n), of_root(n, -1);
+  int count = 0;
+  for (std::size_t b = 0; b < n; ++b) {
+    int& p = of_root[static_cast<std::size_t>(root(static_cast<int>(b)))];
+    if (p < 0) p = count++;
+    piece[b] = p;
+  }
+  return piece;
+}
+
+namespace {
+
+// The model with each rigid piece contracted to one body (cost: the piece's), joints
+// between pieces kept: what the partitioners cut.
+Model contracted(const Model& m, const std::vector<int>& piece, int pieces) {
+  Model c;
+  c.bodies.resize(static_cast<std::size_t>(pieces));
+  for (const Joint& j : m.joints) {
+    Joint copy;
+    copy.body2 = piece[static_cast<std::size_t>(j.body2)];
+    copy.body1 = is_body(j.body1) ? piece[static_cast<std::size_t>(j.body1)] : ground;
+    if (copy.body1 != copy.body2) c.joints.push_back(copy);
+  }
+  return c;
+}
+
+std::string piece_sizes(const std::vector<int>& piece, int pieces) {
+  std::vector<int> size(static_cast<std::size_t>(pieces), 0);
+  for (int p : piece) ++size[static_cast<std::size_t>(p)];
+  std::sort(size.rbegin(), size.rend());
+  std::string out;
+  for (std::size_t i = 0; i < size.size() && i < 12; ++i) out += (i ? ", " : "") + std::to_string(size[i]);
+  return out + (size.size() > 12 ? ", ..." : "");
+}
+
+}  // namespace
+
 Decomposition decompose(const Model& m, int k, Partitioner partitioner) {
   const int n = static_cast<int>(m.bodies.size());
   if (k < 1) throw InputError("partitions: must be >= 1 (got " + std::to_string(k) + ")");
   if (k > n)
     throw InputError("partitions: " + std::to_string(k) + " is more than the model's " + std::to_string(n) + " bodies");
+  const std::vector<int> piece = rigid_pieces(m);
+  const int pieces = piece.empty() ? 0 : *std::max_element(piece.begin(), piece.end()) + 1;
+  if (pieces < n) {  // rigid clusters: partition the contracted model, then expand
+    if (k > pieces)
+      throw InputError("partitions: " + std::to_string(k) + " submodels, but rigid joints leave only " + std::to_string(pieces) +
+                       " pieces that may be cut apart (bodies per piece: " + piece_sizes(piece, pieces) +
+                       "); use fewer submodels or make joints between clusters compliant");
+    const std::vector<double> body_cost = body_costs(m);
+    std::vector<double> cost(static_cast<std::size_t>(pieces), 0.0);
+    for (std::size_t b = 0; b < piece.size(); ++b) cost[static_cast<std::size_t>(piece[b])] += body_cost[b];
+    const Model c = contracted(m, piece, pieces);
+    auto expand = [&](const std::vector<int>& of_piece) {
+      std::vector<int> part(piece.size());
+      for (std::size_t b = 0; b < piece.size(); ++b) part[b] = of_piece[static_cast<std::size_t>(piece[b])];
+      return part;
+    };
+    std::optional<Decomposition> band, metis;
+    if (partitioner != Partitioner::metis || k == 1) band = decompose(m, expand(band_partition(c, cost, k)), k);
+    if (partitioner != Partitioner::band && k > 1)
+      if (const auto part = metis_partition(c, cost, k)) {
+        metis = decompose(m, expand(*part), k);
+        metis->partitioner = Partitioner::metis;
+      }
+    if (!metis) return band ? *band : decompose(m, expand(band_partition(c, cost, k)), k);
+    if (!band || metis->estimated_time() < band->estimated_time()) return *metis;
+    return *band;
+  }
   const std::vector<double> cost = body_costs(m);
   std::optional<Decomposition> band, metis;
   if (partitioner != Partitioner::metis || k == 1) band = decompose(m, band_partition(m, cost, k), k);
@@ -143,6 +217,14 @@ Decomposition decompose(const Model& m, const std::vector<int>& part, int k) {
   }
   for (std::size_t p = 0; p < d.submodels.size(); ++p)
     if (d.submodels[p].own.empty()) throw InputError("partition: part " + std::to_string(p) + " has no bodies");
+  for (const Joint& j : m.joints)
+    if (is_kinematic(j.type) && j.rigid && is_body(j.body1) &&
+        part[static_cast<std::size_t>(j.body1)] != part[static_cast<std::size_t>(j.body2)])
+      throw InputError("partition: rigid joint '" + j.name + "' joins body '" + m.bodies[static_cast<std::size_t>(j.body1)].name +
+                       "' (part " + std::to_string(part[static_cast<std::size_t>(j.body1)]) + ") to body '" +
+                       m.bodies[static_cast<std::size_t>(j.body2)].name + "' (part " +
+                       std::to_string(part[static_cast<std::size_t>(j.body2)]) +
+                       "): a cut may only pass through compliant joints, bushings and springs");
   // Joints, ghosts and cut joints.
   std::vector<std::set<int>> ghosts(static_cast<std::size_t>(k));
   for (std::size_t j = 0; j < m.joints.size(); ++j) {

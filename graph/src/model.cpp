@@ -48,3 +48,23 @@ Quat rest_frame2(const Model& model, const Joint& joint) {
 }
 
 }  // namespace mbsflow
+
+namespace mbsflow {
+
+const char* joint_type_name(JointType t) {
+  switch (t) {
+    case JointType::bushing: return "bushing";
+    case JointType::spring: return "spring";
+    case JointType::revolute: return "revolute";
+    case JointType::spherical: return "spherical";
+    case JointType::prismatic: return "prismatic";
+    case JointType::cylindrical: return "cylindrical";
+    case JointType::universal: return "universal";
+    case JointType::planar: return "planar";
+    case JointType::fixed: return "fixed";
+    case JointType::distance: return "distance";
+  }
+  return "?";
+}
+
+}  // namespace mbsflow

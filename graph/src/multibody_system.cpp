@@ -4,6 +4,7 @@
 #include <Eigen/Geometry>
 #include <Eigen/LU>
 #include <cmath>
+#include <cstdio>
 
 #include "mbsflow/error.hpp"
 #include "rotation.hpp"
@@ -106,7 +107,9 @@ MultibodySystem::MultibodySystem(const Model& model, int active) : model_(model)
   quat_ = Eigen::Matrix4Xd::Zero(4, n + 1);
   quat_(0, n) = 1.0;
   joint_out_.setZero(9, nj);
+  motor_effort_.setZero(nj);
   for (const auto& e : model.force_elements) add_force_element(e);
+  compile_constraints();
 }
 
 Eigen::VectorXd MultibodySystem::initial_state() const {
@@ -118,7 +121,19 @@ Eigen::VectorXd MultibodySystem::initial_state() const {
     y.segment<3>(layout_.velocity(i)) = vec(b.velocity);
     y.segment<3>(layout_.angular_velocity(i)) = vec(b.angular_velocity);
   }
-  after_step(model_.simulation.t_start, y);
+  const double t0 = model_.simulation.t_start;
+  int given_joint = -1, worst_joint = -1;
+  const double given = constraint_violation(t0, y, &given_joint);
+  after_step(t0, y);
+  // The projection assembles the rigid joints; if it cannot, no loop closes there.
+  if (const double v = constraint_violation(t0, y, &worst_joint); !(v <= 1e-6)) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.3g", given);
+    throw InputError("rigid joint '" + model_.joints[static_cast<std::size_t>(given_joint >= 0 ? given_joint : worst_joint)].name +
+                     "' cannot be assembled with the others (violation " + buf +
+                     " as given, and no projection removes it): the rigid joints over-constrain a loop in a way that "
+                     "no position satisfies, or the initial positions are far from one that does");
+  }
   return y;
 }
 
@@ -201,6 +216,10 @@ void MultibodySystem::kinematics_of(double t, const Eigen::VectorXd& y, std::spa
 
 [[gnu::always_inline]] inline void MultibodySystem::joint_force(std::size_t k) {
   const CompiledJoint& j = joints_[k];
+  if (j.kinematic >= 0) {
+    kinematic_joint_force(k);
+    return;
+  }
   auto out = joint_out_.col(static_cast<Eigen::Index>(k));
   const Eigen::Matrix3d& ra = rot_[static_cast<std::size_t>(j.a)];
   const Eigen::Matrix3d& rb = rot_[static_cast<std::size_t>(j.b)];
@@ -265,8 +284,8 @@ void MultibodySystem::add_force_element(std::shared_ptr<const ForceElement> elem
 }
 
 void MultibodySystem::joint_wrenches(double t, const Eigen::VectorXd& y, Eigen::VectorXd& out) {
-  update_kinematics(t, y);
-  compute_joint_forces();
+  Eigen::VectorXd dydt(dimension());
+  rhs(t, y, dydt);  // the rigid joints' multipliers too
   out.resize(6 * static_cast<Eigen::Index>(joints_.size()));
   for (std::size_t k = 0; k < joints_.size(); ++k) {
     const CompiledJoint& j = joints_[k];
@@ -276,14 +295,17 @@ void MultibodySystem::joint_wrenches(double t, const Eigen::VectorXd& y, Eigen::
     out.segment<3>(6 * static_cast<Eigen::Index>(k)) = force;
     out.segment<3>(6 * static_cast<Eigen::Index>(k) + 3) = col.segment<3>(6) - arm.cross(force);
   }
+  add_reactions(out);
 }
 
-[[gnu::always_inline]] inline void MultibodySystem::body_derivative(Eigen::Index i, double t, const Eigen::VectorXd& y,
-                                                                      Eigen::VectorXd& dydt) const {
+// Gravity, loads, joints and force elements on body i: force and torque (world, about
+// the centre of mass), summed in the fixed order of the class comment.
+void MultibodySystem::applied_wrench(Eigen::Index i, double t, Eigen::Vector3d& force,
+                                                                    Eigen::Vector3d& torque) const {
   const auto bi = static_cast<std::size_t>(i);
   const Eigen::Matrix3d& r = rot_[bi];
-  Eigen::Vector3d force = mass_[bi] * gravity_;
-  Eigen::Vector3d torque = Eigen::Vector3d::Zero();  // world frame, about the centre of mass
+  force = mass_[bi] * gravity_;
+  torque = Eigen::Vector3d::Zero();
   for (int p = load_start_[bi]; p < load_start_[bi + 1]; ++p) {
     const Load& l = model_.loads[static_cast<std::size_t>(load_index_[static_cast<std::size_t>(p)])];
     const double s = evaluate(l.function, t).value;
@@ -311,6 +333,12 @@ void MultibodySystem::joint_wrenches(double t, const Eigen::VectorXd& y, Eigen::
     force += w.force;
     torque += w.torque;
   }
+}
+
+void MultibodySystem::write_derivative(Eigen::Index i, double t, const Eigen::VectorXd& y,
+                                                                       Eigen::VectorXd& dydt, const Eigen::Vector3d& force,
+                                                                       const Eigen::Vector3d& torque) const {
+  const auto bi = static_cast<std::size_t>(i);
   const int drv = driver_of_body_[bi];
   if (drv >= 0) {
     const Driver& d = model_.drivers[static_cast<std::size_t>(drv)];
@@ -326,18 +354,39 @@ void MultibodySystem::joint_wrenches(double t, const Eigen::VectorXd& y, Eigen::
   const Eigen::Vector4d q = y.segment<4>(layout_.orientation(i));
   dydt.segment<3>(layout_.position(i)) = y.segment<3>(layout_.velocity(i));
   dydt.segment<3>(layout_.velocity(i)) = inv_mass_[bi] * force;
-  const Eigen::Vector3d tb = r.transpose() * torque;
+  const Eigen::Vector3d tb = rot_[bi].transpose() * torque;
   dydt.segment<3>(layout_.angular_velocity(i)) = inv_inertia_[bi] * (tb - w.cross(inertia_[bi] * w));
   dydt.segment<4>(layout_.orientation(i)) = 0.5 * quat_multiply(q, Eigen::Vector4d(0.0, w[0], w[1], w[2]));
 }
 
-void MultibodySystem::compute_derivatives(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const {
-  for (Eigen::Index i = 0; i < active_; ++i) body_derivative(i, t, y, dydt);
+[[gnu::always_inline]] inline void MultibodySystem::body_derivative(Eigen::Index i, double t, const Eigen::VectorXd& y,
+                                                                      Eigen::VectorXd& dydt) const {
+  Eigen::Vector3d force, torque;
+  applied_wrench(i, t, force, torque);
+  write_derivative(i, t, y, dydt, force, torque);
 }
 
+void MultibodySystem::compute_derivatives(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const {
+  const int n_clusters = clusters();
+  for (Eigen::Index i = 0; i < active_; ++i)
+    if (n_clusters == 0 || cluster_of(static_cast<int>(i)) < 0) body_derivative(i, t, y, dydt);
+  for (int c = 0; c < n_clusters; ++c) solve_cluster(c, t, y, dydt);
+}
+
+// A listed body of a cluster brings in its whole cluster: the caller lists whole clusters.
 void MultibodySystem::derivatives_of(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt,
                                      std::span<const int> bodies) const {
-  for (int i : bodies) body_derivative(i, t, y, dydt);
+  const int n_clusters = clusters();
+  std::vector<int> touched;
+  for (int i : bodies) {
+    const int c = n_clusters == 0 ? -1 : cluster_of(i);
+    if (c < 0)
+      body_derivative(i, t, y, dydt);
+    else if (std::find(touched.begin(), touched.end(), c) == touched.end())
+      touched.push_back(c);
+  }
+  std::sort(touched.begin(), touched.end());
+  for (int c : touched) solve_cluster(c, t, y, dydt);
 }
 
 void MultibodySystem::rhs(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) {
@@ -362,16 +411,23 @@ void MultibodySystem::impose(const Driver& d, double t, Eigen::VectorXd& y) cons
 void MultibodySystem::after_step(double t, Eigen::VectorXd& y) const {
   for (Eigen::Index i = 0; i < layout_.bodies; ++i) y.segment<4>(layout_.orientation(i)).normalize();
   for (const Driver& d : model_.drivers) impose(d, t, y);
+  for (int c = 0; c < clusters(); ++c) project_cluster(c, t, y);
 }
 
 void MultibodySystem::after_step_of(double t, Eigen::VectorXd& y, std::span<const int> bodies) const {
+  std::vector<int> touched;
   for (int i : bodies) {
     y.segment<4>(layout_.orientation(i)).normalize();
     if (const int d = driver_of_body_[static_cast<std::size_t>(i)]; d >= 0) impose(model_.drivers[static_cast<std::size_t>(d)], t, y);
+    if (const int c = clusters() == 0 ? -1 : cluster_of(i); c >= 0 && std::find(touched.begin(), touched.end(), c) == touched.end())
+      touched.push_back(c);
   }
+  std::sort(touched.begin(), touched.end());
+  for (int c : touched) project_cluster(c, t, y);
 }
 
 double MultibodySystem::elastic_energy(const CompiledJoint& j) const {
+  if (j.kinematic >= 0) return kinematic_energy(j);
   if (j.spring) {
     const Eigen::Vector3d delta = pos_.col(j.b) + rot_[static_cast<std::size_t>(j.b)] * j.pb - pos_.col(j.a) -
                                   rot_[static_cast<std::size_t>(j.a)] * j.pa;

@@ -12,13 +12,14 @@
 #include "json_node.hpp"
 #include "mbsflow/error.hpp"
 #include "mbsflow/methods/stepper.hpp"
+#include "model_fields.hpp"
 
 namespace mbsflow {
-namespace {
+namespace model_fields {
 
 constexpr double unit_tolerance = 1e-6;  // allowed |norm - 1| of given quaternions
 
-Vec3 vec3(const JsonNode& parent, const char* key, Vec3 fallback = {}) {
+Vec3 vec3(const JsonNode& parent, const char* key, Vec3 fallback) {
   const auto n = parent.find(key);
   return n ? n->fixed<3>() : fallback;
 }
@@ -29,23 +30,6 @@ Quat unit_quat(const JsonNode& n) {
   if (std::abs(norm - 1.0) > unit_tolerance)
     n.fail("must be a unit quaternion [w, x, y, z] (norm " + number_text(norm) + ", allowed deviation 1e-6)");
   return {q[0] / norm, q[1] / norm, q[2] / norm, q[3] / norm};
-}
-
-// Inertia: 3 principal moments or the 6 tensor entries; positive definite, and the
-// principal moments must satisfy the triangle inequality (a real mass distribution).
-Vec6 inertia(const JsonNode& n) {
-  const std::vector<double> v = n.numbers();
-  if (v.size() != 3 && v.size() != 6) n.fail("must have 3 or 6 numbers (got " + std::to_string(v.size()) + ")");
-  Vec6 i{v[0], v[1], v[2], 0, 0, 0};
-  if (v.size() == 6) i = {v[0], v[1], v[2], v[3], v[4], v[5]};
-  Eigen::Matrix3d m;
-  m << i[0], i[3], i[4], i[3], i[1], i[5], i[4], i[5], i[2];
-  const Eigen::Vector3d e = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(m, Eigen::EigenvaluesOnly).eigenvalues();
-  if (!(e[0] > 0.0)) n.fail("must be positive definite (smallest principal moment " + number_text(e[0]) + ")");
-  if (e[0] + e[1] < e[2] * (1.0 - 1e-9))
-    n.fail("principal moments " + number_text(e[0]) + ", " + number_text(e[1]) + ", " + number_text(e[2]) +
-           " violate the triangle inequality");
-  return i;
 }
 
 TimeFunction time_function(const JsonNode& n) {
@@ -91,6 +75,28 @@ TimeFunction time_function(const JsonNode& n) {
   return f;
 }
 
+}  // namespace model_fields
+
+namespace {
+using namespace model_fields;
+
+// Inertia: 3 principal moments or the 6 tensor entries; positive definite, and the
+// principal moments must satisfy the triangle inequality (a real mass distribution).
+Vec6 inertia(const JsonNode& n) {
+  const std::vector<double> v = n.numbers();
+  if (v.size() != 3 && v.size() != 6) n.fail("must have 3 or 6 numbers (got " + std::to_string(v.size()) + ")");
+  Vec6 i{v[0], v[1], v[2], 0, 0, 0};
+  if (v.size() == 6) i = {v[0], v[1], v[2], v[3], v[4], v[5]};
+  Eigen::Matrix3d m;
+  m << i[0], i[3], i[4], i[3], i[1], i[5], i[4], i[5], i[2];
+  const Eigen::Vector3d e = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(m, Eigen::EigenvaluesOnly).eigenvalues();
+  if (!(e[0] > 0.0)) n.fail("must be positive definite (smallest principal moment " + number_text(e[0]) + ")");
+  if (e[0] + e[1] < e[2] * (1.0 - 1e-9))
+    n.fail("principal moments " + number_text(e[0]) + ", " + number_text(e[1]) + ", " + number_text(e[2]) +
+           " violate the triangle inequality");
+  return i;
+}
+
 ForceTable force_table(const JsonNode& n) {
   n.allow_only({"deflection", "force"});
   ForceTable t{n["deflection"].numbers(), n["force"].numbers()};
@@ -101,6 +107,13 @@ ForceTable force_table(const JsonNode& n) {
   for (std::size_t i = 1; i < t.deflection.size(); ++i)
     if (!(t.deflection[i] > t.deflection[i - 1])) n["deflection"].item(i).fail("must be strictly increasing");
   return t;
+}
+
+std::optional<JointType> kinematic_type(const std::string& name) {
+  for (JointType t : {JointType::revolute, JointType::spherical, JointType::prismatic, JointType::cylindrical,
+                      JointType::universal, JointType::planar, JointType::fixed, JointType::distance})
+    if (name == joint_type_name(t)) return t;
+  return std::nullopt;
 }
 
 class Reader {
@@ -168,8 +181,11 @@ class Reader {
     } else if (t == "spring") {
       n.allow_only({"name", "type", "body1", "body2", "point1", "point2", "stiffness", "damping", "rest_length"});
       j.type = JointType::spring;
+    } else if (const auto k = kinematic_type(t)) {
+      j.type = *k;
     } else {
-      type.fail("must be one of bushing, spring (got '" + t + "')");
+      type.fail("must be one of bushing, spring, revolute, spherical, prismatic, cylindrical, universal, planar, fixed, "
+                "distance (got '" + t + "')");
     }
     const std::size_t index = m_.joints.size();
     j.name = n.find("name") ? n["name"].string() : "j" + std::to_string(index);
@@ -182,8 +198,10 @@ class Reader {
     j.point2 = vec3(n, "point2");
     if (j.type == JointType::spring)
       spring(n, j);
-    else
+    else if (j.type == JointType::bushing)
       bushing(n, j);
+    else
+      read_kinematic_joint(n, m_, j);
     m_.joints.push_back(j);
   }
 

@@ -49,10 +49,33 @@ json body_json(const Body& b) {
   return j;
 }
 
+void kinematic_fields(const Joint& jt, json& j) {
+  j["frame2"] = jt.frame2;
+  if (jt.type == JointType::distance) j["length"] = jt.rest_length;
+  if (!jt.rigid) {
+    j["rigid"] = false;
+    j["stiffness"] = jt.stiffness;
+    j["damping"] = jt.damping;
+  }
+  if (jt.motor.kind != JointMotor::Kind::none) {
+    const char* kind = jt.motor.kind == JointMotor::Kind::position ? "position"
+                       : jt.motor.kind == JointMotor::Kind::velocity ? "velocity" : "effort";
+    j["motor"] = {{"type", kind}, {"function", function_json(jt.motor.function)}};
+  }
+  if (jt.limits.active)
+    j["limits"] = {{"lower", jt.limits.lower}, {"upper", jt.limits.upper}, {"stiffness", jt.limits.stiffness},
+                   {"damping", jt.limits.damping}};
+}
+
 json joint_json(const Model& m, const Joint& jt) {
   auto name = [&](int b) { return b == ground ? std::string("ground") : m.bodies[static_cast<std::size_t>(b)].name; };
-  json j = {{"name", jt.name}, {"type", jt.type == JointType::spring ? "spring" : "bushing"},
+  json j = {{"name", jt.name}, {"type", joint_type_name(jt.type)},
             {"body1", name(jt.body1)}, {"body2", name(jt.body2)}, {"point1", jt.point1}, {"point2", jt.point2}};
+  if (is_kinematic(jt.type)) {
+    if (!identity(jt.frame1)) j["frame1"] = jt.frame1;
+    kinematic_fields(jt, j);
+    return j;
+  }
   if (jt.type == JointType::spring) {
     j["stiffness"] = jt.stiffness[0];
     if (jt.damping[0] != 0.0) j["damping"] = jt.damping[0];

@@ -1,5 +1,6 @@
 #include "partitioned_state.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 
@@ -36,6 +37,12 @@ Part::Part(const Model& model, const Submodel& s, int stages)
     } else {
       inner_joints.push_back(static_cast<int>(k));
     }
+  }
+  // A rigid cluster is solved as a whole: one edge body makes all of it edge.
+  for (int c = 0; c < system.clusters(); ++c) {
+    const std::vector<int>& bodies = system.cluster_bodies(c);
+    if (std::any_of(bodies.begin(), bodies.end(), [&](int i) { return edge[static_cast<std::size_t>(i)] != 0; }))
+      for (int i : bodies) edge[static_cast<std::size_t>(i)] = 1;
   }
   for (int i = 0; i < n_own; ++i) {
     own_bodies.push_back(i);

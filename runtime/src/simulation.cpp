@@ -69,6 +69,10 @@ RunOptions options_from_model(const Model& model, std::optional<double> stable_s
     o.step = *s.step;
   } else {
     o.step = stable_step ? *stable_step : estimate_stable_step(model).step;
+    // Nothing stiff to estimate from (rigid joints only, say): an adaptive method starts
+    // with a step of one output interval, or a thousandth of the run, and adapts.
+    if (adaptive && !std::isfinite(o.step))
+      o.step = s.output_interval ? *s.output_interval : (s.t_end - s.t_start) / 1000.0;
     if (s.output_interval && !adaptive && std::isfinite(o.step))  // fit a whole number of steps into it
       o.step = *s.output_interval / std::ceil(*s.output_interval / o.step * (1.0 - 1e-12));
   }

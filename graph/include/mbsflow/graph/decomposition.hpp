@@ -14,6 +14,10 @@ namespace mbsflow {
 // connected parts one after another).
 std::vector<int> cuthill_mckee_order(const Model& model);
 
+// Bodies joined by rigid joints form pieces that no partition cuts: the piece of each
+// body, numbered in the order of their first body (a body without rigid joints is a piece).
+std::vector<int> rigid_pieces(const Model& model);
+
 // Relative cost of computing a body (its own equations plus half of each joint).
 std::vector<double> body_costs(const Model& model);
 
@@ -54,9 +58,11 @@ struct Decomposition {
 };
 
 
-// K-way decomposition; InputError if k < 1 or k > bodies.
+// K-way decomposition that never cuts a rigid joint; InputError if k < 1 or k is more
+// than the pieces the rigid joints leave (the message gives their sizes).
 Decomposition decompose(const Model& model, int k, Partitioner partitioner = Partitioner::best);
-// Decomposition from a given assignment of bodies to parts 0..k-1 (every part non-empty).
+// Decomposition from a given assignment of bodies to parts 0..k-1 (every part non-empty,
+// no rigid joint between two parts).
 Decomposition decompose(const Model& model, const std::vector<int>& part_of_body, int k);
 
 // The local model of a submodel: own bodies, then ghosts; its joints, loads of own bodies

@@ -32,13 +32,40 @@ struct Body {
   Vec3 angular_velocity{};             // body frame
 };
 
-enum class JointType { bushing, spring };
+enum class JointType { bushing, spring, revolute, spherical, prismatic, cylindrical, universal, planar, fixed, distance };
 
-// A compliant joint between body1 (or ground) and body2.
+// The kinematic joints (revolute ... distance) constrain the relative motion of their
+// two frames; the others are force elements.
+inline bool is_kinematic(JointType t) { return t != JointType::bushing && t != JointType::spring; }
+const char* joint_type_name(JointType t);
+
+// A motor on a revolute (angle, torque) or prismatic (displacement, force) joint, along
+// the joint axis (z of the joint frames): a time function prescribes the position, the
+// velocity, or the effort.
+struct JointMotor {
+  enum class Kind { none, position, velocity, effort };
+  Kind kind = Kind::none;
+  TimeFunction function = TimeFunction::constant(0.0);
+};
+
+// Joint limits on a revolute (angle, rad) or prismatic (displacement, m) joint: beyond
+// them a one-sided spring-damper stop pushes back.
+struct JointLimits {
+  bool active = false;
+  double lower = 0.0, upper = 0.0;
+  double stiffness = 0.0, damping = 0.0;
+};
+
+// A joint between body1 (or ground) and body2.
 // bushing: 6-axis spring-damper in the joint frame (frame1 on body1 at point1),
 //          force on body2 = -(K d + C d' - preload), rotations by the rotation vector
 //          of the relative orientation (valid for large rotations up to pi).
 // spring:  point-to-point spring-damper along the line between the two points.
+// kinematic joints: constraints between the joint frame on body1 (frame1 at point1) and
+//          the one on body2 (frame2 at point2); the joint axis is z of the frames. Rigid:
+//          exact constraints; compliant (rigid = false): on each constrained direction the
+//          seed's reaction -(k phi + c phi'), k and c from frequency and damping ratio like
+//          a bushing's (stored in stiffness/damping per axis).
 struct Joint {
   std::string name;
   JointType type = JointType::bushing;
@@ -52,7 +79,10 @@ struct Joint {
   Vec6 damping{};                   // bushing: per axis; spring: damping[0]
   std::array<ForceTable, 6> tables{};  // nonlinear force(deflection) per axis; empty = linear
   Vec6 preload{};                   // force/torque on body2 at zero deflection, joint frame
-  double rest_length = 0.0;         // spring only
+  double rest_length = 0.0;         // spring: rest length; distance: the rod's length
+  bool rigid = true;                // kinematic joints: exact constraint, or compliant
+  JointMotor motor;                 // revolute and prismatic only
+  JointLimits limits;               // revolute and prismatic only
 };
 
 struct Load {

@@ -1,13 +1,18 @@
 #pragma once
-// The equations of motion of a set of rigid bodies joined by compliant joints:
-//   r' = v,  q' = q (x) (0, w) / 2,  m v' = F,  J w' = T - w x J w
-// as an ODE system for the generic methods (dimension(), rhs()).
+// The equations of motion of a set of rigid bodies joined by compliant and rigid joints:
+//   r' = v,  q' = q (x) (0, w) / 2,  m v' = F + F_c,  J w' = T + T_c - w x J w
+// as an ODE system for the generic methods (dimension(), rhs()). F_c, T_c are the
+// reactions of the rigid joints: bodies joined by rigid joints form a cluster whose
+// multipliers come from one sparse solve per evaluation (index-1 form, see
+// rigid_cluster.hpp); after_step() projects each cluster's positions and velocities back
+// onto its constraints, so drift never accumulates.
 // Each body sums gravity, then its loads in global load order, then its joint
 // forces in global joint order, then user force elements in the order they were
 // added, so a body's derivative does not depend on how the model is later partitioned.
 #include <Eigen/Core>
 #include <memory>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "mbsflow/graph/force_element.hpp"
@@ -15,6 +20,35 @@
 #include "mbsflow/graph/state_layout.hpp"
 
 namespace mbsflow {
+
+namespace detail {
+// Owns a T that this header does not define and copies it deeply (the copy and destroy
+// functions come from where T is defined).
+template <class T>
+class DeepPtr {
+ public:
+  DeepPtr() = default;
+  DeepPtr(T* p, T* (*copy)(const T&), void (*destroy)(T*)) : p_(p), copy_(copy), destroy_(destroy) {}
+  DeepPtr(const DeepPtr& o) : p_(o.p_ ? o.copy_(*o.p_) : nullptr), copy_(o.copy_), destroy_(o.destroy_) {}
+  DeepPtr(DeepPtr&& o) noexcept : p_(std::exchange(o.p_, nullptr)), copy_(o.copy_), destroy_(o.destroy_) {}
+  DeepPtr& operator=(DeepPtr o) noexcept {
+    std::swap(p_, o.p_);
+    std::swap(copy_, o.copy_);
+    std::swap(destroy_, o.destroy_);
+    return *this;
+  }
+  ~DeepPtr() {
+    if (p_) destroy_(p_);
+  }
+  T* operator->() const { return p_; }
+  T& operator*() const { return *p_; }
+
+ private:
+  T* p_ = nullptr;
+  T* (*copy_)(const T&) = nullptr;
+  void (*destroy_)(T*) = nullptr;
+};
+}  // namespace detail
 
 struct Energy {
   double kinetic = 0.0;
@@ -47,8 +81,21 @@ class MultibodySystem {
   void add_force_element(std::shared_ptr<const ForceElement> element);
 
   // Per joint, 6 numbers: the force and the torque (about body2's attachment point) that
-  // the joint exerts on body2, world frame. out is resized to 6 * joints.
+  // the joint exerts on body2, world frame, rigid joints' reactions included. out is
+  // resized to 6 * joints.
   void joint_wrenches(double t, const Eigen::VectorXd& y, Eigen::VectorXd& out);
+  // Per joint, the effort of its motor (torque or force along the joint axis on body2;
+  // 0 without a motor), at the state of the last joint_wrenches() call.
+  const Eigen::VectorXd& motor_efforts() const { return motor_effort_; }
+
+  // Bodies joined by rigid joints, one list per cluster (ascending system indices);
+  // cluster_of(body) is its cluster or -1. A partitioned run keeps a cluster together.
+  int clusters() const;
+  const std::vector<int>& cluster_bodies(int cluster) const;
+  int cluster_of(int body) const;
+  // Largest violation of a rigid joint's position constraints at y (0 without any), and
+  // which joint has it.
+  double constraint_violation(double t, const Eigen::VectorXd& y, int* joint = nullptr) const;
 
   // The three phases of rhs(), public so the benchmark can time them apart.
   void update_kinematics(double t, const Eigen::VectorXd& y);
@@ -67,6 +114,9 @@ class MultibodySystem {
   struct CompiledJoint {
     int a = 0, b = 0;  // kinematics indices; ground is index n
     bool spring = false;
+    int kinematic = -1;  // index into the constraints' joint geometry; -1: bushing or spring
+    bool rigid = false;
+    bool applies_force = false;  // kinematic: compliant, a limit stop or an effort motor
     bool frame1_identity = true, frame2_identity = true;  // skip the frame products
     int tables = -1;   // index into tables_, -1: linear
     Eigen::Vector3d pa, pb;
@@ -76,6 +126,16 @@ class MultibodySystem {
     double rest_length = 0.0;
   };
   struct Deflection;  // defined in the .cpp
+  struct Constraints;  // multibody_constraints.cpp
+  void compile_constraints();
+  void kinematic_joint_force(std::size_t k);
+  double kinematic_energy(const CompiledJoint& j) const;
+  void solve_cluster(int c, double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const;
+  void add_reactions(Eigen::VectorXd& out);
+  void project_cluster(int c, double t, Eigen::VectorXd& y) const;
+  void applied_wrench(Eigen::Index i, double t, Eigen::Vector3d& force, Eigen::Vector3d& torque) const;
+  void write_derivative(Eigen::Index i, double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt,
+                        const Eigen::Vector3d& force, const Eigen::Vector3d& torque) const;
   void body_kinematics(Eigen::Index i, const Eigen::VectorXd& y);
   void drive(const Driver& d, double t);
   void impose(const Driver& d, double t, Eigen::VectorXd& y) const;
@@ -110,6 +170,8 @@ class MultibodySystem {
   Eigen::Matrix4Xd quat_;
   Eigen::Matrix<double, 9, Eigen::Dynamic> joint_out_;  // force on body2, torque on body1, torque on body2
   double time_ = 0.0;
+  detail::DeepPtr<Constraints> constraints_;
+  Eigen::VectorXd motor_effort_;
 
   Kinematics kinematics() const { return Kinematics(rot_, pos_, vel_, omega_); }
 };

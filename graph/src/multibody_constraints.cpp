@@ -1,0 +1,356 @@
+// The kinematic joints of MultibodySystem: compliant ones as forces along their
+// constraint rows, rigid ones solved per cluster, and the projection after each step.
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numeric>
+
+#include "constraint_rows.hpp"
+#include "mbsflow/error.hpp"
+#include "mbsflow/graph/multibody_system.hpp"
+#include "rigid_cluster.hpp"
+#include "rotation.hpp"
+
+namespace mbsflow {
+namespace {
+
+constexpr double position_tolerance = 1e-10;  // largest |phi| a projection leaves (m, or rad)
+constexpr int newton_iterations = 6;
+constexpr int max_joint_rows = 7;
+
+using Row12 = Eigen::Matrix<double, 12, 1>;
+
+Row12 velocities(const BodyMotion& a, const BodyMotion& b) {
+  Row12 v;
+  v << a.v, a.w, b.v, b.w;
+  return v;
+}
+
+// Rotation by the rotation vector theta, as a quaternion.
+Eigen::Vector4d quat_exp(const Eigen::Vector3d& theta) {
+  const double angle = theta.norm();
+  const double s = angle > 1e-8 ? std::sin(0.5 * angle) / angle : 0.5 - angle * angle / 48.0;
+  return {std::cos(0.5 * angle), s * theta[0], s * theta[1], s * theta[2]};
+}
+
+int find_root(std::vector<int>& parent, int i) {
+  while (parent[static_cast<std::size_t>(i)] != i) i = parent[static_cast<std::size_t>(i)] = parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(i)])];
+  return i;
+}
+
+}  // namespace
+
+struct MultibodySystem::Constraints {
+  std::vector<JointGeometry> geometry;  // per kinematic joint
+  std::vector<RigidCluster> clusters;
+  std::vector<int> cluster_of_body;     // -1: in no cluster
+  std::vector<Eigen::VectorXd> lambda;  // per cluster, the multipliers of the last solve
+  std::vector<char> marked;             // scratch of derivatives_of
+  std::vector<Vector6d> wrench;         // scratch
+  std::vector<BodyMotion> motion;       // scratch, per cluster slot
+  std::vector<Eigen::Vector3d> force, torque;  // scratch, per cluster slot
+};
+
+void MultibodySystem::compile_constraints() {
+  constraints_ = detail::DeepPtr<Constraints>(
+      new Constraints, [](const Constraints& c) { return new Constraints(c); }, [](Constraints* c) { delete c; });
+  Constraints& k = *constraints_;
+  const int n = static_cast<int>(layout_.bodies);
+  std::vector<int> parent(static_cast<std::size_t>(n));
+  std::iota(parent.begin(), parent.end(), 0);
+  std::vector<char> touched(static_cast<std::size_t>(n), 0);
+  for (std::size_t j = 0; j < model_.joints.size(); ++j) {
+    const Joint& joint = model_.joints[j];
+    if (!is_kinematic(joint.type)) continue;
+    CompiledJoint& c = joints_[j];
+    c.kinematic = static_cast<int>(k.geometry.size());
+    c.rigid = joint.rigid;
+    c.applies_force = !joint.rigid || joint.limits.active || joint.motor.kind == JointMotor::Kind::effort;
+    k.geometry.push_back(joint_geometry(joint));
+    if (!joint.rigid) continue;
+    touched[static_cast<std::size_t>(joint.body2)] = 1;
+    if (joint.body1 != ground) {
+      touched[static_cast<std::size_t>(joint.body1)] = 1;
+      parent[static_cast<std::size_t>(find_root(parent, joint.body1))] = find_root(parent, joint.body2);
+    }
+  }
+  // Clusters in the order of their first body; bodies ascending.
+  k.cluster_of_body.assign(static_cast<std::size_t>(n), -1);
+  std::vector<int> cluster_of_root(static_cast<std::size_t>(n), -1);
+  std::vector<std::vector<int>> bodies;
+  for (int i = 0; i < n; ++i) {
+    if (!touched[static_cast<std::size_t>(i)]) continue;
+    int& c = cluster_of_root[static_cast<std::size_t>(find_root(parent, i))];
+    if (c < 0) {
+      c = static_cast<int>(bodies.size());
+      bodies.emplace_back();
+    }
+    bodies[static_cast<std::size_t>(c)].push_back(i);
+    k.cluster_of_body[static_cast<std::size_t>(i)] = c;
+  }
+  std::vector<std::vector<ClusterJoint>> joints(bodies.size());
+  std::vector<int> rows(bodies.size(), 0);
+  for (std::size_t j = 0; j < model_.joints.size(); ++j) {
+    const Joint& joint = model_.joints[j];
+    if (!is_kinematic(joint.type) || !joint.rigid) continue;
+    const auto c = static_cast<std::size_t>(k.cluster_of_body[static_cast<std::size_t>(joint.body2)]);
+    auto slot = [&](int body) {
+      if (body == ground) return -1;
+      const auto& list = bodies[c];
+      return static_cast<int>(std::lower_bound(list.begin(), list.end(), body) - list.begin());
+    };
+    ClusterJoint cj{static_cast<int>(j), slot(joint.body1), slot(joint.body2), rows[c],
+                    constraint_rows(k.geometry[static_cast<std::size_t>(joints_[j].kinematic)])};
+    rows[c] += cj.rows;
+    joints[c].push_back(cj);
+  }
+  for (std::size_t c = 0; c < bodies.size(); ++c) {
+    if (bodies[c].back() >= active_)
+      throw InputError("rigid joint '" + model_.joints[static_cast<std::size_t>(joints[c].front().joint)].name +
+                       "' joins bodies of different submodels: a cut may only pass through compliant joints, bushings and springs");
+    k.clusters.emplace_back(std::move(bodies[c]), std::move(joints[c]));
+    k.lambda.emplace_back(Eigen::VectorXd::Zero(k.clusters.back().row_count()));
+  }
+  k.marked.assign(k.clusters.size(), 0);
+}
+
+int MultibodySystem::clusters() const { return static_cast<int>(constraints_->clusters.size()); }
+const std::vector<int>& MultibodySystem::cluster_bodies(int c) const {
+  return constraints_->clusters[static_cast<std::size_t>(c)].bodies();
+}
+int MultibodySystem::cluster_of(int body) const { return constraints_->cluster_of_body[static_cast<std::size_t>(body)]; }
+
+void MultibodySystem::kinematic_joint_force(std::size_t k) {
+  const CompiledJoint& j = joints_[k];
+  auto out = joint_out_.col(static_cast<Eigen::Index>(k));
+  out.setZero();
+  if (!j.applies_force) return;
+  const JointGeometry& g = constraints_->geometry[static_cast<std::size_t>(j.kinematic)];
+  const BodyMotion a{pos_.col(j.a), rot_[static_cast<std::size_t>(j.a)], vel_.col(j.a), omega_.col(j.a)};
+  const BodyMotion b{pos_.col(j.b), rot_[static_cast<std::size_t>(j.b)], vel_.col(j.b), omega_.col(j.b)};
+  const Row12 v = velocities(a, b);
+  auto stiffness = [&](const ConstraintRow& r, const Eigen::Vector3d& kt, const Eigen::Vector3d& kr) {
+    return r.axis < 3 ? kt[r.axis] : kr[r.axis - 3];
+  };
+  if (!j.rigid) {  // the seed's compliant joint: -(k phi + c phi') on every constrained direction
+    std::array<ConstraintRow, max_joint_rows> rows;
+    const int n = constraint_rows(g);
+    evaluate_constraint(g, a, b, time_, rows.data());
+    for (int r = 0; r < n; ++r) {
+      const ConstraintRow& row = rows[static_cast<std::size_t>(r)];
+      const double p = -(stiffness(row, j.kt, j.kr) * row.phi + stiffness(row, j.ct, j.cr) * (row.j.dot(v) + row.rate));
+      add_row_wrench(row, p, out);
+      if (r == n - 1 && g.motor.kind != JointMotor::Kind::none) motor_effort_[static_cast<Eigen::Index>(k)] = p;
+    }
+  }
+  if (g.motor.kind == JointMotor::Kind::effort) {
+    const double p = evaluate(g.motor.function, time_).value;
+    add_row_wrench(joint_coordinate(g, a, b), p, out);
+    motor_effort_[static_cast<Eigen::Index>(k)] = p;
+  }
+  if (g.limits.active) {
+    const ConstraintRow row = joint_coordinate(g, a, b);
+    const double rate = row.j.dot(v);
+    const JointLimits& l = g.limits;
+    double p = 0.0;
+    if (row.phi < l.lower) p = std::max(0.0, l.stiffness * (l.lower - row.phi) - l.damping * rate);
+    if (row.phi > l.upper) p = std::min(0.0, -l.stiffness * (row.phi - l.upper) - l.damping * rate);
+    add_row_wrench(row, p, out);
+  }
+}
+
+double MultibodySystem::kinematic_energy(const CompiledJoint& j) const {
+  if (!j.applies_force) return 0.0;
+  const JointGeometry& g = constraints_->geometry[static_cast<std::size_t>(j.kinematic)];
+  const BodyMotion a{pos_.col(j.a), rot_[static_cast<std::size_t>(j.a)], vel_.col(j.a), omega_.col(j.a)};
+  const BodyMotion b{pos_.col(j.b), rot_[static_cast<std::size_t>(j.b)], vel_.col(j.b), omega_.col(j.b)};
+  double e = 0.0;
+  if (!j.rigid) {
+    std::array<ConstraintRow, max_joint_rows> rows;
+    const int n = constraint_rows(g);
+    evaluate_constraint(g, a, b, time_, rows.data());
+    for (int r = 0; r < n; ++r) {
+      const ConstraintRow& row = rows[static_cast<std::size_t>(r)];
+      const double k = row.axis < 3 ? j.kt[row.axis] : j.kr[row.axis - 3];
+      e += 0.5 * k * row.phi * row.phi;
+    }
+  }
+  if (g.limits.active) {
+    const double s = joint_coordinate(g, a, b).phi;
+    const double over = s < g.limits.lower ? g.limits.lower - s : s > g.limits.upper ? s - g.limits.upper : 0.0;
+    e += 0.5 * g.limits.stiffness * over * over;
+  }
+  return e;
+}
+
+// Applied wrenches, rows, S, multipliers, and the derivatives of the cluster's bodies.
+void MultibodySystem::solve_cluster(int c, double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const {
+  Constraints& k = *constraints_;
+  RigidCluster& rc = k.clusters[static_cast<std::size_t>(c)];
+  const std::vector<int>& bodies = rc.bodies();
+  const std::size_t nb = bodies.size();
+  k.force.resize(nb);
+  k.torque.resize(nb);
+  std::vector<Vector6d>& accel = k.wrench;  // unconstrained accelerations first
+  accel.resize(nb);
+  for (std::size_t s = 0; s < nb; ++s) {
+    const int i = bodies[s];
+    const auto bi = static_cast<std::size_t>(i);
+    applied_wrench(i, t, k.force[s], k.torque[s]);
+    if (const int d = driver_of_body_[bi]; d >= 0) {
+      rc.inv_mass[s] = 0.0;
+      rc.inv_inertia[s].setZero();
+      const Driver& drv = model_.drivers[static_cast<std::size_t>(d)];
+      for (int a = 0; a < 3; ++a) accel[s][a] = evaluate(drv.displacement[static_cast<std::size_t>(a)], t).accel;
+      accel[s].tail<3>().setZero();
+      continue;
+    }
+    const Eigen::Matrix3d& r = rot_[bi];
+    const Eigen::Vector3d w = y.segment<3>(layout_.angular_velocity(i));
+    rc.inv_mass[s] = inv_mass_[bi];
+    rc.inv_inertia[s] = r * inv_inertia_[bi] * r.transpose();
+    accel[s].head<3>() = inv_mass_[bi] * k.force[s];
+    accel[s].tail<3>() = r * (inv_inertia_[bi] * (r.transpose() * k.torque[s] - w.cross(inertia_[bi] * w)));
+  }
+  Eigen::VectorXd& lambda = k.lambda[static_cast<std::size_t>(c)];
+  for (const ClusterJoint& cj : rc.joints()) {
+    const CompiledJoint& j = joints_[static_cast<std::size_t>(cj.joint)];
+    const BodyMotion a{pos_.col(j.a), rot_[static_cast<std::size_t>(j.a)], vel_.col(j.a), omega_.col(j.a)};
+    const BodyMotion b{pos_.col(j.b), rot_[static_cast<std::size_t>(j.b)], vel_.col(j.b), omega_.col(j.b)};
+    ConstraintRow* rows = rc.rows.data() + cj.first_row;
+    evaluate_constraint(k.geometry[static_cast<std::size_t>(j.kinematic)], a, b, t, rows);
+    for (int r = 0; r < cj.rows; ++r) {
+      double ja = rows[r].bias;
+      if (cj.a >= 0) ja += rows[r].j.head<6>().dot(accel[static_cast<std::size_t>(cj.a)]);
+      if (cj.b >= 0) ja += rows[r].j.tail<6>().dot(accel[static_cast<std::size_t>(cj.b)]);
+      lambda[cj.first_row + r] = -ja;
+    }
+  }
+  rc.factor();
+  rc.solve(lambda);
+  rc.wrenches(lambda, k.wrench);
+  for (std::size_t s = 0; s < nb; ++s)
+    write_derivative(bodies[s], t, y, dydt, k.force[s] + k.wrench[s].head<3>(), k.torque[s] + k.wrench[s].tail<3>());
+}
+
+namespace {
+
+BodyMotion state_motion(const StateLayout& l, const Eigen::VectorXd& y, Eigen::Index i) {
+  BodyMotion m;
+  if (i >= l.bodies) return m;  // ground
+  m.r = y.segment<3>(l.position(i));
+  m.R = rotation_matrix(y.segment<4>(l.orientation(i)));
+  m.v = y.segment<3>(l.velocity(i));
+  m.w = m.R * y.segment<3>(l.angular_velocity(i));
+  return m;
+}
+
+}  // namespace
+
+// Newton iterations on the positions (mass-weighted, so the smallest kinetic-energy-like
+// change), then one projection of the velocities: the state after a step lies on the
+// constraints to within position_tolerance, whatever the method.
+void MultibodySystem::project_cluster(int c, double t, Eigen::VectorXd& y) const {
+  Constraints& k = *constraints_;
+  RigidCluster& rc = k.clusters[static_cast<std::size_t>(c)];
+  const std::vector<int>& bodies = rc.bodies();
+  const std::size_t nb = bodies.size();
+  // Rows at y, and with masses: the inverse masses at y for S.
+  auto evaluate_rows = [&](bool masses) {
+    double worst = 0.0;
+    for (const ClusterJoint& cj : rc.joints()) {
+      const CompiledJoint& j = joints_[static_cast<std::size_t>(cj.joint)];
+      ConstraintRow* rows = rc.rows.data() + cj.first_row;
+      evaluate_constraint(k.geometry[static_cast<std::size_t>(j.kinematic)], state_motion(layout_, y, j.a),
+                          state_motion(layout_, y, j.b), t, rows);
+      for (int r = 0; r < cj.rows; ++r)
+        if (rows[r].holonomic) worst = std::max(worst, std::abs(rows[r].phi));
+    }
+    for (std::size_t s = 0; masses && s < nb; ++s) {
+      const int i = bodies[s];
+      const auto bi = static_cast<std::size_t>(i);
+      const bool driven = driver_of_body_[bi] >= 0;
+      const Eigen::Matrix3d r = rotation_matrix(y.segment<4>(layout_.orientation(i)));
+      rc.inv_mass[s] = driven ? 0.0 : inv_mass_[bi];
+      rc.inv_inertia[s] = driven ? Eigen::Matrix3d::Zero() : Eigen::Matrix3d(r * inv_inertia_[bi] * r.transpose());
+    }
+    return worst;
+  };
+  // One factorisation of S at the state the step left, used by every iteration below
+  // (simplified Newton: the state moves by no more than the drift of one step).
+  Eigen::VectorXd mu(rc.row_count());
+  std::vector<Vector6d>& delta = k.wrench;
+  bool factored = false;
+  for (int iteration = 0; iteration < newton_iterations; ++iteration) {
+    if (evaluate_rows(!factored) <= position_tolerance) break;
+    for (int r = 0; r < rc.row_count(); ++r) mu[r] = rc.rows[static_cast<std::size_t>(r)].holonomic ? -rc.rows[static_cast<std::size_t>(r)].phi : 0.0;
+    if (!factored) rc.factor();
+    factored = true;
+    rc.solve(mu);
+    rc.motion(mu, delta);
+    for (std::size_t s = 0; s < nb; ++s) {
+      const Eigen::Index i = bodies[s];
+      y.segment<3>(layout_.position(i)) += delta[s].head<3>();
+      const Eigen::Vector4d q = quat_multiply(quat_exp(delta[s].tail<3>()), y.segment<4>(layout_.orientation(i)));
+      y.segment<4>(layout_.orientation(i)) = q.normalized();
+    }
+    if (iteration == newton_iterations - 1) evaluate_rows(false);
+  }
+  // Velocities: remove the part that violates phi' = 0.
+  for (const ClusterJoint& cj : rc.joints()) {
+    const CompiledJoint& j = joints_[static_cast<std::size_t>(cj.joint)];
+    const Row12 v = velocities(state_motion(layout_, y, j.a), state_motion(layout_, y, j.b));
+    for (int r = 0; r < cj.rows; ++r) {
+      const ConstraintRow& row = rc.rows[static_cast<std::size_t>(cj.first_row + r)];
+      mu[cj.first_row + r] = -(row.j.dot(v) + row.rate);
+    }
+  }
+  if (!factored) rc.factor();
+  rc.solve(mu);
+  rc.motion(mu, delta);
+  for (std::size_t s = 0; s < nb; ++s) {
+    const Eigen::Index i = bodies[s];
+    const Eigen::Matrix3d r = rotation_matrix(y.segment<4>(layout_.orientation(i)));
+    y.segment<3>(layout_.velocity(i)) += delta[s].head<3>();
+    y.segment<3>(layout_.angular_velocity(i)) += r.transpose() * delta[s].tail<3>();
+  }
+}
+
+double MultibodySystem::constraint_violation(double t, const Eigen::VectorXd& y, int* joint) const {
+  double worst = 0.0;
+  std::array<ConstraintRow, max_joint_rows> rows;
+  for (std::size_t k = 0; k < joints_.size(); ++k) {
+    const CompiledJoint& j = joints_[k];
+    if (j.kinematic < 0 || !j.rigid) continue;
+    const JointGeometry& g = constraints_->geometry[static_cast<std::size_t>(j.kinematic)];
+    evaluate_constraint(g, state_motion(layout_, y, j.a), state_motion(layout_, y, j.b), t, rows.data());
+    for (int r = 0; r < constraint_rows(g); ++r)
+      if (const auto& row = rows[static_cast<std::size_t>(r)]; row.holonomic && std::abs(row.phi) > worst) {
+        worst = std::abs(row.phi);
+        if (joint) *joint = static_cast<int>(k);
+      }
+  }
+  return worst;
+}
+
+void MultibodySystem::add_reactions(Eigen::VectorXd& out) {
+  Constraints& k = *constraints_;
+  for (std::size_t c = 0; c < k.clusters.size(); ++c) {
+    const RigidCluster& rc = k.clusters[c];
+    for (const ClusterJoint& cj : rc.joints()) {
+      Eigen::Matrix<double, 9, 1> w = Eigen::Matrix<double, 9, 1>::Zero();
+      for (int r = 0; r < cj.rows; ++r)
+        add_row_wrench(rc.rows[static_cast<std::size_t>(cj.first_row + r)], k.lambda[c][cj.first_row + r], w);
+      const CompiledJoint& j = joints_[static_cast<std::size_t>(cj.joint)];
+      if (constraints_->geometry[static_cast<std::size_t>(j.kinematic)].motor.kind != JointMotor::Kind::none &&
+          constraints_->geometry[static_cast<std::size_t>(j.kinematic)].motor.kind != JointMotor::Kind::effort)
+        motor_effort_[cj.joint] = k.lambda[c][cj.first_row + cj.rows - 1];
+      const Eigen::Vector3d arm = rot_[static_cast<std::size_t>(j.b)] * j.pb;
+      const Eigen::Index at = 6 * static_cast<Eigen::Index>(cj.joint);
+      out.segment<3>(at) += w.segment<3>(0);
+      out.segment<3>(at + 3) += w.segment<3>(6) - arm.cross(Eigen::Vector3d(w.segment<3>(0)));
+    }
+  }
+}
+
+}  // namespace mbsflow

@@ -1,0 +1,193 @@
+#include "rigid_cluster.hpp"
+
+#include <algorithm>
+#include <map>
+#include <numeric>
+
+#include <Eigen/OrderingMethods>
+
+namespace mbsflow {
+namespace {
+constexpr int dense_limit = 48;        // rows up to which the dense factorisation is used
+constexpr double relative_shift = 1e-6;  // eps / diagonal entry (A02 error vs eps: docs/joints.md)
+constexpr int refinements = 2;  // eps / largest diagonal entry
+}  // namespace
+
+RigidCluster::RigidCluster(std::vector<int> bodies, std::vector<ClusterJoint> joints)
+    : bodies_(std::move(bodies)), joints_(std::move(joints)) {
+  for (const ClusterJoint& j : joints_) {
+    for (int r = 0; r < j.rows; ++r) {
+      row_a_.push_back(j.a);
+      row_b_.push_back(j.b);
+    }
+    rows_count_ += j.rows;
+  }
+  const int m = rows_count_;
+  rows.resize(static_cast<std::size_t>(m));
+  inv_mass.assign(bodies_.size(), 0.0);
+  inv_inertia.assign(bodies_.size(), Eigen::Matrix3d::Zero());
+  dense_ = m <= dense_limit;
+  on_body_.resize(bodies_.size());
+  for (int r = 0; r < m; ++r)
+    for (int side = 0; side < 2; ++side)
+      if (const int b = slot(r, side); b >= 0) on_body_[static_cast<std::size_t>(b)].push_back(2 * r + side);
+  // Where row r sits in the factored matrix: itself (dense), or its AMD position.
+  position_.resize(static_cast<std::size_t>(m));
+  std::iota(position_.begin(), position_.end(), 0);
+  if (!dense_) {
+    std::vector<Eigen::Triplet<double>> lower;
+    for (int r = 0; r < m; ++r) lower.emplace_back(r, r, 1.0);
+    for (const auto& list : on_body_)
+      for (std::size_t p = 0; p < list.size(); ++p)
+        for (std::size_t q = 0; q < p; ++q)
+          lower.emplace_back(std::max(list[p], list[q]) / 2, std::min(list[p], list[q]) / 2, 1.0);
+    Eigen::SparseMatrix<double> pattern(m, m);
+    pattern.setFromTriplets(lower.begin(), lower.end());
+    Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> inverse;
+    Eigen::AMDOrdering<int>()(pattern, inverse);  // AMD gives the inverse permutation
+    const Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> order = inverse.inverse();
+    for (int r = 0; r < m; ++r) position_[static_cast<std::size_t>(r)] = order.indices()[r];
+  }
+  // Entries of the upper triangle (row <= column, at the factored positions), in
+  // column-major order: the order of a compressed sparse matrix's values.
+  std::map<std::pair<int, int>, int> entry;  // (column, row) -> value index
+  auto key = [&](int r, int s) {
+    const int a = position_[static_cast<std::size_t>(r)], b = position_[static_cast<std::size_t>(s)];
+    return std::make_pair(std::max(a, b), std::min(a, b));
+  };
+  for (int r = 0; r < m; ++r) entry.emplace(key(r, r), 0);
+  for (const auto& list : on_body_)
+    for (std::size_t p = 0; p < list.size(); ++p)
+      for (std::size_t q = 0; q <= p; ++q) entry.emplace(key(list[p] / 2, list[q] / 2), 0);
+  if (dense_) {
+    for (auto& [k, value] : entry) value = k.second + m * k.first;
+    dense_matrix_.setZero(m, m);
+  } else {
+    std::vector<Eigen::Triplet<double>> upper;
+    for (auto& [k, value] : entry) {
+      value = static_cast<int>(upper.size());
+      upper.emplace_back(k.second, k.first, 0.0);
+    }
+    sparse_matrix_.resize(m, m);
+    sparse_matrix_.setFromTriplets(upper.begin(), upper.end());
+    sparse_matrix_.makeCompressed();
+    analyse();
+  }
+  for (int r = 0; r < m; ++r) diagonal_.push_back(entry.at(key(r, r)));
+  shift_.assign(static_cast<std::size_t>(m), 0.0);
+  permuted_.resize(m);
+  rhs_.resize(m);
+  residual_.resize(m);
+  for (const auto& list : on_body_) {
+    std::vector<int>& to = scatter_.emplace_back();
+    for (std::size_t p = 0; p < list.size(); ++p)
+      for (std::size_t q = 0; q <= p; ++q) to.push_back(entry.at(key(list[p] / 2, list[q] / 2)));
+  }
+}
+
+RigidCluster::RigidCluster(const RigidCluster& o)
+    : rows(o.rows), inv_mass(o.inv_mass), inv_inertia(o.inv_inertia), bodies_(o.bodies_), joints_(o.joints_),
+      rows_count_(o.rows_count_), row_a_(o.row_a_), row_b_(o.row_b_), on_body_(o.on_body_), scatter_(o.scatter_),
+      diagonal_(o.diagonal_), position_(o.position_), dense_(o.dense_), dense_matrix_(o.dense_matrix_),
+      dense_ldlt_(o.dense_ldlt_), sparse_matrix_(o.sparse_matrix_), shift_(o.shift_), permuted_(o.permuted_),
+      rhs_(o.rhs_), residual_(o.residual_) {
+  if (!dense_) analyse();
+}
+
+RigidCluster& RigidCluster::operator=(const RigidCluster& o) {
+  if (this != &o) *this = RigidCluster(o);
+  return *this;
+}
+
+RigidCluster::~RigidCluster() = default;
+
+void RigidCluster::analyse() {
+  sparse_ldlt_ = std::make_unique<SparseLdlt>();
+  sparse_ldlt_->analyzePattern(sparse_matrix_);
+}
+
+Vector6d RigidCluster::weighted(int b, const Vector6d& j) const {
+  const auto i = static_cast<std::size_t>(b);
+  Vector6d out;
+  out.head<3>() = inv_mass[i] * j.head<3>();
+  out.tail<3>() = inv_inertia[i] * j.tail<3>();
+  return out;
+}
+
+void RigidCluster::factor() {
+  double* value = dense_ ? dense_matrix_.data() : sparse_matrix_.valuePtr();
+  if (dense_)
+    dense_matrix_.setZero();
+  else
+    std::fill(value, value + sparse_matrix_.nonZeros(), 0.0);
+  // Body by body: J_b W_b J_b^T over the row sides on body b.
+  for (std::size_t b = 0; b < on_body_.size(); ++b) {
+    const std::vector<int>& list = on_body_[b];
+    const auto k = static_cast<Eigen::Index>(list.size());
+    block_j_.resize(k, 6);
+    for (Eigen::Index p = 0; p < k; ++p)
+      block_j_.row(p) = part(list[static_cast<std::size_t>(p)] / 2, list[static_cast<std::size_t>(p)] % 2).transpose();
+    block_jw_.resize(k, 6);
+    block_jw_.leftCols<3>() = inv_mass[b] * block_j_.leftCols<3>();
+    block_jw_.rightCols<3>() = block_j_.rightCols<3>() * inv_inertia[b];  // symmetric
+    block_.noalias() = block_jw_.lazyProduct(block_j_.transpose());
+    const int* to = scatter_[b].data();
+    for (Eigen::Index p = 0; p < k; ++p)
+      for (Eigen::Index q = 0; q <= p; ++q) value[*to++] += block_(p, q);
+  }
+  // Each diagonal entry grows by eps of itself: the same relative regularisation for rows
+  // in metres and in radians, and for light and heavy bodies alike.
+  for (std::size_t r = 0; r < diagonal_.size(); ++r) {
+    shift_[r] = relative_shift * value[diagonal_[r]] + 1e-300;
+    value[diagonal_[r]] += shift_[r];
+  }
+  if (dense_)
+    dense_ldlt_.compute(dense_matrix_);
+  else
+    sparse_ldlt_->factorize(sparse_matrix_);
+}
+
+// In the permuted numbering: y <- S_eps^-1 y.
+void RigidCluster::solve_shifted(Eigen::VectorXd& y) const {
+  if (dense_)
+    y = dense_ldlt_.solve(y);
+  else
+    y = sparse_ldlt_->solve(y);
+}
+
+// Iterated regularisation (augmented-Lagrangian style): x <- x + S_eps^-1 (b - S x) a few
+// times removes the bias of eps where S is regular, while where S is (nearly) singular the
+// correction stays bounded by 1/eps.
+void RigidCluster::solve(Eigen::VectorXd& x) const {
+  const Eigen::Index m = x.size();
+  for (Eigen::Index r = 0; r < m; ++r) rhs_[position_[static_cast<std::size_t>(r)]] = x[r];
+  permuted_ = rhs_;
+  solve_shifted(permuted_);
+  for (int k = 0; k < refinements; ++k) {
+    if (dense_)
+      residual_.noalias() = dense_matrix_.selfadjointView<Eigen::Upper>() * permuted_;
+    else
+      residual_.noalias() = sparse_matrix_.selfadjointView<Eigen::Upper>() * permuted_;
+    for (Eigen::Index r = 0; r < m; ++r) {
+      const Eigen::Index p = position_[static_cast<std::size_t>(r)];
+      residual_[p] = rhs_[p] - residual_[p] + shift_[static_cast<std::size_t>(r)] * permuted_[p];
+    }
+    solve_shifted(residual_);
+    permuted_ += residual_;
+  }
+  for (Eigen::Index r = 0; r < m; ++r) x[r] = permuted_[position_[static_cast<std::size_t>(r)]];
+}
+
+void RigidCluster::wrenches(const Eigen::VectorXd& lambda, std::vector<Vector6d>& out) const {
+  out.assign(bodies_.size(), Vector6d::Zero());
+  for (int r = 0; r < rows_count_; ++r)
+    for (int side = 0; side < 2; ++side)
+      if (const int b = slot(r, side); b >= 0) out[static_cast<std::size_t>(b)] += lambda[r] * part(r, side);
+}
+
+void RigidCluster::motion(const Eigen::VectorXd& lambda, std::vector<Vector6d>& out) const {
+  wrenches(lambda, out);
+  for (std::size_t b = 0; b < out.size(); ++b) out[b] = weighted(static_cast<int>(b), out[b]);
+}
+
+}  // namespace mbsflow

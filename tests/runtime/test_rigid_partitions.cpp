@@ -1,0 +1,108 @@
+// Rigid joints inside submodels: the partitioners keep rigid clusters whole, an explicit
+// partition that cuts one is refused, and tight runs stay bit for bit the same whatever
+// the partition and thread count.
+#include <catch2/catch.hpp>
+
+#include "mbsflow/error.hpp"
+#include "mbsflow/graph/decomposition.hpp"
+#include "mbsflow/runtime/partitioned_run.hpp"
+#include "mbsflow/runtime/simulation.hpp"
+#include "memory_sink.hpp"
+#include "test_support.hpp"
+
+using namespace mbsflow;
+
+namespace {
+
+// Six three-rod pendulums (rigid revolute chains hung from spherical pivots), neighbours
+// joined tip to tip by bushings and compliant revolute joints.
+Model pendulum_row() {
+  Model m;
+  m.name = "pendulum_row";
+  m.gravity = {0, -9.81, 0};
+  const int clusters = 6, rods = 3;
+  for (int c = 0; c < clusters; ++c)
+    for (int r = 0; r < rods; ++r) {
+      Body b = test::make_body("rod", 1.0, {1e-3, 1.0 / 12, 1.0 / 12, 0, 0, 0}, {0.5 + r, 0, 0.4 * c});
+      b.name += std::to_string(c) + "_" + std::to_string(r);
+      b.velocity = {0, 0.1 * c, 0.05 * r};
+      m.bodies.push_back(b);
+    }
+  auto joint = [&](JointType type, int a, int b, Vec3 pa, Vec3 pb) {
+    Joint j;
+    j.name = "j" + std::to_string(m.joints.size());
+    j.type = type;
+    j.body1 = a;
+    j.body2 = b;
+    j.point1 = pa;
+    j.point2 = pb;
+    j.frame2 = rest_frame2(m, j);
+    m.joints.push_back(j);
+    return &m.joints.back();
+  };
+  for (int c = 0; c < clusters; ++c) {
+    const int first = c * rods;
+    joint(JointType::spherical, ground, first, {0, 0, 0.4 * c}, {-0.5, 0, 0});
+    for (int r = 1; r < rods; ++r) joint(JointType::revolute, first + r - 1, first + r, {0.5, 0, 0}, {-0.5, 0, 0});
+    if (c == 0) continue;
+    const int tip = first + rods - 1, previous = tip - rods;
+    if (c % 2) {
+      *joint(JointType::bushing, previous, tip, {0.5, 0, 0}, {0.5, 0, 0}) = [&] {
+        Joint b = test::make_bushing(previous, tip, {0.5, 0, 0}, {0.5, 0, -0.4}, {400, 400, 400, 10, 10, 10}, {2, 2, 2, 0.1, 0.1, 0.1});
+        b.name = "bushing" + std::to_string(c);
+        return b;
+      }();
+    } else {
+      Joint* j = joint(JointType::revolute, previous, tip, {0.5, 0, 0.2}, {0.5, 0, -0.2});
+      j->rigid = false;
+      set_bushing_from_frequency(m, *j, 30.0, 0.05);
+    }
+  }
+  m.simulation.step = 2e-3;
+  m.simulation.t_end = 0.2;
+  m.simulation.output_every = 20;
+  return m;
+}
+
+}  // namespace
+
+TEST_CASE("partitions never cut a rigid joint, and say why when they cannot be made", "[runtime][rigid]") {
+  const Model m = pendulum_row();
+  const std::vector<int> piece = rigid_pieces(m);
+  for (int k = 1; k <= 6; ++k)
+    for (Partitioner p : {Partitioner::band, Partitioner::metis}) {
+      const Decomposition d = decompose(m, k, p);
+      for (const Joint& j : m.joints)
+        if (is_kinematic(j.type) && j.rigid && j.body1 != ground)
+          CHECK(d.part_of_body[static_cast<std::size_t>(j.body1)] == d.part_of_body[static_cast<std::size_t>(j.body2)]);
+    }
+  CHECK_THROWS_WITH(decompose(m, 7), Catch::Contains("rigid joints leave only 6 pieces") && Catch::Contains("3, 3, 3"));
+  std::vector<int> part(m.bodies.size(), 0);
+  part[1] = 1;
+  CHECK_THROWS_WITH(decompose(m, part, 2), Catch::Contains("rigid joint 'j1'") && Catch::Contains("a cut may only pass through"));
+}
+
+TEST_CASE("tight runs with rigid clusters are bitwise identical across partitions and threads", "[runtime][rigid][identity]") {
+  Model m = pendulum_row();
+  for (Method method : {Method::rk4, Method::dopri5}) {
+    m.simulation.method = method;
+    m.simulation.rtol = m.simulation.atol = 1e-7;
+    MultibodySystem sys(m);
+    test::MemorySink reference;
+    run_simulation(sys, options_from_model(m), &reference);
+    REQUIRE(reference.states.size() > 2);
+    REQUIRE(reference.states.back() != reference.states.front());
+    CHECK(sys.constraint_violation(reference.times.back(), reference.states.back()) < 1e-10);
+    for (int k : {2, 3, 6})
+      for (int threads : {1, 2})
+        for (Executor ex : {Executor::flow_graph, Executor::barrier}) {
+          test::MemorySink sink;
+          run_partitioned(m, decompose(m, k), options_from_model(m), {threads, ex}, &sink);
+          INFO(method_name(method) << ", " << k << " partitions, " << threads << " threads");
+          REQUIRE(sink.states.size() == reference.states.size());
+          bool identical = sink.times == reference.times;
+          for (std::size_t i = 0; i < sink.states.size(); ++i) identical = identical && sink.states[i] == reference.states[i];
+          CHECK(identical);
+        }
+  }
+}
