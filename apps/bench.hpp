@@ -14,7 +14,7 @@ struct BenchArgs {
   std::vector<int> bodies;  // default per benchmark
   double seconds = 1.0;     // rhs: time per measurement
   int steps = 1000;         // output: steps per run
-  int repeats = 3;          // output: runs per case, the fastest counts
+  int repeats = 3;          // output, parallel, cluster, iftomm: runs per case, the fastest counts
   std::string dir = ".";    // output: where the results files go
   std::string csv;          // default: bench_WHAT.csv
   int threads = 0;          // parallel: up to this many threads (default: all cores)
@@ -36,6 +36,7 @@ inline BenchCsv open_csv(const BenchArgs& a) {
 }
 
 int bench_rhs(const BenchArgs& a);
+int bench_iftomm(const BenchArgs& a);
 int bench_output(const BenchArgs& a);
 int bench_parallel(const BenchArgs& a);
 int bench_cluster(const BenchArgs& a);

@@ -17,7 +17,7 @@ Action add_bench(CLI::App& app) {
                   "latency: tight vs loose coupling on 2 processes as the network gets slower; "
                   "ode: work-precision of the block and tirk methods against CVODE and Boost.Odeint on the seed's problems; "
                   "iterations: iteration error after 1, 2, ... iterations of the tirk schemes (seed 004's claim)")
-      ->check(CLI::IsMember({"rhs", "output", "parallel", "cluster", "latency", "ode", "iterations"}));
+      ->check(CLI::IsMember({"rhs", "output", "parallel", "cluster", "latency", "ode", "iterations", "iftomm"}));
   sub->add_option("--problems", a->problems,
                   "ode, iterations: hnw, b1, heatN (default ode: hnw,b1,heat1000,heat100000,heat1000000; iterations: hnw,b1,heat200)")
       ->delimiter(',');
@@ -29,7 +29,7 @@ Action add_bench(CLI::App& app) {
   sub->add_option("--seconds", a->seconds, "rhs: time per measurement")->check(CLI::PositiveNumber);
   sub->add_option("--steps", a->steps, "output: steps per run")->check(CLI::PositiveNumber);
   sub->add_option("--repeats", a->repeats, "output, parallel, cluster: runs per case; the fastest counts")->check(CLI::PositiveNumber);
-  sub->add_option("--dir", a->dir, "output: folder for the results files (the disk being measured)");
+  sub->add_option("--dir", a->dir, "output: folder for the results files (the disk being measured); iftomm: the example models (default examples/models)");
   sub->add_option("--csv", a->csv, "CSV file to write (default bench_WHAT.csv)");
   return [a] {
     if (a->what == "rhs") return bench_rhs(*a);
@@ -38,6 +38,7 @@ Action add_bench(CLI::App& app) {
     if (a->what == "latency") return bench_latency(*a);
     if (a->what == "ode") return bench_ode(*a);
     if (a->what == "iterations") return bench_iterations(*a);
+    if (a->what == "iftomm") return bench_iftomm(*a);
     return bench_parallel(*a);
   };
 }

@@ -35,7 +35,7 @@ int info(const std::string& path) {
   std::printf("fields        %s\n", text("fields").c_str());
   for (const BodyField& f : body_fields)
     if (r.has(f.dataset)) std::printf("  %-24s %s\n", f.dataset, shape_text(r.shape(f.dataset)).c_str());
-  for (const char* d : {energy_dataset, joint_force_dataset})
+  for (const char* d : {energy_dataset, joint_force_dataset, motor_effort_dataset})
     if (r.has(d)) std::printf("  %-24s %s\n", d, shape_text(r.shape(d)).c_str());
   std::printf("written by    mbsflow %s\n", text("mbsflow_version").c_str());
   std::printf("command line  %s\n", text("command_line").c_str());

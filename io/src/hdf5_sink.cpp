@@ -88,7 +88,7 @@ struct Hdf5Sink::File {
   h5::Handle file;
   Series time;
   std::vector<std::pair<std::size_t, Series>> bodies;  // (index into body_fields, series)
-  std::optional<Series> energy, joint_force;
+  std::optional<Series> energy, joint_force, motor_effort;
   hsize_t rows_per_chunk = 1;
   std::vector<double> times;  // every time written, for the XDMF sidecar
 };
@@ -128,6 +128,8 @@ void Hdf5Sink::begin(const MultibodySystem& system) {
                                             {n, static_cast<hsize_t>(body_fields[i].components)}, rows));
   if (fields_.energy) f->energy = make_series(f->file.get(), energy_dataset, {3}, 1024);
   if (fields_.joint_force && joints > 0) f->joint_force = make_series(f->file.get(), joint_force_dataset, {joints, 6}, rows);
+  const bool motors = std::any_of(m.joints.begin(), m.joints.end(), [](const Joint& j) { return j.motor.kind != JointMotor::Kind::none; });
+  if (f->joint_force && motors) f->motor_effort = make_series(f->file.get(), motor_effort_dataset, {joints, 1}, rows);
   std::vector<std::string> names;
   for (const Body& b : m.bodies) names.push_back(b.name);
   const h5::Handle bodies(H5Gopen2(f->file.get(), "/bodies", H5P_DEFAULT), H5Gclose, "open /bodies");
@@ -170,6 +172,7 @@ void Hdf5Sink::write(Snapshot&& s) {
     f.energy->buffer.insert(f.energy->buffer.end(), {e.kinetic, e.gravity, e.elastic});
   }
   if (f.joint_force) f.joint_force->buffer.insert(f.joint_force->buffer.end(), s.joint_wrench.data(), s.joint_wrench.data() + s.joint_wrench.size());
+  if (f.motor_effort) f.motor_effort->buffer.insert(f.motor_effort->buffer.end(), s.motor_effort.data(), s.motor_effort.data() + s.motor_effort.size());
   if (static_cast<hsize_t>(f.time.buffer.size()) >= f.rows_per_chunk) flush();
 }
 
@@ -181,6 +184,7 @@ void Hdf5Sink::flush() {
   for (auto& [i, series] : f.bodies) append(series, first);
   if (f.energy) append(*f.energy, first);
   if (f.joint_force) append(*f.joint_force, first);
+  if (f.motor_effort) append(*f.motor_effort, first);
   append(f.time, first);  // last: a reader never sees a time without its data
   rows_written_ += rows;
   h5::check(H5Fflush(f.file.get(), H5F_SCOPE_GLOBAL), "flush " + path_);

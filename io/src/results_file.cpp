@@ -171,6 +171,30 @@ std::vector<std::string> export_csv(const ResultsFile& r, const std::string& dir
     if (!out) throw InputError(file + ": error while writing");
     written.push_back(file);
   }
+  if (wanted.empty() && r.has(joint_force_dataset)) {  // joints too: joint_NAME.csv
+    const std::vector<std::string> joints = r.joint_names();
+    const bool effort = r.has(motor_effort_dataset);
+    for (std::size_t j = 0; j < joints.size(); ++j) {
+      const std::string file = (std::filesystem::path(dir) / ("joint_" + joints[j] + ".csv")).string();
+      std::ofstream out(file);
+      if (!out) throw InputError(file + ": cannot write");
+      out << "t,fx,fy,fz,mx,my,mz" << (effort ? ",motor_effort\n" : "\n");
+      const std::vector<double> w = r.read_item(joint_force_dataset, j);
+      const std::vector<double> e = effort ? r.read_item(motor_effort_dataset, j) : std::vector<double>{};
+      char buf[32];
+      for (std::size_t i = 0; i < t.size(); ++i) {
+        std::snprintf(buf, sizeof buf, "%.17g", t[i]);
+        out << buf;
+        for (std::size_t c = 0; c < 6 + (effort ? 1u : 0u); ++c) {
+          std::snprintf(buf, sizeof buf, ",%.17g", c < 6 ? w[6 * i + c] : e[i]);
+          out << buf;
+        }
+        out << '\n';
+      }
+      if (!out) throw InputError(file + ": error while writing");
+      written.push_back(file);
+    }
+  }
   return written;
 }
 

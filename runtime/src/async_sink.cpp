@@ -92,7 +92,10 @@ void AsyncSink::run() {
       const auto start = std::chrono::steady_clock::now();
       const SnapshotContent want = inner_->content();
       if (want.energy) s.energy = system_->energy(s.t, s.state);
-      if (want.joint_wrench) system_->joint_wrenches(s.t, s.state, s.joint_wrench);
+      if (want.joint_wrench) {
+        system_->joint_wrenches(s.t, s.state, s.joint_wrench);
+        s.motor_effort = system_->motor_efforts();
+      }
       inner_->write(std::move(s));
       const double spent = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       std::lock_guard lock(mutex_);

@@ -17,7 +17,10 @@ inline void emit(MultibodySystem& sys, ResultSink* sink, double t, const Eigen::
   Snapshot s;
   s.t = t;
   s.state = y;
-  if (want.joint_wrench) sys.joint_wrenches(t, y, s.joint_wrench);
+  if (want.joint_wrench) {
+    sys.joint_wrenches(t, y, s.joint_wrench);
+    s.motor_effort = sys.motor_efforts();
+  }
   if (want.energy) s.energy = sys.energy(t, y);
   sink->write(std::move(s));
   ++out.snapshots;

@@ -26,6 +26,9 @@ inline constexpr std::array<BodyField, 4> body_fields{{
 
 inline constexpr const char* energy_dataset = "/energy";        // T x 3: kinetic, gravity, elastic
 inline constexpr const char* joint_force_dataset = "/joints/force";  // T x J x 6
+// T x J x 1: torque or force of each joint's motor along its axis (0 without a motor);
+// written with joint_force when the model has a motor.
+inline constexpr const char* motor_effort_dataset = "/joints/motor_effort";
 
 struct FieldSet {
   std::array<bool, 4> body{true, true, true, true};  // in the order of body_fields

@@ -12,6 +12,7 @@ struct Snapshot {
   double t = 0.0;
   Eigen::VectorXd state;         // in the layout of system.layout(), quaternions unit
   Eigen::VectorXd joint_wrench;  // 6 per joint (see MultibodySystem::joint_wrenches); empty unless asked for
+  Eigen::VectorXd motor_effort;  // 1 per joint (MultibodySystem::motor_efforts), with joint_wrench
   std::optional<Energy> energy;  // only if asked for
 };
 
