@@ -45,7 +45,12 @@ TEST_CASE("models written and read back are the same model", "[io]") {
   gp.cols = 4;
   Model with_interval = make_chain(ChainParams{});
   with_interval.simulation.output_interval = 0.0025;
-  for (const Model& m : {read_model_file(examples + "/features.json"), with_interval, make_grid(gp), make_train(tp)}) {
+  Model compliant = read_model_file(examples + "/slider_crank.json");  // kinematic joints, motor, limits
+  compliant.joints[1].rigid = false;
+  set_bushing_from_frequency(compliant, compliant.joints[1], 300.0, 0.1);
+  for (const Model& m : {read_model_file(examples + "/features.json"), with_interval, make_grid(gp), make_train(tp),
+                         read_model_file(examples + "/slider_crank.json"), compliant,
+                         read_model_file(examples + "/iftomm_a01_pendulum.json")}) {
     const std::string once = model_to_json(m);
     const Model back = read_model_text(once, m.name);
     CHECK(model_to_json(back) == once);
@@ -53,6 +58,13 @@ TEST_CASE("models written and read back are the same model", "[io]") {
     CHECK(back.bodies.size() == m.bodies.size());
     CHECK(back.joints.size() == m.joints.size());
     for (std::size_t j = 0; j < m.joints.size(); ++j) {
+      CHECK(back.joints[j].type == m.joints[j].type);
+      CHECK(back.joints[j].rigid == m.joints[j].rigid);
+      CHECK(back.joints[j].frame1 == m.joints[j].frame1);
+      CHECK(back.joints[j].frame2 == m.joints[j].frame2);
+      CHECK(back.joints[j].rest_length == m.joints[j].rest_length);
+      CHECK(back.joints[j].motor.kind == m.joints[j].motor.kind);
+      CHECK(back.joints[j].limits.upper == m.joints[j].limits.upper);
       CHECK(back.joints[j].stiffness == m.joints[j].stiffness);
       CHECK(back.joints[j].damping == m.joints[j].damping);
       CHECK(back.joints[j].frame2 == m.joints[j].frame2);
