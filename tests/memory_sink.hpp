@@ -22,4 +22,9 @@ struct MemorySink : ResultSink {
   void end() override { ended = true; }
 };
 
+// The same times and bit for bit the same states.
+inline bool same_snapshots(const MemorySink& a, const MemorySink& b) {
+  return a.times == b.times && a.states == b.states;
+}
+
 }  // namespace mbsflow::test

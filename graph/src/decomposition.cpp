@@ -155,42 +155,34 @@ Decomposition decompose(const Model& m, int k, Partitioner partitioner) {
   if (k < 1) throw InputError("partitions: must be >= 1 (got " + std::to_string(k) + ")");
   if (k > n)
     throw InputError("partitions: " + std::to_string(k) + " is more than the model's " + std::to_string(n) + " bodies");
+  // Rigid pieces are never cut: the partitioners cut the model with each piece contracted
+  // to one vertex (the model itself when there are no rigid joints), then each body goes
+  // where its piece went.
   const std::vector<int> piece = rigid_pieces(m);
   const int pieces = piece.empty() ? 0 : *std::max_element(piece.begin(), piece.end()) + 1;
-  if (pieces < n) {  // rigid clusters: partition the contracted model, then expand
-    if (k > pieces)
-      throw InputError("partitions: " + std::to_string(k) + " submodels, but rigid joints leave only " + std::to_string(pieces) +
-                       " pieces that may be cut apart (bodies per piece: " + piece_sizes(piece, pieces) +
-                       "); use fewer submodels or make joints between clusters compliant");
-    const std::vector<double> body_cost = body_costs(m);
-    std::vector<double> cost(static_cast<std::size_t>(pieces), 0.0);
-    for (std::size_t b = 0; b < piece.size(); ++b) cost[static_cast<std::size_t>(piece[b])] += body_cost[b];
-    const Model c = contracted(m, piece, pieces);
-    auto expand = [&](const std::vector<int>& of_piece) {
-      std::vector<int> part(piece.size());
-      for (std::size_t b = 0; b < piece.size(); ++b) part[b] = of_piece[static_cast<std::size_t>(piece[b])];
-      return part;
-    };
-    std::optional<Decomposition> band, metis;
-    if (partitioner != Partitioner::metis || k == 1) band = decompose(m, expand(band_partition(c, cost, k)), k);
-    if (partitioner != Partitioner::band && k > 1)
-      if (const auto part = metis_partition(c, cost, k)) {
-        metis = decompose(m, expand(*part), k);
-        metis->partitioner = Partitioner::metis;
-      }
-    if (!metis) return band ? *band : decompose(m, expand(band_partition(c, cost, k)), k);
-    if (!band || metis->estimated_time() < band->estimated_time()) return *metis;
-    return *band;
-  }
-  const std::vector<double> cost = body_costs(m);
+  if (k > pieces)
+    throw InputError("partitions: " + std::to_string(k) + " submodels, but rigid joints leave only " + std::to_string(pieces) +
+                     " pieces that may be cut apart (bodies per piece: " + piece_sizes(piece, pieces) +
+                     "); use fewer submodels or make joints between clusters compliant");
+  const std::vector<double> body_cost = body_costs(m);
+  std::vector<double> cost(static_cast<std::size_t>(pieces), 0.0);
+  for (std::size_t b = 0; b < piece.size(); ++b) cost[static_cast<std::size_t>(piece[b])] += body_cost[b];
+  const bool whole = pieces == n;
+  const Model c = whole ? Model{} : contracted(m, piece, pieces);
+  const Model& g = whole ? m : c;
+  auto decompose_pieces = [&](const std::vector<int>& of_piece) {
+    std::vector<int> part(piece.size());
+    for (std::size_t b = 0; b < piece.size(); ++b) part[b] = of_piece[static_cast<std::size_t>(piece[b])];
+    return decompose(m, part, k);
+  };
   std::optional<Decomposition> band, metis;
-  if (partitioner != Partitioner::metis || k == 1) band = decompose(m, band_partition(m, cost, k), k);
+  if (partitioner != Partitioner::metis || k == 1) band = decompose_pieces(band_partition(g, cost, k));
   if (partitioner != Partitioner::band && k > 1)
-    if (const auto part = metis_partition(m, cost, k)) {
-      metis = decompose(m, *part, k);
+    if (const auto part = metis_partition(g, cost, k)) {
+      metis = decompose_pieces(*part);
       metis->partitioner = Partitioner::metis;
     }
-  if (!metis) return band ? *band : decompose(m, band_partition(m, cost, k), k);
+  if (!metis) return band ? *band : decompose_pieces(band_partition(g, cost, k));
   if (!band || metis->estimated_time() < band->estimated_time()) return *metis;
   return *band;
 }

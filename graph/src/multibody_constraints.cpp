@@ -3,10 +3,10 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <numeric>
 
 #include "constraint_rows.hpp"
 #include "mbsflow/error.hpp"
+#include "mbsflow/graph/decomposition.hpp"
 #include "mbsflow/graph/multibody_system.hpp"
 #include "rigid_cluster.hpp"
 #include "rotation.hpp"
@@ -26,16 +26,16 @@ Row12 velocities(const BodyMotion& a, const BodyMotion& b) {
   return v;
 }
 
+// The coefficient of a row's direction: translational (x y z) or rotational (about x y z).
+double on_axis(const ConstraintRow& r, const Eigen::Vector3d& translational, const Eigen::Vector3d& rotational) {
+  return r.axis < 3 ? translational[r.axis] : rotational[r.axis - 3];
+}
+
 // Rotation by the rotation vector theta, as a quaternion.
 Eigen::Vector4d quat_exp(const Eigen::Vector3d& theta) {
   const double angle = theta.norm();
   const double s = angle > 1e-8 ? std::sin(0.5 * angle) / angle : 0.5 - angle * angle / 48.0;
   return {std::cos(0.5 * angle), s * theta[0], s * theta[1], s * theta[2]};
-}
-
-int find_root(std::vector<int>& parent, int i) {
-  while (parent[static_cast<std::size_t>(i)] != i) i = parent[static_cast<std::size_t>(i)] = parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(i)])];
-  return i;
 }
 
 }  // namespace
@@ -56,8 +56,6 @@ void MultibodySystem::compile_constraints() {
       new Constraints, [](const Constraints& c) { return new Constraints(c); }, [](Constraints* c) { delete c; });
   Constraints& k = *constraints_;
   const int n = static_cast<int>(layout_.bodies);
-  std::vector<int> parent(static_cast<std::size_t>(n));
-  std::iota(parent.begin(), parent.end(), 0);
   std::vector<char> touched(static_cast<std::size_t>(n), 0);
   for (std::size_t j = 0; j < model_.joints.size(); ++j) {
     const Joint& joint = model_.joints[j];
@@ -69,18 +67,17 @@ void MultibodySystem::compile_constraints() {
     k.geometry.push_back(joint_geometry(joint));
     if (!joint.rigid) continue;
     touched[static_cast<std::size_t>(joint.body2)] = 1;
-    if (joint.body1 != ground) {
-      touched[static_cast<std::size_t>(joint.body1)] = 1;
-      parent[static_cast<std::size_t>(find_root(parent, joint.body1))] = find_root(parent, joint.body2);
-    }
+    if (joint.body1 != ground) touched[static_cast<std::size_t>(joint.body1)] = 1;
   }
-  // Clusters in the order of their first body; bodies ascending.
+  // The partitioners' rigid pieces, less the bodies without a rigid joint: clusters in
+  // the order of their first body, bodies ascending.
+  const std::vector<int> piece = rigid_pieces(model_);
   k.cluster_of_body.assign(static_cast<std::size_t>(n), -1);
-  std::vector<int> cluster_of_root(static_cast<std::size_t>(n), -1);
+  std::vector<int> cluster_of_piece(static_cast<std::size_t>(n), -1);
   std::vector<std::vector<int>> bodies;
   for (int i = 0; i < n; ++i) {
     if (!touched[static_cast<std::size_t>(i)]) continue;
-    int& c = cluster_of_root[static_cast<std::size_t>(find_root(parent, i))];
+    int& c = cluster_of_piece[static_cast<std::size_t>(piece[static_cast<std::size_t>(i)])];
     if (c < 0) {
       c = static_cast<int>(bodies.size());
       bodies.emplace_back();
@@ -114,6 +111,20 @@ void MultibodySystem::compile_constraints() {
   k.marked.assign(k.clusters.size(), 0);
 }
 
+BodyMotion MultibodySystem::motion_at(int i) const {
+  return {pos_.col(i), rot_[static_cast<std::size_t>(i)], vel_.col(i), omega_.col(i)};
+}
+
+std::vector<int> MultibodySystem::clusters_of(std::span<const int> bodies) const {
+  std::vector<int> out;
+  if (clusters() == 0) return out;
+  for (int i : bodies)
+    if (const int c = cluster_of(i); c >= 0) out.push_back(c);
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
 int MultibodySystem::clusters() const { return static_cast<int>(constraints_->clusters.size()); }
 const std::vector<int>& MultibodySystem::cluster_bodies(int c) const {
   return constraints_->clusters[static_cast<std::size_t>(c)].bodies();
@@ -126,19 +137,16 @@ void MultibodySystem::kinematic_joint_force(std::size_t k) {
   out.setZero();
   if (!j.applies_force) return;
   const JointGeometry& g = constraints_->geometry[static_cast<std::size_t>(j.kinematic)];
-  const BodyMotion a{pos_.col(j.a), rot_[static_cast<std::size_t>(j.a)], vel_.col(j.a), omega_.col(j.a)};
-  const BodyMotion b{pos_.col(j.b), rot_[static_cast<std::size_t>(j.b)], vel_.col(j.b), omega_.col(j.b)};
+  const BodyMotion a = motion_at(j.a);
+  const BodyMotion b = motion_at(j.b);
   const Row12 v = velocities(a, b);
-  auto stiffness = [&](const ConstraintRow& r, const Eigen::Vector3d& kt, const Eigen::Vector3d& kr) {
-    return r.axis < 3 ? kt[r.axis] : kr[r.axis - 3];
-  };
   if (!j.rigid) {  // the seed's compliant joint: -(k phi + c phi') on every constrained direction
     std::array<ConstraintRow, max_joint_rows> rows;
     const int n = constraint_rows(g);
     evaluate_constraint(g, a, b, time_, rows.data());
     for (int r = 0; r < n; ++r) {
       const ConstraintRow& row = rows[static_cast<std::size_t>(r)];
-      const double p = -(stiffness(row, j.kt, j.kr) * row.phi + stiffness(row, j.ct, j.cr) * (row.j.dot(v) + row.rate));
+      const double p = -(on_axis(row, j.kt, j.kr) * row.phi + on_axis(row, j.ct, j.cr) * (row.j.dot(v) + row.rate));
       add_row_wrench(row, p, out);
       if (r == n - 1 && g.motor.kind != JointMotor::Kind::none) motor_effort_[static_cast<Eigen::Index>(k)] = p;
     }
@@ -162,8 +170,8 @@ void MultibodySystem::kinematic_joint_force(std::size_t k) {
 double MultibodySystem::kinematic_energy(const CompiledJoint& j) const {
   if (!j.applies_force) return 0.0;
   const JointGeometry& g = constraints_->geometry[static_cast<std::size_t>(j.kinematic)];
-  const BodyMotion a{pos_.col(j.a), rot_[static_cast<std::size_t>(j.a)], vel_.col(j.a), omega_.col(j.a)};
-  const BodyMotion b{pos_.col(j.b), rot_[static_cast<std::size_t>(j.b)], vel_.col(j.b), omega_.col(j.b)};
+  const BodyMotion a = motion_at(j.a);
+  const BodyMotion b = motion_at(j.b);
   double e = 0.0;
   if (!j.rigid) {
     std::array<ConstraintRow, max_joint_rows> rows;
@@ -171,8 +179,7 @@ double MultibodySystem::kinematic_energy(const CompiledJoint& j) const {
     evaluate_constraint(g, a, b, time_, rows.data());
     for (int r = 0; r < n; ++r) {
       const ConstraintRow& row = rows[static_cast<std::size_t>(r)];
-      const double k = row.axis < 3 ? j.kt[row.axis] : j.kr[row.axis - 3];
-      e += 0.5 * k * row.phi * row.phi;
+      e += 0.5 * on_axis(row, j.kt, j.kr) * row.phi * row.phi;
     }
   }
   if (g.limits.active) {
@@ -215,8 +222,8 @@ void MultibodySystem::solve_cluster(int c, double t, const Eigen::VectorXd& y, E
   Eigen::VectorXd& lambda = k.lambda[static_cast<std::size_t>(c)];
   for (const ClusterJoint& cj : rc.joints()) {
     const CompiledJoint& j = joints_[static_cast<std::size_t>(cj.joint)];
-    const BodyMotion a{pos_.col(j.a), rot_[static_cast<std::size_t>(j.a)], vel_.col(j.a), omega_.col(j.a)};
-    const BodyMotion b{pos_.col(j.b), rot_[static_cast<std::size_t>(j.b)], vel_.col(j.b), omega_.col(j.b)};
+    const BodyMotion a = motion_at(j.a);
+    const BodyMotion b = motion_at(j.b);
     ConstraintRow* rows = rc.rows.data() + cj.first_row;
     evaluate_constraint(k.geometry[static_cast<std::size_t>(j.kinematic)], a, b, t, rows);
     for (int r = 0; r < cj.rows; ++r) {

@@ -284,8 +284,13 @@ void MultibodySystem::add_force_element(std::shared_ptr<const ForceElement> elem
 }
 
 void MultibodySystem::joint_wrenches(double t, const Eigen::VectorXd& y, Eigen::VectorXd& out) {
-  Eigen::VectorXd dydt(dimension());
-  rhs(t, y, dydt);  // the rigid joints' multipliers too
+  if (clusters() > 0) {
+    Eigen::VectorXd dydt(dimension());
+    rhs(t, y, dydt);  // the rigid joints' multipliers too
+  } else {
+    update_kinematics(t, y);
+    compute_joint_forces();
+  }
   out.resize(6 * static_cast<Eigen::Index>(joints_.size()));
   for (std::size_t k = 0; k < joints_.size(); ++k) {
     const CompiledJoint& j = joints_[k];
@@ -376,17 +381,10 @@ void MultibodySystem::compute_derivatives(double t, const Eigen::VectorXd& y, Ei
 // A listed body of a cluster brings in its whole cluster: the caller lists whole clusters.
 void MultibodySystem::derivatives_of(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt,
                                      std::span<const int> bodies) const {
-  const int n_clusters = clusters();
-  std::vector<int> touched;
-  for (int i : bodies) {
-    const int c = n_clusters == 0 ? -1 : cluster_of(i);
-    if (c < 0)
-      body_derivative(i, t, y, dydt);
-    else if (std::find(touched.begin(), touched.end(), c) == touched.end())
-      touched.push_back(c);
-  }
-  std::sort(touched.begin(), touched.end());
-  for (int c : touched) solve_cluster(c, t, y, dydt);
+  const bool any = clusters() > 0;
+  for (int i : bodies)
+    if (!any || cluster_of(i) < 0) body_derivative(i, t, y, dydt);
+  for (int c : clusters_of(bodies)) solve_cluster(c, t, y, dydt);
 }
 
 void MultibodySystem::rhs(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) {
@@ -415,15 +413,11 @@ void MultibodySystem::after_step(double t, Eigen::VectorXd& y) const {
 }
 
 void MultibodySystem::after_step_of(double t, Eigen::VectorXd& y, std::span<const int> bodies) const {
-  std::vector<int> touched;
   for (int i : bodies) {
     y.segment<4>(layout_.orientation(i)).normalize();
     if (const int d = driver_of_body_[static_cast<std::size_t>(i)]; d >= 0) impose(model_.drivers[static_cast<std::size_t>(d)], t, y);
-    if (const int c = clusters() == 0 ? -1 : cluster_of(i); c >= 0 && std::find(touched.begin(), touched.end(), c) == touched.end())
-      touched.push_back(c);
   }
-  std::sort(touched.begin(), touched.end());
-  for (int c : touched) project_cluster(c, t, y);
+  for (int c : clusters_of(bodies)) project_cluster(c, t, y);
 }
 
 double MultibodySystem::elastic_energy(const CompiledJoint& j) const {

@@ -128,6 +128,37 @@ std::vector<std::string> ResultsFile::joint_names() const { return names("/joint
 
 std::uintmax_t ResultsFile::size_bytes() const { return std::filesystem::file_size(path_); }
 
+namespace {
+
+// One CSV table: the header, then per time a row of t and, from each block of values
+// (T x components, row-major), that time's components; every number to full precision.
+struct CsvBlock {
+  std::vector<double> values;
+  int components = 1;
+};
+
+std::string write_csv_table(const std::string& file, const std::string& header, const std::vector<double>& t,
+                            const std::vector<CsvBlock>& blocks) {
+  std::ofstream out(file);
+  if (!out) throw InputError(file + ": cannot write");
+  out << header << '\n';
+  char buf[32];
+  for (std::size_t i = 0; i < t.size(); ++i) {
+    std::snprintf(buf, sizeof buf, "%.17g", t[i]);
+    out << buf;
+    for (const CsvBlock& b : blocks)
+      for (int c = 0; c < b.components; ++c) {
+        std::snprintf(buf, sizeof buf, ",%.17g", b.values[i * static_cast<std::size_t>(b.components) + static_cast<std::size_t>(c)]);
+        out << buf;
+      }
+    out << '\n';
+  }
+  if (!out) throw InputError(file + ": error while writing");
+  return file;
+}
+
+}  // namespace
+
 std::vector<std::string> export_csv(const ResultsFile& r, const std::string& dir, const std::vector<std::string>& wanted) {
   const std::vector<std::string> names = r.body_names();
   std::vector<std::size_t> bodies;
@@ -147,52 +178,22 @@ std::vector<std::string> export_csv(const ResultsFile& r, const std::string& dir
     if (r.has(f.dataset)) fields.push_back(&f);
   std::vector<std::string> written;
   for (std::size_t b : bodies) {
-    const std::string file = (std::filesystem::path(dir) / (names[b] + ".csv")).string();
-    std::ofstream out(file);
-    if (!out) throw InputError(file + ": cannot write");
-    out << "t";
-    std::vector<std::vector<double>> data;
+    std::string header = "t";
+    std::vector<CsvBlock> blocks;
     for (const BodyField* f : fields) {
-      for (int c = 0; c < f->components; ++c) out << ',' << f->columns[static_cast<std::size_t>(c)];
-      data.push_back(r.read_item(f->dataset, b));
+      for (int c = 0; c < f->components; ++c) header += std::string(",") + f->columns[static_cast<std::size_t>(c)];
+      blocks.push_back({r.read_item(f->dataset, b), f->components});
     }
-    out << '\n';
-    char buf[32];
-    for (std::size_t i = 0; i < t.size(); ++i) {
-      std::snprintf(buf, sizeof buf, "%.17g", t[i]);
-      out << buf;
-      for (std::size_t k = 0; k < fields.size(); ++k)
-        for (int c = 0; c < fields[k]->components; ++c) {
-          std::snprintf(buf, sizeof buf, ",%.17g", data[k][i * static_cast<std::size_t>(fields[k]->components) + static_cast<std::size_t>(c)]);
-          out << buf;
-        }
-      out << '\n';
-    }
-    if (!out) throw InputError(file + ": error while writing");
-    written.push_back(file);
+    written.push_back(write_csv_table((std::filesystem::path(dir) / (names[b] + ".csv")).string(), header, t, blocks));
   }
   if (wanted.empty() && r.has(joint_force_dataset)) {  // joints too: joint_NAME.csv
     const std::vector<std::string> joints = r.joint_names();
     const bool effort = r.has(motor_effort_dataset);
     for (std::size_t j = 0; j < joints.size(); ++j) {
-      const std::string file = (std::filesystem::path(dir) / ("joint_" + joints[j] + ".csv")).string();
-      std::ofstream out(file);
-      if (!out) throw InputError(file + ": cannot write");
-      out << "t,fx,fy,fz,mx,my,mz" << (effort ? ",motor_effort\n" : "\n");
-      const std::vector<double> w = r.read_item(joint_force_dataset, j);
-      const std::vector<double> e = effort ? r.read_item(motor_effort_dataset, j) : std::vector<double>{};
-      char buf[32];
-      for (std::size_t i = 0; i < t.size(); ++i) {
-        std::snprintf(buf, sizeof buf, "%.17g", t[i]);
-        out << buf;
-        for (std::size_t c = 0; c < 6 + (effort ? 1u : 0u); ++c) {
-          std::snprintf(buf, sizeof buf, ",%.17g", c < 6 ? w[6 * i + c] : e[i]);
-          out << buf;
-        }
-        out << '\n';
-      }
-      if (!out) throw InputError(file + ": error while writing");
-      written.push_back(file);
+      std::vector<CsvBlock> blocks{{r.read_item(joint_force_dataset, j), 6}};
+      if (effort) blocks.push_back({r.read_item(motor_effort_dataset, j), 1});
+      written.push_back(write_csv_table((std::filesystem::path(dir) / ("joint_" + joints[j] + ".csv")).string(),
+                                        effort ? "t,fx,fy,fz,mx,my,mz,motor_effort" : "t,fx,fy,fz,mx,my,mz", t, blocks));
     }
   }
   return written;

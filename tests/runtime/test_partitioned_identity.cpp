@@ -7,7 +7,7 @@
 #include "mbsflow/graph/stable_step.hpp"
 #include "mbsflow/runtime/partitioned_run.hpp"
 #include "mbsflow/runtime/simulation.hpp"
-#include "memory_sink.hpp"
+#include "reference_run.hpp"
 
 using namespace mbsflow;
 
@@ -69,11 +69,7 @@ std::vector<Model> models() {
 TEST_CASE("partitioned runs equal the single-partition run bit for bit", "[runtime][identity]") {
   for (Model m : models())
     for (Method method : {Method::rk4, Method::dopri5}) {
-    m.simulation.method = method;
-    m.simulation.rtol = m.simulation.atol = 1e-7;
-    MultibodySystem sys(m);
-    test::MemorySink reference;
-    run_simulation(sys, options_from_model(m), &reference);
+    const test::MemorySink reference = test::reference_run(m, method);
     REQUIRE(reference.states.size() == 9);  // DOPRI5 writes on the same grid, from its dense output
     // The model really moved, so equality means something.
     REQUIRE(reference.states.back() != reference.states.front());
@@ -87,9 +83,7 @@ TEST_CASE("partitioned runs equal the single-partition run bit for bit", "[runti
           INFO(m.name << ", " << method_name(method) << ", " << k << " partitions by " << partitioner_name(partitioner) << ", " << threads << " threads, "
                       << (ex == Executor::flow_graph ? "flow graph" : "barrier"));
           REQUIRE(sink.states.size() == reference.states.size());
-          bool identical = sink.times == reference.times;
-          for (std::size_t i = 0; i < sink.states.size(); ++i) identical = identical && sink.states[i] == reference.states[i];
-          CHECK(identical);
+          CHECK(test::same_snapshots(sink, reference));
         }
     }
   }

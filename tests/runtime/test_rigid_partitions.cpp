@@ -7,7 +7,7 @@
 #include "mbsflow/graph/decomposition.hpp"
 #include "mbsflow/runtime/partitioned_run.hpp"
 #include "mbsflow/runtime/simulation.hpp"
-#include "memory_sink.hpp"
+#include "reference_run.hpp"
 #include "test_support.hpp"
 
 using namespace mbsflow;
@@ -85,14 +85,10 @@ TEST_CASE("partitions never cut a rigid joint, and say why when they cannot be m
 TEST_CASE("tight runs with rigid clusters are bitwise identical across partitions and threads", "[runtime][rigid][identity]") {
   Model m = pendulum_row();
   for (Method method : {Method::rk4, Method::dopri5}) {
-    m.simulation.method = method;
-    m.simulation.rtol = m.simulation.atol = 1e-7;
-    MultibodySystem sys(m);
-    test::MemorySink reference;
-    run_simulation(sys, options_from_model(m), &reference);
+    const test::MemorySink reference = test::reference_run(m, method);
     REQUIRE(reference.states.size() > 2);
     REQUIRE(reference.states.back() != reference.states.front());
-    CHECK(sys.constraint_violation(reference.times.back(), reference.states.back()) < 1e-10);
+    CHECK(MultibodySystem(m).constraint_violation(reference.times.back(), reference.states.back()) < 1e-10);
     for (int k : {2, 3, 6})
       for (int threads : {1, 2})
         for (Executor ex : {Executor::flow_graph, Executor::barrier}) {
@@ -100,9 +96,7 @@ TEST_CASE("tight runs with rigid clusters are bitwise identical across partition
           run_partitioned(m, decompose(m, k), options_from_model(m), {threads, ex}, &sink);
           INFO(method_name(method) << ", " << k << " partitions, " << threads << " threads");
           REQUIRE(sink.states.size() == reference.states.size());
-          bool identical = sink.times == reference.times;
-          for (std::size_t i = 0; i < sink.states.size(); ++i) identical = identical && sink.states[i] == reference.states[i];
-          CHECK(identical);
+          CHECK(test::same_snapshots(sink, reference));
         }
   }
 }

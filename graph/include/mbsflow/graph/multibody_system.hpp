@@ -21,6 +21,8 @@
 
 namespace mbsflow {
 
+struct BodyMotion;  // constraint_rows.hpp
+
 namespace detail {
 // Owns a T that this header does not define and copies it deeply (the copy and destroy
 // functions come from where T is defined).
@@ -131,6 +133,8 @@ class MultibodySystem {
   void kinematic_joint_force(std::size_t k);
   double kinematic_energy(const CompiledJoint& j) const;
   void solve_cluster(int c, double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const;
+  BodyMotion motion_at(int i) const;  // kinematics index i of the current evaluation
+  std::vector<int> clusters_of(std::span<const int> bodies) const;  // ascending, each once
   void add_reactions(Eigen::VectorXd& out);
   void project_cluster(int c, double t, Eigen::VectorXd& y) const;
   void applied_wrench(Eigen::Index i, double t, Eigen::Vector3d& force, Eigen::Vector3d& torque) const;
