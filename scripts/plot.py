@@ -70,6 +70,20 @@ def plot_ode(f, path, out):
     fig.savefig(out, dpi=110)
 
 
+def plot_joints(f, t, ax):
+    """Reaction force magnitude of up to 5 joints (written with --fields joint_force),
+    and the effort of the motors among them."""
+    force = f["joints/force"]
+    joint_names = [text(n) for n in f["joints/names"][:]]
+    effort = f["joints/motor_effort"][:, :, 0] if "joints/motor_effort" in f else None
+    for j in pick_bodies(joint_names, []):
+        (line,) = ax.plot(t, (force[:, j, :3] ** 2).sum(axis=1) ** 0.5, label=f"{joint_names[j]} |F|")
+        if effort is not None and (effort[:, j] != 0).any():
+            ax.plot(t, effort[:, j], "--", color=line.get_color(), label=f"{joint_names[j]} motor")
+    ax.set(xlabel="t [s]", ylabel="N (motor: N or N m)", title="joint reactions")
+    ax.legend(fontsize="small")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("file")
@@ -87,9 +101,10 @@ def main():
         chosen = pick_bodies(names, [b for b in args.bodies.split(",") if b])
         has_pos = "bodies/position" in f
         has_energy = "energy" in f
+        has_joints = "joints/force" in f
         if not has_pos and not has_energy:
             sys.exit("plot.py: the file holds neither positions nor energies")
-        panels = int(has_pos) * 2 + int(has_energy)
+        panels = int(has_pos) * 2 + int(has_energy) + int(has_joints)
         fig, axes = plt.subplots(1, panels, figsize=(5.5 * panels, 4.5), squeeze=False)
         axes = list(axes[0])
         title = f.attrs.get("model_name", "")
@@ -112,6 +127,8 @@ def main():
             ax.plot(t, e.sum(axis=1), "k--", label="total")
             ax.set(xlabel="t [s]", ylabel="energy [J]", title="energy")
             ax.legend(fontsize="small")
+        if has_joints:
+            plot_joints(f, t, axes.pop(0))
         fig.suptitle(f"{title}  ({args.file})")
         fig.tight_layout()
         fig.savefig(out, dpi=110)

@@ -130,10 +130,10 @@ void RigidCluster::factor() {
     block_jw_.resize(k, 6);
     block_jw_.leftCols<3>() = inv_mass[b] * block_j_.leftCols<3>();
     block_jw_.rightCols<3>() = block_j_.rightCols<3>() * inv_inertia[b];  // symmetric
-    block_.noalias() = block_jw_.lazyProduct(block_j_.transpose());
+    // The lower triangle only, straight into the matrix (the product is symmetric).
     const int* to = scatter_[b].data();
     for (Eigen::Index p = 0; p < k; ++p)
-      for (Eigen::Index q = 0; q <= p; ++q) value[*to++] += block_(p, q);
+      for (Eigen::Index q = 0; q <= p; ++q) value[*to++] += block_jw_.row(p).dot(block_j_.row(q));
   }
   // Each diagonal entry grows by eps of itself: the same relative regularisation for rows
   // in metres and in radians, and for light and heavy bodies alike.

@@ -81,8 +81,7 @@ class RigidCluster {
   Eigen::SparseMatrix<double> sparse_matrix_;  // upper triangle, permuted
   using SparseLdlt = Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Upper, Eigen::NaturalOrdering<int>>;
   std::unique_ptr<SparseLdlt> sparse_ldlt_;
-  Eigen::Matrix<double, Eigen::Dynamic, 6> block_j_, block_jw_;  // scratch
-  Eigen::MatrixXd block_;
+  Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor> block_j_, block_jw_;  // scratch
   std::vector<double> shift_;  // eps added to each row's diagonal entry
   mutable Eigen::VectorXd permuted_, rhs_, residual_;
   void solve_shifted(Eigen::VectorXd& y) const;

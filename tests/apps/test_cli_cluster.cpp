@@ -85,6 +85,45 @@ TEST_CASE("runs on 2, 3 and 4 processes write the one-process results bit for bi
   fs::remove_all(d.parent_path());
 }
 
+TEST_CASE("rigid joints inside submodels: runs on 2 and 3 processes write the one-process results bit for bit",
+          "[apps][cluster][rigid]") {
+  const fs::path d = scratch("cluster-rigid");
+  const std::string dir = d.string();
+  {
+    // Three double pendulums (rigid revolute pairs, one a velocity motor), tips tied by springs.
+    std::ofstream f(d / "pendulums.json");
+    f << R"({"name": "pendulums", "gravity": [0, -9.81, 0], "bodies": [)";
+    for (int c = 0; c < 3; ++c)
+      for (int r = 0; r < 2; ++r)
+        f << (c + r ? ", " : "") << R"({"name": "p)" << c << r << R"(", "mass": 1, "inertia": [0.001, 0.08, 0.08], "position": [)"
+          << 0.5 + r << ", 0, " << 0.5 * c << "]}";
+    f << R"(], "joints": [)";
+    for (int c = 0; c < 3; ++c) {
+      f << (c ? ", " : "") << R"({"type": "revolute", "body1": "ground", "body2": "p)" << c << R"(0", "point1": [0, 0, )" << 0.5 * c
+        << R"(], "point2": [-0.5, 0, 0])" << (c == 1 ? R"(, "motor": {"type": "velocity", "function": {"type": "constant", "value": 1}})" : "")
+        << R"(}, {"type": "revolute", "body1": "p)" << c << R"(0", "body2": "p)" << c << R"(1", "point1": [0.5, 0, 0], "point2": [-0.5, 0, 0]})";
+      if (c) f << R"(, {"type": "spring", "body1": "p)" << c - 1 << R"(1", "body2": "p)" << c << R"(1", "point1": [0.5, 0, 0], "point2": [0.5, 0, 0], "stiffness": 200, "damping": 1})";
+    }
+    f << R"(], "simulation": {"t_end": 0.2, "step": 0.002, "output_every": 10}})";
+  }
+  const std::string common = "run pendulums.json -q --fields all -o ";
+  REQUIRE(run(common + "p1.h5 --threads 1 --partitions 1", dir).code == 0);
+  for (int n : {2, 3}) {
+    const std::string out = "p" + std::to_string(n) + ".h5";
+    const Result r = run(common + out + " --processes " + std::to_string(n), dir);
+    INFO(n << " processes: " << r.err);
+    REQUIRE(r.code == 0);
+    CHECK(same_results(d / "p1.h5", d / out));
+    const mbsflow::ResultsFile a((d / "p1.h5").string()), b((d / out).string());
+    CHECK(a.read("/joints/force") == b.read("/joints/force"));
+    CHECK(a.read("/joints/motor_effort") == b.read("/joints/motor_effort"));
+  }
+  const Result four = run(common + "p4.h5 --processes 4", dir);
+  CHECK(four.code == 2);
+  CHECK_THAT(four.err, Catch::Contains("rigid joints leave only 3 pieces"));
+  fs::remove_all(d.parent_path());
+}
+
 TEST_CASE("a worker killed mid-run: the coordinator names it, keeps the results and exits 1 within 5 s",
           "[apps][cluster][faults]") {
   for (const bool loose : {false, true}) {

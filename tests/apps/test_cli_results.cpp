@@ -4,7 +4,9 @@
 #include <unistd.h>
 
 #include <catch2/catch.hpp>
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <regex>
 #include <thread>
 
@@ -118,5 +120,26 @@ TEST_CASE("the progress line shows on a terminal only", "[apps]") {
     const Result quiet = run(args + " --quiet", d.string());
     CHECK(quiet.err.find("ETA") == std::string::npos);
   }
+  fs::remove_all(d.parent_path());
+}
+
+TEST_CASE("joint reactions and motor efforts: info lists them, export writes a CSV per joint, plot draws them",
+          "[apps][rigid]") {
+  const fs::path d = scratch("joint-results");
+  const std::string dir = d.string();
+  const std::string model = std::string(MBSFLOW_SOURCE) + "/examples/models/slider_crank.json";
+  REQUIRE(run("run '" + model + "' --t-end 0.5 --fields all -q -o crank.h5", dir).code == 0);
+  const Result info = run("info crank.h5", dir, true);
+  CHECK(info.code == 0);
+  CHECK_THAT(info.out, Catch::Contains("/joints/force") && Catch::Contains("/joints/motor_effort"));
+  REQUIRE(run("export crank.h5 --csv csv", dir).code == 0);
+  for (const char* joint : {"shaft", "crank_pin", "wrist_pin", "guide"}) CHECK(fs::exists(d / "csv" / ("joint_" + std::string(joint) + ".csv")));
+  // The motor holds the crank's speed against gravity: its effort is not zero.
+  const mbsflow::ResultsFile f((d / "crank.h5").string());
+  const std::vector<double> effort = f.read("/joints/motor_effort");
+  CHECK(std::any_of(effort.begin(), effort.end(), [](double e) { return std::abs(e) > 1.0; }));
+  const std::string python = MBSFLOW_PYTHON;
+  CHECK(std::system((python + " '" + MBSFLOW_SOURCE + "/scripts/plot.py' '" + dir + "/crank.h5' -o '" + dir + "/crank.png' >/dev/null").c_str()) == 0);
+  CHECK(fs::exists(d / "crank.png"));
   fs::remove_all(d.parent_path());
 }
