@@ -155,8 +155,8 @@ Action add_ode(CLI::App& app) {
       ->check(CLI::Range(1, 50))->capture_default_str();
   sub->add_option("--jacobian", a->jacobian, "exact (the problem's) or fd (finite differences)")
       ->check(CLI::IsMember({"exact", "fd"}))->capture_default_str();
-  sub->add_option("--linear-solver", a->solver, "auto, dense, banded or sparse")
-      ->check(CLI::IsMember({"auto", "dense", "banded", "sparse"}))->capture_default_str();
+  sub->add_option("--linear-solver", a->solver, "auto, dense, banded, klu (SuiteSparse) or sparselu (Eigen)")
+      ->check(CLI::IsMember({"auto", "dense", "banded", "klu", "sparselu"}))->capture_default_str();
   sub->add_option("--fixed-step", a->fixed_step, "no step control: this step (colloc: point spacing)")->check(CLI::PositiveNumber);
   sub->add_option("--initial-step", a->initial_step, "first step (default: chosen from the problem)")->check(CLI::PositiveNumber);
   sub->add_option("--threads", a->threads, "threads (0: all cores; 1: sequential, the same numbers)")->check(CLI::NonNegativeNumber);

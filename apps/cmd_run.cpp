@@ -33,6 +33,7 @@ struct RunArgs {
   std::string model;
   std::optional<double> t_end, step, rtol, atol, output_interval;
   std::string method;
+  std::string linear_solver = "auto";
   std::optional<int> every;
   std::string output;
   std::string fields = "position,orientation,velocity,angular_velocity,energy";
@@ -115,7 +116,8 @@ RunOptions choose_options(Model& m, const RunArgs& a, const StableStep& s) {
     m.simulation.output_interval.reset();
   }
   if (a.output_interval) m.simulation.output_interval = *a.output_interval;
-  const RunOptions o = options_from_model(m, s.step);
+  RunOptions o = options_from_model(m, s.step);
+  o.linear_solver = a.linear_solver;
   if (m.simulation.step) {
     if (m.simulation.method == Method::rk4 && *m.simulation.step > s.step)
       std::fprintf(stderr, "mbsflow: warning: step %.3g s is above the estimated RK4 stability limit %s\n",
@@ -253,9 +255,12 @@ int run(const RunArgs& a) {
     if (sink->stats().waits > 0)
       output += " (the writer held the run back " + std::to_string(sink->stats().waits) + " times)";
   }
-  std::fprintf(stderr, "mbsflow: done: %ld steps (%ld rejected), %ld evaluations, %.3f s wall, %.3g body-steps/s%s\n",
-               r.steps, r.rejected, r.evaluations, r.wall_seconds, body_steps / std::max(r.wall_seconds, 1e-9),
-               output.c_str());
+  const std::string newton = r.jacobians > 0 ? " (" + std::to_string(r.jacobians) + " Jacobians, " +
+                                                   std::to_string(r.factorizations) + " factorisations)"
+                                             : "";
+  std::fprintf(stderr, "mbsflow: done: %ld steps (%ld rejected), %ld evaluations%s, %.3f s wall, %.3g body-steps/s%s\n",
+               r.steps, r.rejected, r.evaluations, newton.c_str(), r.wall_seconds,
+               body_steps / std::max(r.wall_seconds, 1e-9), output.c_str());
   return 0;
 }
 
@@ -278,6 +283,10 @@ Action add_run(CLI::App& app) {
                   "simulation.output_interval)")
       ->check(CLI::PositiveNumber);
   sub->get_option("--every")->excludes(sub->get_option("--output-interval"));
+  sub->add_option("--linear-solver", a->linear_solver,
+                  "colloc, tirk: the Newton matrices' LU: auto (dense up to 100 equations, banded when narrow, else klu), "
+                  "dense, banded, klu (SuiteSparse) or sparselu (Eigen)")
+      ->check(CLI::IsMember({"auto", "dense", "banded", "klu", "sparselu"}))->capture_default_str();
   sub->add_option("--rtol", a->rtol, "DOPRI5 relative tolerance")->check(CLI::PositiveNumber);
   sub->add_option("--atol", a->atol, "DOPRI5 absolute tolerance")->check(CLI::PositiveNumber);
   sub->add_option("-o,--output", a->output,

@@ -10,6 +10,7 @@ packages=(
   python3 python3-h5py python3-matplotlib
   iproute2  # ip netns, for the test across two network namespaces
   libsundials-dev libboost-dev
+  libsuitesparse-dev  # KLU, the sparse LU of the implicit methods
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -43,12 +43,15 @@ class ImplicitStepper : public Stepper {
     settings_.threads = o.threads;
     settings_.initial_step = o.step;
     settings_.finite_difference_jacobian = !s.jacobian;
+    settings_.linear_solver = linear_solver_from_string(o.linear_solver);
   }
   void count() {
     const auto& st = integrator_->stats();
     stats_.accepted = st.accepted;
     stats_.rejected = st.rejected;
     stats_.evaluations = st.rhs_evaluations;
+    stats_.jacobians = st.jacobians;
+    stats_.factorizations = st.factorizations;
   }
 
   OdeProblem problem_;

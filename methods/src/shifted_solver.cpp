@@ -1,5 +1,9 @@
-#include "mbsflow/error.hpp"
 #include "mbsflow/methods/shifted_solver.hpp"
+
+#include "klu_lu.hpp"
+#include "mbsflow/error.hpp"
+
+#include <algorithm>
 
 
 namespace mbsflow {
@@ -9,15 +13,16 @@ const char* to_string(LinearSolverKind k) {
     case LinearSolverKind::automatic: return "auto";
     case LinearSolverKind::dense: return "dense";
     case LinearSolverKind::banded: return "banded";
-    default: return "sparse";
+    case LinearSolverKind::klu: return "klu";
+    default: return "sparselu";
   }
 }
 
 LinearSolverKind linear_solver_from_string(const std::string& name) {
   for (LinearSolverKind k : {LinearSolverKind::automatic, LinearSolverKind::dense, LinearSolverKind::banded,
-                             LinearSolverKind::sparse})
+                             LinearSolverKind::klu, LinearSolverKind::sparselu})
     if (name == to_string(k)) return k;
-  throw InputError("unknown linear solver '" + name + "' (auto, dense, banded or sparse)");
+  throw InputError("unknown linear solver '" + name + "' (auto, dense, banded, klu or sparselu)");
 }
 
 Bandwidth bandwidth_of(const Eigen::SparseMatrix<double>& j) {
@@ -34,7 +39,7 @@ LinearSolverKind choose_linear_solver(const Eigen::SparseMatrix<double>& j, Line
   if (wanted != LinearSolverKind::automatic) return wanted;
   if (j.rows() <= 100) return LinearSolverKind::dense;
   const Bandwidth b = bandwidth_of(j);
-  return b.lower + b.upper <= 64 ? LinearSolverKind::banded : LinearSolverKind::sparse;
+  return b.lower + b.upper <= 64 ? LinearSolverKind::banded : LinearSolverKind::klu;
 }
 
 template <class Scalar>
@@ -61,13 +66,33 @@ void ShiftedSolver<Scalar>::factorize(const Eigen::SparseMatrix<double>& j, Scal
       break;
     }
     default: {
-      Eigen::SparseMatrix<Scalar> m = (-gamma) * j.template cast<Scalar>();
       Eigen::SparseMatrix<Scalar> identity(n, n);
       identity.setIdentity();
-      m += identity;
-      m.makeCompressed();
-      sparse_ = std::make_shared<Eigen::SparseLU<Eigen::SparseMatrix<Scalar>, Eigen::COLAMDOrdering<int>>>();
-      sparse_->compute(m);
+      matrix_ = (-gamma) * j.template cast<Scalar>() + identity;
+      matrix_.makeCompressed();
+      const int* outer = matrix_.outerIndexPtr();
+      const int* inner = matrix_.innerIndexPtr();
+      const bool analysed = (kind_ == LinearSolverKind::klu ? klu_ != nullptr : sparse_ != nullptr) &&
+                            std::equal(outer_.begin(), outer_.end(), outer, outer + n + 1) &&
+                            std::equal(inner_.begin(), inner_.end(), inner, inner + matrix_.nonZeros());
+      if (!analysed) {
+        outer_.assign(outer, outer + n + 1);
+        inner_.assign(inner, inner + matrix_.nonZeros());
+        ++analyses_;
+      }
+      if (kind_ == LinearSolverKind::klu) {
+        if (!analysed) {
+          klu_ = std::make_shared<KluLu<Scalar>>();
+          klu_->analyze(matrix_);
+        }
+        klu_->factorize(matrix_);
+        break;
+      }
+      if (!analysed) {
+        sparse_ = std::make_shared<Eigen::SparseLU<Eigen::SparseMatrix<Scalar>, Eigen::COLAMDOrdering<int>>>();
+        sparse_->analyzePattern(matrix_);
+      }
+      sparse_->factorize(matrix_);
       if (sparse_->info() != Eigen::Success) throw RunError("Newton matrix is singular (sparse LU failed)");
       break;
     }
@@ -79,6 +104,7 @@ void ShiftedSolver<Scalar>::solve(Vector& b) const {
   switch (kind_) {
     case LinearSolverKind::dense: b = dense_.solve(b); break;
     case LinearSolverKind::banded: band_.solve(b); break;
+    case LinearSolverKind::klu: klu_->solve(b); break;
     default: b = sparse_->solve(b); break;
   }
 }

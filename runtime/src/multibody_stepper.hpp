@@ -1,6 +1,7 @@
 #pragma once
-// A multibody system as what a stepper integrates: its rhs, and after every step the
-// renormalised quaternions and prescribed motions.
+// A multibody system as what a stepper integrates: its rhs, the sparsity of its Jacobian
+// (the implicit methods difference it by colour and factor it sparse), and after every
+// step the renormalised quaternions and prescribed motions.
 #include "mbsflow/graph/multibody_system.hpp"
 #include "mbsflow/methods/stepper.hpp"
 
@@ -11,6 +12,7 @@ inline StepperSystem stepper_system(MultibodySystem& sys) {
   s.size = sys.dimension();
   s.rhs = [&sys](double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) { sys.rhs(t, y, dydt); };
   s.after_step = [&sys](double t, Eigen::VectorXd& y) { sys.after_step(t, y); };
+  s.sparsity = sys.jacobian_pattern();
   return s;
 }
 

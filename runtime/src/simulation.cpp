@@ -105,6 +105,8 @@ RunSummary run_simulation(MultibodySystem& sys, const RunOptions& o, ResultSink*
   out.steps = stepper->stats().accepted;
   out.rejected = stepper->stats().rejected;
   out.evaluations = stepper->stats().evaluations;
+  out.jacobians = stepper->stats().jacobians;
+  out.factorizations = stepper->stats().factorizations;
   out.wall_seconds = std::chrono::duration<double>(Clock::now() - start).count();
   out.final_state = stepper->y();
   return out;

@@ -102,6 +102,7 @@ inline StepperSettings stepper_settings(const RunOptions& o) {
   s.atol = o.atol;
   s.threads = 0;
   s.variant = o.variant;
+  s.linear_solver = o.linear_solver;
   return s;
 }
 

@@ -10,6 +10,7 @@
 // forces in global joint order, then user force elements in the order they were
 // added, so a body's derivative does not depend on how the model is later partitioned.
 #include <Eigen/Core>
+#include <Eigen/SparseCore>
 #include <memory>
 #include <span>
 #include <utility>
@@ -98,6 +99,13 @@ class MultibodySystem {
   // Largest violation of a rigid joint's position constraints at y (0 without any), and
   // which joint has it.
   double constraint_violation(double t, const Eigen::VectorXd& y, int* joint = nullptr) const;
+
+  // The structural non-zeros of d rhs / d y (values 1), following the body graph: a body's
+  // accelerations depend on its own state and on the states of the bodies it shares a
+  // joint or a force element with, and a rigid cluster's bodies on all that any of them
+  // depends on; its position and quaternion rates on its own velocities and orientation. The implicit methods difference the Jacobian by
+  // this pattern's column colouring and factor it as a sparse matrix.
+  Eigen::SparseMatrix<double> jacobian_pattern() const;
 
   // The three phases of rhs(), public so the benchmark can time them apart.
   void update_kinematics(double t, const Eigen::VectorXd& y);

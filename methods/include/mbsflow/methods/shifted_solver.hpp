@@ -1,8 +1,10 @@
 #pragma once
 // Factorisation and solution of (I - gamma J) x = b, J sparse, gamma real or complex: the
 // linear systems of the simplified Newton iterations. The storage follows J's structure:
-// dense LU for small systems, band LU when J is banded, sparse LU (Eigen's SparseLU with
-// COLAMD ordering) otherwise.
+// dense LU for small systems, band LU when J is banded, sparse LU otherwise: SuiteSparse
+// KLU by default (faster on the multibody and heat matrices, docs/methods.md), or Eigen's
+// SparseLU with COLAMD ordering. Both keep their symbolic analysis while the pattern of
+// the matrix stays the same.
 #include "mbsflow/error.hpp"
 #include <Eigen/Core>
 #include <Eigen/LU>
@@ -11,12 +13,13 @@
 #include <complex>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "mbsflow/methods/banded_lu.hpp"
 
 namespace mbsflow {
 
-enum class LinearSolverKind { automatic, dense, banded, sparse };
+enum class LinearSolverKind { automatic, dense, banded, klu, sparselu };
 const char* to_string(LinearSolverKind k);
 LinearSolverKind linear_solver_from_string(const std::string& name);  // throws InputError
 
@@ -25,8 +28,11 @@ struct Bandwidth {
 };
 Bandwidth bandwidth_of(const Eigen::SparseMatrix<double>& j);
 
-// automatic: dense up to 100 equations, banded when lower + upper <= 64, sparse otherwise.
+// automatic: dense up to 100 equations, banded when lower + upper <= 64, klu otherwise.
 LinearSolverKind choose_linear_solver(const Eigen::SparseMatrix<double>& j, LinearSolverKind wanted);
+
+template <class Scalar>
+class KluLu;  // klu_lu.hpp
 
 template <class Scalar>
 class ShiftedSolver {
@@ -36,12 +42,17 @@ class ShiftedSolver {
   void factorize(const Eigen::SparseMatrix<double>& j, Scalar gamma, LinearSolverKind kind);
   void solve(Vector& b) const;  // in place
   LinearSolverKind kind() const { return kind_; }
+  long symbolic_analyses() const { return analyses_; }  // sparse kinds: pattern analyses so far
 
  private:
   LinearSolverKind kind_ = LinearSolverKind::dense;
   Eigen::PartialPivLU<Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>> dense_;
   BandedLU<Scalar> band_;
+  Eigen::SparseMatrix<Scalar> matrix_;  // I - gamma J, sparse kinds
+  std::vector<int> outer_, inner_;       // the pattern the sparse LU analysed
   std::shared_ptr<Eigen::SparseLU<Eigen::SparseMatrix<Scalar>, Eigen::COLAMDOrdering<int>>> sparse_;
+  std::shared_ptr<KluLu<Scalar>> klu_;
+  long analyses_ = 0;
 };
 
 extern template class ShiftedSolver<double>;

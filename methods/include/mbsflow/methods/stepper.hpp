@@ -42,10 +42,12 @@ struct StepperSettings {
   double rtol = 1e-6, atol = 1e-8;
   int threads = 1;      // threads inside one step (the implicit methods' stage nodes); 0: all cores
   std::string variant;  // method-specific: tirk's tableau, colloc's "m,s[,order]"; empty: the default
+  std::string linear_solver = "auto";  // implicit methods: auto, dense, banded, klu or sparselu
 };
 
 struct StepperStats {
   long accepted = 0, rejected = 0, evaluations = 0;
+  long jacobians = 0, factorizations = 0;  // implicit methods (evaluations include the Jacobians' differences)
 };
 
 class Stepper {

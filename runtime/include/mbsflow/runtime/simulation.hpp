@@ -19,6 +19,7 @@ namespace mbsflow {
 struct RunOptions {
   Method method = Method::rk4;  // any method of the stepper registry (mbsflow/methods/stepper.hpp)
   std::string variant;           // its variant (colloc: "m,s[,order]", tirk: the tableau); empty: default
+  std::string linear_solver = "auto";  // implicit methods' Newton matrices: auto, dense, banded, klu, sparselu
   double t_start = 0.0;
   double t_end = 1.0;
   double step = 1e-3;    // fixed-step methods (RK4): the step; adaptive ones: the first step
@@ -39,6 +40,7 @@ struct RunSummary {
   long steps = 0;
   long rejected = 0;
   long evaluations = 0;
+  long jacobians = 0, factorizations = 0;  // implicit methods on a whole model
   long snapshots = 0;
   double t_last_snapshot = 0.0;
   double wall_seconds = 0.0;

@@ -1,0 +1,72 @@
+#include "klu_lu.hpp"
+
+#include <klu.h>
+
+#include "mbsflow/error.hpp"
+
+namespace mbsflow {
+
+template <class Scalar>
+struct KluLu<Scalar>::Handles {
+  klu_common common{};
+  klu_symbolic* symbolic = nullptr;
+  klu_numeric* numeric = nullptr;
+  static constexpr bool complex = !std::is_same_v<Scalar, double>;
+  void free_numeric() {
+    if (!numeric) return;
+    if constexpr (complex)
+      klu_z_free_numeric(&numeric, &common);
+    else
+      klu_free_numeric(&numeric, &common);
+  }
+  ~Handles() {
+    free_numeric();
+    if (symbolic) klu_free_symbolic(&symbolic, &common);
+  }
+};
+
+template <class Scalar>
+KluLu<Scalar>::KluLu() : h_(std::make_unique<Handles>()) {
+  klu_defaults(&h_->common);
+}
+
+template <class Scalar>
+KluLu<Scalar>::~KluLu() = default;
+
+template <class Scalar>
+void KluLu<Scalar>::analyze(const Eigen::SparseMatrix<Scalar>& m) {
+  h_->free_numeric();
+  if (h_->symbolic) klu_free_symbolic(&h_->symbolic, &h_->common);
+  h_->symbolic = klu_analyze(static_cast<int>(m.rows()), const_cast<int*>(m.outerIndexPtr()),
+                             const_cast<int*>(m.innerIndexPtr()), &h_->common);
+  if (!h_->symbolic) throw RunError("sparse LU (KLU): the analysis of the Newton matrix failed");
+}
+
+template <class Scalar>
+void KluLu<Scalar>::factorize(const Eigen::SparseMatrix<Scalar>& m) {
+  h_->free_numeric();
+  int* ap = const_cast<int*>(m.outerIndexPtr());
+  int* ai = const_cast<int*>(m.innerIndexPtr());
+  auto* values = reinterpret_cast<double*>(const_cast<Scalar*>(m.valuePtr()));
+  if constexpr (Handles::complex)
+    h_->numeric = klu_z_factor(ap, ai, values, h_->symbolic, &h_->common);
+  else
+    h_->numeric = klu_factor(ap, ai, values, h_->symbolic, &h_->common);
+  if (!h_->numeric || h_->common.status == KLU_SINGULAR) throw RunError("Newton matrix is singular (sparse LU, KLU)");
+}
+
+template <class Scalar>
+void KluLu<Scalar>::solve(Eigen::Matrix<Scalar, Eigen::Dynamic, 1>& b) const {
+  const int n = static_cast<int>(b.size());
+  auto* values = reinterpret_cast<double*>(b.data());
+  std::lock_guard lock(solving_);
+  if constexpr (Handles::complex)
+    klu_z_solve(h_->symbolic, h_->numeric, n, 1, values, &h_->common);
+  else
+    klu_solve(h_->symbolic, h_->numeric, n, 1, values, &h_->common);
+}
+
+template class KluLu<double>;
+template class KluLu<std::complex<double>>;
+
+}  // namespace mbsflow

@@ -1,0 +1,35 @@
+#pragma once
+// SuiteSparse KLU (Davis & Palamadai Natarajan) behind one small class, real or complex:
+// the sparse LU of the Newton matrices. analyze() (block triangular form, AMD ordering)
+// is needed only when the pattern changes; factorize() redoes the numbers.
+#include <Eigen/SparseCore>
+#include <complex>
+#include <memory>
+#include <mutex>
+
+namespace mbsflow {
+
+template <class Scalar>
+class KluLu {
+ public:
+  KluLu();
+  ~KluLu();
+  KluLu(const KluLu&) = delete;
+  KluLu& operator=(const KluLu&) = delete;
+  // m: compressed, column-major. Both throw RunError on failure (a singular matrix).
+  void analyze(const Eigen::SparseMatrix<Scalar>& m);
+  void factorize(const Eigen::SparseMatrix<Scalar>& m);
+  // In place. KLU solves in the factor's own workspace, so concurrent solves with one
+  // factor (stages sharing a diagonal value) take turns.
+  void solve(Eigen::Matrix<Scalar, Eigen::Dynamic, 1>& b) const;
+
+ private:
+  struct Handles;
+  std::unique_ptr<Handles> h_;
+  mutable std::mutex solving_;
+};
+
+extern template class KluLu<double>;
+extern template class KluLu<std::complex<double>>;
+
+}  // namespace mbsflow
