@@ -28,7 +28,7 @@ Action add_bench(CLI::App& app) {
   sub->add_option("--threads", a->threads, "parallel: up to this many threads (default: all cores)")->check(CLI::PositiveNumber);
   sub->add_option("--seconds", a->seconds, "rhs: time per measurement")->check(CLI::PositiveNumber);
   sub->add_option("--steps", a->steps, "output: steps per run")->check(CLI::PositiveNumber);
-  sub->add_option("--repeats", a->repeats, "output, parallel, cluster: runs per case; the fastest counts")->check(CLI::PositiveNumber);
+  sub->add_option("--repeats", a->repeats, "output, parallel, cluster, iftomm: runs per case; the fastest counts")->check(CLI::PositiveNumber);
   sub->add_option("--dir", a->dir, "output: folder for the results files (the disk being measured); iftomm: the example models (default examples/models)");
   sub->add_option("--csv", a->csv, "CSV file to write (default bench_WHAT.csv)");
   return [a] {

@@ -1,6 +1,7 @@
 #pragma once
 // Helpers shared by the tests: single bodies and joints, fixed-step integration.
 #include <Eigen/Core>
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -11,6 +12,14 @@
 #include "convergence.hpp"
 
 namespace mbsflow::test {
+
+// Largest distance between the centres of mass of the same body in two states.
+inline double position_gap(const MultibodySystem& sys, const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+  const StateLayout& l = sys.layout();
+  double gap = 0.0;
+  for (Eigen::Index i = 0; i < l.bodies; ++i) gap = std::max(gap, (a.segment<3>(l.position(i)) - b.segment<3>(l.position(i))).norm());
+  return gap;
+}
 
 inline Body make_body(const char* name, double mass, Vec6 inertia, Vec3 position = {}) {
   Body b;

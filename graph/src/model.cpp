@@ -47,10 +47,6 @@ Quat rest_frame2(const Model& model, const Joint& joint) {
   return {f2[0], f2[1], f2[2], f2[3]};
 }
 
-}  // namespace mbsflow
-
-namespace mbsflow {
-
 const char* joint_type_name(JointType t) {
   switch (t) {
     case JointType::bushing: return "bushing";

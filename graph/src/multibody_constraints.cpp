@@ -349,8 +349,9 @@ void MultibodySystem::add_reactions(Eigen::VectorXd& out) {
       for (int r = 0; r < cj.rows; ++r)
         add_row_wrench(rc.rows[static_cast<std::size_t>(cj.first_row + r)], k.lambda[c][cj.first_row + r], w);
       const CompiledJoint& j = joints_[static_cast<std::size_t>(cj.joint)];
-      if (constraints_->geometry[static_cast<std::size_t>(j.kinematic)].motor.kind != JointMotor::Kind::none &&
-          constraints_->geometry[static_cast<std::size_t>(j.kinematic)].motor.kind != JointMotor::Kind::effort)
+      // A position or velocity motor is the joint's last row: its multiplier is the effort.
+      const JointMotor::Kind motor = k.geometry[static_cast<std::size_t>(j.kinematic)].motor.kind;
+      if (motor != JointMotor::Kind::none && motor != JointMotor::Kind::effort)
         motor_effort_[cj.joint] = k.lambda[c][cj.first_row + cj.rows - 1];
       const Eigen::Vector3d arm = rot_[static_cast<std::size_t>(j.b)] * j.pb;
       const Eigen::Index at = 6 * static_cast<Eigen::Index>(cj.joint);

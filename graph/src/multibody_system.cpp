@@ -305,8 +305,7 @@ void MultibodySystem::joint_wrenches(double t, const Eigen::VectorXd& y, Eigen::
 
 // Gravity, loads, joints and force elements on body i: force and torque (world, about
 // the centre of mass), summed in the fixed order of the class comment.
-void MultibodySystem::applied_wrench(Eigen::Index i, double t, Eigen::Vector3d& force,
-                                                                    Eigen::Vector3d& torque) const {
+void MultibodySystem::applied_wrench(Eigen::Index i, double t, Eigen::Vector3d& force, Eigen::Vector3d& torque) const {
   const auto bi = static_cast<std::size_t>(i);
   const Eigen::Matrix3d& r = rot_[bi];
   force = mass_[bi] * gravity_;
@@ -340,9 +339,8 @@ void MultibodySystem::applied_wrench(Eigen::Index i, double t, Eigen::Vector3d& 
   }
 }
 
-void MultibodySystem::write_derivative(Eigen::Index i, double t, const Eigen::VectorXd& y,
-                                                                       Eigen::VectorXd& dydt, const Eigen::Vector3d& force,
-                                                                       const Eigen::Vector3d& torque) const {
+void MultibodySystem::write_derivative(Eigen::Index i, double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt,
+                                       const Eigen::Vector3d& force, const Eigen::Vector3d& torque) const {
   const auto bi = static_cast<std::size_t>(i);
   const int drv = driver_of_body_[bi];
   if (drv >= 0) {

@@ -10,7 +10,7 @@ namespace mbsflow {
 namespace {
 constexpr int dense_limit = 48;        // rows up to which the dense factorisation is used
 constexpr double relative_shift = 1e-6;  // eps / diagonal entry (A02 error vs eps: docs/joints.md)
-constexpr int refinements = 2;  // eps / largest diagonal entry
+constexpr int refinements = 2;          // iterative refinement steps against the unshifted S
 }  // namespace
 
 RigidCluster::RigidCluster(std::vector<int> bodies, std::vector<ClusterJoint> joints)
@@ -130,7 +130,7 @@ void RigidCluster::factor() {
     block_jw_.resize(k, 6);
     block_jw_.leftCols<3>() = inv_mass[b] * block_j_.leftCols<3>();
     block_jw_.rightCols<3>() = block_j_.rightCols<3>() * inv_inertia[b];  // symmetric
-    // The lower triangle only, straight into the matrix (the product is symmetric).
+    // The block is symmetric: each pair q <= p once, scattered into S's upper triangle.
     const int* to = scatter_[b].data();
     for (Eigen::Index p = 0; p < k; ++p)
       for (Eigen::Index q = 0; q <= p; ++q) value[*to++] += block_jw_.row(p).dot(block_j_.row(q));

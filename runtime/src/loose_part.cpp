@@ -45,7 +45,7 @@ LoosePart::LoosePart(const Model& model, const Submodel& sub, const RunOptions& 
   system_.size = part.system.dimension();
   system_.rhs = [this](double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) { ghosted_rhs(t, y, dydt); };
   system_.after_step = [this](double t, Eigen::VectorXd& y) { part.system.after_step(t, y); };
-  system_.sparsity = part.system.jacobian_pattern();
+  system_.sparsity = [this] { return part.system.jacobian_pattern(); };
   RunOptions mine = o;
   mine.method = method;
   stepper_ = stepper_entry(method).make(system_, stepper_settings(mine));

@@ -12,7 +12,7 @@ inline StepperSystem stepper_system(MultibodySystem& sys) {
   s.size = sys.dimension();
   s.rhs = [&sys](double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) { sys.rhs(t, y, dydt); };
   s.after_step = [&sys](double t, Eigen::VectorXd& y) { sys.after_step(t, y); };
-  s.sparsity = sys.jacobian_pattern();
+  s.sparsity = [&sys] { return sys.jacobian_pattern(); };
   return s;
 }
 

@@ -8,18 +8,13 @@
 #include "mbsflow/runtime/loose_coupling.hpp"
 #include "mbsflow/runtime/simulation.hpp"
 #include "memory_sink.hpp"
+#include "test_support.hpp"
 
 using namespace mbsflow;
 
 namespace {
 
-// Largest position difference over all bodies at the end.
-double position_gap(const MultibodySystem& sys, const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
-  const StateLayout& l = sys.layout();
-  double gap = 0.0;
-  for (Eigen::Index i = 0; i < l.bodies; ++i) gap = std::max(gap, (a.segment<3>(l.position(i)) - b.segment<3>(l.position(i))).norm());
-  return gap;
-}
+using test::position_gap;
 
 // A model run for `steps` steps of a fraction of its stable step (macro steps well inside
 // the joints' periods: explicit coupling of stiff joints over longer ones is unstable, as

@@ -103,8 +103,9 @@ class MultibodySystem {
   // The structural non-zeros of d rhs / d y (values 1), following the body graph: a body's
   // accelerations depend on its own state and on the states of the bodies it shares a
   // joint or a force element with, and a rigid cluster's bodies on all that any of them
-  // depends on; its position and quaternion rates on its own velocities and orientation. The implicit methods difference the Jacobian by
-  // this pattern's column colouring and factor it as a sparse matrix.
+  // depends on; its position and quaternion rates on its own velocities and orientation.
+  // The implicit methods difference the Jacobian by this pattern's column colouring and
+  // factor it as a sparse matrix.
   Eigen::SparseMatrix<double> jacobian_pattern() const;
 
   // The three phases of rhs(), public so the benchmark can time them apart.

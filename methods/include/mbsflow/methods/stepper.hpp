@@ -34,7 +34,9 @@ struct StepperSystem {
   // Optional: the Jacobian df/dy in a matrix of pattern `sparsity` (implicit methods;
   // without it they take finite differences, grouped by the pattern's column colouring).
   std::function<void(double t, const Eigen::VectorXd& y, Eigen::SparseMatrix<double>& jac)> jacobian;
-  std::optional<Eigen::SparseMatrix<double>> sparsity;
+  // Optional: makes that pattern. Called only by the methods that use a Jacobian, once
+  // each, so the explicit methods never pay for building it.
+  std::function<Eigen::SparseMatrix<double>()> sparsity;
 };
 
 struct StepperSettings {
