@@ -21,6 +21,10 @@ struct BenchArgs {
   std::vector<std::string> problems;  // ode: default hnw, b1, heat1000, heat100000, heat1000000
   std::vector<double> tolerances;     // ode: default 1e-4, 1e-6, 1e-8, 1e-10
   std::string tableau;                // iterations: default radau3
+  std::vector<double> frequencies;    // stiff: the chain's bushing frequencies (default 1e3, 1e4, 1e5 rad/s)
+  double t_end = 0;                   // stiff: model time (default per model)
+  double reference_tol = 1e-8;        // stiff: tolerance of the reference run
+  double target_error = 1e-3;         // stiff: the error at which methods are compared
 };
 
 // The CSV file of a benchmark: --csv, or bench_WHAT.csv; InputError if it cannot be written.
@@ -43,6 +47,7 @@ int bench_cluster(const BenchArgs& a);
 int bench_latency(const BenchArgs& a);
 int bench_ode(const BenchArgs& a);
 int bench_iterations(const BenchArgs& a);
+int bench_stiff(const BenchArgs& a);
 
 using BenchClock = std::chrono::steady_clock;
 inline double seconds_since(BenchClock::time_point start) {

@@ -1,13 +1,6 @@
 // mbsflow bench ode: work-precision of the block methods and the triangularised Runge-Kutta
 // methods (Radau IIA s = 3, every iteration scheme) against SUNDIALS CVODE (BDF with dense
 // or band Newton) and Boost.Odeint (rk4, dopri5) on the seed's problems, in one run.
-#include <cvode/cvode.h>
-#include <nvector/nvector_serial.h>
-#include <sunlinsol/sunlinsol_band.h>
-#include <sunlinsol/sunlinsol_dense.h>
-#include <sunmatrix/sunmatrix_band.h>
-#include <sunmatrix/sunmatrix_dense.h>
-
 #include <boost/numeric/odeint.hpp>
 #include <cmath>
 #include <cstdio>
@@ -15,6 +8,7 @@
 #include <iostream>
 
 #include "bench.hpp"
+#include "cvode_driver.hpp"
 #include "mbsflow/methods/block_integrator.hpp"
 #include "mbsflow/methods/shifted_solver.hpp"
 #include "mbsflow/methods/tirk_integrator.hpp"
@@ -39,79 +33,17 @@ double error_at(const OdeProblem& p, double t, const double* y) {
 }
 
 // CVODE: BDF, Newton with the problem's exact Jacobian, band solver for banded systems.
-struct CvodeData {
-  const OdeProblem* p;
-  Eigen::VectorXd y, f;
-  Eigen::SparseMatrix<double> jac;
-  bool band;
-};
-int cvode_rhs(sunrealtype t, N_Vector y, N_Vector ydot, void* data) {
-  auto* d = static_cast<CvodeData*>(data);
-  d->y = Eigen::Map<Eigen::VectorXd>(N_VGetArrayPointer(y), d->p->size);
-  d->p->evaluate(t, d->y, d->f);
-  Eigen::Map<Eigen::VectorXd>(N_VGetArrayPointer(ydot), d->p->size) = d->f;
-  return d->f.allFinite() ? 0 : 1;
-}
-int cvode_jac(sunrealtype t, N_Vector y, N_Vector, SUNMatrix j, void* data, N_Vector, N_Vector, N_Vector) {
-  auto* d = static_cast<CvodeData*>(data);
-  d->y = Eigen::Map<Eigen::VectorXd>(N_VGetArrayPointer(y), d->p->size);
-  d->p->jacobian(t, d->y, d->jac);
-  SUNMatZero(j);
-  for (Eigen::Index c = 0; c < d->jac.outerSize(); ++c)
-    for (Eigen::SparseMatrix<double>::InnerIterator it(d->jac, c); it; ++it) {
-      if (d->band)
-        SM_ELEMENT_B(j, it.row(), it.col()) = it.value();
-      else
-        SM_ELEMENT_D(j, it.row(), it.col()) = it.value();
-    }
-  return 0;
-}
-
-Outcome run_cvode(const OdeProblem& p, double tol) {
+Outcome run_cvode_bdf(const OdeProblem& p, double tol) {
   Outcome o;
-  SUNContext ctx;
-  SUNContext_Create(nullptr, &ctx);
-  N_Vector y = N_VNew_Serial(p.size, ctx);
-  Eigen::Map<Eigen::VectorXd>(N_VGetArrayPointer(y), p.size) = p.y0;
-  CvodeData d{&p, Eigen::VectorXd(p.size), Eigen::VectorXd(p.size), *p.sparsity, p.size > 100};
-  const Bandwidth bw = bandwidth_of(*p.sparsity);
-  SUNMatrix a = d.band ? SUNBandMatrix(p.size, bw.upper, bw.lower, ctx) : SUNDenseMatrix(p.size, p.size, ctx);
-  SUNLinearSolver ls = d.band ? SUNLinSol_Band(y, a, ctx) : SUNLinSol_Dense(y, a, ctx);
-  void* mem = CVodeCreate(CV_BDF, ctx);
-  CVodeInit(mem, cvode_rhs, p.t0, y);
-  CVodeSStolerances(mem, tol, tol);
-  CVodeSetUserData(mem, &d);
-  CVodeSetLinearSolver(mem, ls, a);
-  CVodeSetJacFn(mem, cvode_jac);
-  CVodeSetMaxNumSteps(mem, 10'000'000);
-  CVodeSetStopTime(mem, p.t_end);
-  CVodeSetMaxHnilWarns(mem, -1);  // its step-underflow warnings: reported below instead
-  const auto start = Clock::now();
-  sunrealtype t = p.t0;
-  o.ok = true;
-  int stalled = 0;  // CVODE goes on when t + h == t; count steps that do not move
-  while (t < p.t_end - 1e-12 * std::max(1.0, std::abs(p.t_end))) {
-    const sunrealtype before = t;
-    const int flag = CVode(mem, p.t_end, y, &t, CV_ONE_STEP);
-    stalled = t == before ? stalled + 1 : 0;
-    if (flag < 0 || stalled > 100) {
-      o.ok = false;
-      o.note = (flag < 0 ? "CVODE flag " + std::to_string(flag) : std::string("step size underflow")) + " at t = " + std::to_string(t);
-      break;
-    }
-    o.max_error = std::max(o.max_error, error_at(p, t, N_VGetArrayPointer(y)));
-  }
-  o.seconds = std::chrono::duration<double>(Clock::now() - start).count();
-  long nfe = 0, nst = 0;
-  CVodeGetNumRhsEvals(mem, &nfe);
-  CVodeGetNumSteps(mem, &nst);
-  o.evaluations = nfe;
-  o.steps = nst;
-  CVodeFree(&mem);
-  SUNLinSolFree(ls);
-  SUNMatDestroy(a);
-  N_VDestroy(y);
-  SUNContext_Free(&ctx);
+  const CvodeLinearSolver solver = p.size > 100 ? CvodeLinearSolver::band : CvodeLinearSolver::dense;
+  const CvodeOutcome c = run_cvode(p, tol, tol, solver, {}, [&](double t, const double* y) {
+    o.max_error = std::max(o.max_error, error_at(p, t, y));
+  });
+  o.ok = c.ok;
+  o.seconds = c.seconds;
+  o.evaluations = c.evaluations;
+  o.steps = c.steps;
+  o.note = c.note;
   return o;
 }
 
@@ -210,7 +142,7 @@ int bench_ode(const BenchArgs& a) {
     };
     for (std::size_t k = 0; k < tols.size(); ++k) {
       const double tol = tols[k];
-      row(std::string("cvode-bdf-") + (p.size > 100 ? "band" : "dense"), 1, tol, run_cvode(p, tol));
+      row(std::string("cvode-bdf-") + (p.size > 100 ? "band" : "dense"), 1, tol, run_cvode_bdf(p, tol));
       for (int s : {2, 3})
         for (int threads : {1, 2}) row("colloc-s" + std::to_string(s), threads, tol, run_colloc(p, tol, s, threads));
       for (TirkIteration it : {TirkIteration::newton_triangular, TirkIteration::newton_diagonal, TirkIteration::triangular,

@@ -16,20 +16,32 @@ Action add_bench(CLI::App& app) {
                   "cluster: 2 threads vs 2 processes over tcp and ipc, exchange cost, predicted speedup on a cluster; "
                   "latency: tight vs loose coupling on 2 processes as the network gets slower; "
                   "ode: work-precision of the block and tirk methods against CVODE and Boost.Odeint on the seed's problems; "
-                  "iterations: iteration error after 1, 2, ... iterations of the tirk schemes (seed 004's claim)")
-      ->check(CLI::IsMember({"rhs", "output", "parallel", "cluster", "latency", "ode", "iterations", "iftomm"}));
+                  "iterations: iteration error after 1, 2, ... iterations of the tirk schemes (seed 004's claim); "
+                  "iftomm: the IFToMM examples against their reduced equations; "
+                  "stiff: work-precision on stiff multibody models (chain at several bushing frequencies, train, A05) "
+                  "against RK4 at its stable step, DOPRI5 and CVODE with KLU")
+      ->check(CLI::IsMember({"rhs", "output", "parallel", "cluster", "latency", "ode", "iterations", "iftomm", "stiff"}));
   sub->add_option("--problems", a->problems,
-                  "ode, iterations: hnw, b1, heatN (default ode: hnw,b1,heat1000,heat100000,heat1000000; iterations: hnw,b1,heat200)")
+                  "ode, iterations: hnw, b1, heatN (default ode: hnw,b1,heat1000,heat100000,heat1000000; iterations: hnw,b1,heat200); "
+                  "stiff: chain, train, a05 (default all)")
       ->delimiter(',');
   sub->add_option("--tableau", a->tableau, "iterations: the tirk tableau (default radau3)");
-  sub->add_option("--tolerances", a->tolerances, "ode: tolerances (default 1e-4,1e-6,1e-8,1e-10)")->delimiter(',');
-  sub->add_option("--bodies", a->bodies, "Chain sizes (rhs: 2000,6500,100000; output: 6500; parallel, cluster: 2000,4000,6500)")
+  sub->add_option("--tolerances", a->tolerances, "ode: tolerances (default 1e-4,1e-6,1e-8,1e-10); stiff: rtol = atol (default 1e-1,1e-2,1e-3,1e-4)")
+      ->delimiter(',');
+  sub->add_option("--frequencies", a->frequencies, "stiff: the chain's bushing frequencies in rad/s (default 1e3,1e4,1e5)")
+      ->delimiter(',')
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--t-end", a->t_end, "stiff: model time in s (default: chain 0.2, train 1, A05 its file's 10)")->check(CLI::PositiveNumber);
+  sub->add_option("--reference-tol", a->reference_tol, "stiff: tolerance of the tirk reference run")->check(CLI::PositiveNumber);
+  sub->add_option("--target-error", a->target_error, "stiff: the position error (m) at which the summary compares methods")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--bodies", a->bodies, "Chain sizes (rhs: 2000,6500,100000; output: 6500; parallel, cluster: 2000,4000,6500; stiff: 2000)")
       ->delimiter(',');
   sub->add_option("--threads", a->threads, "parallel: up to this many threads (default: all cores)")->check(CLI::PositiveNumber);
   sub->add_option("--seconds", a->seconds, "rhs: time per measurement")->check(CLI::PositiveNumber);
   sub->add_option("--steps", a->steps, "output: steps per run")->check(CLI::PositiveNumber);
   sub->add_option("--repeats", a->repeats, "output, parallel, cluster, iftomm: runs per case; the fastest counts")->check(CLI::PositiveNumber);
-  sub->add_option("--dir", a->dir, "output: folder for the results files (the disk being measured); iftomm: the example models (default examples/models)");
+  sub->add_option("--dir", a->dir, "output: folder for the results files (the disk being measured); iftomm, stiff: the example models (default examples/models)");
   sub->add_option("--csv", a->csv, "CSV file to write (default bench_WHAT.csv)");
   return [a] {
     if (a->what == "rhs") return bench_rhs(*a);
@@ -39,6 +51,7 @@ Action add_bench(CLI::App& app) {
     if (a->what == "ode") return bench_ode(*a);
     if (a->what == "iterations") return bench_iterations(*a);
     if (a->what == "iftomm") return bench_iftomm(*a);
+    if (a->what == "stiff") return bench_stiff(*a);
     return bench_parallel(*a);
   };
 }

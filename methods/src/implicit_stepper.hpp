@@ -44,6 +44,11 @@ class ImplicitStepper : public Stepper {
     settings_.initial_step = o.step;
     settings_.finite_difference_jacobian = !s.jacobian;
     settings_.linear_solver = linear_solver_from_string(o.linear_solver);
+    if (o.fixed_step) {
+      if (!(o.step > 0)) throw InputError("a fixed-step run needs a positive step");
+      settings_.fixed_step = o.step;
+      settings_.max_iterations = 100;  // no step to shorten: the iteration may take longer to converge
+    }
   }
   void count() {
     const auto& st = integrator_->stats();

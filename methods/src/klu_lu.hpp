@@ -1,7 +1,8 @@
 #pragma once
 // SuiteSparse KLU (Davis & Palamadai Natarajan) behind one small class, real or complex:
 // the sparse LU of the Newton matrices. analyze() (block triangular form, AMD ordering)
-// is needed only when the pattern changes; factorize() redoes the numbers.
+// is needed only when the pattern changes; factorize() redoes the numbers, reusing the
+// last pivot sequence while it stays sound (refactorizations() counts those).
 #include <Eigen/SparseCore>
 #include <complex>
 #include <memory>
@@ -22,11 +23,13 @@ class KluLu {
   // In place. KLU solves in the factor's own workspace, so concurrent solves with one
   // factor (stages sharing a diagonal value) take turns.
   void solve(Eigen::Matrix<Scalar, Eigen::Dynamic, 1>& b) const;
+  long refactorizations() const { return refactorizations_; }
 
  private:
   struct Handles;
   std::unique_ptr<Handles> h_;
   mutable std::mutex solving_;
+  long refactorizations_ = 0;
 };
 
 extern template class KluLu<double>;

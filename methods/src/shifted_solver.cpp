@@ -42,6 +42,53 @@ LinearSolverKind choose_linear_solver(const Eigen::SparseMatrix<double>& j, Line
   return b.lower + b.upper <= 64 ? LinearSolverKind::banded : LinearSolverKind::klu;
 }
 
+// matrix_ = I - gamma J. While J keeps its pattern only the numbers are written, through
+// the slots found when the pattern first came; true when the sparse LU of the current kind
+// has already analysed that pattern.
+template <class Scalar>
+bool ShiftedSolver<Scalar>::fill_sparse(const Eigen::SparseMatrix<double>& j, Scalar gamma) {
+  const Eigen::Index n = j.rows(), nnz = j.nonZeros();
+  const int* outer = j.outerIndexPtr();
+  const int* inner = j.innerIndexPtr();
+  const bool same = j.isCompressed() && static_cast<Eigen::Index>(slot_.size()) == nnz &&
+                    std::equal(j_outer_.begin(), j_outer_.end(), outer, outer + n + 1) &&
+                    std::equal(j_inner_.begin(), j_inner_.end(), inner, inner + nnz);
+  if (!same) {
+    Eigen::SparseMatrix<Scalar> identity(n, n);
+    identity.setIdentity();
+    matrix_ = (-gamma) * j.template cast<Scalar>() + identity;
+    matrix_.makeCompressed();
+    slot_.clear();
+    diagonal_slot_.assign(static_cast<std::size_t>(n), 0);
+    j_outer_.clear();
+    j_inner_.clear();
+    if (j.isCompressed()) {
+      j_outer_.assign(outer, outer + n + 1);
+      j_inner_.assign(inner, inner + nnz);
+      slot_.reserve(static_cast<std::size_t>(nnz));
+      for (Eigen::Index c = 0; c < n; ++c) {
+        int at = matrix_.outerIndexPtr()[c];  // both columns are sorted by row
+        for (int k = outer[c]; k < outer[c + 1]; ++k) {
+          while (matrix_.innerIndexPtr()[at] != inner[k]) ++at;
+          slot_.push_back(at);
+        }
+        at = matrix_.outerIndexPtr()[c];
+        while (matrix_.innerIndexPtr()[at] != c) ++at;
+        diagonal_slot_[static_cast<std::size_t>(c)] = at;
+      }
+    }
+    sparse_.reset();
+    klu_.reset();
+    return false;
+  }
+  Scalar* v = matrix_.valuePtr();
+  std::fill(v, v + matrix_.nonZeros(), Scalar(0));
+  const double* jv = j.valuePtr();
+  for (Eigen::Index k = 0; k < nnz; ++k) v[slot_[static_cast<std::size_t>(k)]] = -gamma * jv[k];
+  for (int d : diagonal_slot_) v[d] += Scalar(1);
+  return kind_ == LinearSolverKind::klu ? klu_ != nullptr : sparse_ != nullptr;
+}
+
 template <class Scalar>
 void ShiftedSolver<Scalar>::factorize(const Eigen::SparseMatrix<double>& j, Scalar gamma, LinearSolverKind kind) {
   kind_ = kind == LinearSolverKind::automatic ? choose_linear_solver(j, kind) : kind;
@@ -66,22 +113,11 @@ void ShiftedSolver<Scalar>::factorize(const Eigen::SparseMatrix<double>& j, Scal
       break;
     }
     default: {
-      Eigen::SparseMatrix<Scalar> identity(n, n);
-      identity.setIdentity();
-      matrix_ = (-gamma) * j.template cast<Scalar>() + identity;
-      matrix_.makeCompressed();
-      const int* outer = matrix_.outerIndexPtr();
-      const int* inner = matrix_.innerIndexPtr();
-      const bool analysed = (kind_ == LinearSolverKind::klu ? klu_ != nullptr : sparse_ != nullptr) &&
-                            std::equal(outer_.begin(), outer_.end(), outer, outer + n + 1) &&
-                            std::equal(inner_.begin(), inner_.end(), inner, inner + matrix_.nonZeros());
-      if (!analysed) {
-        outer_.assign(outer, outer + n + 1);
-        inner_.assign(inner, inner + matrix_.nonZeros());
-        ++analyses_;
-      }
+      const bool analysed = fill_sparse(j, gamma);
+      if (!analysed) ++analyses_;
       if (kind_ == LinearSolverKind::klu) {
         if (!analysed) {
+          sparse_.reset();
           klu_ = std::make_shared<KluLu<Scalar>>();
           klu_->analyze(matrix_);
         }
@@ -89,6 +125,7 @@ void ShiftedSolver<Scalar>::factorize(const Eigen::SparseMatrix<double>& j, Scal
         break;
       }
       if (!analysed) {
+        klu_.reset();
         sparse_ = std::make_shared<Eigen::SparseLU<Eigen::SparseMatrix<Scalar>, Eigen::COLAMDOrdering<int>>>();
         sparse_->analyzePattern(matrix_);
       }
@@ -97,6 +134,11 @@ void ShiftedSolver<Scalar>::factorize(const Eigen::SparseMatrix<double>& j, Scal
       break;
     }
   }
+}
+
+template <class Scalar>
+long ShiftedSolver<Scalar>::refactorizations() const {
+  return klu_ ? klu_->refactorizations() : 0;
 }
 
 template <class Scalar>

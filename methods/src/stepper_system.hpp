@@ -27,6 +27,7 @@ inline OdeProblem problem_of(const StepperSystem& s) {
   };
   OdeProblem p = make_ode_problem("system", 0.0, 1.0, Eigen::VectorXd::Zero(s.size), rhs);
   p.jacobian = s.jacobian;
+  p.describe = s.describe;
   if (s.sparsity) p.sparsity = s.sparsity();
   return p;
 }

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "annotated_node.hpp"
 
@@ -234,6 +235,34 @@ void TirkStages::finished() {
 }
 
 double TirkStages::correction() const { return *std::max_element(norm_.begin(), norm_.end()); }
+
+Eigen::Index TirkStages::worst_component() const {
+  if (!scale_) return -1;
+  // Where non-finite numbers came from: a derivative that is not finite at a finite
+  // iterate (the linear solve then spreads them to every coupled unknown).
+  for (const auto* pair : {&y_new_, &y_old_}) {
+    const auto& f = pair == &y_new_ ? f_new_ : f_old_;
+    for (int i = 0; i < si_; ++i) {
+      const auto at = static_cast<std::size_t>(i);
+      for (Eigen::Index k = 0; k < n_; ++k)
+        if (std::isfinite((*pair)[at](k)) && !std::isfinite(f[at](k))) return k;
+    }
+  }
+  Eigen::Index worst = -1;
+  double largest = -1;
+  for (int i = 0; i < si_; ++i) {
+    const auto at = static_cast<std::size_t>(i);
+    for (Eigen::Index k = 0; k < n_; ++k) {
+      const double c = std::abs(y_old_[at](k) - y_new_[at](k)) / (*scale_)(k);
+      const double key = std::isfinite(c) ? c : std::numeric_limits<double>::infinity();
+      if (key > largest) {
+        largest = key;
+        worst = k;
+      }
+    }
+  }
+  return worst;
+}
 
 bool TirkStages::at_rounding() const {
   return std::all_of(roundoff_.begin(), roundoff_.end(), [](char c) { return c != 0; });

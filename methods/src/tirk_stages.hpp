@@ -53,6 +53,10 @@ class TirkStages {
   // After finished(): the scaled size of the last correction, whether it was at rounding
   // level, whether some f was not finite, and |dF| / |dY| over the stages (0 if dY = 0).
   double correction() const;
+  // After finished(): the unknown that drove the iteration: one whose derivative was not
+  // finite at a finite iterate, else the one whose last correction was largest against
+  // its scale; -1 before any iteration.
+  Eigen::Index worst_component() const;
   bool at_rounding() const;
   bool f_failed() const;
   double lipschitz_ratio() const;

@@ -1,7 +1,9 @@
 #include "mbsflow/runtime/divergence.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <vector>
 
 #include "mbsflow/graph/stable_step.hpp"
 
@@ -29,6 +31,31 @@ std::optional<Divergence> find_divergence(const StateLayout& layout, const Eigen
     }
   }
   return std::nullopt;
+}
+
+std::string describe_unknown(const Model& model, Eigen::Index i) {
+  const auto n = static_cast<Eigen::Index>(model.bodies.size());
+  if (i < 0 || i >= 13 * n) return "unknown " + std::to_string(i);
+  static const char* const fields[] = {"position", "orientation", "velocity", "angular velocity"};
+  const Eigen::Index starts[] = {0, 3 * n, 7 * n, 10 * n, 13 * n};
+  int f = 0;
+  while (i >= starts[f + 1]) ++f;
+  const int width = f == 1 ? 4 : 3;
+  const auto body = static_cast<int>((i - starts[f]) / width);
+  const auto component = static_cast<int>((i - starts[f]) % width);
+  static const char* const xyz[] = {"x", "y", "z"}, *const wxyz[] = {"w", "x", "y", "z"};
+  std::string out = std::string("the ") + fields[f] + " (" + (f == 1 ? wxyz : xyz)[component] + ") of body '" +
+                    model.bodies[static_cast<std::size_t>(body)].name + "'";
+  std::vector<const Joint*> at;
+  for (const Joint& j : model.joints)
+    if (j.body1 == body || j.body2 == body) at.push_back(&j);
+  if (at.empty()) return out;
+  auto stiffest = [](const Joint* j) { return *std::max_element(j->stiffness.begin(), j->stiffness.end()); };
+  std::stable_sort(at.begin(), at.end(), [&](const Joint* a, const Joint* b) { return stiffest(a) > stiffest(b); });
+  out += at.size() == 1 ? " (joint" : " (joints, stiffest first,";
+  for (std::size_t k = 0; k < at.size() && k < 4; ++k) out += (k ? ", '" : " '") + at[k]->name + "'";
+  if (at.size() > 4) out += ", ...";
+  return out + ")";
 }
 
 std::string divergence_message(const Model& model, const Divergence& d, double t, Method method, double step) {

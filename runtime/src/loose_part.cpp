@@ -46,8 +46,10 @@ LoosePart::LoosePart(const Model& model, const Submodel& sub, const RunOptions& 
   system_.rhs = [this](double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) { ghosted_rhs(t, y, dydt); };
   system_.after_step = [this](double t, Eigen::VectorXd& y) { part.system.after_step(t, y); };
   system_.sparsity = [this] { return part.system.jacobian_pattern(); };
+  system_.describe = [this](Eigen::Index i) { return describe_unknown(part.system.model(), i); };
   RunOptions mine = o;
   mine.method = method;
+  mine.threads = 1;  // the submodels themselves run side by side
   stepper_ = stepper_entry(method).make(system_, stepper_settings(mine));
 }
 

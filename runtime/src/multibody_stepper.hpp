@@ -4,6 +4,7 @@
 // step the renormalised quaternions and prescribed motions.
 #include "mbsflow/graph/multibody_system.hpp"
 #include "mbsflow/methods/stepper.hpp"
+#include "mbsflow/runtime/divergence.hpp"
 
 namespace mbsflow {
 
@@ -13,6 +14,7 @@ inline StepperSystem stepper_system(MultibodySystem& sys) {
   s.rhs = [&sys](double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) { sys.rhs(t, y, dydt); };
   s.after_step = [&sys](double t, Eigen::VectorXd& y) { sys.after_step(t, y); };
   s.sparsity = [&sys] { return sys.jacobian_pattern(); };
+  s.describe = [&sys](Eigen::Index i) { return describe_unknown(sys.model(), i); };
   return s;
 }
 

@@ -36,7 +36,9 @@ RunSummary run(const Model& model, const RunPlan& plan, ResultSink* sink, RunSta
   if (loose) return run_loose(model, *plan.partition, plan.options, *loose, sink, &st.loose);
   if (plan.partition) return run_partitioned(model, *plan.partition, plan.options, plan.parallel, sink, &st.parallel);
   MultibodySystem system(model);
-  return run_simulation(system, plan.options, sink);
+  RunOptions whole = plan.options;
+  if (whole.threads == 0) whole.threads = plan.parallel.threads;
+  return run_simulation(system, whole, sink);
 }
 
 }  // namespace mbsflow

@@ -82,6 +82,8 @@ inline void check_options(const RunOptions& o) {
   if (!(o.t_end > o.t_start)) throw InputError("t_end must be greater than t_start");
   if (!(o.step > 0.0) || !std::isfinite(o.step)) throw InputError("the step must be a positive finite number");
   if (o.output_every < 1) throw InputError("output_every must be >= 1");
+  if (o.fixed_step && o.method != Method::tirk && o.method != Method::colloc)
+    throw InputError(std::string("a fixed step without error control is for colloc and tirk, not ") + o.method.name());
   if (o.output_interval < 0.0 || !std::isfinite(o.output_interval))
     throw InputError("the output interval must be a positive finite number");
   if (o.output_interval > 0.0 && !stepper_entry(o.method).adaptive) {
@@ -100,9 +102,10 @@ inline StepperSettings stepper_settings(const RunOptions& o) {
   s.step = o.step;
   s.rtol = o.rtol;
   s.atol = o.atol;
-  s.threads = 0;
+  s.threads = o.threads;
   s.variant = o.variant;
   s.linear_solver = o.linear_solver;
+  s.fixed_step = o.fixed_step;
   return s;
 }
 

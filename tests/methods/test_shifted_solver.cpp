@@ -50,11 +50,31 @@ TEST_CASE("sparse Newton matrices: KLU and SparseLU solve them and keep their an
       CHECK(residual_after_solve(complex, jacobian(300, 1.0 + k), std::complex<double>(0.1, 0.05 * k), kind) < 1e-10);
     }
     CHECK(real.kind() == kind);
+    // KLU refactors the later matrices with the first one's pivot sequence.
+    CHECK(real.refactorizations() == (kind == LinearSolverKind::klu ? 2 : 0));
     CHECK(real.symbolic_analyses() == 1);
     CHECK(complex.symbolic_analyses() == 1);
     CHECK(residual_after_solve(real, jacobian(200, 1.0), 0.3, kind) < 1e-10);  // another pattern
     CHECK(real.symbolic_analyses() == 2);
   }
   CHECK(linear_solver_from_string("klu") == LinearSolverKind::klu);
+}
+
+TEST_CASE("KLU picks new pivots when the old sequence meets a zero pivot", "[methods][linear]") {
+  // J full 2 x 2; with gamma = 1, I - J has a zero where the first factorisation pivoted.
+  auto j = [](double j00) {
+    Eigen::SparseMatrix<double> m(2, 2);
+    const std::vector<Eigen::Triplet<double>> t{{0, 0, j00}, {0, 1, 1.0}, {1, 0, 1.0}, {1, 1, -1.0}};
+    m.setFromTriplets(t.begin(), t.end());
+    m.makeCompressed();
+    return m;
+  };
+  ShiftedSolver<double> solver;
+  CHECK(residual_after_solve(solver, j(-1.0), 1.0, LinearSolverKind::klu) < 1e-12);
+  CHECK(residual_after_solve(solver, j(0.2), 1.0, LinearSolverKind::klu) < 1e-12);
+  CHECK(solver.refactorizations() == 1);
+  CHECK(residual_after_solve(solver, j(1.0), 1.0, LinearSolverKind::klu) < 1e-12);  // 1 - 1 = 0 on the diagonal
+  CHECK(solver.refactorizations() == 1);
+  CHECK(solver.symbolic_analyses() == 1);
   CHECK_THROWS_WITH(linear_solver_from_string("sparse"), Catch::Contains("auto, dense, banded, klu or sparselu"));
 }

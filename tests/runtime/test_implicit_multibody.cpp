@@ -1,8 +1,14 @@
-// The implicit methods evaluate their stages from several flow-graph nodes at once; on a
-// multibody model (whole, or a loosely coupled submodel) those evaluations share one
-// system's scratch, so they must not race: the same run gives the same numbers every time.
+// The implicit methods on multibody models. They evaluate their stages from several
+// flow-graph nodes at once; on a multibody model (whole, or a loosely coupled submodel)
+// those evaluations share one system's scratch, so they must not race: the same run gives
+// the same numbers every time. Their order with fixed steps, the energy of an undamped
+// stiff chain, and the message when the iteration cannot go on.
 #include <catch2/catch.hpp>
 
+#include <cmath>
+
+#include "convergence.hpp"
+#include "mbsflow/graph/force_element.hpp"
 #include "mbsflow/graph/generators.hpp"
 #include "mbsflow/runtime/loose_coupling.hpp"
 #include "mbsflow/runtime/simulation.hpp"
@@ -90,6 +96,9 @@ TEST_CASE("tirk on a stiff chain: sparse Jacobians by colour, KLU and SparseLU a
                << " evaluations");
   CHECK(s.jacobians > 0);
   CHECK(s.factorizations >= s.jacobians);
+  // The triangular iteration's own contraction rate does not call for a new Jacobian: it
+  // is kept over many steps (it was renewed at almost every step before).
+  CHECK(s.jacobians * 5 < s.steps);
   // Differencing by colour: far fewer evaluations per Jacobian than the 520 columns.
   CHECK(s.evaluations < 100 * (s.jacobians + s.steps));
   REQUIRE(runs[0].states.size() == reference.states.size());
@@ -102,4 +111,115 @@ TEST_CASE("tirk on a stiff chain: sparse Jacobians by colour, KLU and SparseLU a
   CHECK(solvers < 1e-6);  // roundoff apart, within the run's tolerance
   o.linear_solver = "lu";
   CHECK_THROWS_WITH(run_simulation(sys, o, nullptr), Catch::Contains("unknown linear solver 'lu'"));
+}
+
+namespace {
+
+// Final state of a fixed-step run of `method` with `steps` steps over the model's span.
+Eigen::VectorXd fixed_step_end(const Model& m, Method method, const std::string& variant, int steps) {
+  RunOptions o = options_from_model(m);
+  o.method = method;
+  o.variant = variant;
+  o.fixed_step = true;
+  o.step = (o.t_end - o.t_start) / steps;
+  o.rtol = o.atol = 1e-13;  // the iterations converge to rounding
+  o.threads = 1;
+  MultibodySystem sys(m);
+  return run_simulation(sys, o, nullptr).final_state;
+}
+
+}  // namespace
+
+TEST_CASE("implicit methods show their order on a multibody chain with fixed steps", "[runtime][implicit][order]") {
+  ChainParams chain;
+  chain.bodies = 4;
+  chain.stiffness = 1e3;  // joint modes near 90 rad/s: resolved by the steps below
+  Model m = make_chain(chain);
+  m.simulation.t_end = 0.2;
+  RunOptions ro = options_from_model(m);
+  ro.method = Method::dopri5;
+  ro.rtol = ro.atol = 1e-13;
+  MultibodySystem sys(m);
+  const Eigen::VectorXd reference = run_simulation(sys, ro, nullptr).final_state;
+  struct Case {
+    Method method;
+    const char* variant;
+    double order;
+    std::vector<int> steps;
+  };
+  // Radau IIA with 3 and 2 stages (orders 5 and 3); the 2-point collocation block, whose
+  // block end is superconvergent (order 4).
+  const std::vector<Case> cases = {{Method::tirk, "radau3", 5, {20, 40, 80}},
+                                   {Method::tirk, "radau2", 3, {40, 80, 160}},
+                                   {Method::colloc, "1,2", 4, {80, 160, 320}}};
+  for (const Case& c : cases) {
+    std::vector<double> h, e;
+    for (int n : c.steps) {
+      h.push_back(0.2 / n);
+      e.push_back(test::position_gap(sys, fixed_step_end(m, c.method, c.variant, n), reference));
+    }
+    const double slope = test::convergence_slope(h, e);
+    INFO(method_name(c.method) << " " << c.variant << ": errors " << e[0] << ", " << e[1] << ", " << e[2] << ", slope " << slope);
+    CHECK(std::abs(slope - c.order) < 0.3);
+  }
+  RunOptions bad = ro;
+  bad.fixed_step = true;
+  CHECK_THROWS_WITH(run_simulation(sys, bad, nullptr), Catch::Contains("for colloc and tirk, not dopri5"));
+}
+
+TEST_CASE("tirk keeps the energy of an undamped stiff chain bounded", "[runtime][implicit][energy]") {
+  ChainParams chain;
+  chain.bodies = 20;
+  Model m = make_chain(chain);
+  for (Joint& j : m.joints) set_bushing_from_frequency(m, j, 1e4, 0.0);  // no damping at all
+  RunOptions o = options_from_model(m);
+  o.method = Method::tirk;
+  o.t_end = o.t_start + 0.3;
+  o.output_interval = 0.01;
+  o.rtol = o.atol = 1e-5;
+  MultibodySystem sys(m);
+  test::MemorySink sink;
+  const RunSummary s = run_simulation(sys, o, &sink);
+  REQUIRE(sink.states.size() == 31);
+  const double e0 = sys.energy(o.t_start, sink.states.front()).total();
+  double highest = e0, lowest = e0, scale = 0;
+  for (std::size_t k = 0; k < sink.states.size(); ++k) {
+    const Energy e = sys.energy(sink.times[k], sink.states[k]);
+    highest = std::max(highest, e.total());
+    lowest = std::min(lowest, e.total());
+    scale = std::max(scale, e.kinetic);
+  }
+  INFO(s.steps << " steps; energy from " << lowest - e0 << " to " << highest - e0 << " J around E0, kinetic up to " << scale);
+  REQUIRE(scale > 1.0);  // the chain does swing
+  // Radau IIA is algebraically stable: no growth, and at this tolerance little loss.
+  CHECK(highest - e0 < 1e-4 * scale);
+  CHECK(e0 - lowest < 1e-2 * scale);
+}
+
+namespace {
+
+// A force that becomes NaN on one body after t = 0.01 s: no step can pass it.
+struct Poison final : ForceElement {
+  int body;
+  explicit Poison(int b) : body(b) {}
+  std::vector<int> bodies() const override { return {body}; }
+  void evaluate(double t, const Kinematics&, std::span<Wrench> out) const override {
+    out[0].force = Eigen::Vector3d(0, t > 0.01 ? std::nan("") : 0.0, 0);
+  }
+};
+
+}  // namespace
+
+TEST_CASE("tirk refuses a model on which its iteration keeps failing and names the body", "[runtime][implicit][failure]") {
+  ChainParams chain;
+  chain.bodies = 6;
+  const Model m = make_chain(chain);
+  MultibodySystem sys(m);
+  sys.add_force_element(std::make_shared<Poison>(3));
+  RunOptions o = options_from_model(m);
+  o.method = Method::tirk;
+  o.t_end = o.t_start + 0.05;
+  CHECK_THROWS_WITH(run_simulation(sys, o, nullptr),
+                    Catch::Contains("step size underflow") && Catch::Contains("the iteration failed") &&
+                        Catch::Contains("the velocity (y) of body 'link3' (joints, stiffest first, 'j3', 'j4')"));
 }

@@ -33,6 +33,8 @@ struct OdeProblem {
   // Optional: the structural non-zeros of df/dy (values ignored). Without it the Jacobian
   // is taken as dense; with it finite differences need one evaluation per column colour.
   std::optional<Eigen::SparseMatrix<double>> sparsity;
+  // Optional: what unknown i is (e.g. "the velocity of body 'link3'"), for failure messages.
+  std::function<std::string(Eigen::Index i)> describe;
   // Optional: the exact solution, for error reports and tests.
   std::function<Eigen::VectorXd(double t)> exact;
 

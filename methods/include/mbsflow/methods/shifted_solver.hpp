@@ -43,16 +43,19 @@ class ShiftedSolver {
   void solve(Vector& b) const;  // in place
   LinearSolverKind kind() const { return kind_; }
   long symbolic_analyses() const { return analyses_; }  // sparse kinds: pattern analyses so far
+  long refactorizations() const;  // klu: factorisations that reused the pivot sequence
 
  private:
   LinearSolverKind kind_ = LinearSolverKind::dense;
   Eigen::PartialPivLU<Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>> dense_;
   BandedLU<Scalar> band_;
   Eigen::SparseMatrix<Scalar> matrix_;  // I - gamma J, sparse kinds
-  std::vector<int> outer_, inner_;       // the pattern the sparse LU analysed
+  std::vector<int> j_outer_, j_inner_;   // the pattern of J that matrix_ was built from
+  std::vector<int> slot_, diagonal_slot_;  // where J's entries and the identity go in matrix_
   std::shared_ptr<Eigen::SparseLU<Eigen::SparseMatrix<Scalar>, Eigen::COLAMDOrdering<int>>> sparse_;
   std::shared_ptr<KluLu<Scalar>> klu_;
   long analyses_ = 0;
+  bool fill_sparse(const Eigen::SparseMatrix<double>& j, Scalar gamma);
 };
 
 extern template class ShiftedSolver<double>;

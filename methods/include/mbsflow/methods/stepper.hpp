@@ -37,6 +37,8 @@ struct StepperSystem {
   // Optional: makes that pattern. Called only by the methods that use a Jacobian, once
   // each, so the explicit methods never pay for building it.
   std::function<Eigen::SparseMatrix<double>()> sparsity;
+  // Optional: what unknown i is, for the message of a failed run.
+  std::function<std::string(Eigen::Index i)> describe;
 };
 
 struct StepperSettings {
@@ -45,6 +47,7 @@ struct StepperSettings {
   int threads = 1;      // threads inside one step (the implicit methods' stage nodes); 0: all cores
   std::string variant;  // method-specific: tirk's tableau, colloc's "m,s[,order]"; empty: the default
   std::string linear_solver = "auto";  // implicit methods: auto, dense, banded, klu or sparselu
+  bool fixed_step = false;  // colloc, tirk: every step is `step`, no error control (order studies)
 };
 
 struct StepperStats {

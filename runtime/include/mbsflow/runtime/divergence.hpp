@@ -21,6 +21,10 @@ inline constexpr double divergence_angular_speed = 1e7;  // rad/s
 // first for a non-finite value, then for a blow-up.
 std::optional<Divergence> find_divergence(const StateLayout& layout, const Eigen::VectorXd& y, Eigen::Index bodies = -1);
 
+// What unknown i of a model's state is, with the joints at its body, stiffest first:
+// "the velocity (y) of body 'link3' (joints 'j4', 'j3')". For failure messages.
+std::string describe_unknown(const Model& model, Eigen::Index i);
+
 // The message of a diverged run: time, body, and a step that would work.
 std::string divergence_message(const Model& model, const Divergence& d, double t, Method method, double step);
 // The same for a loosely coupled run (loose_coupling.hpp), where the coupling is the

@@ -23,12 +23,16 @@ struct RunOptions {
   double t_start = 0.0;
   double t_end = 1.0;
   double step = 1e-3;    // fixed-step methods (RK4): the step; adaptive ones: the first step
+  bool fixed_step = false;  // colloc, tirk: keep `step` throughout, without error control (order studies)
   // The output grid: a snapshot every output_interval s of model time when it is > 0 (for
   // fixed-step methods a whole number of steps), else every output_every steps (fixed-step
   // methods) or every output_every * step s (adaptive ones); and one at the end.
   int output_every = 1;
   double output_interval = 0.0;
   double rtol = 1e-6, atol = 1e-8;
+  // Threads of an implicit method on a whole model (its stages, slices and Jacobian
+  // columns); 0: all cores. The numbers do not depend on it.
+  int threads = 0;
   // Called now and then with the time reached and the steps taken; may be empty.
   std::function<void(double t, long steps)> progress;
   // When set and it becomes true (a signal handler may set it), the run stops after the
