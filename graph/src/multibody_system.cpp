@@ -97,6 +97,7 @@ MultibodySystem::MultibodySystem(const Model& model, int active) : model_(model)
   }, load_start_, load_index_);
   element_start_.assign(static_cast<std::size_t>(n) + 1, 0);
   driver_of_body_.assign(static_cast<std::size_t>(n), -1);
+  drive_memo_.assign(model.drivers.size(), DriveMemo{});
   for (std::size_t k = 0; k < model.drivers.size(); ++k)
     driver_of_body_[static_cast<std::size_t>(model.drivers[k].body)] = static_cast<int>(k);
 
@@ -151,10 +152,22 @@ Eigen::VectorXd MultibodySystem::initial_state() const {
 void MultibodySystem::drive(const Driver& d, double t) {
   const Eigen::Index i = d.body;
   const Body& b = model_.bodies[static_cast<std::size_t>(i)];
+  DriveMemo& memo = drive_memo_[static_cast<std::size_t>(&d - model_.drivers.data())];
+  int slot = 0;
+  while (slot < DriveMemo::slots && memo.t[slot] != t) ++slot;
+  if (slot == DriveMemo::slots) {
+    slot = memo.next;
+    memo.next = (memo.next + 1) % DriveMemo::slots;
+    memo.t[slot] = t;
+    for (int k = 0; k < 3; ++k) {
+      const FunctionValue f = evaluate(d.displacement[static_cast<std::size_t>(k)], t);
+      memo.value[slot](k) = f.value;
+      memo.rate[slot](k) = f.rate;
+    }
+  }
   for (int k = 0; k < 3; ++k) {
-    const FunctionValue f = evaluate(d.displacement[static_cast<std::size_t>(k)], t);
-    pos_(k, i) = b.position[static_cast<std::size_t>(k)] + d.velocity[static_cast<std::size_t>(k)] * t + f.value;
-    vel_(k, i) = d.velocity[static_cast<std::size_t>(k)] + f.rate;
+    pos_(k, i) = b.position[static_cast<std::size_t>(k)] + d.velocity[static_cast<std::size_t>(k)] * t + memo.value[slot](k);
+    vel_(k, i) = d.velocity[static_cast<std::size_t>(k)] + memo.rate[slot](k);
   }
   quat_.col(i) = quat(b.orientation).normalized();
   rot_[static_cast<std::size_t>(i)] = rotation_matrix(quat_.col(i));

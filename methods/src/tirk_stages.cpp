@@ -68,15 +68,17 @@ void TirkStages::solve_with(double gamma, Eigen::VectorXd& v) const {
   throw std::logic_error("solve_with: no factorisation for this diagonal value");
 }
 
-void TirkStages::setup(double t, double tau, const Eigen::VectorXd& x, const Eigen::VectorXd& fx, const Eigen::VectorXd& scale) {
+void TirkStages::setup(double t, double tau, const Eigen::VectorXd& x, const Eigen::VectorXd& fx, const Eigen::VectorXd& scale,
+                       const std::vector<Eigen::VectorXd>* guess) {
   t_n_ = t;
   tau_ = tau;
   x_ = &x;
   fx_ = &fx;
   scale_ = &scale;
   for (int i = 0; i < si_; ++i) {
-    y_old_[static_cast<std::size_t>(i)] = x;
-    f_old_[static_cast<std::size_t>(i)] = fx;
+    const auto at = static_cast<std::size_t>(i);
+    y_old_[at] = guess && tableau_.c(first_ + i) != 0 ? (*guess)[at] : x;
+    f_old_[at] = fx;
   }
 }
 
@@ -163,7 +165,7 @@ void TirkStages::build(flow::graph& g) {
                          end = std::min(n_, slice_begin(e * per_node + per_node));
       flow::make_edge(*predict_start_, node([this, i, begin, end] {
                         const auto at = static_cast<std::size_t>(i);
-                        problem_.rhs(t_n_ + tableau_.c(first_ + i) * tau_, *x_, f_old_[at], {begin, end});
+                        problem_.rhs(t_n_ + tableau_.c(first_ + i) * tau_, y_old_[at], f_old_[at], {begin, end});
                       }));
     }
   }

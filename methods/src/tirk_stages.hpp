@@ -41,10 +41,12 @@ class TirkStages {
   // (I - tau gamma J)^-1 v with the factorisation of the diagonal value gamma (one of t_ii).
   void solve_with(double gamma, Eigen::VectorXd& v) const;
 
-  // A step from (t, x, fx = f(t, x)): the trivial predictor Y_i = x, F_i = fx; then
-  // start_predictor() (and wait_for_all, finished_predictor()) evaluates F_i = f(t_n + c_i tau, x)
-  // for the stages with c_i != 0, so that the first correction measures the iteration.
-  void setup(double t, double tau, const Eigen::VectorXd& x, const Eigen::VectorXd& fx, const Eigen::VectorXd& scale);
+  // A step from (t, x, fx = f(t, x)): the predictor Y_i = guess[i] (default: the trivial
+  // Y_i = x), F_i = fx; then start_predictor() (and wait_for_all, finished_predictor())
+  // evaluates F_i = f(t_n + c_i tau, Y_i) for the stages with c_i != 0, so that the first
+  // correction measures the iteration.
+  void setup(double t, double tau, const Eigen::VectorXd& x, const Eigen::VectorXd& fx, const Eigen::VectorXd& scale,
+             const std::vector<Eigen::VectorXd>* guess = nullptr);
   void start_predictor();
   void finished_predictor();
   long predictor_evaluations() const;

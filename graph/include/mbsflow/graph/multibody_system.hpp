@@ -1,4 +1,5 @@
 #pragma once
+#include <cmath>
 // The equations of motion of a set of rigid bodies joined by compliant and rigid joints:
 //   r' = v,  q' = q (x) (0, w) / 2,  m v' = F + F_c,  J w' = T + T_c - w x J w
 // as an ODE system for the generic methods (dimension(), rhs()). F_c, T_c are the
@@ -170,6 +171,16 @@ class MultibodySystem {
   std::vector<int> incidence_start_, incidence_;
   std::vector<int> load_start_, load_index_;
   std::vector<int> driver_of_body_;  // -1 if free
+  // The prescribed displacement and rate of each driver at its last few times: implicit
+  // methods and difference Jacobians evaluate many states at one time, and a rough-track
+  // driver costs a hundred sines per evaluation.
+  struct DriveMemo {
+    static constexpr int slots = 4;
+    double t[slots] = {NAN, NAN, NAN, NAN};
+    Eigen::Vector3d value[slots], rate[slots];
+    int next = 0;
+  };
+  std::vector<DriveMemo> drive_memo_;
   // Force elements: their wrenches, and per body the slots into element_out_ in element order.
   std::vector<std::shared_ptr<const ForceElement>> elements_;
   std::vector<std::size_t> element_first_;  // first slot of each element
