@@ -198,7 +198,7 @@ void print_row(const std::string& name, const Row& r, BenchCsv& csv) {
               r.steps, r.evaluations, r.jacobians, r.factorizations, r.seconds, r.error, r.note.c_str());
   std::fflush(stdout);
   csv.out << '"' << name << "\"," << r.method << ',' << r.threads << ',' << r.tol << ',' << r.steps << ',' << r.evaluations << ','
-          << r.jacobians << ',' << r.factorizations << ',' << r.seconds << ',' << r.error << ",\"" << r.note << "\"\n";
+          << r.jacobians << ',' << r.factorizations << ',' << r.seconds << ',' << r.error << ",\"" << r.note << "\"" << std::endl;  // kept if the run is stopped
 }
 
 }  // namespace
