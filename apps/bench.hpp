@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "mbsflow/error.hpp"
+#include "mbsflow/runtime/result_sink.hpp"
 
 namespace mbsflow::cli {
 
@@ -48,6 +49,26 @@ int bench_latency(const BenchArgs& a);
 int bench_ode(const BenchArgs& a);
 int bench_iterations(const BenchArgs& a);
 int bench_stiff(const BenchArgs& a);
+
+// Where the example models are: --dir, or examples/models (run from the source tree).
+inline std::string examples_dir(const BenchArgs& a) { return a.dir == "." ? "examples/models" : a.dir; }
+
+// Keeps every snapshot's time and state, or only the body positions (the state's first
+// 3 entries per body).
+struct KeptStates : ResultSink {
+  bool positions_only = false;
+  std::vector<double> t;
+  std::vector<Eigen::VectorXd> y;
+  void begin(const MultibodySystem& s) override { rows_ = positions_only ? 3 * s.layout().bodies : s.dimension(); }
+  void write(Snapshot&& s) override {
+    t.push_back(s.t);
+    y.emplace_back(s.state.head(rows_));
+  }
+  void end() override {}
+
+ private:
+  Eigen::Index rows_ = 0;
+};
 
 using BenchClock = std::chrono::steady_clock;
 inline double seconds_since(BenchClock::time_point start) {

@@ -3,7 +3,7 @@
 // coordinate against the mechanism's reduced equations in generalised coordinates
 // (runtime/src/iftomm_reference.cpp), the drift of a conserved quantity and the wall time,
 // beside what published entries of other codes report (docs/joints.md gives the sources).
-#include <chrono>
+#include <algorithm>
 #include <cstdio>
 
 #include "bench.hpp"
@@ -12,20 +12,6 @@
 #include "mbsflow/runtime/simulation.hpp"
 
 namespace mbsflow::cli {
-namespace {
-
-struct Keep : ResultSink {
-  std::vector<double> t;
-  std::vector<Eigen::VectorXd> y;
-  void begin(const MultibodySystem&) override {}
-  void write(Snapshot&& s) override {
-    t.push_back(s.t);
-    y.push_back(std::move(s.state));
-  }
-  void end() override {}
-};
-
-}  // namespace
 
 int bench_iftomm(const BenchArgs& a) {
   BenchCsv csv = open_csv(a);
@@ -33,17 +19,16 @@ int bench_iftomm(const BenchArgs& a) {
   std::printf("%-28s %-7s %-8s %8s %11s %11s %-20s %8s   %s\n", "problem", "method", "rtol", "steps", "error m", "drift",
               "of", "wall s", "published");
   for (const IftommInfo& p : iftomm_problems()) {
-    const Model m = read_model_file((a.dir == "." ? std::string("examples/models") : a.dir) + "/" + p.file);
+    const Model m = read_model_file(examples_dir(a) + "/" + p.file);
     double best = 1e300;
-    Keep keep;
+    KeptStates keep;
     RunSummary summary;
     for (int r = 0; r < a.repeats; ++r) {
       MultibodySystem sys(m);
-      keep.t.clear();
-      keep.y.clear();
-      const auto start = std::chrono::steady_clock::now();
+      keep = KeptStates{};
+      const auto start = BenchClock::now();
       summary = run_simulation(sys, options_from_model(m), &keep);
-      best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+      best = std::min(best, seconds_since(start));
     }
     MultibodySystem sys(m);
     const IftommCheck c = check_iftomm(p.id, sys, keep.t, keep.y);

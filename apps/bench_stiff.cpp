@@ -29,27 +29,21 @@ struct Case {
   Model model;
 };
 
-// Positions (the first 3 n entries of the state) at every output time.
-struct Positions : ResultSink {
-  Eigen::Index n3 = 0;
-  std::vector<double> t;
-  std::vector<Eigen::VectorXd> x;
-  void begin(const MultibodySystem& s) override { n3 = 3 * s.layout().bodies; }
-  void write(Snapshot&& s) override {
-    t.push_back(s.t);
-    x.emplace_back(s.state.head(n3));
-  }
-  void end() override {}
-};
+// A sink for the body positions at every output time.
+KeptStates positions() {
+  KeptStates k;
+  k.positions_only = true;
+  return k;
+}
 
 // Largest distance of a body from the reference over all output times; infinity when the
 // run stopped early or left the grid.
-double position_error(const Positions& run, const Positions& ref) {
+double position_error(const KeptStates& run, const KeptStates& ref) {
   if (run.t.size() != ref.t.size()) return INFINITY;
   double e = 0;
   for (std::size_t k = 0; k < run.t.size(); ++k) {
     if (std::abs(run.t[k] - ref.t[k]) > 1e-9) return INFINITY;
-    const Eigen::VectorXd d = run.x[k] - ref.x[k];
+    const Eigen::VectorXd d = run.y[k] - ref.y[k];
     for (Eigen::Index i = 0; i < d.size(); i += 3) e = std::max(e, d.segment<3>(i).norm());
   }
   return std::isfinite(e) ? e : INFINITY;
@@ -63,12 +57,9 @@ std::vector<Case> stiff_cases(const BenchArgs& a) {
       ChainParams cp;
       cp.bodies = a.bodies.empty() ? 2000 : a.bodies.front();
       for (double omega : a.frequencies.empty() ? std::vector<double>{1e3, 1e4, 1e5} : a.frequencies) {
-        Case c{"chain" + std::to_string(cp.bodies) + " W=" + [&] {
-                 char b[16];
-                 std::snprintf(b, sizeof b, "%.0e", omega);
-                 return std::string(b);
-               }(),
-               make_chain(cp)};
+        char name[48];
+        std::snprintf(name, sizeof name, "chain%d W=%.0e", cp.bodies, omega);
+        Case c{name, make_chain(cp)};
         for (Joint& j : c.model.joints) set_bushing_from_frequency(c.model, j, omega, 0.02);
         c.model.simulation.t_end = a.t_end > 0 ? a.t_end : 0.2;
         out.push_back(std::move(c));
@@ -83,7 +74,7 @@ std::vector<Case> stiff_cases(const BenchArgs& a) {
       out.push_back(std::move(c));
     } else if (p == "a05") {
       Case c{"A05 flyball governor",
-             read_model_file((a.dir == "." ? std::string("examples/models") : a.dir) + "/iftomm_a05_flyball_governor.json")};
+             read_model_file(examples_dir(a) + "/iftomm_a05_flyball_governor.json")};
       if (a.t_end > 0) c.model.simulation.t_end = a.t_end;
       out.push_back(std::move(c));
     } else {
@@ -133,7 +124,7 @@ struct Row {
 
 // One run of the runtime: implicit methods whole with `threads`, explicit ones cut into
 // submodels on `threads` (one submodel on one thread).
-Row run_method(const Model& m, Method method, double tol, double step, int threads, Positions& out) {
+Row run_method(const Model& m, Method method, double tol, double step, int threads, KeptStates& out) {
   Row r;
   r.method = method_name(method);
   r.threads = threads;
@@ -162,7 +153,7 @@ Row run_method(const Model& m, Method method, double tol, double step, int threa
   return r;
 }
 
-Row run_cvode_klu(const Model& m, double tol, Positions& out) {
+Row run_cvode_klu(const Model& m, double tol, KeptStates& out) {
   Row r;
   r.method = "cvode-klu";
   r.tol = tol;
@@ -171,13 +162,12 @@ Row run_cvode_klu(const Model& m, double tol, Positions& out) {
   const double t_end = m.simulation.t_end;
   const OdeProblem p = multibody_problem(sys, t_end);
   out.begin(sys);
-  std::vector<double> times;
-  for (long k = 0; output_interval * k <= t_end * (1 + 1e-12); ++k) times.push_back(output_interval * k);
-  Eigen::VectorXd state(p.size);
+  std::vector<double> times;  // after t = 0, whose snapshot is the initial state
+  for (long k = 1; output_interval * k <= t_end * (1 + 1e-12); ++k) times.push_back(output_interval * k);
   Snapshot first;
   first.state = p.y0;
   out.write(std::move(first));
-  const CvodeOutcome c = run_cvode(p, tol, tol, CvodeLinearSolver::klu, {times.begin() + 1, times.end()},
+  const CvodeOutcome c = run_cvode(p, tol, tol, CvodeLinearSolver::klu, times,
                                    [&](double t, const double* y) {
                                      Snapshot s;
                                      s.t = t;
@@ -221,14 +211,14 @@ int bench_stiff(const BenchArgs& a) {
   };
   std::vector<std::pair<std::string, std::map<std::string, Best>>> summary;
   for (const Case& c : cases) {
-    Positions ref;
+    KeptStates ref = positions();
     Row rr = run_method(c.model, Method::tirk, a.reference_tol, 0, all, ref);
     rr.method = "reference";
     rr.error = 0;
     print_row(c.name, rr, csv);
     if (!rr.note.empty()) continue;
     std::map<std::string, Best> best;
-    auto record = [&](Row r, const Positions& out) {
+    auto record = [&](Row r, const KeptStates& out) {
       if (r.note.empty()) r.error = position_error(out, ref);
       print_row(c.name, r, csv);
       if (r.threads != 1 || !(r.error <= a.target_error)) return;
@@ -241,7 +231,7 @@ int bench_stiff(const BenchArgs& a) {
     };
     const double h = rk4_stable_step(c.model);
     for (int threads : thread_counts) {
-      Positions out;
+      KeptStates out = positions();
       Row r = run_method(c.model, Method::rk4, 0, h, threads, out);
       r.tol = h;  // the step, in the tolerance column
       record(r, out);
@@ -249,11 +239,11 @@ int bench_stiff(const BenchArgs& a) {
     for (Method m : {Method::dopri5, Method::tirk, Method::colloc})
       for (double tol : tols)
         for (int threads : thread_counts) {
-          Positions out;
+          KeptStates out = positions();
           record(run_method(c.model, m, tol, 0, threads, out), out);
         }
     for (double tol : tols) {
-      Positions out;
+      KeptStates out = positions();
       record(run_cvode_klu(c.model, tol, out), out);
     }
     summary.emplace_back(c.name, best);

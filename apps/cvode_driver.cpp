@@ -131,9 +131,13 @@ CvodeOutcome run_cvode(const OdeProblem& p, double rtol, double atol, CvodeLinea
       const sunrealtype before = t;
       const int flag = CVode(mem, p.t_end, y, &t, CV_ONE_STEP);
       stalled = t == before ? stalled + 1 : 0;
-      if (flag < 0 || stalled > 100) {
-        failed(flag < 0 ? flag : 0);
-        if (flag >= 0) o.note = "step size underflow at t = " + std::to_string(t);
+      if (flag < 0) {
+        failed(flag);
+        break;
+      }
+      if (stalled > 100) {
+        o.ok = false;
+        o.note = "step size underflow at t = " + std::to_string(t);
         break;
       }
       if (on_output) on_output(t, N_VGetArrayPointer(y));

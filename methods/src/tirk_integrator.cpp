@@ -117,6 +117,8 @@ class TirkIntegrator::Driver {
 
  private:
   bool newton() const { return is_newton(s_.iteration); }
+  // Whether steps start from the extrapolated collocation polynomial (see extrapolate()).
+  bool predicts() const { return s_.iteration == TirkIteration::newton_triangular && nodes_.size() >= 2; }
   void keep_or_renew_jacobian();
   void begin_step(double t, const Eigen::VectorXd& x, const Eigen::VectorXd& fx, double tau,
                   const std::vector<Eigen::VectorXd>* guess = nullptr);
@@ -163,8 +165,8 @@ class TirkIntegrator::Driver {
   double t_now_ = 0, tau_ = 0, t_old_ = 0;
   Eigen::VectorXd x_, fx_, x_old_, f_old_;
   bool fixed_ = false, after_rejection_ = false;
-  int slow_growth_ = 0;
-  int renew_every_step_ = 0;  // accepted steps that still renew the Jacobian, after an old one failed  // accepted steps that may still grow by 1.2 at most, after the iteration failed
+  int slow_growth_ = 0;       // accepted steps that may still grow by 1.2 at most, after a fresh Jacobian failed
+  int renew_every_step_ = 0;  // accepted steps that still renew the Jacobian, after an old one failed
 };
 
 void TirkIntegrator::Driver::fail(const std::string& why, double tau) const {
@@ -215,8 +217,7 @@ bool TirkIntegrator::Driver::factorize(const Eigen::VectorXd& x, const Eigen::Ve
 // stiff components of the extrapolation error instead of damping them (it diverged on
 // the heat equation at every step size).
 const std::vector<Eigen::VectorXd>* TirkIntegrator::Driver::extrapolate(double t, double tau) {
-  if (s_.iteration != TirkIteration::newton_triangular || !have_last_ || !extrapolation_ok_ || nodes_.size() < 2)
-    return nullptr;
+  if (!predicts() || !have_last_ || !extrapolation_ok_) return nullptr;
   const int first = tableau_.first_implicit();
   guess_.resize(static_cast<std::size_t>(stages_.implicit()));
   for (int i = 0; i < stages_.implicit(); ++i) {
@@ -421,7 +422,7 @@ bool TirkIntegrator::Driver::advance() {
     st.largest_step = std::max(st.largest_step, h);
     if (newton()) keep_or_renew_jacobian();
     extrapolation_ok_ = true;
-    if (newton()) {
+    if (predicts()) {
       have_last_ = true;
       last_t_ = t;
       last_h_ = h;

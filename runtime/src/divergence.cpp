@@ -35,9 +35,10 @@ std::optional<Divergence> find_divergence(const StateLayout& layout, const Eigen
 
 std::string describe_unknown(const Model& model, Eigen::Index i) {
   const auto n = static_cast<Eigen::Index>(model.bodies.size());
-  if (i < 0 || i >= 13 * n) return "unknown " + std::to_string(i);
+  if (i < 0 || i >= StateLayout{n}.size()) return "unknown " + std::to_string(i);
   static const char* const fields[] = {"position", "orientation", "velocity", "angular velocity"};
-  const Eigen::Index starts[] = {0, 3 * n, 7 * n, 10 * n, 13 * n};
+  const StateLayout l{n};
+  const Eigen::Index starts[] = {l.position(0), l.orientation(0), l.velocity(0), l.angular_velocity(0), l.size()};
   int f = 0;
   while (i >= starts[f + 1]) ++f;
   const int width = f == 1 ? 4 : 3;

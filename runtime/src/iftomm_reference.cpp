@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <numbers>
+#include <optional>
 
 #include "mbsflow/error.hpp"
 
@@ -33,10 +34,9 @@ std::vector<Eigen::Matrix<double, N, 1>> rk4_samples(F f, Eigen::Matrix<double, 
 }
 
 int body_named(const MultibodySystem& sys, const char* name) {
-  const auto& b = sys.model().bodies;
-  for (std::size_t i = 0; i < b.size(); ++i)
-    if (b[i].name == name) return static_cast<int>(i);
-  throw InputError(std::string("the IFToMM model has no body '") + name + "'");
+  const std::optional<int> i = find_body(sys.model(), name);
+  if (!i || *i == ground) throw InputError(std::string("the IFToMM model has no body '") + name + "'");
+  return *i;
 }
 
 Eigen::Vector3d position(const MultibodySystem& sys, const Eigen::VectorXd& y, int i) {

@@ -1,5 +1,4 @@
 #pragma once
-#include <cmath>
 // The equations of motion of a set of rigid bodies joined by compliant and rigid joints:
 //   r' = v,  q' = q (x) (0, w) / 2,  m v' = F + F_c,  J w' = T + T_c - w x J w
 // as an ODE system for the generic methods (dimension(), rhs()). F_c, T_c are the
@@ -12,6 +11,7 @@
 // added, so a body's derivative does not depend on how the model is later partitioned.
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
+#include <cmath>
 #include <memory>
 #include <span>
 #include <utility>
