@@ -124,14 +124,16 @@ struct Row {
 
 // One run of the runtime: implicit methods whole with `threads`, explicit ones cut into
 // submodels on `threads` (one submodel on one thread).
-Row run_method(const Model& m, Method method, double tol, double step, int threads, KeptStates& out) {
+Row run_method(const Model& m, Method method, double tol, double step, int threads, KeptStates& out,
+               const std::string& variant = "") {
   Row r;
-  r.method = method_name(method);
+  r.method = variant.empty() ? method_name(method) : std::string(method_name(method)) + "-" + variant;
   r.threads = threads;
   r.tol = tol;
   RunPlan plan;
   plan.options = options_from_model(m);
   plan.options.method = method;
+  plan.options.variant = variant;
   plan.options.rtol = plan.options.atol = tol;
   if (step > 0) plan.options.step = step;
   plan.options.output_interval = output_interval;
@@ -236,11 +238,14 @@ int bench_stiff(const BenchArgs& a) {
       r.tol = h;  // the step, in the tolerance column
       record(r, out);
     }
-    for (Method m : {Method::dopri5, Method::tirk, Method::colloc})
+    // tirk twice: the full Newton iteration (as Radau5) and the seed's triangular one.
+    const std::vector<std::pair<Method, std::string>> methods = {
+        {Method::dopri5, ""}, {Method::tirk, "newton"}, {Method::tirk, "newton-triangular"}, {Method::colloc, ""}};
+    for (const auto& [m, variant] : methods)
       for (double tol : tols)
         for (int threads : thread_counts) {
           KeptStates out = positions();
-          record(run_method(c.model, m, tol, 0, threads, out), out);
+          record(run_method(c.model, m, tol, 0, threads, out, variant), out);
         }
     for (double tol : tols) {
       KeptStates out = positions();

@@ -146,7 +146,7 @@ Action add_ode(CLI::App& app) {
   sub->add_option("--tol", a->tol, "relative (and, without --atol, absolute) tolerance")->check(CLI::PositiveNumber)->capture_default_str();
   sub->add_option("--atol", a->atol, "absolute tolerance (default: --tol)")->check(CLI::PositiveNumber);
   sub->add_option("--iteration", a->iteration,
-                  "colloc: newton (default) or functional; tirk: newton-triangular (default), newton-diagonal, triangular, "
+                  "colloc: newton (default) or functional; tirk: newton (default, as Radau5: one real and one complex LU for radau3), newton-triangular (the seed's PTIRK), newton-diagonal, triangular, "
                   "diagonal or jacobi")
       ->check(CLI::IsMember({"newton", "functional", "jacobi", "triangular", "diagonal", "newton-triangular", "newton-diagonal"}));
   sub->add_option("--iterations", a->iterations, "tirk: exactly this many iterations per step, no convergence test (0: until converged)")

@@ -25,7 +25,7 @@ void print_matrix(const char* name, const Eigen::MatrixXd& m) {
 double spectral_radius(const Eigen::MatrixXd& m) { return m.eigenvalues().cwiseAbs().maxCoeff(); }
 
 TirkIteration iteration_of(const OdeArgs& a) {
-  return a.iteration.empty() ? TirkIteration::newton_triangular : tirk_iteration_from_string(a.iteration);
+  return a.iteration.empty() ? TirkIteration::newton : tirk_iteration_from_string(a.iteration);
 }
 
 }  // namespace
@@ -59,6 +59,14 @@ int describe_tableau(const std::string& name) {
   }
   std::printf("functional iterations contract for tau < 1/(L M), L the Lipschitz constant of f; the Newton-type ones\n"
               "(newton-triangular, newton-diagonal) converge on very stiff components when rho(I - T^-1 A) < 1.\n");
+  // The full Newton iteration: one linear system per real eigenvalue or complex pair of A.
+  const Eigen::VectorXcd mu = a.eigenvalues();
+  std::printf("\nnewton (default): the full simplified Newton iteration, one system per real eigenvalue or complex pair of A:");
+  for (Eigen::Index i = 0; i < mu.size(); ++i)
+    if (mu(i).imag() >= 0) std::printf(mu(i).imag() > 1e-12 ? " %.6f+-%.6fi" : " %.6f", mu(i).real(), mu(i).imag());
+  const double g0 = largest_real_eigenvalue(t);
+  if (g0 > 0) std::printf("\n  its error estimate filters through the real system, gamma = %.6f\n", g0);
+  else std::printf("\n  no real eigenvalue: its error estimate factorises I - tau gamma J with gamma = %.6f\n", e.gamma);
   return 0;
 }
 

@@ -33,6 +33,7 @@ struct RunArgs {
   std::string model;
   std::optional<double> t_end, step, rtol, atol, output_interval;
   std::string method;
+  std::optional<std::string> variant;
   std::string linear_solver = "auto";
   std::optional<int> every;
   std::string output;
@@ -161,7 +162,11 @@ int run(const RunArgs& a) {
     if (!(*a.t_end > m.simulation.t_start)) throw InputError("--t-end: must be > t_start of the model");
     m.simulation.t_end = *a.t_end;
   }
-  if (!a.method.empty()) m.simulation.method = *find_method(a.method);
+  if (!a.method.empty() && *find_method(a.method) != m.simulation.method) {
+    m.simulation.method = *find_method(a.method);
+    m.simulation.variant.clear();  // the model's variant belongs to its own method
+  }
+  if (a.variant) m.simulation.variant = *a.variant;
   if (a.rtol) m.simulation.rtol = *a.rtol;
   if (a.atol) m.simulation.atol = *a.atol;
   const StableStep stable = estimate_stable_step(m);
@@ -276,6 +281,9 @@ Action add_run(CLI::App& app) {
   std::vector<std::string> methods;
   for (const StepperEntry& e : stepper_entries()) methods.push_back(e.method.name());
   sub->add_option("--method", a->method, "Integration method")->check(CLI::IsMember(methods));
+  sub->add_option("--variant", a->variant,
+                  "tirk: tableau and/or iteration, e.g. radau5 or radau3,newton-triangular (default radau3,newton); "
+                  "colloc: m,s[,order] (overrides simulation.variant)");
   sub->add_option("--every", a->every, "Write every K-th step (overrides simulation.output_every)")
       ->check(CLI::Range(1, 1 << 30));
   sub->add_option("--output-interval", a->output_interval,

@@ -288,7 +288,7 @@ class Reader {
   }
 
   void simulation(const JsonNode& n) {
-    n.allow_only({"t_start", "t_end", "step", "method", "output_every", "output_interval", "rtol", "atol"});
+    n.allow_only({"t_start", "t_end", "step", "method", "variant", "output_every", "output_interval", "rtol", "atol"});
     SimulationSettings& s = m_.simulation;
     if (auto v = n.find("t_start")) s.t_start = v->number();
     if (auto v = n.find("t_end")) {
@@ -301,6 +301,7 @@ class Reader {
       if (!m) v->fail("must be one of " + method_list() + " (got '" + v->string() + "')");
       s.method = *m;
     }
+    if (auto v = n.find("variant")) s.variant = v->string();
     if (auto v = n.find("output_every")) s.output_every = static_cast<int>(v->integer(1));
     if (auto v = n.find("output_interval")) s.output_interval = v->positive();
     if (auto v = n.find("rtol")) s.rtol = v->positive();

@@ -128,6 +128,7 @@ std::string model_to_json(const Model& m) {
   json sim = {{"t_start", s.t_start}, {"t_end", s.t_end}, {"method", method_name(s.method)},
               {"output_every", s.output_every}, {"rtol", s.rtol}, {"atol", s.atol}};
   if (s.step) sim["step"] = *s.step;
+  if (!s.variant.empty()) sim["variant"] = s.variant;
   if (s.output_interval) sim["output_interval"] = *s.output_interval;
   root["simulation"] = sim;
   // One body or joint per line: readable, and error line numbers stay meaningful.

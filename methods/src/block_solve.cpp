@@ -1,8 +1,6 @@
 #include "mbsflow/error.hpp"
 #include "block_solve.hpp"
 
-#include <Eigen/Eigenvalues>
-#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -32,58 +30,14 @@ BlockSolve::BlockSolve(const BlockCoefficients& method, const OdeProblem& proble
   f_not_finite_.assign(static_cast<std::size_t>(slices() * k), 0);
   if (kind_ != BlockIteration::newton) return;
   r_.assign(k, Eigen::VectorXd::Zero(n_));
-  // g = T diag(mu) T^-1, with real columns for real eigenvalues and conjugate columns for
-  // a complex pair, so that only one system per pair is solved.
-  Eigen::EigenSolver<Eigen::MatrixXd> eig(method_.g);
-  if (eig.info() != Eigen::Success) throw InputError("cannot diagonalise the block method's matrix g");
-  const Eigen::VectorXcd mu = eig.eigenvalues();
-  Eigen::MatrixXcd v = eig.eigenvectors();
-  t_.resize(k, k);
-  std::vector<bool> done(k, false);
-  for (int e = 0; e < k; ++e) {
-    if (done[e]) continue;
-    done[e] = true;
-    System sys;
-    sys.mu = mu(e);
-    sys.column = e;
-    const double scale_mu = std::max(1.0, std::abs(mu(e)));
-    if (std::abs(mu(e).imag()) <= 1e-12 * scale_mu) {
-      sys.mu = mu(e).real();
-      Eigen::VectorXd col = v.col(e).real();
-      t_.col(e) = (col / col.norm()).cast<std::complex<double>>();
-    } else {
-      sys.complex = true;
-      if (mu(e).imag() < 0) sys.mu = std::conj(mu(e));
-      t_.col(e) = mu(e).imag() < 0 ? Eigen::VectorXcd(v.col(e).conjugate()) : Eigen::VectorXcd(v.col(e));
-      int partner = -1;
-      for (int o = 0; o < k; ++o)
-        if (!done[o] && std::abs(mu(o) - std::conj(mu(e))) <= 1e-10 * scale_mu) {
-          partner = o;
-          break;
-        }
-      if (partner < 0) throw InputError("block method matrix g: complex eigenvalue without its conjugate");
-      done[partner] = true;
-      t_.col(partner) = t_.col(e).conjugate();
-    }
-    if (std::abs(sys.mu) == 0) throw InputError("block method matrix g is singular");
-    systems_.push_back(std::move(sys));
-  }
-  Eigen::FullPivLU<Eigen::MatrixXcd> lu(t_);
-  if (!lu.isInvertible()) throw InputError("block method matrix g is not diagonalisable");
-  t_inv_ = lu.inverse();
-  for (System& sys : systems_) {
-    if (sys.complex)
-      sys.zc.resize(n_);
-    else
-      sys.zr.resize(n_);
-  }
+  split_ = std::make_unique<EigenSplit>(method_.g, n_, "the block method's matrix g");
 }
 
 void BlockSolve::request_factorization(const Eigen::SparseMatrix<double>& jac, double tau, LinearSolverKind kind) {
   factor_jac_ = &jac;
   factor_tau_ = tau;
   factor_kind_ = kind;
-  factor_failed_.assign(systems_.size(), 0);
+  factor_failed_.assign(static_cast<std::size_t>(systems()), 0);
 }
 
 void BlockSolve::start_factorization() {
@@ -96,12 +50,8 @@ bool BlockSolve::factorization_ok() const {
 }
 
 void BlockSolve::factorize(int system) {
-  System& sys = systems_[static_cast<std::size_t>(system)];
   try {
-    if (sys.complex)
-      sys.complex_solver.factorize(*factor_jac_, factor_tau_ * sys.mu, factor_kind_);
-    else
-      sys.real_solver.factorize(*factor_jac_, factor_tau_ * sys.mu.real(), factor_kind_);
+    split_->factorize(system, *factor_jac_, factor_tau_, factor_kind_);
   } catch (const RunError&) {
     factor_failed_[static_cast<std::size_t>(system)] = 1;
   }
@@ -180,30 +130,10 @@ void BlockSolve::residual(Eigen::Index r) {
     rl = u[l].segment(lo, len) - b_[l].segment(lo, len);
     for (int j = 0; j < k; ++j) rl -= (tau_ * method_.g(l, j)) * f[j].segment(lo, len);
   }
-  for (System& sys : systems_) {
-    if (sys.complex) {
-      auto z = sys.zc.segment(lo, len);
-      z.setZero();
-      for (int l = 0; l < k; ++l) {  // a complex times a real vector: two real products
-        const std::complex<double> c = t_inv_(sys.column, l);
-        z.real() -= c.real() * r_[l].segment(lo, len);
-        z.imag() -= c.imag() * r_[l].segment(lo, len);
-      }
-    } else {
-      auto z = sys.zr.segment(lo, len);
-      z.setZero();
-      for (int l = 0; l < k; ++l) z -= t_inv_(sys.column, l).real() * r_[l].segment(lo, len);
-    }
-  }
+  split_->load_residuals(r_, lo, len);
 }
 
-void BlockSolve::solve(int e) {
-  System& sys = systems_[static_cast<std::size_t>(e)];
-  if (sys.complex)
-    sys.complex_solver.solve(sys.zc);
-  else
-    sys.real_solver.solve(sys.zr);
-}
+void BlockSolve::solve(int e) { split_->solve(e); }
 
 // dU = T w (a complex pair contributes twice the real part of one of its columns).
 void BlockSolve::update(Eigen::Index r) {
@@ -212,14 +142,7 @@ void BlockSolve::update(Eigen::Index r) {
   bool roundoff = true;
   Eigen::VectorXd du(len);
   for (int i = 0; i < points(); ++i) {
-    du.setZero();
-    for (const System& sys : systems_) {
-      if (sys.complex)
-        du += (2.0 * t_(i, sys.column).real()) * sys.zc.segment(lo, len).real() -
-              (2.0 * t_(i, sys.column).imag()) * sys.zc.segment(lo, len).imag();
-      else
-        du += t_(i, sys.column).real() * sys.zr.segment(lo, len);
-    }
+    split_->correction(i, lo, len, du);
     u[i].segment(lo, len) += du;
     norm = std::max(norm, (du.array().abs() / scale_->segment(lo, len).array()).maxCoeff());
     roundoff = roundoff && at_roundoff(du, u[i].segment(lo, len));

@@ -18,6 +18,7 @@
 
 #include "annotated_node.hpp"
 #include "convergence_monitor.hpp"
+#include "eigen_split.hpp"
 #include "mbsflow/methods/block_integrator.hpp"
 
 namespace mbsflow {
@@ -33,7 +34,7 @@ class BlockSolve {
   int points() const { return method_.spec.s; }
 
   // The linear systems of the Newton iteration: one per real eigenvalue or complex pair.
-  int systems() const { return static_cast<int>(systems_.size()); }
+  int systems() const { return split_ ? split_->systems() : 0; }
   // Factorising I - tau mu_e J for every system, each a node of the graph: set up, start
   // (then g.wait_for_all() and finished()), and whether all matrices were regular.
   void request_factorization(const Eigen::SparseMatrix<double>& jac, double tau, LinearSolverKind kind);
@@ -54,15 +55,6 @@ class BlockSolve {
   long evaluations = 0;
 
  private:
-  struct System {
-    std::complex<double> mu;
-    bool complex = false;
-    int column = 0;  // its column of T (its partner's column is the conjugate)
-    ShiftedSolver<double> real_solver;
-    ShiftedSolver<std::complex<double>> complex_solver;
-    Eigen::VectorXd zr;
-    Eigen::VectorXcd zc;
-  };
   using Node = ContinueNode;
   using Start = tbb::flow::broadcast_node<tbb::flow::continue_msg>;
 
@@ -83,8 +75,7 @@ class BlockSolve {
   BlockIteration kind_;
   ConvergenceMonitor monitor_;
   Eigen::Index n_, slice_;
-  Eigen::MatrixXcd t_, t_inv_;
-  std::vector<System> systems_;
+  std::unique_ptr<EigenSplit> split_;  // Newton only
   std::vector<Eigen::VectorXd> b_, r_;
   std::vector<double> slice_norm_;
   std::vector<char> slice_at_roundoff_;

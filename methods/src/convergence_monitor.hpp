@@ -4,6 +4,8 @@
 // the last two corrections and eta = theta / (1 - theta), the iteration has converged when
 // eta |dU| <= tol; it has failed when theta reaches 0.99, a correction is not finite, or
 // the iteration count runs out. eta carries over to the next step's first iteration.
+// With predict_failure (Radau5's rule) it fails as soon as the rate says that the
+// remaining iterations cannot reach the tolerance: theta^(left) / (1 - theta) |dU| > tol.
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -22,6 +24,7 @@ enum class IterationVerdict { iterate, converged, failed };
 struct ConvergenceMonitor {
   double tol = 0.03;
   int max_iterations = 7;
+  bool predict_failure = false;
   double eta = 1.0, last_norm = 0, theta = 0;
 
   // After correction number `iteration` (1, 2, ...) of scaled size `norm`; `at_roundoff`:
@@ -35,6 +38,12 @@ struct ConvergenceMonitor {
       e = std::pow(std::max(eta, std::numeric_limits<double>::epsilon()), 0.8);
     } else {
       theta = norm / last_norm;
+      // Corrections that stopped shrinking while both were already within the tolerance:
+      // rounding noise (tight tolerances make it visible), not divergence.
+      if (theta >= 0.99 && norm <= tol && last_norm <= tol) {
+        eta = 1.0;
+        return IterationVerdict::converged;
+      }
       if (theta >= 0.99) return IterationVerdict::failed;
       e = theta / (1 - theta);
     }
@@ -43,7 +52,10 @@ struct ConvergenceMonitor {
       eta = e;
       return IterationVerdict::converged;
     }
-    return iteration >= max_iterations ? IterationVerdict::failed : IterationVerdict::iterate;
+    if (iteration >= max_iterations) return IterationVerdict::failed;
+    if (predict_failure && iteration > 1 && std::pow(theta, max_iterations - iteration) * e * norm > tol)
+      return IterationVerdict::failed;
+    return IterationVerdict::iterate;
   }
 };
 

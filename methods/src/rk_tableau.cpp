@@ -1,6 +1,7 @@
 // The tableaux: Gauss and Radau IIA as collocation methods at the roots of (shifted)
 // Legendre polynomials, computed in long double; Lobatto IIIC exactly; the one-step block
 // methods of seed 001 rewritten as Runge-Kutta methods.
+#include <Eigen/Eigenvalues>
 #include "mbsflow/error.hpp"
 #include "mbsflow/methods/rk_tableau.hpp"
 
@@ -173,8 +174,20 @@ TriangularSplitting ldu_splitting(const Eigen::MatrixXd& a) {
 }
 
 EmbeddedFormula embedded_formula(const RkTableau& t, const TriangularSplitting& split) {
+  return embedded_formula(t, split.d.maxCoeff());
+}
+
+double largest_real_eigenvalue(const RkTableau& t) {
+  const Eigen::VectorXcd mu = t.implicit_block().eigenvalues();
+  double best = 0;
+  for (const std::complex<double>& m : mu)
+    if (std::abs(m.imag()) <= 1e-12 * std::max(1.0, std::abs(m))) best = std::max(best, m.real());
+  return best;
+}
+
+EmbeddedFormula embedded_formula(const RkTableau& t, double gamma) {
   EmbeddedFormula e;
-  e.gamma = split.d.maxCoeff();
+  e.gamma = gamma;
   if (!(e.gamma > 0)) throw InputError(t.name + ": no positive pivot for the embedded formula");
   const int s = t.stages();
   std::vector<double> distinct;

@@ -12,7 +12,7 @@ namespace mbsflow {
 namespace flow = tbb::flow;
 
 TirkStages::TirkStages(const RkTableau& tableau, const Eigen::MatrixXd& t, TirkIteration kind, int inner_iterations,
-                       const OdeProblem& problem, Eigen::Index slice_size)
+                       const OdeProblem& problem, Eigen::Index slice_size, double filter_gamma)
     : tableau_(tableau),
       t_(t),
       kind_(kind),
@@ -29,6 +29,13 @@ TirkStages::TirkStages(const RkTableau& tableau, const Eigen::MatrixXd& t, TirkI
   roundoff_.assign(cells, 0);
   f_bad_.assign(cells, 0);
   if (!newton()) return;
+  filter_gamma_ = filter_gamma;
+  if (full_newton()) {
+    split_ = std::make_unique<EigenSplit>(tableau.implicit_block(), n_, "the matrix A of tableau " + tableau.name);
+    filter_system_ = split_->real_system(filter_gamma);
+    r_.assign(static_cast<std::size_t>(si_), zero);
+    return;
+  }
   for (int i = 0; i < si_; ++i) {
     const double v = t_(i, i);
     if (!(v > 0)) throw InputError("Newton-type iteration: the diagonal of T must be positive");
@@ -48,7 +55,26 @@ void TirkStages::request_factorization(const Eigen::SparseMatrix<double>& jac, d
   factor_jac_ = &jac;
   factor_tau_ = tau;
   factor_kind_ = kind;
-  factor_failed_.assign(solvers_.size(), 0);
+  factor_failed_.assign(static_cast<std::size_t>(systems()), 0);
+}
+
+int TirkStages::systems() const {
+  if (full_newton()) return split_->systems() + (filter_system_ < 0 ? 1 : 0);
+  return static_cast<int>(solvers_.size());
+}
+
+void TirkStages::factorize(int k) {
+  const auto at = static_cast<std::size_t>(k);
+  try {
+    if (!full_newton())
+      solvers_[at].factorize(*factor_jac_, factor_tau_ * diagonal_values_[at], factor_kind_);
+    else if (k < split_->systems())
+      split_->factorize(k, *factor_jac_, factor_tau_, factor_kind_);
+    else
+      filter_.factorize(*factor_jac_, factor_tau_ * filter_gamma_, factor_kind_);
+  } catch (const RunError&) {
+    factor_failed_[at] = 1;
+  }
 }
 
 void TirkStages::start_factorization() {
@@ -63,6 +89,8 @@ bool TirkStages::factorization_ok() const {
 }
 
 void TirkStages::solve_with(double gamma, Eigen::VectorXd& v) const {
+  if (full_newton() && std::abs(gamma - filter_gamma_) <= 1e-14 * gamma)
+    return filter_system_ >= 0 ? split_->solve_real(filter_system_, v) : filter_.solve(v);
   for (std::size_t k = 0; k < diagonal_values_.size(); ++k)
     if (std::abs(diagonal_values_[k] - gamma) <= 1e-14 * gamma) return solvers_[k].solve(v);
   throw std::logic_error("solve_with: no factorisation for this diagonal value");
@@ -134,6 +162,30 @@ void TirkStages::solve(int i) {
   for (Eigen::Index r = 0; r < slices(); ++r) measure(i, r, y_new_[at], y_old_[at]);
 }
 
+void TirkStages::residual(Eigen::Index r) {
+  const Eigen::Index lo = slice_begin(r), len = slice_length(r);
+  for (int i = 0; i < si_; ++i) {
+    auto ri = r_[static_cast<std::size_t>(i)].segment(lo, len);
+    ri = y_old_[static_cast<std::size_t>(i)].segment(lo, len) - x_->segment(lo, len);
+    for (int j = 0; j < tableau_.stages(); ++j) {
+      const double a = tableau_.a(first_ + i, j);
+      if (a != 0) ri -= (tau_ * a) * stage_f(j).segment(lo, len);
+    }
+  }
+  split_->load_residuals(r_, lo, len);
+}
+
+void TirkStages::update(Eigen::Index r) {
+  const Eigen::Index lo = slice_begin(r), len = slice_length(r);
+  Eigen::VectorXd du;
+  for (int i = 0; i < si_; ++i) {
+    const auto at = static_cast<std::size_t>(i);
+    split_->correction(i, lo, len, du);
+    y_new_[at].segment(lo, len) = y_old_[at].segment(lo, len) + du;
+    measure(i, r, y_new_[at], y_old_[at]);
+  }
+}
+
 void TirkStages::evaluate(int i, Eigen::Index first_slice, Eigen::Index count) {
   const auto at = static_cast<std::size_t>(i);
   const Eigen::Index begin = slice_begin(first_slice), end = slice_begin(first_slice + count - 1) + slice_length(first_slice + count - 1);
@@ -169,15 +221,33 @@ void TirkStages::build(flow::graph& g) {
                       }));
     }
   }
-  for (int k = 0; k < systems(); ++k)
-    flow::make_edge(*factor_start_, node([this, k] {
-                      try {
-                        solvers_[static_cast<std::size_t>(k)].factorize(*factor_jac_, factor_tau_ * diagonal_values_[static_cast<std::size_t>(k)],
-                                                                        factor_kind_);
-                      } catch (const RunError&) {
-                        factor_failed_[static_cast<std::size_t>(k)] = 1;
-                      }
-                    }));
+  for (int k = 0; k < systems(); ++k) flow::make_edge(*factor_start_, node([this, k] { factorize(k); }));
+  if (full_newton()) {
+    // residual(slice) -> solve(system) -> update(slice) -> f(stage, slice)
+    Node& residuals_done = node([] {});
+    for (Eigen::Index r = 0; r < n_slices; ++r) {
+      Node& a = node([this, r] { residual(r); });
+      flow::make_edge(*start_, a);
+      flow::make_edge(a, residuals_done);
+    }
+    Node& solved = node([] {});
+    for (int e = 0; e < split_->systems(); ++e) {
+      Node& sv = node([this, e] { split_->solve(e); });
+      flow::make_edge(residuals_done, sv);
+      flow::make_edge(sv, solved);
+    }
+    Node& written = node([] {});
+    for (Eigen::Index r = 0; r < n_slices; ++r) {
+      Node& u = node([this, r] { update(r); });
+      flow::make_edge(solved, u);
+      flow::make_edge(u, written);
+    }
+    for (int i = 0; i < si_; ++i)
+      for (Eigen::Index e = 0; e < f_nodes; ++e)
+        flow::make_edge(written, node([this, i, e, per_node] { evaluate(i, e * per_node, per_node); }));
+    captures_published();
+    return;
+  }
   // final_eval[i][e]: the last evaluation nodes of stage i, which later stages wait for.
   std::vector<std::vector<Node*>> final_eval(static_cast<std::size_t>(si_));
   for (int i = 0; i < si_; ++i) {

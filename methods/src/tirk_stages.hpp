@@ -7,6 +7,12 @@
 //     Newton:     solve(i): (I - tau t_ii J) dY = G_i - Y_i^old, Y_i = Y_i^old + dY
 //   evaluate(i, r): F_i^new = f(t_n + c_i tau, Y_i)
 //
+// The full simplified Newton iteration ("newton", as Radau5) has no splitting: the
+// residuals R_i = Y_i - x_n - tau sum_j a_ij F_j of all stages go through the eigenvector
+// transform of A (eigen_split.hpp), one node per slice; every real eigenvalue and complex
+// pair of A solves its system in a node of its own; the corrections come back per slice,
+// and all stages evaluate f at once.
+//
 // With the triangular T, assemble(i, r) waits for evaluate(j, r) of the stages j < i with
 // t_ij != 0 (a pipelined DAG: slices of stage i start as soon as the same slices of the
 // earlier stages are done); with the diagonal T or Jacobi all stages start together.
@@ -18,14 +24,18 @@
 #include <vector>
 
 #include "convergence_monitor.hpp"
+#include "eigen_split.hpp"
 #include "mbsflow/methods/tirk_integrator.hpp"
 
 namespace mbsflow {
 
 class TirkStages {
  public:
+  // filter_gamma: the value gamma of the error estimate's stiff filter (I - tau gamma J)^-1
+  // (one of the diagonal values of T; for the full Newton iteration a real eigenvalue of
+  // A, or a factorisation of its own is added).
   TirkStages(const RkTableau& tableau, const Eigen::MatrixXd& t, TirkIteration kind, int inner_iterations,
-             const OdeProblem& problem, Eigen::Index slice_size);
+             const OdeProblem& problem, Eigen::Index slice_size, double filter_gamma);
   TirkStages(const TirkStages&) = delete;
   TirkStages& operator=(const TirkStages&) = delete;
 
@@ -37,7 +47,8 @@ class TirkStages {
   void start_factorization();
   void finished_factorization();
   bool factorization_ok() const;
-  int systems() const { return static_cast<int>(solvers_.size()); }
+  // Linear systems factorised per Jacobian and step size.
+  int systems() const;
   // (I - tau gamma J)^-1 v with the factorisation of the diagonal value gamma (one of t_ii).
   void solve_with(double gamma, Eigen::VectorXd& v) const;
 
@@ -80,6 +91,10 @@ class TirkStages {
   Eigen::Index slice_begin(Eigen::Index r) const { return r * slice_; }
   Eigen::Index slice_length(Eigen::Index r) const { return std::min(slice_, n_ - r * slice_); }
   bool newton() const { return is_newton(kind_); }
+  bool full_newton() const { return kind_ == TirkIteration::newton; }
+  void factorize(int k);
+  void residual(Eigen::Index r);  // full Newton: R over slice r, loaded into the eigen split
+  void update(Eigen::Index r);    // full Newton: Y_i += (T w)_i over slice r
   int layers() const { return newton() ? 1 : inner_; }
   void assemble(int i, Eigen::Index r);
   void substitute(int i, Eigen::Index r, int layer);
@@ -103,6 +118,13 @@ class TirkStages {
   std::vector<int> solver_of_stage_;
   std::vector<ShiftedSolver<double>> solvers_;
   std::vector<char> factor_failed_;
+  // The full Newton iteration's systems, and the filter's own factorisation when gamma is
+  // not a real eigenvalue of A (-1 in filter_system_ then).
+  std::unique_ptr<EigenSplit> split_;
+  int filter_system_ = -1;
+  double filter_gamma_ = 0;
+  ShiftedSolver<double> filter_;
+  std::vector<Eigen::VectorXd> r_;
   const Eigen::SparseMatrix<double>* factor_jac_ = nullptr;
   double factor_tau_ = 0;
   LinearSolverKind factor_kind_ = LinearSolverKind::automatic;

@@ -1,6 +1,11 @@
-// The "tirk" stepper: triangularised implicit Runge-Kutta (TirkIntegrator), Newton-type
-// triangular iteration (PTIRK). variant names the tableau (default radau3).
+// The "tirk" stepper: implicit Runge-Kutta (TirkIntegrator). The variant is a
+// comma-separated list of a tableau name (default radau3) and/or an iteration name
+// (default newton, as Radau5; newton-triangular is the seed's PTIRK), in any order: "radau5", "newton",
+// "radau3,newton-diagonal".
 #include "mbsflow/methods/tirk_integrator.hpp"
+
+#include <algorithm>
+
 #include "stepper_registry.hpp"
 #include "implicit_stepper.hpp"
 
@@ -10,11 +15,32 @@ namespace {
 class TirkStepper final : public ImplicitStepper<TirkIntegrator, TirkSettings> {
  public:
   TirkStepper(const StepperSystem& s, const StepperSettings& o) : ImplicitStepper(s, o) {
-    if (!o.variant.empty()) settings_.tableau = o.variant;
+    apply_variant(o.variant);
     rk_tableau(settings_.tableau);  // InputError for an unknown tableau
     integrator_ = std::make_unique<TirkIntegrator>(problem_, settings_, s.after_step);
   }
   void dense(double t, Eigen::VectorXd& out) const override { integrator_->dense(t, out); }
+
+ private:
+  void apply_variant(const std::string& variant) {
+    std::size_t at = 0;
+    while (at < variant.size()) {
+      std::size_t end = variant.find(',', at);
+      if (end == std::string::npos) end = variant.size();
+      const std::string token = variant.substr(at, end - at);
+      const std::vector<std::string> tableaux = rk_tableau_names();
+      if (std::find(tableaux.begin(), tableaux.end(), token) != tableaux.end()) {
+        settings_.tableau = token;
+      } else {
+        try {
+          settings_.iteration = tirk_iteration_from_string(token);
+        } catch (const InputError&) {
+          throw InputError("tirk: the variant '" + variant + "' names neither a tableau nor an iteration: '" + token + "'");
+        }
+      }
+      at = end + 1;
+    }
+  }
 };
 
 }  // namespace

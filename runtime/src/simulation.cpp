@@ -61,6 +61,7 @@ RunOptions options_from_model(const Model& model, std::optional<double> stable_s
   RunOptions o;
   const SimulationSettings& s = model.simulation;
   o.method = s.method;
+  o.variant = s.variant;
   o.t_start = s.t_start;
   o.t_end = s.t_end;
   const bool adaptive = stepper_entry(o.method).adaptive;

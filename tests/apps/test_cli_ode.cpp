@@ -100,5 +100,6 @@ TEST_CASE("cli ode: --describe NAME prints the tableau and its splitting", "[cli
   CHECK(m.out.find("stage 1 explicit") != std::string::npos);
   CHECK(run("ode --describe radau4").code == 2);
   CHECK(run("ode --problem b1 --method colloc --iteration jacobi").code == 2);
-  CHECK(run("ode --problem b1 --method tirk --iteration newton").code == 2);
+  CHECK(run("ode --problem b1 --method tirk --iteration functional").code == 2);
+  CHECK(r.out.find("newton (default)") != std::string::npos);
 }

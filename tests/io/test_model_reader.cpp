@@ -45,6 +45,8 @@ TEST_CASE("models written and read back are the same model", "[io]") {
   gp.cols = 4;
   Model with_interval = make_chain(ChainParams{});
   with_interval.simulation.output_interval = 0.0025;
+  with_interval.simulation.method = Method::tirk;
+  with_interval.simulation.variant = "radau5,newton-triangular";
   Model compliant = read_model_file(examples + "/slider_crank.json");  // kinematic joints, motor, limits
   compliant.joints[1].rigid = false;
   set_bushing_from_frequency(compliant, compliant.joints[1], 300.0, 0.1);
@@ -55,6 +57,7 @@ TEST_CASE("models written and read back are the same model", "[io]") {
     const Model back = read_model_text(once, m.name);
     CHECK(model_to_json(back) == once);
     CHECK(back.simulation.output_interval == m.simulation.output_interval);
+    CHECK(back.simulation.variant == m.simulation.variant);
     CHECK(back.bodies.size() == m.bodies.size());
     CHECK(back.joints.size() == m.joints.size());
     for (std::size_t j = 0; j < m.joints.size(); ++j) {

@@ -39,19 +39,20 @@ TEST_CASE("tirk: every tableau reaches its order with converged iterations (eq. 
   p.t_end = 1;
   // Steps in each method's asymptotic range, above rounding.
   const std::map<std::string, std::vector<int>> steps = {
-      {"radau2", {16, 32, 64}},  {"radau3", {16, 24, 32}},    {"radau5", {14, 15, 16}}, {"gauss2", {16, 32, 64}},
+      {"radau2", {16, 32, 64}},  {"radau3", {16, 24, 32}},    {"radau5", {15, 16, 17}}, {"gauss2", {16, 32, 64}},
       {"gauss3", {16, 24, 32}},  {"lobatto3c", {32, 64, 128}}, {"block1", {8, 16, 32}},  {"block2", {8, 16, 32}},
       {"block3", {8, 16, 32}},   {"block4", {16, 24, 32}},    {"block5", {16, 24, 32}}, {"block6", {12, 16, 24}}};
-  for (const auto& [name, n] : steps) {
-    TirkSettings s;
-    s.tableau = name;
-    s.iteration = TirkIteration::newton_triangular;
-    s.fixed_iterations = 40;  // converged: the simplified Newton iteration contracts at these steps
-    s.threads = 1;
-    const double slope = fixed_step_slope(p, s, n);
-    INFO(name << ": slope " << slope);
-    CHECK(std::abs(slope - rk_tableau(name).order) <= 0.3);
-  }
+  for (const auto& [name, n] : steps)
+    for (TirkIteration it : {TirkIteration::newton_triangular, TirkIteration::newton}) {
+      TirkSettings s;
+      s.tableau = name;
+      s.iteration = it;
+      s.fixed_iterations = 40;  // converged: the simplified Newton iterations contract at these steps
+      s.threads = 1;
+      const double slope = fixed_step_slope(p, s, n);
+      INFO(name << " " << to_string(it) << ": slope " << slope);
+      CHECK(std::abs(slope - rk_tableau(name).order) <= 0.3);
+    }
 }
 
 TEST_CASE("tirk: the functional iterations converge within tau < 1/(L M) and diverge far outside", "[methods][tirk]") {
@@ -85,7 +86,8 @@ TEST_CASE("tirk: the functional iterations converge within tau < 1/(L M) and div
 TEST_CASE("tirk: Newton-type iterations solve heat with N = 1e5 at large steps", "[methods][tirk][slow]") {
   const OdeProblem p = heat_problem(100000);
   const double explicit_limit = 2.0 / infinity_norm(p);
-  for (auto [tableau, it] : {std::pair{"radau3", TirkIteration::newton_triangular}, std::pair{"radau2", TirkIteration::newton_diagonal}}) {
+  for (auto [tableau, it] : {std::pair{"radau3", TirkIteration::newton_triangular}, std::pair{"radau2", TirkIteration::newton_diagonal},
+                             std::pair{"radau3", TirkIteration::newton}}) {
     TirkSettings s;
     s.tableau = tableau;
     s.iteration = it;
@@ -122,7 +124,7 @@ TEST_CASE("tirk: step control keeps the error near the tolerance and follows it"
 
 TEST_CASE("tirk: parallel and sequential runs give bitwise the same numbers", "[methods][tirk]") {
   for (TirkIteration it : {TirkIteration::newton_triangular, TirkIteration::newton_diagonal, TirkIteration::triangular,
-                           TirkIteration::jacobi}) {
+                           TirkIteration::jacobi, TirkIteration::newton}) {
     OdeProblem p = heat_problem(20000);
     TirkSettings s;
     s.iteration = it;
@@ -155,14 +157,18 @@ TEST_CASE("tirk: the iteration trace converges to the stage values the integrato
   const OdeProblem p = detest_b1_problem();
   TirkSettings s;
   s.threads = 1;
-  for (TirkIteration it : {TirkIteration::jacobi, TirkIteration::triangular, TirkIteration::newton_triangular}) {
+  for (TirkIteration it : {TirkIteration::jacobi, TirkIteration::triangular, TirkIteration::newton_triangular,
+                           TirkIteration::newton}) {
     s.iteration = it;
     const IterationTrace tr = trace_tirk_iterations(p, s, 10.0, p.exact(10.0), 1e-4, 6);
     INFO(to_string(it));
     REQUIRE(tr.reference_ok);
     CHECK(tr.reference_residual < 1e-14);
     CHECK(tr.error[0] > 0);
-    CHECK(tr.error[3] < 1e-3 * tr.error[0]);
+    if (it == TirkIteration::newton)
+      CHECK(tr.error[1] <= 1e-13);  // the full Newton iteration: quadratic, at rounding after two
+    else
+      CHECK(tr.error[3] < 1e-3 * tr.error[0]);
     CHECK(tr.evaluations[1] == 2 * tr.evaluations[0]);
   }
   // Non-stiff regime: the triangular splitting gains on the diagonal one and on Jacobi
@@ -173,4 +179,27 @@ TEST_CASE("tirk: the iteration trace converges to the stage values the integrato
   };
   CHECK(first(TirkIteration::triangular) < first(TirkIteration::diagonal));
   CHECK(first(TirkIteration::diagonal) < first(TirkIteration::jacobi));
+}
+
+TEST_CASE("tirk newton: matrices kept across small step changes, same accuracy, fewer factorisations", "[methods][tirk]") {
+  const OdeProblem p = hairer_wanner_problem();
+  std::vector<TirkResult> runs;
+  for (double ratio : {0.0, 0.2}) {
+    TirkSettings s;
+    s.iteration = TirkIteration::newton;
+    s.rtol = s.atol = 1e-6;
+    s.refactor_ratio = ratio;
+    s.threads = 1;
+    runs.push_back(integrate_tirk(p, s));
+    const TirkResult& r = runs.back();
+    const double err = (r.y - p.exact(r.t)).cwiseAbs().maxCoeff();
+    INFO("refactor_ratio " << ratio << ": " << r.stats.steps << " steps, " << r.stats.factorizations
+                           << " factorisations, error " << err);
+    CHECK(err <= 10 * s.rtol);  // within a small factor of the tolerance
+    CHECK(r.stats.factorizations % 2 == 0);  // radau3: one real and one complex system per factorisation
+  }
+  CHECK(runs[1].stats.factorizations < runs[0].stats.factorizations);
+  TirkSettings bad;
+  bad.refactor_ratio = 1.5;
+  CHECK_THROWS_AS(integrate_tirk(p, bad), InputError);
 }

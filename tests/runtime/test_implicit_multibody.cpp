@@ -147,9 +147,10 @@ TEST_CASE("implicit methods show their order on a multibody chain with fixed ste
     double order;
     std::vector<int> steps;
   };
-  // Radau IIA with 3 and 2 stages (orders 5 and 3); the 2-point collocation block, whose
-  // block end is superconvergent (order 4).
+  // Radau IIA with 3 and 2 stages (orders 5 and 3), by the full and the triangular Newton
+  // iteration; the 2-point collocation block, whose block end is superconvergent (order 4).
   const std::vector<Case> cases = {{Method::tirk, "radau3", 5, {20, 40, 80}},
+                                   {Method::tirk, "radau3,newton-triangular", 5, {20, 40, 80}},
                                    {Method::tirk, "radau2", 3, {40, 80, 160}},
                                    {Method::colloc, "1,2", 4, {80, 160, 320}}};
   for (const Case& c : cases) {
@@ -222,4 +223,26 @@ TEST_CASE("tirk refuses a model on which its iteration keeps failing and names t
   CHECK_THROWS_WITH(run_simulation(sys, o, nullptr),
                     Catch::Contains("step size underflow") && Catch::Contains("the iteration failed") &&
                         Catch::Contains("the velocity (y) of body 'link3' (joints, stiffest first, 'j3', 'j4')"));
+}
+
+TEST_CASE("tirk variants name a tableau and an iteration, in any order", "[runtime][implicit]") {
+  ChainParams chain;
+  chain.bodies = 5;
+  Model m = make_chain(chain);
+  m.simulation.t_end = 0.05;
+  MultibodySystem sys(m);
+  RunOptions o = options_from_model(m);
+  o.method = Method::tirk;
+  o.rtol = o.atol = 1e-6;
+  o.threads = 1;
+  std::vector<Eigen::VectorXd> ends;
+  for (const char* v : {"", "radau3,newton", "newton,radau3", "radau5", "newton-triangular"}) {
+    o.variant = v;
+    ends.push_back(run_simulation(sys, o, nullptr).final_state);
+  }
+  CHECK((ends[0].array() == ends[1].array()).all());  // the default is radau3 with the full Newton iteration
+  CHECK((ends[1].array() == ends[2].array()).all());
+  for (const Eigen::VectorXd& e : ends) CHECK((e - ends[0]).cwiseAbs().maxCoeff() < 1e-4);
+  o.variant = "radau3,newtn";
+  CHECK_THROWS_WITH(run_simulation(sys, o, nullptr), Catch::Contains("names neither a tableau nor an iteration: 'newtn'"));
 }

@@ -108,6 +108,9 @@ struct SimulationSettings {
   double t_end = 1.0;
   std::optional<double> step;  // none: RK4 picks a stable step
   Method method = Method::rk4;
+  // Method-specific: tirk's tableau and/or iteration ("radau3", "newton", "radau5,newton-triangular"),
+  // colloc's "m,s[,order]"; empty: the method's default.
+  std::string variant;
   int output_every = 1;        // write every k-th step (RK4) or every k*step (DOPRI5)
   // The output grid in s of model time, whatever the method's steps; overrides output_every.
   std::optional<double> output_interval;

@@ -55,7 +55,11 @@ struct EmbeddedFormula {
   Eigen::VectorXd bhat;
   int order = 0;
 };
-EmbeddedFormula embedded_formula(const RkTableau& t, const TriangularSplitting& split);
+EmbeddedFormula embedded_formula(const RkTableau& t, const TriangularSplitting& split);  // gamma = max d_i
+EmbeddedFormula embedded_formula(const RkTableau& t, double gamma);
+// The largest real eigenvalue of A's implicit block, 0 if it has none (the full Newton
+// iteration's estimate filters through its system).
+double largest_real_eigenvalue(const RkTableau& t);
 
 // By name; throws InputError with the list of names otherwise.
 RkTableau rk_tableau(const std::string& name);

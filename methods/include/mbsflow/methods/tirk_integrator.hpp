@@ -14,7 +14,10 @@
 //     M = max_i sum_j |(A - T)_ij| + max_i sum_j |t_ij|, L the Lipschitz constant of f;
 //   - by one simplified Newton step with I - tau t_ii J (newton-triangular = PTIRK,
 //     newton-diagonal = PDIRK, after van der Houwen, Sommeijer and de Swart), one
-//     factorisation per distinct t_ii, for stiff problems.
+//     factorisation per distinct t_ii, for stiff problems;
+//   - or, with no splitting at all, by the full simplified Newton iteration with I - tau A (x) J
+//     split by the eigenvalues of A (newton, as Radau5: one real and one complex system
+//     for 3-stage Radau IIA), whose iteration contracts like Newton's.
 // Stages (and slices of equations) are nodes of a oneTBB flow graph; the numbers do not
 // depend on the thread count.
 #include "mbsflow/error.hpp"
@@ -28,19 +31,27 @@
 
 namespace mbsflow {
 
-enum class TirkIteration { jacobi, triangular, diagonal, newton_triangular, newton_diagonal };
+enum class TirkIteration { jacobi, triangular, diagonal, newton_triangular, newton_diagonal, newton };
 const char* to_string(TirkIteration i);
 TirkIteration tirk_iteration_from_string(const std::string& name);  // throws InputError
 bool is_newton(TirkIteration i);
 
-// The approximation T of the implicit block of A that an iteration uses.
+// The approximation T of the implicit block of A that an iteration uses (not for newton,
+// which uses A itself).
 Eigen::MatrixXd splitting_matrix(const TriangularSplitting& split, TirkIteration i);
 // M of the contraction bound tau < 1 / (L M) of the functional iteration with T.
 double contraction_constant(const Eigen::MatrixXd& a, const Eigen::MatrixXd& t);
 
+// Radau5's Newton tolerance, max(10 eps / rtol', min(0.03, sqrt(rtol'))) relative to its
+// internal tolerance rtol' = 0.1 rtol^(2/3), is in terms of the user's rtol
+// max(10 eps / rtol, 0.03): 0.03 * rtol'^(3/2) = 0.0316 rtol. This is that rule.
+double newton_tolerance(double rtol);
+
 struct TirkSettings {
   std::string tableau = "radau3";
-  TirkIteration iteration = TirkIteration::newton_triangular;
+  // The full Newton iteration by default: on the stiff multibody models and the seed's
+  // problems it needs a third of the triangular iteration's f evaluations (docs/methods.md).
+  TirkIteration iteration = TirkIteration::newton;
   double rtol = 1e-6, atol = 1e-6;
   double safety = 0.9, facmin = 0.2, facmax = 4.0;
   double initial_step = 0;  // 0: chosen from the problem
@@ -52,7 +63,13 @@ struct TirkSettings {
   // Functional triangular/diagonal: substitutions per stage and iteration for the stage's
   // own term tau t_ii f(Y_i) (each one f evaluation). With 1 the diagonal scheme is Jacobi.
   int inner_iterations = 3;
-  double iteration_tol = 0.03;  // stop when the estimated iteration error is this fraction of the tolerance
+  // Stop when the estimated iteration error is this fraction of the tolerance; 0:
+  // newton_tolerance(rtol).
+  double iteration_tol = 0;
+  // Full Newton iteration: the matrices factorised for step tau_f serve a step tau while
+  // |tau / tau_f - 1| <= this (a slightly stale Newton matrix, as CVODE keeps one while
+  // gamma changes by less than 30 %); 0: refactorise at every change of step.
+  double refactor_ratio = 0.2;
   bool finite_difference_jacobian = false;
   LinearSolverKind linear_solver = LinearSolverKind::automatic;
   int threads = 0;              // 0: all cores; 1: sequential (the same numbers)

@@ -18,7 +18,7 @@ namespace mbsflow {
 
 struct RunOptions {
   Method method = Method::rk4;  // any method of the stepper registry (mbsflow/methods/stepper.hpp)
-  std::string variant;           // its variant (colloc: "m,s[,order]", tirk: the tableau); empty: default
+  std::string variant;           // its variant (colloc: "m,s[,order]", tirk: tableau and/or iteration); empty: default
   std::string linear_solver = "auto";  // implicit methods' Newton matrices: auto, dense, banded, klu, sparselu
   double t_start = 0.0;
   double t_end = 1.0;
