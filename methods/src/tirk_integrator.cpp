@@ -62,6 +62,13 @@ double newton_tolerance(double rtol) {
 
 namespace {
 
+// The embedded formula's gamma: for the full Newton iteration a real eigenvalue of A, whose
+// system is factorised anyway; else (or without one) the largest pivot of the splitting.
+EmbeddedFormula embedded_for(const RkTableau& tableau, const TriangularSplitting& split, TirkIteration iteration) {
+  const double real = iteration == TirkIteration::newton ? largest_real_eigenvalue(tableau) : 0.0;
+  return real > 0 ? embedded_formula(tableau, real) : embedded_formula(tableau, split);
+}
+
 void check_settings(const OdeProblem& p, const TirkSettings& s) {
   check_common_settings(p, s);
   if (s.fixed_iterations < 0 || s.max_iterations < 0) throw InputError("iteration counts must be >= 0");
@@ -77,9 +84,7 @@ class TirkIntegrator::Driver {
       : p_(p), s_(s), project_(std::move(project)),
         tableau_(rk_tableau(s.tableau)),
         split_(ldu_splitting(tableau_.implicit_block())),
-        embedded_(s.iteration == TirkIteration::newton && largest_real_eigenvalue(tableau_) > 0
-                      ? embedded_formula(tableau_, largest_real_eigenvalue(tableau_))
-                      : embedded_formula(tableau_, split_)),
+        embedded_(embedded_for(tableau_, split_, s.iteration)),
         t_matrix_(s.iteration == TirkIteration::newton ? tableau_.implicit_block() : splitting_matrix(split_, s.iteration)),
         arena_(s.threads > 0 ? s.threads : tbb::task_arena::automatic),
         stages_(tableau_, t_matrix_, s.iteration, s.inner_iterations, p,
@@ -258,10 +263,10 @@ const std::vector<Eigen::VectorXd>* TirkIntegrator::Driver::extrapolate(double t
 // for Radau IIA), so a slow iteration is not by itself a sign of a stale Jacobian: the
 // Jacobian is renewed when the rate exceeds both 0.3 (0.1 for the full Newton iteration)
 // and 1.5 times the rate seen right after the last renewal, unless the matrices were kept
-// from another step size: that mismatch slows the iteration too, and costs fewer than a
-// new factorisation (measured on the 2000-body chain: with a refactorisation whenever the
-// rate passed 0.1 there, 27 per 59 steps). An iteration that fails with an old Jacobian renews it, and then it
-// is renewed at every step for the next 10 (in advance()).
+// from another step size: that mismatch slows the iteration too, and the extra iterations
+// cost less than new factorisations (on the 2000-body chain, refactorising whenever the
+// rate passed 0.1 took 27 factorisations in 59 steps). An iteration that fails with an old
+// Jacobian renews it, and then it is renewed at every step for the next 10 (in advance()).
 void TirkIntegrator::Driver::keep_or_renew_jacobian(double h) {
   const double theta = monitor_.theta;
   if (jacobian_at_point_)

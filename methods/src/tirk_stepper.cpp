@@ -5,6 +5,7 @@
 #include "mbsflow/methods/tirk_integrator.hpp"
 
 #include <algorithm>
+#include <sstream>
 
 #include "stepper_registry.hpp"
 #include "implicit_stepper.hpp"
@@ -23,12 +24,9 @@ class TirkStepper final : public ImplicitStepper<TirkIntegrator, TirkSettings> {
 
  private:
   void apply_variant(const std::string& variant) {
-    std::size_t at = 0;
-    while (at < variant.size()) {
-      std::size_t end = variant.find(',', at);
-      if (end == std::string::npos) end = variant.size();
-      const std::string token = variant.substr(at, end - at);
-      const std::vector<std::string> tableaux = rk_tableau_names();
+    const std::vector<std::string> tableaux = rk_tableau_names();
+    std::stringstream in(variant);
+    for (std::string token; std::getline(in, token, ',');) {
       if (std::find(tableaux.begin(), tableaux.end(), token) != tableaux.end()) {
         settings_.tableau = token;
       } else {
@@ -38,7 +36,6 @@ class TirkStepper final : public ImplicitStepper<TirkIntegrator, TirkSettings> {
           throw InputError("tirk: the variant '" + variant + "' names neither a tableau nor an iteration: '" + token + "'");
         }
       }
-      at = end + 1;
     }
   }
 };
