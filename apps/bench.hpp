@@ -26,6 +26,7 @@ struct BenchArgs {
   double t_end = 0;                   // stiff: model time (default per model)
   double reference_tol = 1e-6;        // stiff: tolerance of the reference run (1e-7 is slow on the 2000-body chain at 1e5: docs/methods.md)
   double target_error = 1e-3;         // stiff: the error at which methods are compared
+  std::vector<std::string> methods;   // stiff: which methods run beside the reference (default all)
 };
 
 // The CSV file of a benchmark: --csv, or bench_WHAT.csv; InputError if it cannot be written.

@@ -35,6 +35,11 @@ Action add_bench(CLI::App& app) {
   sub->add_option("--reference-tol", a->reference_tol, "stiff: tolerance of the tirk reference run")->check(CLI::PositiveNumber);
   sub->add_option("--target-error", a->target_error, "stiff: the position error (m) at which the summary compares methods")
       ->check(CLI::PositiveNumber);
+  sub->add_option("--methods", a->methods,
+                  "stiff: the methods compared with the reference: rk4, dopri5, tirk-newton, tirk-newton-triangular, colloc, "
+                  "cvode-klu (default all)")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"rk4", "dopri5", "tirk-newton", "tirk-newton-triangular", "colloc", "cvode-klu"}));
   sub->add_option("--bodies", a->bodies, "Chain sizes (rhs: 2000,6500,100000; output: 6500; parallel, cluster: 2000,4000,6500; stiff: 2000)")
       ->delimiter(',');
   sub->add_option("--threads", a->threads, "parallel: up to this many threads (default: all cores)")->check(CLI::PositiveNumber);

@@ -35,6 +35,7 @@ struct RunArgs {
   std::string method;
   std::optional<std::string> variant;
   std::string linear_solver = "auto";
+  std::string jacobian = "auto";
   std::optional<int> every;
   std::string output;
   std::string fields = "position,orientation,velocity,angular_velocity,energy";
@@ -119,6 +120,7 @@ RunOptions choose_options(Model& m, const RunArgs& a, const StableStep& s) {
   if (a.output_interval) m.simulation.output_interval = *a.output_interval;
   RunOptions o = options_from_model(m, s.step);
   o.linear_solver = a.linear_solver;
+  o.jacobian = a.jacobian;
   if (m.simulation.step) {
     if (m.simulation.method == Method::rk4 && *m.simulation.step > s.step)
       std::fprintf(stderr, "mbsflow: warning: step %.3g s is above the estimated RK4 stability limit %s\n",
@@ -295,8 +297,12 @@ Action add_run(CLI::App& app) {
                   "colloc, tirk: the Newton matrices' LU: auto (dense up to 100 equations, banded when narrow, else klu), "
                   "dense, banded, klu (SuiteSparse) or sparselu (Eigen)")
       ->check(CLI::IsMember({"auto", "dense", "banded", "klu", "sparselu"}))->capture_default_str();
-  sub->add_option("--rtol", a->rtol, "DOPRI5 relative tolerance")->check(CLI::PositiveNumber);
-  sub->add_option("--atol", a->atol, "DOPRI5 absolute tolerance")->check(CLI::PositiveNumber);
+  sub->add_option("--jacobian", a->jacobian,
+                  "colloc, tirk: auto (analytic when every force comes from bushings, springs, loads and gravity; else "
+                  "differences grouped by the pattern's colouring) or differences")
+      ->check(CLI::IsMember({"auto", "differences"}))->capture_default_str();
+  sub->add_option("--rtol", a->rtol, "Adaptive methods (dopri5, colloc, tirk): relative tolerance")->check(CLI::PositiveNumber);
+  sub->add_option("--atol", a->atol, "Adaptive methods (dopri5, colloc, tirk): absolute tolerance")->check(CLI::PositiveNumber);
   sub->add_option("-o,--output", a->output,
                   "Results file (HDF5, with an XDMF sidecar for ParaView); without it a final-state summary is printed");
   sub->add_option("--fields", a->fields,

@@ -96,6 +96,7 @@ CvodeOutcome run_cvode(const OdeProblem& p, double rtol, double atol, CvodeLinea
   if (!p.jacobian) d.differences = std::make_unique<JacobianEvaluator>(p, true);
   Eigen::SparseMatrix<double> pattern = p.sparsity ? *p.sparsity : Eigen::MatrixXd::Ones(p.size, p.size).sparseView();
   pattern.makeCompressed();
+  d.jac = pattern + d.zero_diagonal;  // the problem's Jacobian writes its values into this pattern
   SUNMatrix a = nullptr;
   SUNLinearSolver ls = nullptr;
   if (solver == CvodeLinearSolver::klu) {

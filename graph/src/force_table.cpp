@@ -32,6 +32,11 @@ double table_force(const ForceTable& t, double x) {
   return t.force[i] + slope(t, i) * (x - t.deflection[i]);
 }
 
+double table_slope(const ForceTable& t, double x) {
+  if (t.deflection.size() < 2) return 0.0;
+  return slope(t, segment(t, x));
+}
+
 double table_energy(const ForceTable& t, double x) {
   if (t.deflection.size() < 2) return 0.0;
   const double lo = std::min(0.0, x), hi = std::max(0.0, x);

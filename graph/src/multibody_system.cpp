@@ -7,6 +7,7 @@
 #include <cstdio>
 
 #include "mbsflow/error.hpp"
+#include "force_laws.hpp"
 #include "rotation.hpp"
 
 namespace mbsflow {
@@ -37,14 +38,6 @@ void build_csr(int bodies, int items, BodyOf body_of, std::vector<int>& start, s
 }
 
 }  // namespace
-
-struct MultibodySystem::Deflection {
-  Eigen::Matrix3d frame;     // world orientation of the joint frame on body1
-  Eigen::Vector3d pb;        // world attachment point on body2
-  Eigen::Vector3d d, d_rate;  // translational deflection and its rate, joint frame
-  RotationLog rotation;      // of the relative orientation, joint frame
-  Eigen::Vector3d omega_rel;  // relative angular velocity, joint frame
-};
 
 MultibodySystem::MultibodySystem(const Model& model) : MultibodySystem(model, static_cast<int>(model.bodies.size())) {}
 
@@ -148,14 +141,17 @@ Eigen::VectorXd MultibodySystem::initial_state() const {
   omega_.col(i) = r * y.segment<3>(layout_.angular_velocity(i));
 }
 
+[[gnu::always_inline]] inline BodyFrameView MultibodySystem::body_frame_at(int i) const {
+  return {rot_[static_cast<std::size_t>(i)], pos_.col(i), vel_.col(i), omega_.col(i), quat_.col(i)};
+}
+
 // A driven body's kinematics replace what its state says.
 void MultibodySystem::drive(const Driver& d, double t) {
   const Eigen::Index i = d.body;
   const Body& b = model_.bodies[static_cast<std::size_t>(i)];
   DriveMemo& memo = drive_memo_[static_cast<std::size_t>(&d - model_.drivers.data())];
-  int slot = 0;
-  while (slot < DriveMemo::slots && memo.t[slot] != t) ++slot;
-  if (slot == DriveMemo::slots) {
+  int slot = memo.find(t);
+  if (slot < 0) {
     slot = memo.next;
     memo.next = (memo.next + 1) % DriveMemo::slots;
     memo.t[slot] = t;
@@ -163,6 +159,7 @@ void MultibodySystem::drive(const Driver& d, double t) {
       const FunctionValue f = evaluate(d.displacement[static_cast<std::size_t>(k)], t);
       memo.value[slot](k) = f.value;
       memo.rate[slot](k) = f.rate;
+      memo.accel[slot](k) = f.accel;
     }
   }
   for (int k = 0; k < 3; ++k) {
@@ -189,76 +186,13 @@ void MultibodySystem::kinematics_of(double t, const Eigen::VectorXd& y, std::spa
   }
 }
 
-// Inlined into the joint loop: it runs once per joint per evaluation.
-[[gnu::always_inline]] inline MultibodySystem::Deflection MultibodySystem::bushing_deflection(const CompiledJoint& j) const {
-  Deflection r;
-  const Eigen::Matrix3d& ra = rot_[static_cast<std::size_t>(j.a)];
-  const Eigen::Matrix3d& rb = rot_[static_cast<std::size_t>(j.b)];
-  r.frame = j.frame1_identity ? ra : Eigen::Matrix3d(ra * j.rfa);
-  const Eigen::Vector3d bw = rb * j.pb;
-  r.pb = pos_.col(j.b) + bw;
-  const Eigen::Vector3d pa = pos_.col(j.a) + ra * j.pa;
-  // Rate of the deflection seen from body1: velocity of the point on body2 minus the
-  // velocity of body1's material point that coincides with it.
-  const Eigen::Vector3d wa = omega_.col(j.a), wb = omega_.col(j.b);
-  const Eigen::Vector3d dv = vel_.col(j.b) + wb.cross(bw) - vel_.col(j.a) - wa.cross(r.pb - pos_.col(j.a));
-  r.d = r.frame.transpose() * (r.pb - pa);
-  r.d_rate = r.frame.transpose() * dv;
-  Eigen::Vector4d qa = quat_.col(j.a), qb = quat_.col(j.b);
-  if (!j.frame1_identity) qa = quat_multiply(qa, j.qfa);
-  if (!j.frame2_identity) qb = quat_multiply(qb, j.qfb);
-  r.rotation = rotation_log(quat_multiply(quat_conjugate(qa), qb));
-  r.omega_rel = r.frame.transpose() * (wb - wa);
-  return r;
-}
-
-// Spring forces per axis (K d, or the tables), for axes first_axis..first_axis+2.
-[[gnu::always_inline]] inline Eigen::Vector3d MultibodySystem::axis_forces(const CompiledJoint& j, const Eigen::Vector3d& d,
-                                                                           int first_axis) const {
-  const Eigen::Vector3d& k = first_axis == 0 ? j.kt : j.kr;
-  Eigen::Vector3d f = k.cwiseProduct(d);
-  if (j.tables >= 0) {
-    const auto& t = tables_[static_cast<std::size_t>(j.tables)];
-    for (int i = 0; i < 3; ++i) {
-      const ForceTable& table = t[static_cast<std::size_t>(first_axis + i)];
-      if (!table.empty()) f[i] = table_force(table, d[i]);
-    }
-  }
-  return f;
-}
-
 [[gnu::always_inline]] inline void MultibodySystem::joint_force(std::size_t k) {
   const CompiledJoint& j = joints_[k];
   if (j.kinematic >= 0) {
     kinematic_joint_force(k);
     return;
   }
-  auto out = joint_out_.col(static_cast<Eigen::Index>(k));
-  const Eigen::Matrix3d& ra = rot_[static_cast<std::size_t>(j.a)];
-  const Eigen::Matrix3d& rb = rot_[static_cast<std::size_t>(j.b)];
-  if (j.spring) {
-    const Eigen::Vector3d aw = ra * j.pa, bw = rb * j.pb;
-    const Eigen::Vector3d delta = pos_.col(j.b) + bw - pos_.col(j.a) - aw;
-    const double length = delta.norm();
-    const Eigen::Vector3d u = length > 0.0 ? Eigen::Vector3d(delta / length) : Eigen::Vector3d::Zero();
-    const Eigen::Vector3d dv = vel_.col(j.b) + omega_.col(j.b).cross(bw) - vel_.col(j.a) - omega_.col(j.a).cross(aw);
-    const double f = j.kt[0] * (length - j.rest_length) + j.ct[0] * u.dot(dv);
-    const Eigen::Vector3d force = -f * u;  // on body2, at its attachment point
-    out.segment<3>(0) = force;
-    out.segment<3>(3) = aw.cross(-force);
-    out.segment<3>(6) = bw.cross(force);
-    return;
-  }
-  const Deflection def = bushing_deflection(j);
-  const Eigen::Vector3d f = axis_forces(j, def.d, 0) + j.ct.cwiseProduct(def.d_rate) - j.preload_force;
-  const Eigen::Vector3d force = -(def.frame * f);  // on body2 at pb; on body1 (opposite) also at pb
-  const Eigen::Vector3d& theta = def.rotation.theta;
-  const Eigen::Vector3d g = rotation_gradient_to_torque(def.rotation, axis_forces(j, theta, 3) - j.preload_torque) +
-                            j.cr.cwiseProduct(def.omega_rel);
-  const Eigen::Vector3d couple = def.frame * g;  // on body1; body2 gets -couple
-  out.segment<3>(0) = force;
-  out.segment<3>(3) = (def.pb - pos_.col(j.a)).cross(-force) + couple;
-  out.segment<3>(6) = (def.pb - pos_.col(j.b)).cross(force) - couple;
+  compliant_joint_wrench<double>(j, tables_of(j), body_frame_at(j.a), body_frame_at(j.b), joint_out_.col(static_cast<Eigen::Index>(k)));
 }
 
 void MultibodySystem::compute_joint_forces() {
@@ -325,14 +259,7 @@ void MultibodySystem::applied_wrench(Eigen::Index i, double t, Eigen::Vector3d& 
   torque = Eigen::Vector3d::Zero();
   for (int p = load_start_[bi]; p < load_start_[bi + 1]; ++p) {
     const Load& l = model_.loads[static_cast<std::size_t>(load_index_[static_cast<std::size_t>(p)])];
-    const double s = evaluate(l.function, t).value;
-    Eigen::Vector3d f = s * vec(l.force), m = s * vec(l.torque);
-    if (l.body_frame) {
-      f = r * f;
-      m = r * m;
-    }
-    force += f;
-    torque += m + (r * vec(l.point)).cross(f);
+    add_load<double>(l, evaluate(l.function, t).value, r, force, torque);
   }
   for (int p = incidence_start_[bi]; p < incidence_start_[bi + 1]; ++p) {
     const int code = incidence_[static_cast<std::size_t>(p)];
@@ -358,9 +285,11 @@ void MultibodySystem::write_derivative(Eigen::Index i, double t, const Eigen::Ve
   const int drv = driver_of_body_[bi];
   if (drv >= 0) {
     const Driver& d = model_.drivers[static_cast<std::size_t>(drv)];
+    const DriveMemo& memo = drive_memo_[static_cast<std::size_t>(drv)];
+    const int slot = memo.find(t);  // kept by this evaluation's kinematics
     for (int k = 0; k < 3; ++k) {
       dydt[layout_.position(i) + k] = vel_(k, i);
-      dydt[layout_.velocity(i) + k] = evaluate(d.displacement[static_cast<std::size_t>(k)], t).accel;
+      dydt[layout_.velocity(i) + k] = slot >= 0 ? memo.accel[slot](k) : evaluate(d.displacement[static_cast<std::size_t>(k)], t).accel;
     }
     dydt.segment<4>(layout_.orientation(i)).setZero();
     dydt.segment<3>(layout_.angular_velocity(i)).setZero();
@@ -370,9 +299,8 @@ void MultibodySystem::write_derivative(Eigen::Index i, double t, const Eigen::Ve
   const Eigen::Vector4d q = y.segment<4>(layout_.orientation(i));
   dydt.segment<3>(layout_.position(i)) = y.segment<3>(layout_.velocity(i));
   dydt.segment<3>(layout_.velocity(i)) = inv_mass_[bi] * force;
-  const Eigen::Vector3d tb = rot_[bi].transpose() * torque;
-  dydt.segment<3>(layout_.angular_velocity(i)) = inv_inertia_[bi] * (tb - w.cross(inertia_[bi] * w));
-  dydt.segment<4>(layout_.orientation(i)) = 0.5 * quat_multiply(q, Eigen::Vector4d(0.0, w[0], w[1], w[2]));
+  dydt.segment<3>(layout_.angular_velocity(i)) = angular_acceleration<double>(rot_[bi], w, torque, inertia_[bi], inv_inertia_[bi]);
+  dydt.segment<4>(layout_.orientation(i)) = quaternion_rate<double>(q, w);
 }
 
 [[gnu::always_inline]] inline void MultibodySystem::body_derivative(Eigen::Index i, double t, const Eigen::VectorXd& y,
@@ -439,7 +367,7 @@ double MultibodySystem::elastic_energy(const CompiledJoint& j) const {
     const double e = delta.norm() - j.rest_length;
     return 0.5 * j.kt[0] * e * e;
   }
-  const Deflection def = bushing_deflection(j);
+  const DeflectionT<double> def = bushing_deflection<double>(j, body_frame_at(j.a), body_frame_at(j.b));
   const Eigen::Vector3d& theta = def.rotation.theta;
   double e = -j.preload_force.dot(def.d) - j.preload_torque.dot(theta);
   for (int axis = 0; axis < 6; ++axis) {

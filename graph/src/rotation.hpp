@@ -8,50 +8,72 @@
 
 namespace mbsflow {
 
-inline Eigen::Matrix3d rotation_matrix(const Eigen::Vector4d& q) {
-  const double w = q[0], x = q[1], y = q[2], z = q[3];
-  const double s = 2.0 / (w * w + x * x + y * y + z * z);
-  const double xs = x * s, ys = y * s, zs = z * s;
-  const double wx = w * xs, wy = w * ys, wz = w * zs;
-  const double xx = x * xs, xy = x * ys, xz = x * zs;
-  const double yy = y * ys, yz = y * zs, zz = z * zs;
-  Eigen::Matrix3d r;
+// The helpers are templates on the scalar so that the analytic Jacobian can differentiate
+// the same arithmetic (analytic_jacobian.cpp); the double overloads below take Eigen
+// expressions (columns of a matrix) as well.
+template <class S>
+using Vector3T = Eigen::Matrix<S, 3, 1>;
+template <class S>
+using Vector4T = Eigen::Matrix<S, 4, 1>;
+template <class S>
+using Matrix3T = Eigen::Matrix<S, 3, 3>;
+
+template <class S>
+[[gnu::always_inline]] inline Matrix3T<S> rotation_matrix(const Vector4T<S>& q) {
+  const S w = q[0], x = q[1], y = q[2], z = q[3];
+  const S s = 2.0 / (w * w + x * x + y * y + z * z);
+  const S xs = x * s, ys = y * s, zs = z * s;
+  const S wx = w * xs, wy = w * ys, wz = w * zs;
+  const S xx = x * xs, xy = x * ys, xz = x * zs;
+  const S yy = y * ys, yz = y * zs, zz = z * zs;
+  Matrix3T<S> r;
   r << 1.0 - (yy + zz), xy - wz, xz + wy,
        xy + wz, 1.0 - (xx + zz), yz - wx,
        xz - wy, yz + wx, 1.0 - (xx + yy);
   return r;
 }
+inline Eigen::Matrix3d rotation_matrix(const Eigen::Vector4d& q) { return rotation_matrix<double>(q); }
 
-inline Eigen::Vector4d quat_multiply(const Eigen::Vector4d& a, const Eigen::Vector4d& b) {
+template <class S>
+[[gnu::always_inline]] inline Vector4T<S> quat_multiply(const Vector4T<S>& a, const Vector4T<S>& b) {
   return {a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3],
           a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2],
           a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1],
           a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0]};
 }
+inline Eigen::Vector4d quat_multiply(const Eigen::Vector4d& a, const Eigen::Vector4d& b) { return quat_multiply<double>(a, b); }
 
-inline Eigen::Vector4d quat_conjugate(const Eigen::Vector4d& q) { return {q[0], -q[1], -q[2], -q[3]}; }
+template <class S>
+[[gnu::always_inline]] inline Vector4T<S> quat_conjugate(const Vector4T<S>& q) {
+  return {q[0], -q[1], -q[2], -q[3]};
+}
+inline Eigen::Vector4d quat_conjugate(const Eigen::Vector4d& q) { return quat_conjugate<double>(q); }
 
 // Logarithm of a rotation: its rotation vector theta (axis * angle, angle in [0, pi]) and
 // the coefficient c of the left Jacobian of SO(3),
 //   J_l(theta)^-T = I + [theta]/2 + c [theta]^2,  c = 1/angle^2 - cot(angle/2) / (2 angle),
 // with cot(angle/2) = w/|v| read off the quaternion, so no sine or cosine is evaluated.
-struct RotationLog {
-  Eigen::Vector3d theta;
-  double c;
+template <class S>
+struct RotationLogT {
+  Vector3T<S> theta;
+  S c;
 };
+using RotationLog = RotationLogT<double>;
 
-inline RotationLog rotation_log(const Eigen::Vector4d& q) {
+template <class S>
+[[gnu::always_inline]] inline RotationLogT<S> rotation_log(const Vector4T<S>& q) {
+  using std::atan2;  // and Eigen's, for automatic differentiation, by argument-dependent lookup
   const double sign = q[0] < 0.0 ? -1.0 : 1.0;  // shortest rotation
-  const double w = sign * q[0];
-  const Eigen::Vector3d v = sign * q.tail<3>();
-  const double s = v.norm();
-  RotationLog r;
-  double a2;
+  const S w = sign * q[0];
+  const Vector3T<S> v = sign * q.template tail<3>();
+  const S s = v.norm();  // for dual numbers its derivatives are not finite at 0, but then unused
+  RotationLogT<S> r;
+  S a2;
   if (s < 1e-7 * w) {  // angle/s = 2/w (1 - (s/w)^2/3 + ...)
     r.theta = (2.0 / w) * v;
     a2 = r.theta.squaredNorm();
   } else {
-    const double angle = 2.0 * std::atan2(s, w);
+    const S angle = 2.0 * atan2(s, w);
     r.theta = (angle / s) * v;
     a2 = angle * angle;
     if (a2 >= 1e-2) {
@@ -62,15 +84,20 @@ inline RotationLog rotation_log(const Eigen::Vector4d& q) {
   r.c = 1.0 / 12.0 + a2 * (1.0 / 720.0 + a2 * (1.0 / 30240.0 + a2 / 1209600.0));  // series, error < 1e-16
   return r;
 }
+inline RotationLog rotation_log(const Eigen::Vector4d& q) { return rotation_log<double>(q); }
 
 inline Eigen::Vector3d rotation_vector(const Eigen::Vector4d& q) { return rotation_log(q).theta; }
 
 // J_l(theta)^-T tau: maps the gradient of an energy in rotation-vector coordinates to the
 // torque this energy exerts, so that a bushing's rotational spring is exactly
 // conservative at any angle below pi.
-inline Eigen::Vector3d rotation_gradient_to_torque(const RotationLog& r, const Eigen::Vector3d& tau) {
-  const Eigen::Vector3d txt = r.theta.cross(tau);
+template <class S>
+[[gnu::always_inline]] inline Vector3T<S> rotation_gradient_to_torque(const RotationLogT<S>& r, const Vector3T<S>& tau) {
+  const Vector3T<S> txt = r.theta.cross(tau);
   return tau + 0.5 * txt + r.c * r.theta.cross(txt);
+}
+inline Eigen::Vector3d rotation_gradient_to_torque(const RotationLog& r, const Eigen::Vector3d& tau) {
+  return rotation_gradient_to_torque<double>(r, tau);
 }
 
 }  // namespace mbsflow

@@ -38,10 +38,10 @@ JacobianEvaluator::JacobianEvaluator(const OdeProblem& problem, bool finite_diff
     pattern_.setFromTriplets(all.begin(), all.end());
   }
   pattern_.makeCompressed();
+  jac_ = pattern_;  // the problem's Jacobian writes its values into this pattern too
   if (differences_) {
     colour_ = colour_columns(pattern_);
     colours_ = colour_.empty() ? 0 : *std::max_element(colour_.begin(), colour_.end()) + 1;
-    jac_ = pattern_;
   }
 }
 

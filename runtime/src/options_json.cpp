@@ -16,7 +16,7 @@ Method method_of(const std::string& name) {
 }  // namespace
 
 json options_to_json(const RunOptions& o) {
-  return {{"method", method_name(o.method)},  {"variant", o.variant}, {"linear_solver", o.linear_solver}, {"t_start", o.t_start},
+  return {{"method", method_name(o.method)},  {"variant", o.variant}, {"linear_solver", o.linear_solver}, {"jacobian", o.jacobian}, {"t_start", o.t_start},
           {"t_end", o.t_end},                 {"step", o.step},       {"fixed_step", o.fixed_step},       {"output_every", o.output_every},
           {"output_interval", o.output_interval}, {"rtol", o.rtol},   {"atol", o.atol}};
 }
@@ -27,6 +27,7 @@ RunOptions options_from_json(const json& j) {
     o.method = method_of(j.at("method").get<std::string>());
     o.variant = j.at("variant").get<std::string>();
     o.linear_solver = j.at("linear_solver").get<std::string>();
+    o.jacobian = j.at("jacobian").get<std::string>();
     o.t_start = j.at("t_start").get<double>();
     o.t_end = j.at("t_end").get<double>();
     o.step = j.at("step").get<double>();

@@ -92,7 +92,7 @@ RunSummary run_simulation(MultibodySystem& sys, const RunOptions& o, ResultSink*
   RunSummary out;
   const auto start = Clock::now();
   Eigen::VectorXd y = sys.initial_state();
-  const StepperSystem system = stepper_system(sys);
+  const StepperSystem system = stepper_system(sys, o.jacobian);
   std::unique_ptr<Stepper> stepper = entry.make(system, stepper_settings(o));
   stepper->start(o.t_start, y, o.t_end);
   if (sink) sink->begin(sys);

@@ -82,6 +82,8 @@ inline void check_options(const RunOptions& o) {
   if (!(o.t_end > o.t_start)) throw InputError("t_end must be greater than t_start");
   if (!(o.step > 0.0) || !std::isfinite(o.step)) throw InputError("the step must be a positive finite number");
   if (o.output_every < 1) throw InputError("output_every must be >= 1");
+  if (o.jacobian != "auto" && o.jacobian != "differences")
+    throw InputError("the Jacobian must be auto (analytic where the model has one) or differences, not '" + o.jacobian + "'");
   if (o.fixed_step && o.method != Method::tirk && o.method != Method::colloc)
     throw InputError(std::string("a fixed step without error control is for colloc and tirk, not ") + o.method.name());
   if (o.output_interval < 0.0 || !std::isfinite(o.output_interval))

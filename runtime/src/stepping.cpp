@@ -20,7 +20,7 @@ Simulation::Simulation(const Model& model) : Simulation(model, options_from_mode
 Simulation::Simulation(const Model& model, const RunOptions& options)
     : system_(std::make_unique<MultibodySystem>(model)), o_(options) {
   check_options(o_);
-  stepper_system_ = stepper_system(*system_);
+  stepper_system_ = stepper_system(*system_, o_.jacobian);
   stepper_ = stepper_entry(o_.method).make(stepper_system_, stepper_settings(o_));
   stepper_->start(o_.t_start, system_->initial_state(), o_.t_end);
 }
@@ -30,6 +30,14 @@ Simulation::~Simulation() = default;
 void Simulation::add_force_element(std::shared_ptr<const ForceElement> element) {
   system_->add_force_element(std::move(element));
   restart_ = true;
+  if (stepper_system_.jacobian && !system_->has_analytic_jacobian()) {
+    // The element has no analytic Jacobian: a stepper that differences (its counters restart).
+    const double t = stepper_->t(), t_end = stepper_->t_end();
+    const Eigen::VectorXd y = stepper_->y();
+    stepper_system_ = stepper_system(*system_, o_.jacobian);
+    stepper_ = stepper_entry(o_.method).make(stepper_system_, stepper_settings(o_));
+    stepper_->start(t, y, t_end);
+  }
 }
 
 void Simulation::set_load(int body, const Eigen::Vector3d& force, const Eigen::Vector3d& torque) {

@@ -69,7 +69,8 @@ TEST_CASE("implicit submodels of a loosely coupled run give the same numbers eve
   }
 }
 
-TEST_CASE("tirk on a stiff chain: sparse Jacobians by colour, KLU and SparseLU agree, and the dense output matches DOPRI5",
+TEST_CASE("tirk on a stiff chain: analytic and coloured-difference Jacobians, KLU and SparseLU agree, and the dense output "
+          "matches DOPRI5",
           "[runtime][implicit][sparse]") {
   ChainParams chain;
   chain.bodies = 40;  // 520 equations: the sparse path
@@ -81,34 +82,46 @@ TEST_CASE("tirk on a stiff chain: sparse Jacobians by colour, KLU and SparseLU a
   o.method = Method::dopri5;
   o.rtol = o.atol = 1e-10;
   MultibodySystem sys(m);
+  REQUIRE(sys.has_analytic_jacobian());
   test::MemorySink reference;
   run_simulation(sys, o, &reference);
   o.method = Method::tirk;
   o.rtol = o.atol = 1e-7;
-  std::vector<test::MemorySink> runs(2);
+  std::vector<test::MemorySink> runs(3);
   std::vector<RunSummary> summaries;
-  for (const char* solver : {"klu", "sparselu"}) {
+  for (const auto& [solver, jacobian] : {std::pair{"klu", "auto"}, {"sparselu", "auto"}, {"klu", "differences"}}) {
     o.linear_solver = solver;
+    o.jacobian = jacobian;
     summaries.push_back(run_simulation(sys, o, &runs[summaries.size()]));
   }
-  const RunSummary& s = summaries[0];
-  INFO(s.steps << " steps, " << s.jacobians << " Jacobians, " << s.factorizations << " factorisations, " << s.evaluations
-               << " evaluations");
-  CHECK(s.jacobians > 0);
-  CHECK(s.factorizations >= s.jacobians);
-  // The triangular iteration's own contraction rate does not call for a new Jacobian: it
-  // is kept over many steps (it was renewed at almost every step before).
-  CHECK(s.jacobians * 5 < s.steps);
-  // Differencing by colour: far fewer evaluations per Jacobian than the 520 columns.
-  CHECK(s.evaluations < 100 * (s.jacobians + s.steps));
+  for (const RunSummary& s : summaries) {
+    INFO(s.steps << " steps, " << s.jacobians << " Jacobians, " << s.factorizations << " factorisations, " << s.evaluations
+                 << " evaluations");
+    CHECK(s.jacobians > 0);
+    CHECK(s.factorizations >= s.jacobians);
+    // The iteration's own contraction rate does not call for a new Jacobian: it is kept
+    // over many steps (it was renewed at almost every step before).
+    CHECK(s.jacobians * 5 < s.steps);
+  }
+  // Differencing by colour: far fewer evaluations per Jacobian than the 520 columns; the
+  // analytic Jacobian needs none.
+  const RunSummary& fd = summaries[2];
+  CHECK(fd.evaluations < 100 * (fd.jacobians + fd.steps));
+  CHECK(summaries[0].evaluations < fd.evaluations);
   REQUIRE(runs[0].states.size() == reference.states.size());
-  double gap = 0.0, solvers = 0.0;
+  double gap = 0.0, solvers = 0.0, jacobians = 0.0;
   for (std::size_t k = 0; k < reference.states.size(); ++k) {
     gap = std::max(gap, test::position_gap(sys, runs[0].states[k], reference.states[k]));
+    gap = std::max(gap, test::position_gap(sys, runs[2].states[k], reference.states[k]));
     solvers = std::max(solvers, (runs[0].states[k] - runs[1].states[k]).cwiseAbs().maxCoeff());
+    jacobians = std::max(jacobians, (runs[0].states[k] - runs[2].states[k]).cwiseAbs().maxCoeff());
   }
   CHECK(gap < 1e-5);
-  CHECK(solvers < 1e-6);  // roundoff apart, within the run's tolerance
+  CHECK(solvers < 1e-6);    // roundoff apart, within the run's tolerance
+  CHECK(jacobians < 1e-6);  // Newton converges to the same stages whichever Jacobian it iterates with
+  o.jacobian = "exact";
+  CHECK_THROWS_WITH(run_simulation(sys, o, nullptr), Catch::Contains("auto (analytic where the model has one) or differences"));
+  o.jacobian = "auto";
   o.linear_solver = "lu";
   CHECK_THROWS_WITH(run_simulation(sys, o, nullptr), Catch::Contains("unknown linear solver 'lu'"));
 }

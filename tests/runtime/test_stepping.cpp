@@ -98,3 +98,30 @@ TEST_CASE("the implicit methods integrate a multibody model to its exact solutio
     CHECK(r.steps < 1000);  // its own steps, not the 1 ms grid
   }
 }
+
+namespace {
+
+// A second spring to ground along x, as a user element: it has no analytic Jacobian.
+struct ExtraSpring final : ForceElement {
+  double k;
+  explicit ExtraSpring(double k_) : k(k_) {}
+  std::vector<int> bodies() const override { return {0}; }
+  void evaluate(double, const Kinematics& kin, std::span<Wrench> out) const override {
+    out[0].force = Eigen::Vector3d(-k * kin.position(0).x(), 0.0, 0.0);
+  }
+};
+
+}  // namespace
+
+TEST_CASE("an implicit Simulation given a force element without an analytic Jacobian goes on with differences",
+          "[runtime][stepping][jacobian]") {
+  const double k = 800.0, w = std::sqrt(2 * k / 2.0);  // the element doubles the stiffness along x
+  RunOptions o = options_from_model(spring_mass(k));
+  o.method = Method::tirk;
+  o.rtol = o.atol = 1e-9;
+  Simulation sim(spring_mass(k), o);
+  sim.add_force_element(std::make_shared<ExtraSpring>(k));
+  sim.advance_to(0.5);
+  CHECK(sim.body(0).position.x() == Approx(0.1 * std::cos(w * 0.5)).margin(1e-6));
+  CHECK(sim.stats().jacobians > 0);
+}

@@ -12,6 +12,8 @@ struct ForceTable {
 };
 
 double table_force(const ForceTable& t, double x);
+// d force / d x at x: the slope of the segment (or end extension) that holds x.
+double table_slope(const ForceTable& t, double x);
 // Integral of the force from 0 to x (the stored elastic energy of that axis).
 double table_energy(const ForceTable& t, double x);
 // Largest slope of the table (for the stable-step estimate).

@@ -11,9 +11,11 @@
 // added, so a body's derivative does not depend on how the model is later partitioned.
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
+#include <array>
 #include <cmath>
 #include <memory>
 #include <span>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -24,6 +26,7 @@
 namespace mbsflow {
 
 struct BodyMotion;  // constraint_rows.hpp
+struct BodyFrameView;  // force_laws.hpp
 
 namespace detail {
 // Owns a T that this header does not define and copies it deeply (the copy and destroy
@@ -108,6 +111,15 @@ class MultibodySystem {
   // The implicit methods difference the Jacobian by this pattern's column colouring and
   // factor it as a sparse matrix.
   Eigen::SparseMatrix<double> jacobian_pattern() const;
+  // Whether jacobian() can give d rhs / d y: every force comes from gravity, loads, bushings
+  // and springs (the rigid and kinematic joints and user force elements have no analytic
+  // Jacobian; the methods then difference by the pattern's colouring), and the system is
+  // the whole model. Else *why says which item stands in the way.
+  bool has_analytic_jacobian(std::string* why = nullptr) const;
+  // d rhs / d y at (t, y), exact up to rounding (forward-mode differentiation of each
+  // element's force law, assembled body by body along the body graph), written into jac,
+  // a matrix of jacobian_pattern()'s pattern. Throws std::logic_error without one.
+  void jacobian(double t, const Eigen::VectorXd& y, Eigen::SparseMatrix<double>& jac);
 
   // The three phases of rhs(), public so the benchmark can time them apart.
   void update_kinematics(double t, const Eigen::VectorXd& y);
@@ -137,7 +149,6 @@ class MultibodySystem {
     Eigen::Vector3d kt, ct, kr, cr, preload_force, preload_torque;
     double rest_length = 0.0;
   };
-  struct Deflection;  // defined in the .cpp
   struct Constraints;  // multibody_constraints.cpp
   void compile_constraints();
   void kinematic_joint_force(std::size_t k);
@@ -155,8 +166,10 @@ class MultibodySystem {
   void impose(const Driver& d, double t, Eigen::VectorXd& y) const;
   void joint_force(std::size_t k);
   void body_derivative(Eigen::Index i, double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const;
-  Deflection bushing_deflection(const CompiledJoint& j) const;
-  Eigen::Vector3d axis_forces(const CompiledJoint& j, const Eigen::Vector3d& d, int first_axis) const;
+  BodyFrameView body_frame_at(int i) const;  // kinematics index i of the current evaluation
+  const std::array<ForceTable, 6>* tables_of(const CompiledJoint& j) const {
+    return j.tables >= 0 ? &tables_[static_cast<std::size_t>(j.tables)] : nullptr;
+  }
   double elastic_energy(const CompiledJoint& j) const;
 
   Model model_;
@@ -171,14 +184,19 @@ class MultibodySystem {
   std::vector<int> incidence_start_, incidence_;
   std::vector<int> load_start_, load_index_;
   std::vector<int> driver_of_body_;  // -1 if free
-  // The prescribed displacement and rate of each driver at its last few times: implicit
-  // methods and difference Jacobians evaluate many states at one time, and a rough-track
-  // driver costs a hundred sines per evaluation.
+  // The prescribed displacement, rate and acceleration of each driver at its last few
+  // times: implicit methods and difference Jacobians evaluate many states at one time, and
+  // a rough-track driver costs a hundred sines per evaluation.
   struct DriveMemo {
     static constexpr int slots = 4;
     double t[slots] = {NAN, NAN, NAN, NAN};
-    Eigen::Vector3d value[slots], rate[slots];
+    Eigen::Vector3d value[slots], rate[slots], accel[slots];
     int next = 0;
+    int find(double time) const {  // the slot of time, or -1
+      for (int s = 0; s < slots; ++s)
+        if (t[s] == time) return s;
+      return -1;
+    }
   };
   std::vector<DriveMemo> drive_memo_;
   // Force elements: their wrenches, and per body the slots into element_out_ in element order.

@@ -20,6 +20,9 @@ struct RunOptions {
   Method method = Method::rk4;  // any method of the stepper registry (mbsflow/methods/stepper.hpp)
   std::string variant;           // its variant (colloc: "m,s[,order]", tirk: tableau and/or iteration); empty: default
   std::string linear_solver = "auto";  // implicit methods' Newton matrices: auto, dense, banded, klu, sparselu
+  // Implicit methods' Jacobian: "auto" (analytic where every force element has one, see
+  // MultibodySystem::has_analytic_jacobian; else differences by colour) or "differences".
+  std::string jacobian = "auto";
   double t_start = 0.0;
   double t_end = 1.0;
   double step = 1e-3;    // fixed-step methods (RK4): the step; adaptive ones: the first step

@@ -1,0 +1,186 @@
+// The analytic Jacobian of the multibody right-hand side: each spring's and bushing's
+// wrench differentiated in forward-mode dual numbers with respect to the 26 state numbers
+// of its two bodies (force_laws.hpp, the arithmetic the right-hand side runs), then
+// assembled body by body along the body graph with the chain rule through
+//   v' = F / m,  w' = J^-1 (R(q)^T T - w x J w),  q' = q (x) (0, w) / 2,  r' = v.
+// Exact up to rounding, so Newton converges at its own rate, and no right-hand-side call
+// is spent on differences.
+#include <Eigen/Core>
+#include <unsupported/Eigen/AutoDiff>
+
+#include <algorithm>
+#include <stdexcept>
+
+#include "force_laws.hpp"
+#include "mbsflow/graph/multibody_system.hpp"
+
+namespace mbsflow {
+namespace {
+
+constexpr int body_states = 13;  // position 3, quaternion 4, velocity 3, angular velocity 3
+using Dual = Eigen::AutoDiffScalar<Eigen::Matrix<double, 2 * body_states, 1>>;
+using Block6 = Eigen::Matrix<double, 6, body_states>;
+
+// Body i's state numbers as the variables first..first+12, in the order position,
+// quaternion, velocity, body-frame angular velocity.
+struct SeededState {
+  Vector3T<Dual> r, v, w;
+  Vector4T<Dual> q;
+};
+SeededState seeded_state(const Eigen::VectorXd& y, const StateLayout& l, Eigen::Index i, int first) {
+  SeededState s;
+  for (int k = 0; k < 3; ++k) {
+    s.r[k] = Dual(y[l.position(i) + k], 2 * body_states, first + k);
+    s.v[k] = Dual(y[l.velocity(i) + k], 2 * body_states, first + 7 + k);
+    s.w[k] = Dual(y[l.angular_velocity(i) + k], 2 * body_states, first + 10 + k);
+  }
+  for (int k = 0; k < 4; ++k) s.q[k] = Dual(y[l.orientation(i) + k], 2 * body_states, first + 3 + k);
+  return s;
+}
+BodyFrameT<Dual> seeded_frame(const Eigen::VectorXd& y, const StateLayout& l, Eigen::Index i, int first) {
+  const SeededState s = seeded_state(y, l, i, first);
+  return body_frame<Dual>(s.r, s.q, s.v, s.w);
+}
+
+// The index in y of body b's state number c (0..12, in seeded_frame's order).
+Eigen::Index state_index(const StateLayout& l, Eigen::Index b, int c) {
+  if (c < 3) return l.position(b) + c;
+  if (c < 7) return l.orientation(b) + c - 3;
+  if (c < 10) return l.velocity(b) + c - 7;
+  return l.angular_velocity(b) + c - 10;
+}
+
+// The stored value of jac at (row, col), which the pattern must hold.
+double& entry(Eigen::SparseMatrix<double>& jac, Eigen::Index row, Eigen::Index col) {
+  const int* first = jac.innerIndexPtr() + jac.outerIndexPtr()[col];
+  const int* last = jac.innerIndexPtr() + jac.outerIndexPtr()[col + 1];
+  const int* at = std::lower_bound(first, last, static_cast<int>(row));
+  if (at == last || *at != row) throw std::logic_error("multibody Jacobian: entry outside the Jacobian pattern");
+  return jac.valuePtr()[at - jac.innerIndexPtr()];
+}
+
+// Derivative rows of a dual vector, columns first..first+12.
+template <int Rows>
+Eigen::Matrix<double, Rows, body_states> derivatives(const Eigen::Matrix<Dual, Rows, 1>& v, int first) {
+  Eigen::Matrix<double, Rows, body_states> d;
+  for (int r = 0; r < Rows; ++r) d.row(r) = v[r].derivatives().template segment<body_states>(first).transpose();
+  return d;
+}
+
+}  // namespace
+
+bool MultibodySystem::has_analytic_jacobian(std::string* why) const {
+  auto no = [&](std::string reason) {
+    if (why) *why = std::move(reason);
+    return false;
+  };
+  if (active_ != layout_.bodies) return no("the system is a submodel (its ghost bodies' states come from other submodels)");
+  for (std::size_t k = 0; k < joints_.size(); ++k)
+    if (joints_[k].kinematic >= 0) {
+      const Joint& j = model_.joints[k];
+      return no(std::string(j.rigid ? "rigid " : "compliant ") + joint_type_name(j.type) + " joint '" + j.name +
+                "' (kinematic joints have no analytic Jacobian yet)");
+    }
+  if (!elements_.empty()) return no("the model has user force elements");
+  return true;
+}
+
+void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::SparseMatrix<double>& jac) {
+  if (std::string why; !has_analytic_jacobian(&why)) throw std::logic_error("no analytic Jacobian: " + why);
+  update_kinematics(t, y);
+  compute_joint_forces();  // the torques, whose value w' depends on through R(q)^T
+  std::fill_n(jac.valuePtr(), jac.nonZeros(), 0.0);
+  const Eigen::Index n = layout_.bodies;
+  // A kinematics index whose state is a variable: not ground (index n), not driven.
+  auto free = [&](int k) { return k < n && driver_of_body_[static_cast<std::size_t>(k)] < 0; };
+  auto constant_frame = [&](int k) {
+    BodyFrameT<Dual> f;
+    f.rot = rot_[static_cast<std::size_t>(k)].cast<Dual>();
+    f.pos = pos_.col(k).cast<Dual>();
+    f.vel = vel_.col(k).cast<Dual>();
+    f.omega = omega_.col(k).cast<Dual>();
+    f.quat = quat_.col(k).cast<Dual>();
+    return f;
+  };
+
+  // d (wrench of joint k) / d (states of its body1, then of its body2).
+  std::vector<Eigen::Matrix<double, 9, 2 * body_states>> joint_derivatives(joints_.size());
+  for (std::size_t k = 0; k < joints_.size(); ++k) {
+    const CompiledJoint& j = joints_[k];
+    const BodyFrameT<Dual> a = free(j.a) ? seeded_frame(y, layout_, j.a, 0) : constant_frame(j.a);
+    const BodyFrameT<Dual> b = free(j.b) ? seeded_frame(y, layout_, j.b, body_states) : constant_frame(j.b);
+    Eigen::Matrix<Dual, 9, 1> out;
+    compliant_joint_wrench<Dual>(j, tables_of(j), a, b, out);
+    for (int r = 0; r < 9; ++r) joint_derivatives[k].row(r) = out[r].derivatives().transpose();
+  }
+
+  std::vector<std::pair<int, Block6>> blocks;  // per body read: d (force, torque) / d (its state)
+  auto block_of = [&](int body) -> Block6& {
+    for (auto& [b, m] : blocks)
+      if (b == body) return m;
+    return blocks.emplace_back(body, Block6::Zero()).second;
+  };
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const auto bi = static_cast<std::size_t>(i);
+    if (!free(static_cast<int>(i))) continue;  // a driven body's rates do not depend on the state
+    blocks.clear();
+    const SeededState own = seeded_state(y, layout_, i, 0);
+    const Matrix3T<Dual> rot = rotation_matrix<Dual>(own.q);
+    // Loads: through the orientation only.
+    Vector3T<Dual> load_force = Vector3T<Dual>::Zero(), load_torque = Vector3T<Dual>::Zero();
+    for (int p = load_start_[bi]; p < load_start_[bi + 1]; ++p) {
+      const Load& l = model_.loads[static_cast<std::size_t>(load_index_[static_cast<std::size_t>(p)])];
+      add_load<Dual>(l, evaluate(l.function, t).value, rot, load_force, load_torque);
+    }
+    Block6& self = block_of(static_cast<int>(i));
+    self.topRows<3>() = derivatives<3>(load_force, 0);
+    self.bottomRows<3>() = derivatives<3>(load_torque, 0);
+    // Joints: body1 gets minus the force and the torque rows 3-5, body2 the force and rows 6-8.
+    for (int p = incidence_start_[bi]; p < incidence_start_[bi + 1]; ++p) {
+      const int code = incidence_[static_cast<std::size_t>(p)];
+      const CompiledJoint& j = joints_[static_cast<std::size_t>(code / 2)];
+      const auto& d = joint_derivatives[static_cast<std::size_t>(code / 2)];
+      const bool body2 = code & 1;
+      for (int side = 0; side < 2; ++side) {
+        const int other = side == 0 ? j.a : j.b;
+        if (!free(other)) continue;
+        Block6& m = block_of(other);
+        const auto cols = d.middleCols<body_states>(side * body_states);
+        if (body2)
+          m.topRows<3>() += cols.topRows<3>();
+        else
+          m.topRows<3>() -= cols.topRows<3>();
+        m.bottomRows<3>() += cols.middleRows<3>(body2 ? 6 : 3);
+      }
+    }
+    // w' = J^-1 (R^T T - w x J w): the torque's derivatives through J^-1 R^T; R(q) and the
+    // gyroscopic term through the body's own quaternion and angular velocity.
+    Eigen::Vector3d force, torque;
+    applied_wrench(i, t, force, torque);
+    const Eigen::Matrix3d to_w = inv_inertia_[bi] * rot_[bi].transpose();
+    const Vector3T<Dual> w_rate =
+        angular_acceleration<Dual>(rot, own.w, Vector3T<Dual>(torque.cast<Dual>()), inertia_[bi], inv_inertia_[bi]);
+    for (const auto& [b, m] : blocks) {
+      Block6 rows;
+      rows.topRows<3>() = inv_mass_[bi] * m.topRows<3>();
+      rows.bottomRows<3>() = to_w * m.bottomRows<3>();
+      if (b == i) rows.bottomRows<3>() += derivatives<3>(w_rate, 0);
+      for (int c = 0; c < body_states; ++c) {
+        const Eigen::Index col = state_index(layout_, b, c);
+        for (int r = 0; r < 3; ++r) {
+          entry(jac, layout_.velocity(i) + r, col) = rows(r, c);
+          entry(jac, layout_.angular_velocity(i) + r, col) = rows(3 + r, c);
+        }
+      }
+    }
+    // q' = q (x) (0, w) / 2 and r' = v.
+    const Eigen::Matrix<double, 4, body_states> q_rate = derivatives<4>(quaternion_rate<Dual>(own.q, own.w), 0);
+    for (int r = 0; r < 4; ++r) {
+      for (int c = 0; c < 4; ++c) entry(jac, layout_.orientation(i) + r, layout_.orientation(i) + c) = q_rate(r, 3 + c);
+      for (int c = 0; c < 3; ++c) entry(jac, layout_.orientation(i) + r, layout_.angular_velocity(i) + c) = q_rate(r, 10 + c);
+    }
+    for (int k = 0; k < 3; ++k) entry(jac, layout_.position(i) + k, layout_.velocity(i) + k) = 1.0;
+  }
+}
+
+}  // namespace mbsflow

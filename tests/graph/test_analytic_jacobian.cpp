@@ -1,0 +1,175 @@
+// The analytic Jacobian of the multibody right-hand side against central differences, for
+// every element it covers (bushings with frames, tables, preload and damping at small and
+// large rotations, springs, joints to ground, loads in either frame with time functions,
+// a driven body, gravity, the gyroscopic terms), and its refusal where it has none.
+#include <catch2/catch.hpp>
+
+#include <Eigen/Geometry>
+#include <random>
+
+#include "mbsflow/graph/multibody_system.hpp"
+#include "test_support.hpp"
+
+using namespace mbsflow;
+
+namespace {
+
+struct Pulling final : ForceElement {
+  std::vector<int> bodies() const override { return {0}; }
+  void evaluate(double, const Kinematics& k, std::span<Wrench> out) const override { out[0].force = -k.position(0); }
+};
+
+ForceTable table(double k1, double k2) {
+  ForceTable t;
+  t.deflection = {-1.0, -0.02, 0.0, 0.02, 1.0};
+  t.force = {-0.02 * k1 - 0.98 * k2, -0.02 * k1, 0.0, 0.02 * k1, 0.02 * k1 + 0.98 * k2};
+  return t;
+}
+
+// Six bodies of unequal inertia: a bushing to ground with a rotated frame, bushings between
+// bodies (tables, preload, damping), a spring, a driven body, and loads.
+Model jacobian_model() {
+  Model m;
+  m.gravity = {0.3, -9.81, 0.1};
+  for (int i = 0; i < 6; ++i) {
+    Body b = test::make_body("b", 1.0 + 0.3 * i, {0.02 + 0.01 * i, 0.03, 0.05, 0.002, -0.001, 0.003}, {0.6 * i, 0.05 * i, 0.0});
+    b.name += std::to_string(i);
+    m.bodies.push_back(b);
+  }
+  Joint g = test::make_bushing(ground, 0, {0, 0, 0}, {-0.3, 0, 0}, {2e4, 3e4, 4e4, 50, 60, 70}, {5, 6, 7, 0.1, 0.2, 0.3});
+  g.frame1 = {std::cos(0.2), std::sin(0.2), 0.0, 0.0};
+  m.joints.push_back(g);
+  Joint b1 = test::make_bushing(0, 1, {0.3, 0, 0}, {-0.3, 0, 0}, {1e4, 2e4, 3e4, 40, 30, 20}, {1, 2, 3, 0.05, 0.04, 0.03});
+  b1.frame1 = {std::cos(0.3), 0.0, std::sin(0.3), 0.0};
+  b1.frame2 = {std::cos(-0.1), 0.0, 0.0, std::sin(-0.1)};
+  b1.tables[1] = table(2e4, 5e3);
+  b1.tables[4] = table(30, 90);
+  b1.preload = {1, -2, 3, 0.1, -0.2, 0.3};
+  m.joints.push_back(b1);
+  m.joints.push_back(test::make_bushing(1, 2, {0.3, 0.02, 0}, {-0.3, 0, 0.01}, {3e4, 3e4, 3e4, 80, 80, 80}, {2, 2, 2, 0.1, 0.1, 0.1}));
+  Joint spring = test::make_joint(JointType::spring, 2, 3, {0.3, 0.1, 0}, {-0.3, 0, 0.05});
+  spring.stiffness = {5e3, 0, 0, 0, 0, 0};
+  spring.damping = {4, 0, 0, 0, 0, 0};
+  spring.rest_length = 0.1;
+  m.joints.push_back(spring);
+  m.joints.push_back(test::make_bushing(3, 4, {0.3, 0, 0}, {-0.3, 0, 0}, {1e4, 1e4, 1e4, 20, 20, 20}, {1, 1, 1, 0.01, 0.01, 0.01}));
+  m.joints.push_back(test::make_bushing(4, 5, {0.3, 0, 0}, {-0.3, 0, 0}, {1e4, 1e4, 1e4, 20, 20, 20}));
+  Driver d;
+  d.body = 5;
+  d.velocity = {0.2, 0, 0};
+  d.displacement[1] = TimeFunction::harmonic(0.01, 3.0);
+  m.drivers.push_back(d);
+  Load world;
+  world.body = 1;
+  world.force = {3, -4, 5};
+  world.torque = {0.2, 0.1, -0.3};
+  world.point = {0.1, 0.2, -0.05};
+  world.function = TimeFunction::harmonic(1.0, 2.0, 0.3);
+  m.loads.push_back(world);
+  Load body;
+  body.body = 3;
+  body.force = {-2, 1, 0.5};
+  body.torque = {0.05, -0.1, 0.2};
+  body.point = {0.2, -0.1, 0.1};
+  body.body_frame = true;
+  m.loads.push_back(body);
+  return m;
+}
+
+// A state away from rest: random displacements, large rotations (up to ~1 rad, so the
+// bushings' rotation logarithm runs outside its series), velocities, spin.
+Eigen::VectorXd shaken_state(MultibodySystem& sys, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Eigen::VectorXd y = sys.initial_state();
+  const StateLayout& l = sys.layout();
+  for (Eigen::Index i = 0; i < l.bodies; ++i) {
+    for (int k = 0; k < 3; ++k) {
+      y[l.position(i) + k] += 0.05 * u(rng);
+      y[l.velocity(i) + k] = 0.5 * u(rng);
+      y[l.angular_velocity(i) + k] = 3.0 * u(rng);
+    }
+    const Eigen::Vector3d axis = Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized();
+    const Eigen::Quaterniond q(Eigen::AngleAxisd(0.6 * (1 + u(rng)) / 2 + 0.1 * i, axis));
+    y.segment<4>(l.orientation(i)) = 1.01 * Eigen::Vector4d(q.w(), q.x(), q.y(), q.z());  // not unit: the rhs normalises
+  }
+  sys.after_step(0.0, y);  // puts the driven body on its motion
+  return y;
+}
+
+// Central differences, column by column, into a dense matrix.
+Eigen::MatrixXd central_differences(MultibodySystem& sys, double t, const Eigen::VectorXd& y) {
+  const Eigen::Index n = sys.dimension();
+  Eigen::MatrixXd j(n, n);
+  Eigen::VectorXd fp(n), fm(n);
+  for (Eigen::Index c = 0; c < n; ++c) {
+    const double h = 1e-6 * std::max(1.0, std::abs(y[c]));
+    Eigen::VectorXd yp = y, ym = y;
+    yp[c] += h;
+    ym[c] -= h;
+    sys.rhs(t, yp, fp);
+    sys.rhs(t, ym, fm);
+    j.col(c) = (fp - fm) / (2 * h);
+  }
+  return j;
+}
+
+}  // namespace
+
+TEST_CASE("the analytic multibody Jacobian matches central differences", "[graph][jacobian]") {
+  const Model m = jacobian_model();
+  MultibodySystem sys(m);
+  REQUIRE(sys.has_analytic_jacobian());
+  for (unsigned seed : {1u, 2u, 3u}) {
+    const double t = 0.1 * seed;
+    const Eigen::VectorXd y = shaken_state(sys, seed);
+    Eigen::SparseMatrix<double> jac = sys.jacobian_pattern();
+    sys.jacobian(t, y, jac);
+    const Eigen::MatrixXd exact = Eigen::MatrixXd(jac), fd = central_differences(sys, t, y);
+    // Entry by entry, relative to the largest entry of its row (rows mix 1 and 1e5).
+    double worst = 0;
+    for (Eigen::Index r = 0; r < exact.rows(); ++r) {
+      const double scale = std::max(1.0, fd.row(r).cwiseAbs().maxCoeff());
+      worst = std::max(worst, (exact.row(r) - fd.row(r)).cwiseAbs().maxCoeff() / scale);
+    }
+    INFO("seed " << seed << ": largest difference " << worst << " of the row's largest entry");
+    CHECK(worst < 1e-7);
+    CHECK(fd.cwiseAbs().maxCoeff() > 1e3);  // the stiff entries are there to be matched
+  }
+}
+
+TEST_CASE("the analytic multibody Jacobian holds at rest, where the rotation logarithm runs its series", "[graph][jacobian]") {
+  const Model m = jacobian_model();
+  MultibodySystem sys(m);
+  const Eigen::VectorXd y = sys.initial_state();
+  Eigen::SparseMatrix<double> jac = sys.jacobian_pattern();
+  sys.jacobian(0.0, y, jac);
+  const Eigen::MatrixXd exact = Eigen::MatrixXd(jac), fd = central_differences(sys, 0.0, y);
+  CHECK((exact - fd).cwiseAbs().maxCoeff() < 1e-6 * fd.cwiseAbs().maxCoeff());
+}
+
+TEST_CASE("models without an analytic Jacobian say which item stands in the way", "[graph][jacobian]") {
+  std::string why;
+  SECTION("a kinematic joint") {
+    Model m = jacobian_model();
+    m.joints.push_back(test::make_joint(JointType::revolute, 4, 5, {0.3, 0, 0}, {-0.3, -0.05, 0}));
+    m.joints.back().name = "hinge";
+    m.joints.back().frame2 = rest_frame2(m, m.joints.back());
+    MultibodySystem sys(m);
+    CHECK_FALSE(sys.has_analytic_jacobian(&why));
+    CHECK(why.find("'hinge'") != std::string::npos);
+    Eigen::SparseMatrix<double> jac = sys.jacobian_pattern();
+    CHECK_THROWS_AS(sys.jacobian(0.0, sys.initial_state(), jac), std::logic_error);
+  }
+  SECTION("a user force element") {
+    MultibodySystem sys(jacobian_model());
+    sys.add_force_element(std::make_shared<Pulling>());
+    CHECK_FALSE(sys.has_analytic_jacobian(&why));
+    CHECK(why.find("force element") != std::string::npos);
+  }
+  SECTION("a submodel") {
+    MultibodySystem sys(jacobian_model(), 3);
+    CHECK_FALSE(sys.has_analytic_jacobian(&why));
+    CHECK(why.find("submodel") != std::string::npos);
+  }
+}
