@@ -136,6 +136,10 @@ RunOptions choose_options(Model& m, const RunArgs& a, const StableStep& s) {
     std::snprintf(use, sizeof use, ", shortened to %.4g s to fit the output interval", o.step);
   else if (find_stepper(o.method.name())->adaptive)
     std::snprintf(use, sizeof use, " as the first step");
+  if (o.method == Method::tirk || o.method == Method::colloc) {
+    std::fprintf(stderr, "mbsflow: no step given; %s picks its first step from the tolerances\n", o.method.name());
+    return o;
+  }
   std::fprintf(stderr, "mbsflow: no step given; using the RK4 stability estimate %s%s\n", s.describe(m).c_str(), use);
   return o;
 }

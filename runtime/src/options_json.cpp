@@ -17,7 +17,7 @@ Method method_of(const std::string& name) {
 
 json options_to_json(const RunOptions& o) {
   return {{"method", method_name(o.method)},  {"variant", o.variant}, {"linear_solver", o.linear_solver}, {"jacobian", o.jacobian}, {"t_start", o.t_start},
-          {"t_end", o.t_end},                 {"step", o.step},       {"fixed_step", o.fixed_step},       {"output_every", o.output_every},
+          {"t_end", o.t_end},                 {"step", o.step}, {"step_given", o.step_given}, {"fixed_step", o.fixed_step},       {"output_every", o.output_every},
           {"output_interval", o.output_interval}, {"rtol", o.rtol},   {"atol", o.atol}};
 }
 
@@ -31,6 +31,7 @@ RunOptions options_from_json(const json& j) {
     o.t_start = j.at("t_start").get<double>();
     o.t_end = j.at("t_end").get<double>();
     o.step = j.at("step").get<double>();
+    o.step_given = j.at("step_given").get<bool>();
     o.fixed_step = j.at("fixed_step").get<bool>();
     o.output_every = j.at("output_every").get<int>();
     o.output_interval = j.at("output_interval").get<double>();

@@ -69,6 +69,7 @@ RunOptions options_from_model(const Model& model, std::optional<double> stable_s
   if (s.step) {
     o.step = *s.step;
   } else {
+    o.step_given = false;
     o.step = stable_step ? *stable_step : estimate_stable_step(model).step;
     // Nothing stiff to estimate from (rigid joints only, say): an adaptive method starts
     // with a step of one output interval, or a thousandth of the run, and adapts.

@@ -101,7 +101,8 @@ inline void check_options(const RunOptions& o) {
 
 inline StepperSettings stepper_settings(const RunOptions& o) {
   StepperSettings s;
-  s.step = o.step;
+  const bool implicit = o.method == Method::tirk || o.method == Method::colloc;
+  s.step = implicit && !o.step_given && !o.fixed_step ? 0.0 : o.step;  // 0: the method's own first step
   s.rtol = o.rtol;
   s.atol = o.atol;
   s.threads = o.threads;

@@ -26,6 +26,10 @@ struct RunOptions {
   double t_start = 0.0;
   double t_end = 1.0;
   double step = 1e-3;    // fixed-step methods (RK4): the step; adaptive ones: the first step
+  // False when `step` is only the RK4 stability estimate (the model gives none): the
+  // implicit methods then pick their first step from the tolerances (Hairer & Wanner's
+  // starting step), since the explicit stability limit says nothing about theirs.
+  bool step_given = true;
   bool fixed_step = false;  // colloc, tirk: keep `step` throughout, without error control (order studies)
   // The output grid: a snapshot every output_interval s of model time when it is > 0 (for
   // fixed-step methods a whole number of steps), else every output_every steps (fixed-step
