@@ -1,5 +1,6 @@
 // mbsflow bench rhs: nanoseconds per body per right-hand-side evaluation on chain models,
-// one thread, with the time split into the three phases of the evaluation.
+// one thread, with the time split into the three phases of the evaluation; and per body
+// per Jacobian, analytic against coloured differences.
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -10,6 +11,7 @@
 #include "mbsflow/error.hpp"
 #include "mbsflow/graph/generators.hpp"
 #include "mbsflow/graph/multibody_system.hpp"
+#include "mbsflow/methods/jacobian.hpp"
 
 namespace mbsflow::cli {
 namespace {
@@ -47,9 +49,11 @@ Eigen::VectorXd perturbed_state(const MultibodySystem& sys) {
 int bench_rhs(const BenchArgs& a) {
   const std::vector<int> sizes = a.bodies.empty() ? std::vector<int>{2000, 6500, 100000} : a.bodies;
   auto [csv_path, csv] = open_csv(a);
-  csv << "bodies,evaluations_per_s,ns_per_body_eval,ns_kinematics,ns_joints,ns_bodies\n";
-  std::printf("right-hand side of generate chain, one thread (ns per body per evaluation)\n");
-  std::printf("%10s %12s %10s %12s %10s %10s\n", "bodies", "evals/s", "total", "kinematics", "joints", "bodies");
+  csv << "bodies,evaluations_per_s,ns_per_body_eval,ns_kinematics,ns_joints,ns_bodies,ns_jacobian,ns_differences,colours\n";
+  std::printf("right-hand side of generate chain, one thread (ns per body per evaluation; Jacobian: analytic, and by\n"
+              "coloured differences, ns per body per Jacobian)\n");
+  std::printf("%10s %12s %10s %12s %10s %10s %10s %12s\n", "bodies", "evals/s", "total", "kinematics", "joints", "bodies",
+              "jacobian", "differences");
   for (const int n : sizes) {
     ChainParams p;
     p.bodies = n;
@@ -61,11 +65,21 @@ int bench_rhs(const BenchArgs& a) {
     const double kin = time_per_call(s / 3, [&] { sys.update_kinematics(0.1, y); });
     const double joints = time_per_call(s / 3, [&] { sys.compute_joint_forces(); });
     const double bodies = time_per_call(s / 3, [&] { sys.compute_derivatives(0.1, y, dy); });
+    Eigen::SparseMatrix<double> jac = sys.jacobian_pattern();
+    const double analytic = time_per_call(s / 3, [&] { sys.jacobian(0.1, y, jac); });
+    OdeProblem problem = make_ode_problem("chain", 0.0, 1.0, y, [&](double t, const Eigen::VectorXd& x, Eigen::VectorXd& f) {
+      sys.rhs(t, x, f);
+    });
+    problem.sparsity = jac;
+    JacobianEvaluator differences(problem, true);
+    sys.rhs(0.1, y, dy);
+    long evaluations = 0;
+    const double differenced = time_per_call(s / 3, [&] { differences.evaluate(0.1, y, dy, evaluations); });
     const double per = 1e9 / n;
-    std::printf("%10d %12.1f %10.1f %12.1f %10.1f %10.1f\n", n, 1.0 / total, total * per, kin * per, joints * per,
-                bodies * per);
-    csv << n << ',' << 1.0 / total << ',' << total * per << ',' << kin * per << ',' << joints * per << ','
-        << bodies * per << '\n';
+    std::printf("%10d %12.1f %10.1f %12.1f %10.1f %10.1f %10.1f %12.1f (%d colours)\n", n, 1.0 / total, total * per, kin * per,
+                joints * per, bodies * per, analytic * per, differenced * per, differences.colours());
+    csv << n << ',' << 1.0 / total << ',' << total * per << ',' << kin * per << ',' << joints * per << ',' << bodies * per
+        << ',' << analytic * per << ',' << differenced * per << ',' << differences.colours() << '\n';
     if (!dy.allFinite()) throw RunError("benchmark state produced non-finite derivatives");
   }
   std::printf("written to %s\n", csv_path.c_str());

@@ -50,13 +50,15 @@ Eigen::Index state_index(const StateLayout& l, Eigen::Index b, int c) {
   return l.angular_velocity(b) + c - 10;
 }
 
-// The stored value of jac at (row, col), which the pattern must hold.
-double& entry(Eigen::SparseMatrix<double>& jac, Eigen::Index row, Eigen::Index col) {
+// The stored values of jac at rows row..row+count-1 of column col, which the pattern must
+// hold (then they are consecutive in the column: its rows are sorted).
+double* entries(Eigen::SparseMatrix<double>& jac, Eigen::Index row, Eigen::Index col, int count = 1) {
   const int* first = jac.innerIndexPtr() + jac.outerIndexPtr()[col];
   const int* last = jac.innerIndexPtr() + jac.outerIndexPtr()[col + 1];
   const int* at = std::lower_bound(first, last, static_cast<int>(row));
-  if (at == last || *at != row) throw std::logic_error("multibody Jacobian: entry outside the Jacobian pattern");
-  return jac.valuePtr()[at - jac.innerIndexPtr()];
+  if (last - at < count || at[count - 1] != row + count - 1)
+    throw std::logic_error("multibody Jacobian: entry outside the Jacobian pattern");
+  return jac.valuePtr() + (at - jac.innerIndexPtr());
 }
 
 // Derivative rows of a dual vector, columns first..first+12.
@@ -104,14 +106,19 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
   };
 
   // d (wrench of joint k) / d (states of its body1, then of its body2).
-  std::vector<Eigen::Matrix<double, 9, 2 * body_states>> joint_derivatives(joints_.size());
+  using JointDerivatives = Eigen::Matrix<double, 9, 2 * body_states>;
+  jacobian_scratch_.resize(joints_.size() * JointDerivatives::SizeAtCompileTime);
+  auto joint_derivatives = [&](std::size_t k) {
+    return Eigen::Map<JointDerivatives>(jacobian_scratch_.data() + k * JointDerivatives::SizeAtCompileTime);
+  };
   for (std::size_t k = 0; k < joints_.size(); ++k) {
     const CompiledJoint& j = joints_[k];
     const BodyFrameT<Dual> a = free(j.a) ? seeded_frame(y, layout_, j.a, 0) : constant_frame(j.a);
     const BodyFrameT<Dual> b = free(j.b) ? seeded_frame(y, layout_, j.b, body_states) : constant_frame(j.b);
     Eigen::Matrix<Dual, 9, 1> out;
     compliant_joint_wrench<Dual>(j, tables_of(j), a, b, out);
-    for (int r = 0; r < 9; ++r) joint_derivatives[k].row(r) = out[r].derivatives().transpose();
+    auto d = joint_derivatives(k);
+    for (int r = 0; r < 9; ++r) d.row(r) = out[r].derivatives().transpose();
   }
 
   std::vector<std::pair<int, Block6>> blocks;  // per body read: d (force, torque) / d (its state)
@@ -139,7 +146,7 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
     for (int p = incidence_start_[bi]; p < incidence_start_[bi + 1]; ++p) {
       const int code = incidence_[static_cast<std::size_t>(p)];
       const CompiledJoint& j = joints_[static_cast<std::size_t>(code / 2)];
-      const auto& d = joint_derivatives[static_cast<std::size_t>(code / 2)];
+      const auto d = joint_derivatives(static_cast<std::size_t>(code / 2));
       const bool body2 = code & 1;
       for (int side = 0; side < 2; ++side) {
         const int other = side == 0 ? j.a : j.b;
@@ -167,19 +174,25 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
       if (b == i) rows.bottomRows<3>() += derivatives<3>(w_rate, 0);
       for (int c = 0; c < body_states; ++c) {
         const Eigen::Index col = state_index(layout_, b, c);
+        double* v = entries(jac, layout_.velocity(i), col, 3);
+        double* w = entries(jac, layout_.angular_velocity(i), col, 3);
         for (int r = 0; r < 3; ++r) {
-          entry(jac, layout_.velocity(i) + r, col) = rows(r, c);
-          entry(jac, layout_.angular_velocity(i) + r, col) = rows(3 + r, c);
+          v[r] = rows(r, c);
+          w[r] = rows(3 + r, c);
         }
       }
     }
     // q' = q (x) (0, w) / 2 and r' = v.
     const Eigen::Matrix<double, 4, body_states> q_rate = derivatives<4>(quaternion_rate<Dual>(own.q, own.w), 0);
-    for (int r = 0; r < 4; ++r) {
-      for (int c = 0; c < 4; ++c) entry(jac, layout_.orientation(i) + r, layout_.orientation(i) + c) = q_rate(r, 3 + c);
-      for (int c = 0; c < 3; ++c) entry(jac, layout_.orientation(i) + r, layout_.angular_velocity(i) + c) = q_rate(r, 10 + c);
+    for (int c = 0; c < 4; ++c) {
+      double* q = entries(jac, layout_.orientation(i), layout_.orientation(i) + c, 4);
+      for (int r = 0; r < 4; ++r) q[r] = q_rate(r, 3 + c);
     }
-    for (int k = 0; k < 3; ++k) entry(jac, layout_.position(i) + k, layout_.velocity(i) + k) = 1.0;
+    for (int c = 0; c < 3; ++c) {
+      double* q = entries(jac, layout_.orientation(i), layout_.angular_velocity(i) + c, 4);
+      for (int r = 0; r < 4; ++r) q[r] = q_rate(r, 10 + c);
+    }
+    for (int k = 0; k < 3; ++k) *entries(jac, layout_.position(i) + k, layout_.velocity(i) + k) = 1.0;
   }
 }
 

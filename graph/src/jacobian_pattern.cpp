@@ -28,30 +28,48 @@ Eigen::SparseMatrix<double> MultibodySystem::jacobian_pattern() const {
     for (int b : cluster_bodies(c)) reads[static_cast<std::size_t>(b)] = all;
   }
 
-  std::vector<Eigen::Triplet<double>> t;
-  auto block = [&](Eigen::Index row, int rows, Eigen::Index col, int cols) {
-    for (int r = 0; r < rows; ++r)
-      for (int c = 0; c < cols; ++c) t.emplace_back(row + r, col + c, 1.0);
-  };
-  for (Eigen::Index i = 0; i < n; ++i) {
-    std::vector<int>& r = reads[static_cast<std::size_t>(i)];
+  for (auto& r : reads) {
     std::sort(r.begin(), r.end());
     r.erase(std::unique(r.begin(), r.end()), r.end());
-    // r' = v; q' = q (x) (0, w) / 2.
-    block(layout_.position(i), 3, layout_.velocity(i), 3);
-    block(layout_.orientation(i), 4, layout_.orientation(i), 4);
-    block(layout_.orientation(i), 4, layout_.angular_velocity(i), 3);
-    for (int b : r)
-      for (Eigen::Index row : {layout_.velocity(i), layout_.angular_velocity(i)}) {
-        block(row, 3, layout_.position(b), 3);
-        block(row, 3, layout_.orientation(b), 4);
-        block(row, 3, layout_.velocity(b), 3);
-        block(row, 3, layout_.angular_velocity(b), 3);
+  }
+  // Column by column (compressed, rows ascending), straight into the matrix: the model's
+  // sizes make a list of triplets tens of megabytes. Rows of the velocity and angular
+  // velocity of every body that reads body b: readers[b], ascending.
+  std::vector<std::vector<int>> readers(static_cast<std::size_t>(n));
+  for (Eigen::Index i = 0; i < n; ++i)
+    for (int b : reads[static_cast<std::size_t>(i)]) readers[static_cast<std::size_t>(b)].push_back(static_cast<int>(i));
+  // r' = v: a body's position rows read its velocity; q' = q (x) (0, w) / 2: its
+  // orientation rows read its orientation and angular velocity.
+  enum Field { position, orientation, velocity, angular_velocity };
+  auto own_rows = [&](Field f, Eigen::Index b, auto emit) {
+    if (f == velocity)
+      for (int k = 0; k < 3; ++k) emit(layout_.position(b) + k);
+    if (f == orientation || f == angular_velocity)
+      for (int k = 0; k < 4; ++k) emit(layout_.orientation(b) + k);
+  };
+  const Eigen::Index size = layout_.size();
+  Eigen::SparseMatrix<double> p(size, size);
+  p.makeCompressed();
+  std::vector<int> inner;
+  std::vector<int> outer{0};
+  outer.reserve(static_cast<std::size_t>(size) + 1);
+  for (Field f : {position, orientation, velocity, angular_velocity}) {
+    const int width = f == orientation ? 4 : 3;
+    for (Eigen::Index b = 0; b < n; ++b)
+      for (int k = 0; k < width; ++k) {
+        auto emit = [&](Eigen::Index row) { inner.push_back(static_cast<int>(row)); };
+        own_rows(f, b, emit);
+        for (const int i : readers[static_cast<std::size_t>(b)])
+          for (int c = 0; c < 3; ++c) emit(layout_.velocity(i) + c);
+        for (const int i : readers[static_cast<std::size_t>(b)])
+          for (int c = 0; c < 3; ++c) emit(layout_.angular_velocity(i) + c);
+        outer.push_back(static_cast<int>(inner.size()));
       }
   }
-  Eigen::SparseMatrix<double> p(layout_.size(), layout_.size());
-  p.setFromTriplets(t.begin(), t.end(), [](double, double) { return 1.0; });
-  p.makeCompressed();
+  p.resizeNonZeros(static_cast<Eigen::Index>(inner.size()));
+  std::copy(outer.begin(), outer.end(), p.outerIndexPtr());
+  std::copy(inner.begin(), inner.end(), p.innerIndexPtr());
+  std::fill_n(p.valuePtr(), inner.size(), 1.0);
   return p;
 }
 

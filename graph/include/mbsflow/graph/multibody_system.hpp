@@ -213,6 +213,7 @@ class MultibodySystem {
   Eigen::Matrix<double, 9, Eigen::Dynamic> joint_out_;  // force on body2, torque on body1, torque on body2
   double time_ = 0.0;
   detail::DeepPtr<Constraints> constraints_;
+  std::vector<double> jacobian_scratch_;  // jacobian(): each joint's wrench derivatives, kept between calls
   Eigen::VectorXd motor_effort_;
 
   Kinematics kinematics() const { return Kinematics(rot_, pos_, vel_, omega_); }
