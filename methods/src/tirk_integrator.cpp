@@ -147,7 +147,8 @@ class TirkIntegrator::Driver {
   bool iterate_once();
   bool iterate(int iterations);
   Eigen::VectorXd step_end(const Eigen::VectorXd& x, double tau) const;
-  double estimate(const Eigen::VectorXd& x, const Eigen::VectorXd& x_new, const Eigen::VectorXd& fx, double tau) const;
+  double estimate(double t, const Eigen::VectorXd& x, const Eigen::VectorXd& x_new, const Eigen::VectorXd& fx, double tau,
+                  bool first_or_rejected);
   [[noreturn]] void fail(const std::string& why, double tau) const;
 
   const OdeProblem& p_;
@@ -336,15 +337,30 @@ Eigen::VectorXd TirkIntegrator::Driver::step_end(const Eigen::VectorXd& x, doubl
   return out;
 }
 
-double TirkIntegrator::Driver::estimate(const Eigen::VectorXd& x, const Eigen::VectorXd& x_new, const Eigen::VectorXd& fx, double tau) const {
-  Eigen::VectorXd e = (tau * embedded_.gamma) * fx;
+double TirkIntegrator::Driver::estimate(double t, const Eigen::VectorXd& x, const Eigen::VectorXd& x_new, const Eigen::VectorXd& fx,
+                                        double tau, bool first_or_rejected) {
+  Eigen::VectorXd combination = (tau * embedded_.gamma) * fx;
   for (int j = 0; j < tableau_.stages(); ++j) {
     const double w = embedded_.bhat(j) - tableau_.b(j);
-    if (w != 0) e += (tau * w) * stages_.stage_f(j);
+    if (w != 0) combination += (tau * w) * stages_.stage_f(j);
   }
+  Eigen::VectorXd e = combination;
   if (newton()) stages_.solve_with(embedded_.gamma, e);  // the stiff filter
   const Eigen::ArrayXd sc = s_.atol + s_.rtol * x.array().abs().max(x_new.array().abs());
-  return (e.array().abs() / sc).maxCoeff();
+  double err = (e.array().abs() / sc).maxCoeff();
+  // Radau5's second filter (Hairer & Wanner IV.8): on the first step and after a rejection
+  // a large estimate may be the stiff components the filter lets through; f at x + e in
+  // place of f(x) filters them once more, so that a sound step is not cut, and a step that
+  // is not sound is still rejected.
+  if (newton() && err > 1 && first_or_rejected) {
+    Eigen::VectorXd f1(p_.size);
+    p_.evaluate(t, x + e, f1);
+    ++result_.stats.rhs_evaluations;
+    e = combination + (tau * embedded_.gamma) * (f1 - fx);
+    stages_.solve_with(embedded_.gamma, e);
+    err = (e.array().abs() / sc).maxCoeff();
+  }
+  return err;
 }
 
 void TirkIntegrator::Driver::begin() {
@@ -429,7 +445,7 @@ bool TirkIntegrator::Driver::advance() {
     Eigen::VectorXd x_new = step_end(x, h);
     double err = 0, fac = s_.facmax;
     if (!fixed) {
-      err = estimate(x, x_new, fx, h);
+      err = estimate(t, x, x_new, fx, h, st.accepted == 0 || after_rejection);
       fac = err == 0 ? s_.facmax
                      : std::min(s_.facmax, std::max(s_.facmin, s_.safety * std::pow(err, -1.0 / (embedded_.order + 1))));
     }
