@@ -17,16 +17,21 @@ struct StepperOde {
 
 // The problem the implicit integrators read; start() sets t0, y0 and t_end. They evaluate
 // stages (and finite-difference columns) from several flow-graph nodes at once, but a
-// StepperSystem's rhs is called by one thread at a time (a multibody system and a loose
-// submodel work in their own scratch), so the calls are serialised here.
+// StepperSystem's rhs and Jacobian are called by one thread at a time (a multibody system
+// and a loose submodel work in their own scratch), so the calls are serialised here, the
+// Jacobian's with the rhs's.
 inline OdeProblem problem_of(const StepperSystem& s) {
-  auto rhs = [f = s.rhs, busy = std::make_shared<std::mutex>()](double t, const Eigen::VectorXd& y,
-                                                                Eigen::VectorXd& dydt) {
+  auto busy = std::make_shared<std::mutex>();
+  auto rhs = [f = s.rhs, busy](double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) {
     std::lock_guard lock(*busy);
     f(t, y, dydt);
   };
   OdeProblem p = make_ode_problem("system", 0.0, 1.0, Eigen::VectorXd::Zero(s.size), rhs);
-  p.jacobian = s.jacobian;
+  if (s.jacobian)
+    p.jacobian = [j = s.jacobian, busy](double t, const Eigen::VectorXd& y, Eigen::SparseMatrix<double>& jac) {
+      std::lock_guard lock(*busy);
+      j(t, y, jac);
+    };
   p.describe = s.describe;
   if (s.sparsity) p.sparsity = s.sparsity();
   return p;
