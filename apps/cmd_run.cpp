@@ -225,6 +225,15 @@ int run(const RunArgs& a) {
     std::fprintf(stderr, "mbsflow: %zu submodels on %d threads (%s), %d cut joints, load imbalance %.1f %%\n",
                  d->submodels.size(), threads, a.executor == "flow" ? "flow graph" : "barrier per stage", d->cut_joints,
                  100.0 * d->imbalance);
+  if (!stage_split && !loose && !cluster && !a.quiet) {  // an implicit method on the whole model
+    std::string why;
+    if (o.jacobian == "differences")
+      std::fprintf(stderr, "mbsflow: Jacobian by coloured differences (--jacobian differences)\n");
+    else if (MultibodySystem(m).has_analytic_jacobian(&why))
+      std::fprintf(stderr, "mbsflow: analytic Jacobian\n");
+    else
+      std::fprintf(stderr, "mbsflow: Jacobian by coloured differences: no analytic one for %s\n", why.c_str());
+  }
   ProgressLine progress(o.t_start, o.t_end, !a.quiet);
   o.progress = [&](double t, long steps) { progress.update(t, steps); };
   o.stop = install_stop_handlers();

@@ -49,6 +49,14 @@ TEST_CASE("generated chain, grid and train models run to the end", "[apps]") {
   CHECK(chain.err.find("no step given; using the RK4 stability estimate") != std::string::npos);
   CHECK(chain.out.find("model chain-30: 30 bodies, 30 joints") != std::string::npos);
   CHECK(run("run grid.json --t-end 0.1 --method dopri5 --rtol 1e-5 --quiet", dir).code == 0);
+  // The implicit methods say where their first step and their Jacobian come from.
+  const Result implicit = run("run chain.json --t-end 0.05 --method tirk --rtol 1e-4 --atol 1e-4", dir, true);
+  CHECK(implicit.code == 0);
+  CHECK(implicit.err.find("tirk picks its first step from the tolerances") != std::string::npos);
+  CHECK(implicit.err.find("analytic Jacobian") != std::string::npos);
+  const Result differenced = run("run chain.json --t-end 0.05 --method tirk --jacobian differences", dir, true);
+  CHECK(differenced.code == 0);
+  CHECK(differenced.err.find("Jacobian by coloured differences (--jacobian differences)") != std::string::npos);
   const Result train = run("run train.json --t-end 0.5 --every 5 --output train.h5", dir);
   CHECK(train.code == 0);
   CHECK(train.err.find("in train.h5") != std::string::npos);
