@@ -180,11 +180,7 @@ void BlockSolve::build(flow::graph& g) {
 
   for (int e = 0; e < systems(); ++e) flow::make_edge(*factor_start_, node([this, e] { factorize(e); }));
   Node& prepared = join(*evaluate_start_);
-  for (Eigen::Index r = 0; r < n_slices; ++r) {
-    Node& p = node([this, r] { prepare(r); });
-    flow::make_edge(*start_, p);
-    flow::make_edge(p, prepared);
-  }
+  fan(node, *start_, prepared, n_slices, [this](Eigen::Index r) { prepare(r); });
   Node& gate_node = node([this] {
     if (gate()) {
       ++iterations;
@@ -202,31 +198,15 @@ void BlockSolve::build(flow::graph& g) {
     }
   Node& corrected = join(*evaluate_start_);
   if (kind_ == BlockIteration::functional) {
-    for (Eigen::Index r = 0; r < n_slices; ++r) {
-      Node& c = node([this, r] { functional_update(r); });
-      flow::make_edge(*correct_start_, c);
-      flow::make_edge(c, corrected);
-    }
+    fan(node, *correct_start_, corrected, n_slices, [this](Eigen::Index r) { functional_update(r); });
     captures_published();
     return;
   }
   Node& residuals_done = node([] {});
-  for (Eigen::Index r = 0; r < n_slices; ++r) {
-    Node& c = node([this, r] { residual(r); });
-    flow::make_edge(*correct_start_, c);
-    flow::make_edge(c, residuals_done);
-  }
+  fan(node, *correct_start_, residuals_done, n_slices, [this](Eigen::Index r) { residual(r); });
   Node& solved = node([] {});
-  for (int e = 0; e < systems(); ++e) {
-    Node& s = node([this, e] { solve(e); });
-    flow::make_edge(residuals_done, s);
-    flow::make_edge(s, solved);
-  }
-  for (Eigen::Index r = 0; r < n_slices; ++r) {
-    Node& c = node([this, r] { update(r); });
-    flow::make_edge(solved, c);
-    flow::make_edge(c, corrected);
-  }
+  fan(node, residuals_done, solved, systems(), [this](Eigen::Index e) { solve(static_cast<int>(e)); });
+  fan(node, solved, corrected, n_slices, [this](Eigen::Index r) { update(r); });
   captures_published();
 }
 

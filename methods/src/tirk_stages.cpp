@@ -225,23 +225,11 @@ void TirkStages::build(flow::graph& g) {
   if (full_newton()) {
     // residual(slice) -> solve(system) -> update(slice) -> f(stage, slice)
     Node& residuals_done = node([] {});
-    for (Eigen::Index r = 0; r < n_slices; ++r) {
-      Node& a = node([this, r] { residual(r); });
-      flow::make_edge(*start_, a);
-      flow::make_edge(a, residuals_done);
-    }
+    fan(node, *start_, residuals_done, n_slices, [this](Eigen::Index r) { residual(r); });
     Node& solved = node([] {});
-    for (int e = 0; e < split_->systems(); ++e) {
-      Node& sv = node([this, e] { split_->solve(e); });
-      flow::make_edge(residuals_done, sv);
-      flow::make_edge(sv, solved);
-    }
+    fan(node, residuals_done, solved, split_->systems(), [this](Eigen::Index e) { split_->solve(static_cast<int>(e)); });
     Node& written = node([] {});
-    for (Eigen::Index r = 0; r < n_slices; ++r) {
-      Node& u = node([this, r] { update(r); });
-      flow::make_edge(solved, u);
-      flow::make_edge(u, written);
-    }
+    fan(node, solved, written, n_slices, [this](Eigen::Index r) { update(r); });
     for (int i = 0; i < si_; ++i)
       for (Eigen::Index e = 0; e < f_nodes; ++e)
         flow::make_edge(written, node([this, i, e, per_node] { evaluate(i, e * per_node, per_node); }));
