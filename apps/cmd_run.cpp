@@ -229,7 +229,7 @@ int run(const RunArgs& a) {
     std::string why;
     if (o.jacobian == "differences")
       std::fprintf(stderr, "mbsflow: Jacobian by coloured differences (--jacobian differences)\n");
-    else if (MultibodySystem(m).has_analytic_jacobian(&why))
+    else if (has_analytic_jacobian(m, &why))
       std::fprintf(stderr, "mbsflow: analytic Jacobian\n");
     else
       std::fprintf(stderr, "mbsflow: Jacobian by coloured differences: no analytic one for %s\n", why.c_str());

@@ -71,19 +71,26 @@ Eigen::Matrix<double, Rows, body_states> derivatives(const Eigen::Matrix<Dual, R
 
 }  // namespace
 
+namespace {
+bool no_jacobian(std::string* why, std::string reason) {
+  if (why) *why = std::move(reason);
+  return false;
+}
+}  // namespace
+
+bool has_analytic_jacobian(const Model& m, std::string* why) {
+  for (const Joint& j : m.joints)
+    if (is_kinematic(j.type))
+      return no_jacobian(why, std::string(j.rigid ? "rigid " : "compliant ") + joint_type_name(j.type) + " joint '" + j.name +
+                                  "' (kinematic joints have no analytic Jacobian yet)");
+  if (!m.force_elements.empty()) return no_jacobian(why, "the model has user force elements");
+  return true;
+}
+
 bool MultibodySystem::has_analytic_jacobian(std::string* why) const {
-  auto no = [&](std::string reason) {
-    if (why) *why = std::move(reason);
-    return false;
-  };
-  if (active_ != layout_.bodies) return no("the system is a submodel (its ghost bodies' states come from other submodels)");
-  for (std::size_t k = 0; k < joints_.size(); ++k)
-    if (joints_[k].kinematic >= 0) {
-      const Joint& j = model_.joints[k];
-      return no(std::string(j.rigid ? "rigid " : "compliant ") + joint_type_name(j.type) + " joint '" + j.name +
-                "' (kinematic joints have no analytic Jacobian yet)");
-    }
-  if (!elements_.empty()) return no("the model has user force elements");
+  if (active_ != layout_.bodies) return no_jacobian(why, "the system is a submodel (its ghost bodies' states come from other submodels)");
+  if (!mbsflow::has_analytic_jacobian(model_, why)) return false;
+  if (!elements_.empty()) return no_jacobian(why, "the model has user force elements");  // added after construction
   return true;
 }
 

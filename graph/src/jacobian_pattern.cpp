@@ -38,31 +38,24 @@ Eigen::SparseMatrix<double> MultibodySystem::jacobian_pattern() const {
   std::vector<std::vector<int>> readers(static_cast<std::size_t>(n));
   for (Eigen::Index i = 0; i < n; ++i)
     for (int b : reads[static_cast<std::size_t>(i)]) readers[static_cast<std::size_t>(b)].push_back(static_cast<int>(i));
-  // r' = v: a body's position rows read its velocity; q' = q (x) (0, w) / 2: its
-  // orientation rows read its orientation and angular velocity.
-  enum Field { position, orientation, velocity, angular_velocity };
-  auto own_rows = [&](Field f, Eigen::Index b, auto emit) {
-    if (f == velocity)
-      for (int k = 0; k < 3; ++k) emit(layout_.position(b) + k);
-    if (f == orientation || f == angular_velocity)
-      for (int k = 0; k < 4; ++k) emit(layout_.orientation(b) + k);
-  };
   const Eigen::Index size = layout_.size();
   Eigen::SparseMatrix<double> p(size, size);
   p.makeCompressed();
   std::vector<int> inner;
   std::vector<int> outer{0};
   outer.reserve(static_cast<std::size_t>(size) + 1);
+  auto push_rows = [&](Eigen::Index first, int count) {
+    for (int c = 0; c < count; ++c) inner.push_back(static_cast<int>(first + c));
+  };
+  enum Field { position, orientation, velocity, angular_velocity };
   for (Field f : {position, orientation, velocity, angular_velocity}) {
     const int width = f == orientation ? 4 : 3;
     for (Eigen::Index b = 0; b < n; ++b)
       for (int k = 0; k < width; ++k) {
-        auto emit = [&](Eigen::Index row) { inner.push_back(static_cast<int>(row)); };
-        own_rows(f, b, emit);
-        for (const int i : readers[static_cast<std::size_t>(b)])
-          for (int c = 0; c < 3; ++c) emit(layout_.velocity(i) + c);
-        for (const int i : readers[static_cast<std::size_t>(b)])
-          for (int c = 0; c < 3; ++c) emit(layout_.angular_velocity(i) + c);
+        if (f == velocity) push_rows(layout_.position(b), 3);  // r' = v
+        if (f == orientation || f == angular_velocity) push_rows(layout_.orientation(b), 4);  // q' = q (x) (0, w) / 2
+        for (const int i : readers[static_cast<std::size_t>(b)]) push_rows(layout_.velocity(i), 3);
+        for (const int i : readers[static_cast<std::size_t>(b)]) push_rows(layout_.angular_velocity(i), 3);
         outer.push_back(static_cast<int>(inner.size()));
       }
   }

@@ -64,6 +64,10 @@ struct Energy {
   double total() const { return kinetic + gravity + elastic; }
 };
 
+// Whether the whole-model system of m has an analytic Jacobian (see
+// MultibodySystem::has_analytic_jacobian), without building it.
+bool has_analytic_jacobian(const Model& m, std::string* why = nullptr);
+
 class MultibodySystem {
  public:
   explicit MultibodySystem(const Model& model);
