@@ -30,24 +30,44 @@ std::string polynomial(const std::vector<std::string>& c) {
   return out.empty() ? "0" : out;
 }
 
+BlockMethodSpec spec_of(const OdeArgs& a) {
+  const bool radau = a.nodes == "radau" || (a.nodes.empty() && a.m == 1 && a.order == 0);
+  BlockMethodSpec spec{a.m, a.s, a.order, radau ? BlockNodes::radau : BlockNodes::equidistant};
+  generate_block_method(spec);  // InputError for a method that does not exist
+  return spec;
+}
+
+void print_stability(const StabilityReport& rep) {
+  std::cout << "  max |R(iy)| = " << rep.max_on_imaginary_axis << ", |R(inf)| = " << rep.at_infinity
+            << ", smallest Re(pole) = " << rep.min_pole_real_part << ": "
+            << (rep.l_stable() ? "L-stable" : rep.a_stable ? "A-stable, not L-stable (stiff components are not damped)" : "not A-stable")
+            << "\n";
+}
+
 int describe(const OdeArgs& a) {
-  const BlockCoefficients c = generate_block_method({a.m, a.s, a.order});
-  std::cout << "collocation block method: m = " << a.m << " steps, s = " << a.s << " points, order " << c.order
-            << " (maximal " << c.spec.maximal_order() << ")\n"
+  const BlockMethodSpec spec = spec_of(a);
+  const BlockCoefficients c = generate_block_method(spec);
+  std::cout << "collocation block method (" << to_string(spec.nodes) << " points): m = " << a.m << " steps, s = " << a.s
+            << " points, order " << c.order << " (maximal " << c.spec.maximal_order() << ")\n"
             << "u_i = sum_j q_ij u_j + tau (sum_j d_ij f_j + sum_j g_ij f_j), past points j = " << -(a.m - 1)
-            << "..0, block points j = 1.." << a.s << "\n";
+            << "..0, block points at t0 + p_j tau, p = (";
+  for (Eigen::Index j = 0; j < c.positions.size(); ++j) std::cout << (j ? ", " : "") << c.positions(j);
+  std::cout << ")\n";
   for (int i = 0; i < a.s; ++i)
     std::cout << "  i = " << i + 1 << ": q = (" << join(c.q_exact, i, a.m) << "), d = (" << join(c.d_exact, i, a.m)
               << "), g = (" << join(c.g_exact, i, a.s) << ")\n";
-  std::cout << "order conditions: largest exact residual " << order_condition_residual(c) << "\n";
+  std::cout << "order conditions: largest " << (c.exact ? "exact" : "rounded") << " residual " << order_condition_residual(c)
+            << "\n";
   if (a.m == 1) {
     const StabilityFunction r = stability_function(c);
-    const StabilityReport rep = check_a_stability(c);
     std::cout << "stability function R(z) = P(z)/Q(z), z = lambda tau, u_s = R(z) u_0\n"
-              << "  P(z) = " << polynomial(r.numerator_exact) << "\n  Q(z) = " << polynomial(r.denominator_exact) << "\n"
-              << "  max |R(iy)| = " << rep.max_on_imaginary_axis << ", |R(inf)| = " << rep.at_infinity
-              << ", smallest Re(pole) = " << rep.min_pole_real_part << ": " << (rep.a_stable ? "A-stable" : "not A-stable")
-              << "\n";
+              << "  P(z) = " << polynomial(r.numerator_exact) << "\n  Q(z) = " << polynomial(r.denominator_exact) << "\n";
+    print_stability(check_a_stability(c));
+    BlockMethodSpec partner = spec;
+    ++partner.s;
+    if (partner.order > 0) ++partner.order;
+    std::cout << "the step control's (s+1)-point block (order " << generate_block_method(partner).order << "):\n";
+    print_stability(check_a_stability(generate_block_method(partner)));
   } else {
     const ZeroStability z = check_zero_stability(c);
     std::cout << "zero-stability: largest parasitic root " << z.parasitic_radius << ": "
@@ -56,15 +76,20 @@ int describe(const OdeArgs& a) {
   return 0;
 }
 
-// The table of docs/methods.md: one-step methods s = 1..6 at maximal and lowest order.
+// The table of docs/methods.md: one-step methods s = 1..6 at maximal and lowest order,
+// equidistant and at Radau points.
 int stability_table() {
-  std::cout << "| s | order | R(z) at infinity | max abs R(iy) | A-stable |\n|---|---|---|---|---|\n";
-  for (int s = 1; s <= 6; ++s)
+  std::cout << "| points | s | order | R(z) at infinity | max abs R(iy) | A-stable |\n|---|---|---|---|---|---|\n";
+  for (int s = 1; s <= 7; ++s) {
     for (int order : {s + 1, s}) {
       const StabilityReport r = check_a_stability(generate_block_method({1, s, order}));
-      std::printf("| %d | %d%s | %.3g | %.4g | %s |\n", s, order, order == s + 1 ? " (maximal)" : "", r.at_infinity,
+      std::printf("| equidistant | %d | %d%s | %.3g | %.4g | %s |\n", s, order, order == s + 1 ? " (maximal)" : "", r.at_infinity,
                   r.max_on_imaginary_axis, r.a_stable ? "yes" : "no");
     }
+    const StabilityReport r = check_a_stability(generate_block_method({1, s, 0, BlockNodes::radau}));
+    std::printf("| Radau | %d | %d | %.3g | %.4g | %s |\n", s, 2 * s - 1, r.at_infinity, r.max_on_imaginary_axis,
+                r.a_stable ? "yes" : "no");
+  }
   std::cout << "\n| m | s | order | parasitic root | zero-stable |\n|---|---|---|---|---|\n";
   for (int m = 2; m <= 4; ++m)
     for (int s = 1; s <= 3; ++s)
@@ -83,8 +108,7 @@ int run(const OdeArgs& a) {
   BlockSettings s;
   try {
     p = builtin_problem(a.problem, a.n);
-    s.method = {a.m, a.s, a.order};
-    generate_block_method(s.method);
+    s.method = spec_of(a);
     s.iteration = block_iteration_from_string(a.iteration.empty() ? "newton" : a.iteration);
     apply_common_options(a, s);
   } catch (const InputError& e) {
@@ -93,11 +117,11 @@ int run(const OdeArgs& a) {
 
   OdeRecorder rec(p, !a.output.empty());
   auto on_block = [&](const AcceptedBlock& b) {
-    for (int i = 0; i < b.points; ++i) rec.add(b.t0 + (i + 1) * b.tau, (*b.u)[static_cast<std::size_t>(i)]);
+    for (int i = 0; i < b.points; ++i) rec.add(b.t0 + b.method->positions(i) * b.tau, (*b.u)[static_cast<std::size_t>(i)]);
   };
   if (!a.quiet)
-    std::cerr << "mbsflow ode: " << p.name << " (N = " << p.size << ") on [" << p.t0 << ", " << p.t_end << "], colloc m = " << a.m
-              << ", s = " << a.s << " / " << a.s + 1 << ", order " << s.method.effective_order() << ", tol " << a.tol << ", "
+    std::cerr << "mbsflow ode: " << p.name << " (N = " << p.size << ") on [" << p.t0 << ", " << p.t_end << "], colloc "
+              << describe_block_method(s.method) << " (and s + 1 = " << a.s + 1 << "), tol " << a.tol << ", "
               << to_string(s.iteration) << "\n";
   const auto start = std::chrono::steady_clock::now();
   BlockResult r;
@@ -138,9 +162,13 @@ Action add_ode(CLI::App& app) {
       ->check(CLI::IsMember({"colloc", "tirk"}))->capture_default_str();
   sub->add_option("--s", a->s, "colloc: points per block (the controller also runs s+1)")->check(CLI::Range(1, 12))->capture_default_str();
   sub->add_option("--m", a->m, "colloc: steps (1: one-step methods)")->check(CLI::Range(1, 8))->capture_default_str();
-  sub->add_option("--order", a->order, "colloc: order of the s-point method (0: maximal, 2m+s-1)")->check(CLI::NonNegativeNumber);
+  sub->add_option("--order", a->order, "colloc: order of an equidistant s-point method (0: maximal, 2m+s-1)")->check(CLI::NonNegativeNumber);
+  sub->add_option("--nodes", a->nodes,
+                  "colloc: radau (blocks at the Radau points, L-stable, order 2s-1; the default for one-step methods) or "
+                  "equidistant (the seed's blocks; the default with --m > 1 or --order)")
+      ->check(CLI::IsMember({"radau", "equidistant"}));
   sub->add_option("--tableau", a->tableau,
-                  "tirk: radau2, radau3, radau5 (Radau IIA, s stages), gauss2, gauss3, lobatto3c, block1..block6 (seed 001's one-step "
+                  "tirk: radau1..radau12 (Radau IIA, s stages), gauss2, gauss3, lobatto3c, block1..block6 (seed 001's one-step "
                   "block methods)")
       ->capture_default_str();
   sub->add_option("--tol", a->tol, "relative (and, without --atol, absolute) tolerance")->check(CLI::PositiveNumber)->capture_default_str();
@@ -157,7 +185,7 @@ Action add_ode(CLI::App& app) {
       ->check(CLI::IsMember({"exact", "fd"}))->capture_default_str();
   sub->add_option("--linear-solver", a->solver, "auto, dense, banded, klu (SuiteSparse) or sparselu (Eigen)")
       ->check(CLI::IsMember({"auto", "dense", "banded", "klu", "sparselu"}))->capture_default_str();
-  sub->add_option("--fixed-step", a->fixed_step, "no step control: this step (colloc: point spacing)")->check(CLI::PositiveNumber);
+  sub->add_option("--fixed-step", a->fixed_step, "no step control: this step (colloc: the point spacing of equidistant blocks, the block length at Radau points)")->check(CLI::PositiveNumber);
   sub->add_option("--initial-step", a->initial_step, "first step (default: chosen from the problem)")->check(CLI::PositiveNumber);
   sub->add_option("--threads", a->threads, "threads (0: all cores; 1: sequential, the same numbers)")->check(CLI::NonNegativeNumber);
   sub->add_option("-o,--output", a->output, "HDF5 file for the solution and the step record");

@@ -38,6 +38,11 @@ int describe_tableau(const std::string& name) {
   std::printf("%s: %s, %d stages, order %d%s\n", t.name.c_str(), t.family.c_str(), t.stages(), t.order,
               t.explicit_first ? " (stage 1 explicit: K_1 = f(t_n, x_n))" : "");
   std::printf("quadrature check |sum b_i c_i^(k-1) - 1/k|, k <= %d: %.2e\n", t.order, quadrature_residual(t, t.order));
+  const StabilityReport st = check_a_stability(t);
+  std::printf("stability: R(z) = 1 + z b^T (I - z A)^-1 1; max |R(iy)| = %.4g, |R(inf)| = %.3g, smallest Re(pole) = %.4g: %s%s\n",
+              st.max_on_imaginary_axis, st.at_infinity, st.min_pole_real_part,
+              st.l_stable() ? "L-stable" : st.a_stable ? "A-stable, not L-stable (stiff components are not damped)" : "not A-stable",
+              stiffly_accurate(t) ? ", stiffly accurate" : ", not stiffly accurate (the step's end is not its last stage)");
   print_matrix("A", t.a);
   print_matrix("b", t.b.transpose());
   print_matrix("c", t.c.transpose());

@@ -13,6 +13,7 @@ namespace mbsflow::cli {
 
 struct OdeArgs {
   std::string problem, method = "colloc", tableau = "radau3", iteration, jacobian = "exact", solver = "auto", output;
+  std::string nodes;  // colloc: radau or equidistant; empty: radau unless --m > 1 or --order is given
   long n = 1000;
   int s = 3, m = 1, order = 0, threads = 0, iterations = 0, inner = 3;
   double tol = 1e-6, atol = 0, fixed_step = 0, initial_step = 0;

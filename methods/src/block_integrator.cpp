@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "block_solve.hpp"
+#include "error_norm.hpp"
 #include "settings_checks.hpp"
 #include "starting_step.hpp"
 #include "mbsflow/methods/jacobian.hpp"
@@ -43,7 +44,7 @@ namespace {
 
 void check_settings(const OdeProblem& p, const BlockSettings& s) {
   check_common_settings(p, s);
-  if (!(s.global_fraction > 0 && s.global_fraction <= 1)) throw InputError("global_fraction must be in (0, 1]");
+  if (!(s.global_fraction >= 0 && s.global_fraction <= 1)) throw InputError("global_fraction must be in [0, 1] (0: the method's default)");
 }
 
 // The last accepted block (or the start-up block), kept for the dense output that
@@ -55,7 +56,7 @@ struct LastBlock {
   AcceptedBlock view() const { return {t0, tau, static_cast<int>(u.size()), method, &past_u, &past_f, &u, &f}; }
 };
 
-BlockMethodSpec larger(const BlockMethodSpec& s) { return {s.m, s.s + 1, s.order > 0 ? s.order + 1 : 0}; }
+BlockMethodSpec larger(const BlockMethodSpec& s) { return {s.m, s.s + 1, s.order > 0 ? s.order + 1 : 0, s.nodes}; }
 
 // The first m - 1 points of a multistep method come from a one-step block method with
 // max(s, m - 1, p - 1) points at the same spacing, of order at least p (so the start does
@@ -181,7 +182,7 @@ bool BlockIntegrator::Driver::factorize(std::initializer_list<BlockSolve*> block
 
 bool BlockIntegrator::Driver::solve(std::initializer_list<BlockSolve*> blocks, double tau) {
   ++result_.stats.steps;
-  scale_ = s_.atol + s_.rtol * past_u_.back().array().abs();
+  scale_ = tolerance_weights(s_, past_u_.back().array().abs());
   for (BlockSolve* b : blocks) b->setup(t_, tau, past_u_, past_f_, scale_);
   if (newton() && !factorize(blocks, tau)) {
     for (BlockSolve* b : blocks) b->failed = true;
@@ -201,13 +202,17 @@ bool BlockIntegrator::Driver::solve(std::initializer_list<BlockSolve*> blocks, d
   return ok;
 }
 
-// Largest scaled difference of the two blocks over their s shared points.
+// Largest difference of the two blocks over the points they share, in the weighted RMS norm.
 double BlockIntegrator::Driver::block_difference() const {
   double err = 0;
-  for (int i = 0; i < small_.points(); ++i) {
-    const Eigen::ArrayXd sc = s_.atol + s_.rtol * past_u_.back().array().abs().max(large_.u[i].array().abs());
-    err = std::max(err, ((large_.u[i] - small_.u[i]).array().abs() / sc).maxCoeff());
-  }
+  const Eigen::VectorXd& ps = small_.method().positions;
+  const Eigen::VectorXd& pl = large_.method().positions;
+  for (int i = 0; i < small_.points(); ++i)
+    for (int j = 0; j < large_.points(); ++j) {
+      if (std::abs(ps(i) - pl(j)) > 1e-12) continue;
+      const Eigen::ArrayXd w = tolerance_weights(s_, past_u_.back().array().abs().max(large_.u[j].array().abs()));
+      err = std::max(err, weighted_rms(large_.u[j] - small_.u[i], w));
+    }
   return err;
 }
 
@@ -235,7 +240,7 @@ void BlockIntegrator::Driver::accept(const BlockSolve& b, double tau) {
     past_u_[at] = c < w ? past_u_[static_cast<std::size_t>(c)] : b.u[static_cast<std::size_t>(c - w)];
     past_f_[at] = c < w ? past_f_[static_cast<std::size_t>(c)] : b.f[static_cast<std::size_t>(c - w)];
   }
-  t_ += k * tau;
+  t_ += b.method().span() * tau;
   if (project_) project_(t_, past_u_.back());
   window_tau_ = tau;
   jacobian_at_point_ = false;
@@ -269,7 +274,7 @@ void BlockIntegrator::Driver::begin() {
   factorized_for_ = nullptr;
   tau_ = s_.fixed_step;
   if (!fixed_) {
-    scale_ = s_.atol + s_.rtol * p_.y0.array().abs();
+    scale_ = tolerance_weights(s_, p_.y0.array().abs());
     tau_ = s_.initial_step > 0 ? s_.initial_step
                                : starting_step(p_, p_.y0, past_f_[0], scale_, small_.method().order, st.rhs_evaluations);
   }
@@ -310,12 +315,14 @@ bool BlockIntegrator::Driver::advance() {
       return true;
     }
     bool allow_large = !fixed_;
-    const double left = t_end - t_;
-    if (left < (s + 0.5) * tau) {
-      tau = left / s;  // the s-point block lands on the end
+    const double left = t_end - t_, span_s = small_.method().span(), span_s1 = large_.method().span();
+    if (span_s == span_s1) {
+      if (left <= span_s * tau) tau = left / span_s;  // both blocks land on the end
+    } else if (left < (span_s + 0.5) * tau) {
+      tau = left / span_s;  // the s-point block lands on the end
       allow_large = false;
-    } else if (left < (s + 1) * tau) {
-      tau = left / (s + 1);  // the (s+1)-point block lands on the end
+    } else if (left < span_s1 * tau) {
+      tau = left / span_s1;  // the (s+1)-point block lands on the end
     }
     if (m() > 1 && tau != window_tau_) rebuild_window(tau);
     const bool ok = fixed_ ? solve({&small_}, tau) : solve({&small_, &large_}, tau);
@@ -329,9 +336,13 @@ bool BlockIntegrator::Driver::advance() {
       accept(small_, tau);
       return true;
     }
-    const double err = block_difference(), gf = s_.global_fraction;
+    // At Radau points the difference at the end is the s-point block's local error,
+    // O(tau^(q+1)); equidistant blocks keep the seed's exponent 1/q.
+    const bool radau = s_.method.nodes == BlockNodes::radau;
+    const double err = block_difference(), gf = s_.global_fraction > 0 ? s_.global_fraction : radau ? 1.0 : 0.1;
+    const double exponent = radau ? 1.0 / (q + 1) : 1.0 / q;
     const double fac = err == 0 ? s_.facmax
-                                : std::min(s_.facmax, std::max(s_.facmin, s_.safety * std::pow(gf / err, 1.0 / q)));
+                                : std::min(s_.facmax, std::max(s_.facmin, s_.safety * std::pow(gf / err, exponent)));
     const int taken = err <= gf && allow_large ? s + 1 : err <= 1 ? s : 0;
     record(tau, taken, err, small_, &large_);
     if (taken == 0) {

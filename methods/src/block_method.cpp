@@ -6,7 +6,12 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 #include <boost/multiprecision/cpp_int.hpp>
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <limits>
+
+#include "mbsflow/methods/rk_tableau.hpp"
 
 namespace mbsflow {
 namespace {
@@ -43,18 +48,17 @@ std::vector<bool> kept_unknowns(const BlockMethodSpec& spec) {
   return keep;
 }
 
-// Exactness on 1, x, ..., x^order at the target x: one equation per power, one column
-// per kept unknown.
+// Exactness on 1, x, ..., x^q at the target x: one equation per power, one column per
+// kept unknown; the block points lie at `positions` (the past points at 0, -1, ...).
 template <class T>
-void order_system(const BlockMethodSpec& spec, const std::vector<bool>& keep, const T& x, std::vector<std::vector<T>>& a,
-                  std::vector<T>& b) {
-  const int q = spec.effective_order();
+void order_system(const BlockMethodSpec& spec, const std::vector<bool>& keep, const std::vector<T>& positions, int q,
+                  const T& x, std::vector<std::vector<T>>& a, std::vector<T>& b) {
   a.assign(q + 1, {});
   b.assign(q + 1, T(0));
   for (int l = 0; l <= q; ++l) {
     for (int k = 0; k < static_cast<int>(keep.size()); ++k) {
       if (!keep[k]) continue;
-      const T j = T(point_of(spec, k));
+      const T j = k < 2 * spec.m ? T(point_of(spec, k)) : positions[static_cast<std::size_t>(k - 2 * spec.m)];
       if (k < spec.m)
         a[l].push_back(power(j, l));
       else
@@ -106,6 +110,13 @@ Rational determinant(std::vector<std::vector<Rational>> a) {
 
 void check_spec(const BlockMethodSpec& spec) {
   if (spec.m < 1 || spec.s < 1) throw InputError("a block method needs m >= 1 and s >= 1");
+  if (spec.nodes == BlockNodes::radau) {
+    if (spec.m != 1) throw InputError("blocks at Radau points are one-step methods (m = 1); multistep blocks are equidistant");
+    if (spec.order != 0 && spec.order != spec.maximal_order())
+      throw InputError("blocks at Radau points have order 2s - 1 only (lower orders are equidistant blocks)");
+    if (spec.s > 11) throw InputError("blocks at Radau points have at most 11 points (the controller also runs s + 1)");
+    return;
+  }
   if (spec.order < 0 || spec.order > spec.maximal_order())
     throw InputError("order " + std::to_string(spec.order) + " is outside 1.." +
                                 std::to_string(spec.maximal_order()) + " (the maximal order 2m+s-1)");
@@ -124,7 +135,9 @@ ExactRows exact_rows(const BlockMethodSpec& spec, const std::vector<bool>& keep)
   for (int i = 1; i <= spec.s; ++i) {
     std::vector<std::vector<Rational>> a;
     std::vector<Rational> b;
-    order_system<Rational>(spec, keep, Rational(i), a, b);
+    std::vector<Rational> positions;
+    for (int j = 1; j <= spec.s; ++j) positions.emplace_back(j);
+    order_system<Rational>(spec, keep, positions, spec.effective_order(), Rational(i), a, b);
     const std::vector<Rational> x = solve_exact(std::move(a), std::move(b));
     std::vector<Rational> full(n, 0);
     for (int k = 0, used = 0; k < n; ++k)
@@ -137,13 +150,73 @@ ExactRows exact_rows(const BlockMethodSpec& spec, const std::vector<bool>& keep)
   return rows;
 }
 
+std::string decimal(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+
+// The one-step block at the s right Radau points: Radau IIA collocation, u_i = u_0 +
+// tau sum_j a_ij f_j (q = 1, no f_0).
+BlockCoefficients radau_block(const BlockMethodSpec& spec) {
+  const RkTableau t = radau_iia(spec.s);
+  BlockCoefficients c;
+  c.spec = spec;
+  c.order = spec.maximal_order();
+  c.exact = false;
+  c.keep_u = {true};
+  c.keep_f.assign(static_cast<std::size_t>(spec.s + 1), true);
+  c.keep_f[0] = false;
+  c.q = Eigen::MatrixXd::Ones(spec.s, 1);
+  c.d = Eigen::MatrixXd::Zero(spec.s, 1);
+  c.g = t.a;
+  c.positions = t.c;
+  for (int i = 0; i < spec.s; ++i) {
+    c.q_exact.push_back("1");
+    c.d_exact.push_back("0");
+    for (int j = 0; j < spec.s; ++j) c.g_exact.push_back(decimal(t.a(i, j)));
+  }
+  return c;
+}
+
 }  // namespace
+
+const char* to_string(BlockNodes n) { return n == BlockNodes::radau ? "radau" : "equidistant"; }
+
+BlockMethodSpec default_block_method() { return {1, 3, 0, BlockNodes::radau}; }
+
+BlockMethodSpec parse_block_method(const std::string& v) {
+  if (v.empty()) return default_block_method();
+  BlockMethodSpec spec;
+  char end = 0;
+  if (v.rfind("radau", 0) == 0) {
+    spec = default_block_method();
+    if (v != "radau" && std::sscanf(v.c_str(), "radau,%d%c", &spec.s, &end) != 1)
+      throw InputError("colloc: the variant is radau, radau,s, m,s or m,s,order (got '" + v + "')");
+  } else {
+    int order = 0;
+    const int n = std::sscanf(v.c_str(), "%d,%d,%d%c", &spec.m, &spec.s, &order, &end);
+    if (n != 2 && n != 3) throw InputError("colloc: the variant is radau, radau,s, m,s or m,s,order (got '" + v + "')");
+    spec.order = order;
+  }
+  check_spec(spec);
+  return spec;
+}
+
+std::string describe_block_method(const BlockMethodSpec& spec) {
+  if (spec.nodes == BlockNodes::radau)
+    return "Radau points, s = " + std::to_string(spec.s) + ", order " + std::to_string(spec.maximal_order());
+  return "equidistant, m = " + std::to_string(spec.m) + ", s = " + std::to_string(spec.s) + ", order " +
+         std::to_string(spec.effective_order());
+}
 
 BlockCoefficients generate_block_method(const BlockMethodSpec& spec) {
   check_spec(spec);
+  if (spec.nodes == BlockNodes::radau) return radau_block(spec);
   BlockCoefficients c;
   c.spec = spec;
   c.order = spec.effective_order();
+  c.positions = Eigen::VectorXd::LinSpaced(spec.s, 1, spec.s);
   const std::vector<bool> keep = kept_unknowns(spec);
   c.keep_u.assign(keep.begin(), keep.begin() + spec.m);
   c.keep_f.assign(keep.begin() + spec.m, keep.end());
@@ -170,7 +243,11 @@ DenseWeights dense_output_weights(const BlockCoefficients& method, double theta)
   keep.insert(keep.end(), method.keep_f.begin(), method.keep_f.end());
   std::vector<std::vector<double>> a;
   std::vector<double> b;
-  order_system<double>(spec, keep, theta, a, b);
+  const std::vector<double> positions(method.positions.data(), method.positions.data() + method.positions.size());
+  // The interpolation polynomial through the kept data (of the method's order for
+  // equidistant blocks; degree s for Radau points, superconvergent at the end only).
+  const int degree = static_cast<int>(std::count(keep.begin(), keep.end(), true)) - 1;
+  order_system<double>(spec, keep, positions, degree, theta, a, b);
   const int n = static_cast<int>(b.size());
   Eigen::MatrixXd am(n, n);
   Eigen::VectorXd bv(n);
@@ -193,7 +270,26 @@ DenseWeights dense_output_weights(const BlockCoefficients& method, double theta)
   return w;
 }
 
+// In doubles, for methods without exact coefficients (Radau points): the stage order s
+// at every point, the order 2s - 1 at the end.
+std::string order_condition_residual_double(const BlockCoefficients& method) {
+  const int s = method.spec.s;
+  double worst = 0;
+  for (int i = 0; i < s; ++i) {
+    const int order = i == s - 1 ? method.order : s;
+    for (int l = 1; l <= order; ++l) {
+      double sum = 0;
+      for (int j = 0; j < s; ++j) sum += l * method.g(i, j) * std::pow(method.positions(j), l - 1);
+      worst = std::max(worst, std::abs(sum - std::pow(method.positions(i), l)));
+    }
+  }
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g", worst);
+  return buf;
+}
+
 std::string order_condition_residual(const BlockCoefficients& method) {
+  if (!method.exact) return order_condition_residual_double(method);
   const BlockMethodSpec& spec = method.spec;
   Rational worst = 0;
   auto parse = [](const std::string& s) { return Rational(s); };
@@ -215,9 +311,49 @@ std::string order_condition_residual(const BlockCoefficients& method) {
   return text(worst);
 }
 
+namespace {
+
+// R in doubles (long double determinants), for methods without exact coefficients.
+// R(infinity) = |(g^-1 d)_s|: u = (I - z g)^-1 (1 + z d) tends to -g^-1 d.
+StabilityFunction stability_function_double(const BlockCoefficients& method) {
+  using MatrixL = Eigen::Matrix<long double, Eigen::Dynamic, Eigen::Dynamic>;
+  using VectorL = Eigen::Matrix<long double, Eigen::Dynamic, 1>;
+  const int s = method.spec.s;
+  const MatrixL g = method.g.cast<long double>();
+  VectorL pv(s + 1), qv(s + 1);
+  MatrixL vandermonde(s + 1, s + 1);
+  for (int zi = 0; zi <= s; ++zi) {
+    const long double z = zi;
+    MatrixL a = MatrixL::Identity(s, s) - z * g;
+    qv(zi) = a.determinant();
+    for (int i = 0; i < s; ++i) a(i, s - 1) = 1 + z * static_cast<long double>(method.d(i, 0));
+    pv(zi) = a.determinant();
+    for (int k = 0; k <= s; ++k) vandermonde(zi, k) = std::pow(z, static_cast<long double>(k));
+  }
+  const Eigen::FullPivLU<MatrixL> lu(vandermonde);
+  const VectorL pc = lu.solve(pv), qc = lu.solve(qv);
+  StabilityFunction r;
+  r.numerator = pc.cast<double>();
+  r.denominator = qc.cast<double>();
+  const double size = std::max(r.numerator.cwiseAbs().maxCoeff(), r.denominator.cwiseAbs().maxCoeff());
+  for (Eigen::VectorXd* v : {&r.numerator, &r.denominator})
+    for (double& c : *v)
+      if (std::abs(c) < 1e-13 * size) c = 0;  // rounding of an exact zero
+  for (int k = 0; k <= s; ++k) {
+    r.numerator_exact.push_back(decimal(r.numerator(k)));
+    r.denominator_exact.push_back(decimal(r.denominator(k)));
+  }
+  r.infinity = std::abs(method.g.fullPivLu().solve(method.d.col(0))(s - 1));
+  if (r.infinity < 1e-12) r.infinity = 0;
+  return r;
+}
+
+}  // namespace
+
 StabilityFunction stability_function(const BlockCoefficients& method) {
   const int s = method.spec.s;
   if (method.spec.m != 1) throw InputError("a stability function is given for one-step methods (m = 1) only");
+  if (!method.exact) return stability_function_double(method);
   // u = (I - z G)^{-1} (1 + z d) u0; u_s by Cramer's rule. P and Q have degree <= s: take
   // them at z = 0..s and interpolate.
   std::vector<Rational> qv, pv;
@@ -243,6 +379,11 @@ StabilityFunction stability_function(const BlockCoefficients& method) {
     r.numerator(k) = to_double(pc[k]);
     r.denominator(k) = to_double(qc[k]);
   }
+  // The limit from the degrees of P and Q (exact zeros).
+  int dp = s, dq = s;
+  while (dp > 0 && pc[dp] == 0) --dp;
+  while (dq > 0 && qc[dq] == 0) --dq;
+  r.infinity = dp < dq ? 0.0 : dp > dq ? std::numeric_limits<double>::infinity() : std::abs(to_double(pc[dp] / qc[dq]));
   return r;
 }
 
@@ -251,18 +392,6 @@ std::complex<double> StabilityFunction::operator()(std::complex<double> z) const
   for (Eigen::Index k = numerator.size() - 1; k >= 0; --k) p = p * z + numerator(k);
   for (Eigen::Index k = denominator.size() - 1; k >= 0; --k) q = q * z + denominator(k);
   return p / q;
-}
-
-double StabilityFunction::at_infinity() const {
-  auto degree = [](const std::vector<std::string>& c) {
-    int d = static_cast<int>(c.size()) - 1;
-    while (d > 0 && c[d] == "0") --d;
-    return d;
-  };
-  const int dp = degree(numerator_exact), dq = degree(denominator_exact);
-  if (dp < dq) return 0.0;
-  if (dp > dq) return std::numeric_limits<double>::infinity();
-  return std::abs(numerator(dp) / denominator(dq));
 }
 
 ZeroStability check_zero_stability(const BlockCoefficients& method) {
@@ -295,19 +424,12 @@ ZeroStability check_zero_stability(const BlockCoefficients& method) {
 
 StabilityReport check_a_stability(const BlockCoefficients& method) {
   const StabilityFunction r = stability_function(method);
-  StabilityReport rep;
-  rep.at_infinity = r.at_infinity();
-  rep.min_pole_real_part = std::numeric_limits<double>::infinity();
   const Eigen::VectorXcd mu = method.g.eigenvalues();
+  std::vector<std::complex<double>> poles;
   for (Eigen::Index i = 0; i < mu.size(); ++i)
-    if (std::abs(mu(i)) > 1e-14) rep.min_pole_real_part = std::min(rep.min_pole_real_part, (1.0 / mu(i)).real());
-  for (int k = 0; k <= 4000; ++k) {
-    const double y = k == 0 ? 0.0 : std::pow(10.0, -3.0 + 7.0 * (k - 1) / 3999.0);
-    rep.max_on_imaginary_axis = std::max(rep.max_on_imaginary_axis, std::abs(r({0.0, y})));
-  }
-  const double slack = 1e-12;
-  rep.a_stable = rep.min_pole_real_part > 0 && rep.max_on_imaginary_axis <= 1 + slack && rep.at_infinity <= 1 + slack;
-  return rep;
+    if (std::abs(mu(i)) > 1e-14) poles.push_back(1.0 / mu(i));
+  return stability_report(r, Eigen::Map<const Eigen::VectorXcd>(poles.data(), static_cast<Eigen::Index>(poles.size())),
+                          r.at_infinity());
 }
 
 }  // namespace mbsflow

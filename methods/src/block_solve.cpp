@@ -86,7 +86,7 @@ void BlockSolve::prepare(Eigen::Index r) {
     if (kind_ == BlockIteration::newton)
       u[i].segment(lo, len) = u0.segment(lo, len);
     else
-      u[i].segment(lo, len) = u0.segment(lo, len) + (double(i + 1) * tau_) * f0.segment(lo, len);
+      u[i].segment(lo, len) = u0.segment(lo, len) + (method_.positions(i) * tau_) * f0.segment(lo, len);
   }
 }
 
@@ -94,7 +94,7 @@ void BlockSolve::prepare(Eigen::Index r) {
 void BlockSolve::evaluate(int i, Eigen::Index first_slice, Eigen::Index slice_count) {
   const Eigen::Index begin = slice_begin(first_slice), end = slice_begin(first_slice + slice_count - 1) +
                                                              slice_length(first_slice + slice_count - 1);
-  problem_.rhs(t0_ + double(i + 1) * tau_, u[i], f[i], {begin, end});
+  problem_.rhs(t0_ + method_.positions(i) * tau_, u[i], f[i], {begin, end});
   f_not_finite_[static_cast<std::size_t>(first_slice * points() + i)] = !f[i].segment(begin, end - begin).allFinite();
 }
 

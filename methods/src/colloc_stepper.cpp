@@ -1,8 +1,7 @@
 // The "colloc" stepper: collocation block methods with the seed's s/(s+1)-point step
-// control (BlockIntegrator). variant "m,s" or "m,s,order" picks the method (default 1,2).
+// control (BlockIntegrator). variant "radau" or "radau,s" (blocks at Radau points; the
+// default, s = 3) or "m,s" / "m,s,order" (the seed's equidistant blocks) picks the method.
 // Dense output from the accepted block's collocation polynomial.
-#include <cstdio>
-
 #include "mbsflow/methods/block_integrator.hpp"
 #include "stepper_registry.hpp"
 #include "implicit_stepper.hpp"
@@ -10,22 +9,10 @@
 namespace mbsflow {
 namespace {
 
-BlockMethodSpec parse_spec(const std::string& v) {
-  BlockMethodSpec spec;
-  if (v.empty()) return spec;
-  int order = 0;
-  char end = 0;
-  const int n = std::sscanf(v.c_str(), "%d,%d,%d%c", &spec.m, &spec.s, &order, &end);
-  if (n != 2 && n != 3) throw InputError("colloc: the variant is m,s or m,s,order (got '" + v + "')");
-  spec.order = order;
-  return spec;
-}
-
 class CollocStepper final : public ImplicitStepper<BlockIntegrator, BlockSettings> {
  public:
   CollocStepper(const StepperSystem& s, const StepperSettings& o) : ImplicitStepper(s, o) {
-    settings_.method = parse_spec(o.variant);
-    generate_block_method(settings_.method);  // InputError for a method that does not exist
+    settings_.method = parse_block_method(o.variant);  // InputError for a method that does not exist
     integrator_ = std::make_unique<BlockIntegrator>(
         problem_, settings_, [this](const AcceptedBlock& b) { keep(b); }, s.after_step);
   }

@@ -40,6 +40,8 @@ class ImplicitStepper : public Stepper {
     check_system(s);
     settings_.rtol = o.rtol;
     settings_.atol = o.atol;
+    settings_.rtols = o.rtols;
+    settings_.atols = o.atols;
     settings_.threads = o.threads;
     settings_.initial_step = o.step;
     settings_.finite_difference_jacobian = !s.jacobian;

@@ -94,13 +94,6 @@ RkTableau gauss(int s) {
   return t;
 }
 
-RkTableau radau(int s) {
-  RkTableau t = collocation(roots_on_unit_interval([s](Real y) { return legendre(s, y) - legendre(s - 1, y); }, s));
-  t.name = "radau" + std::to_string(s);
-  t.family = "Radau IIA (collocation at the right Radau points)";
-  t.order = 2 * s - 1;
-  return t;
-}
 
 RkTableau lobatto3c() {
   RkTableau t;
@@ -139,6 +132,15 @@ RkTableau block(int s) {
 }
 
 }  // namespace
+
+RkTableau radau_iia(int s) {
+  if (s < 1 || s > 12) throw InputError("Radau IIA: stages must be in 1..12 (got " + std::to_string(s) + ")");
+  RkTableau t = collocation(roots_on_unit_interval([s](Real y) { return legendre(s, y) - legendre(s - 1, y); }, s));
+  t.name = "radau" + std::to_string(s);
+  t.family = "Radau IIA (collocation at the right Radau points)";
+  t.order = 2 * s - 1;
+  return t;
+}
 
 Eigen::MatrixXd RkTableau::implicit_block() const {
   const int k = first_implicit(), n = implicit_stages();
@@ -208,9 +210,10 @@ EmbeddedFormula embedded_formula(const RkTableau& t, double gamma) {
 }
 
 RkTableau rk_tableau(const std::string& name) {
-  if (name == "radau2") return radau(2);
-  if (name == "radau3") return radau(3);
-  if (name == "radau5") return radau(5);
+  if (name.rfind("radau", 0) == 0 && name.size() > 5 && name.size() <= 7 &&
+      name.find_first_not_of("0123456789", 5) == std::string::npos && std::stoi(name.substr(5)) >= 1 &&
+      std::stoi(name.substr(5)) <= 12)
+    return radau_iia(std::stoi(name.substr(5)));
   if (name == "gauss2") return gauss(2);
   if (name == "gauss3") return gauss(3);
   if (name == "lobatto3c") return lobatto3c();
@@ -237,6 +240,40 @@ double stage_order_residual(const RkTableau& t, int stage_order) {
     r = std::max(r, (lhs.array() - t.c.array().pow(k) / k).abs().maxCoeff());
   }
   return r;
+}
+
+std::complex<double> stability_value(const RkTableau& t, std::complex<double> z) {
+  using C = std::complex<long double>;
+  using MatrixC = Eigen::Matrix<C, Eigen::Dynamic, Eigen::Dynamic>;
+  using VectorC = Eigen::Matrix<C, Eigen::Dynamic, 1>;
+  const int s = t.stages();
+  const C zl(z.real(), z.imag());
+  const MatrixC m = MatrixC::Identity(s, s) - zl * t.a.cast<long double>().cast<C>();
+  const VectorC w = m.fullPivLu().solve(VectorC::Ones(s));
+  const C r = C(1) + zl * (t.b.cast<long double>().cast<C>().dot(w));
+  return {static_cast<double>(r.real()), static_cast<double>(r.imag())};
+}
+
+bool stiffly_accurate(const RkTableau& t) {
+  const int last = t.stages() - 1;
+  return t.c(last) == 1.0 && (t.a.row(last).transpose() - t.b).cwiseAbs().maxCoeff() < 1e-15;
+}
+
+StabilityReport check_a_stability(const RkTableau& t) {
+  const Eigen::VectorXcd mu = t.a.eigenvalues();
+  std::vector<std::complex<double>> poles;
+  for (Eigen::Index i = 0; i < mu.size(); ++i)
+    if (std::abs(mu(i)) > 1e-14) poles.push_back(1.0 / mu(i));
+  double at_infinity;
+  const Eigen::FullPivLU<Eigen::MatrixXd> lu(t.a);
+  if (lu.isInvertible()) {
+    at_infinity = std::abs(1.0 - t.b.dot(lu.solve(Eigen::VectorXd::Ones(t.stages()))));  // R(inf) = 1 - b^T A^-1 1
+  } else {
+    at_infinity = std::abs(stability_value(t, -1e10));  // an explicit stage: the limit numerically
+  }
+  if (at_infinity < 1e-12) at_infinity = 0;
+  return stability_report([&](std::complex<double> z) { return stability_value(t, z); },
+                          Eigen::Map<const Eigen::VectorXcd>(poles.data(), static_cast<Eigen::Index>(poles.size())), at_infinity);
 }
 
 }  // namespace mbsflow

@@ -5,7 +5,6 @@
 
 namespace mbsflow {
 
-double scaled_max(const Eigen::VectorXd& v, const Eigen::VectorXd& scale);
 double starting_step(const OdeProblem& p, const Eigen::VectorXd& y0, const Eigen::VectorXd& f0, const Eigen::VectorXd& scale,
                      int q, long& evaluations);
 

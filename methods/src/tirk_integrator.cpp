@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "mbsflow/methods/jacobian.hpp"
+#include "error_norm.hpp"
 #include "settings_checks.hpp"
 #include "starting_step.hpp"
 #include "tirk_stages.hpp"
@@ -97,8 +98,7 @@ class TirkIntegrator::Driver {
     monitor_.tol = s.iteration_tol > 0 ? s.iteration_tol : newton_tolerance(s.rtol);
     monitor_.predict_failure = full_newton();
     monitor_.max_iterations = s.max_iterations > 0 ? s.max_iterations : newton() ? 10 : 50;
-    const int last = tableau_.stages() - 1;
-    stiffly_accurate_ = tableau_.c(last) == 1.0 && (tableau_.a.row(last).transpose() - tableau_.b).cwiseAbs().maxCoeff() < 1e-15;
+    stiffly_accurate_ = stiffly_accurate(tableau_);
     result_.stats.contraction_m = contraction_constant(tableau_.implicit_block(), t_matrix_);
     nodes_ = {0.0};
     node_stage_ = {-1};
@@ -284,7 +284,7 @@ void TirkIntegrator::Driver::begin_step(double t, const Eigen::VectorXd& x, cons
                                         const std::vector<Eigen::VectorXd>* guess) {
   ++result_.stats.steps;
   t_ = t;
-  scale_ = s_.atol + s_.rtol * x.array().abs();
+  scale_ = tolerance_weights(s_, x.array().abs());
   stages_.setup(t, tau, x, fx, scale_, guess);
   iterations_ = 0;
   arena_.execute([&] {
@@ -346,8 +346,8 @@ double TirkIntegrator::Driver::estimate(double t, const Eigen::VectorXd& x, cons
   }
   Eigen::VectorXd e = combination;
   if (newton()) stages_.solve_with(embedded_.gamma, e);  // the stiff filter
-  const Eigen::ArrayXd sc = s_.atol + s_.rtol * x.array().abs().max(x_new.array().abs());
-  double err = (e.array().abs() / sc).maxCoeff();
+  const Eigen::ArrayXd w = tolerance_weights(s_, x.array().abs().max(x_new.array().abs()));
+  double err = weighted_rms(e, w);
   // Radau5's second filter (Hairer & Wanner IV.8): on the first step and after a rejection
   // a large estimate may be the stiff components the filter lets through; f at x + e in
   // place of f(x) filters them once more, so that a sound step is not cut, and a step that
@@ -358,7 +358,7 @@ double TirkIntegrator::Driver::estimate(double t, const Eigen::VectorXd& x, cons
     ++result_.stats.rhs_evaluations;
     e = combination + (tau * embedded_.gamma) * (f1 - fx);
     stages_.solve_with(embedded_.gamma, e);
-    err = (e.array().abs() / sc).maxCoeff();
+    err = weighted_rms(e, w);
   }
   return err;
 }
@@ -383,7 +383,7 @@ void TirkIntegrator::Driver::begin() {
   fixed_ = s_.fixed_step > 0;
   tau_ = s_.fixed_step;
   if (!fixed_) {
-    const Eigen::VectorXd scale = s_.atol + s_.rtol * x.array().abs();
+    const Eigen::VectorXd scale = tolerance_weights(s_, x.array().abs());
     tau_ = s_.initial_step > 0 ? s_.initial_step : starting_step(p_, x, fx, scale, tableau_.order, st.rhs_evaluations);
   }
   t_now_ = t_old_ = t;

@@ -38,9 +38,14 @@ TEST_CASE("cli ode: the seed's functional iteration on eq. 10, and fixed steps",
   INFO(f.err << f.out);
   REQUIRE(f.code == 0);
   CHECK(reported(f.out, "factorizations") == 0);
-  const Result fixed = run("ode --problem b1 --s 2 --fixed-step 0.001 -q", ".", true);
+  // Equidistant blocks: the step is the point spacing (2 points per block); at Radau
+  // points it is the block length.
+  const Result fixed = run("ode --problem b1 --s 2 --nodes equidistant --fixed-step 0.001 -q", ".", true);
   REQUIRE(fixed.code == 0);
   CHECK(reported(fixed.out, "steps") == 10000);
+  const Result radau = run("ode --problem b1 --s 2 --fixed-step 0.001 -q", ".", true);
+  REQUIRE(radau.code == 0);
+  CHECK(reported(radau.out, "steps") == 20000);
 }
 
 TEST_CASE("cli ode: --describe prints the seed's method with exact coefficients", "[cli][ode]") {
@@ -49,15 +54,24 @@ TEST_CASE("cli ode: --describe prints the seed's method with exact coefficients"
   CHECK(r.out.find("q = (55/136, 27/17, -135/136), d = (141/1360, 207/170, 297/170), g = (57/170, -9/1360)") != std::string::npos);
   CHECK(r.out.find("largest exact residual 0") != std::string::npos);
   CHECK(r.out.find("not zero-stable") != std::string::npos);
-  const Result a = run("ode --describe --s 2", ".", true);
-  CHECK(a.out.find("A-stable") != std::string::npos);
+  const Result a = run("ode --describe --s 2 --nodes equidistant", ".", true);
+  CHECK(a.out.find("A-stable, not L-stable") != std::string::npos);
+  // The default blocks (Radau points): both blocks of the step control L-stable.
+  const Result d = run("ode --describe", ".", true);
+  CHECK(d.out.find("radau points") != std::string::npos);
+  CHECK(d.out.find("largest rounded residual") != std::string::npos);
+  const auto first = d.out.find(": L-stable");
+  REQUIRE(first != std::string::npos);
+  CHECK(d.out.find(": L-stable", first + 1) != std::string::npos);
 }
 
 TEST_CASE("cli ode: bad input exits 2, a failed run exits 1", "[cli][ode]") {
   CHECK(run("ode --problem heat --s 3 --order 2").code == 2);  // order below s
   CHECK(run("ode --problem nope").code == 2);
   CHECK(run("ode --s 2").code == 2);  // no problem
-  const Result fail = run("ode --problem hnw --s 3 --tol 1e-3");  // x2 drifts to its singularity near t = 1.93
+  // The seed's equidistant blocks: x2 drifts to its singularity near t = 1.93.
+  CHECK(run("ode --problem hnw --m 2 --nodes radau").code == 2);  // Radau blocks are one-step
+  const Result fail = run("ode --problem hnw --s 3 --nodes equidistant --tol 1e-3");
   CHECK(fail.code == 1);
   CHECK(fail.err.find("step size underflow") != std::string::npos);
 }
@@ -98,7 +112,9 @@ TEST_CASE("cli ode: --describe NAME prints the tableau and its splitting", "[cli
   CHECK(r.out.find("triangular") != std::string::npos);
   const Result m = run("ode --method tirk --tableau block3 --describe", ".", true);
   CHECK(m.out.find("stage 1 explicit") != std::string::npos);
-  CHECK(run("ode --describe radau4").code == 2);
+  CHECK(run("ode --describe radau13").code == 2);
+  CHECK(r.out.find("L-stable, stiffly accurate") != std::string::npos);
+  CHECK(run("ode --describe gauss2", ".", true).out.find("A-stable, not L-stable") != std::string::npos);
   CHECK(run("ode --problem b1 --method colloc --iteration jacobi").code == 2);
   CHECK(run("ode --problem b1 --method tirk --iteration functional").code == 2);
   CHECK(r.out.find("newton (default)") != std::string::npos);

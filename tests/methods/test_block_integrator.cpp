@@ -23,7 +23,7 @@ double max_error(const OdeProblem& p, const BlockSettings& s, BlockResult* out =
   double err = 0;
   BlockResult r = integrate_block(p, s, [&](const AcceptedBlock& b) {
     for (int i = 0; i < b.points; ++i)
-      err = std::max(err, ((*b.u)[static_cast<std::size_t>(i)] - p.exact(b.t0 + (i + 1) * b.tau)).cwiseAbs().maxCoeff());
+      err = std::max(err, ((*b.u)[static_cast<std::size_t>(i)] - p.exact(b.t0 + b.method->positions(i) * b.tau)).cwiseAbs().maxCoeff());
   });
   if (out) *out = std::move(r);
   return err;
@@ -33,7 +33,7 @@ double max_error(const OdeProblem& p, const BlockSettings& s, BlockResult* out =
 double fixed_step_slope(const OdeProblem& p, BlockSettings s, const std::vector<int>& blocks) {
   std::vector<double> h, e;
   for (int n : blocks) {
-    s.fixed_step = (p.t_end - p.t0) / (n * s.method.s);
+    s.fixed_step = (p.t_end - p.t0) / (n * generate_block_method(s.method).span());
     h.push_back(s.fixed_step);
     e.push_back(final_error(p, s));
   }

@@ -103,3 +103,46 @@ TEST_CASE("block methods: stability functions and A-stability of one-step method
   }
   CHECK_THROWS_AS(stability_function(generate_block_method({2, 2, 0})), InputError);
 }
+
+TEST_CASE("block methods at Radau points: both blocks of every pair L-stable, rows of Radau IIA, exact dense output",
+          "[methods][block]") {
+  for (int s = 1; s <= 8; ++s) {
+    const BlockCoefficients c = generate_block_method({1, s, 0, BlockNodes::radau});
+    INFO("s = " << s);
+    CHECK(c.order == 2 * s - 1);
+    CHECK_FALSE(c.exact);
+    CHECK(c.span() == 1.0);
+    const StabilityReport rep = check_a_stability(c);
+    CHECK(rep.a_stable);
+    CHECK(rep.l_stable());
+    CHECK(rep.at_infinity == 0.0);
+    // R(z) approximates e^z (the block is one step of length tau) to order 2s - 1.
+    const StabilityFunction r = stability_function(c);
+    const double e1 = std::abs(r(0.1) - std::exp(0.1)), e2 = std::abs(r(0.05) - std::exp(0.05));
+    if (e1 > 1e-13) CHECK(std::log2(e1 / e2) > c.order + 0.5);
+    // The order conditions hold to rounding (stage order s inside, 2s - 1 at the end).
+    CHECK(std::stod(order_condition_residual(c)) < 1e-13);
+    // Dense output: the collocation polynomial reproduces every point and interpolates
+    // u(t) = t^s exactly between them.
+    for (int i = 0; i < s; ++i) {
+      const DenseWeights w = dense_output_weights(c, c.positions(i));
+      CHECK((w.wg - c.g.row(i).transpose()).cwiseAbs().maxCoeff() < 1e-12);
+      CHECK(w.wu(0) == Approx(1.0));
+    }
+    const DenseWeights w = dense_output_weights(c, 0.37);
+    double u = 0;
+    for (int j = 0; j < s; ++j) u += w.wg(j) * s * std::pow(c.positions(j), s - 1);
+    CHECK(u == Approx(std::pow(0.37, s)).margin(1e-12));
+  }
+  // The equidistant one-step blocks of maximal order are not damped at infinity (the
+  // reason they are no longer the default), and those of lowest order lose A-stability
+  // from s = 3 on.
+  CHECK(check_a_stability(generate_block_method({1, 3, 0})).at_infinity == Approx(1.0));
+  CHECK_FALSE(check_a_stability(generate_block_method({1, 3, 3})).a_stable);
+  CHECK(default_block_method().nodes == BlockNodes::radau);
+  CHECK(parse_block_method("").s == 3);
+  CHECK(parse_block_method("radau,2").s == 2);
+  CHECK(parse_block_method("2,3").nodes == BlockNodes::equidistant);
+  CHECK_THROWS_AS(parse_block_method("radau,x"), InputError);
+  CHECK_THROWS_AS(generate_block_method({2, 2, 0, BlockNodes::radau}), InputError);
+}

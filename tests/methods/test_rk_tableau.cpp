@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 
+#include "mbsflow/methods/block_method.hpp"
 #include "mbsflow/methods/rk_tableau.hpp"
 #include "mbsflow/methods/tirk_integrator.hpp"
 
@@ -19,7 +20,10 @@ TEST_CASE("tableaux: nodes of Radau IIA and Gauss in closed form", "[methods][ti
   const RkTableau g3 = rk_tableau("gauss3");
   CHECK(g3.b(1) == Approx(4.0 / 9).epsilon(1e-15));
   CHECK(rk_tableau("radau2").a(0, 0) == Approx(5.0 / 12).epsilon(1e-15));
-  CHECK_THROWS_AS(rk_tableau("radau4"), InputError);
+  CHECK(rk_tableau("radau4").order == 7);
+  CHECK(quadrature_residual(rk_tableau("radau6"), 11) < 1e-14);
+  CHECK_THROWS_AS(rk_tableau("radau13"), InputError);
+  CHECK_THROWS_AS(rk_tableau("radau0"), InputError);
 }
 
 TEST_CASE("tableaux: quadrature to the order, stage order of the collocation methods", "[methods][tirk]") {
@@ -117,4 +121,31 @@ TEST_CASE("contraction constants: Jacobi is the row-sum norm of A", "[methods][t
   CHECK(contraction_constant(t.a, splitting_matrix(s, TirkIteration::triangular)) >= t.a.cwiseAbs().rowwise().sum().maxCoeff());
   CHECK(tirk_iteration_from_string("newton-diagonal") == TirkIteration::newton_diagonal);
   CHECK_THROWS_AS(tirk_iteration_from_string("gauss-seidel"), InputError);
+}
+
+TEST_CASE("tableaux: stability reports (L-stable Radau IIA, Gauss not damped at infinity)", "[methods][tirk]") {
+  for (int s = 1; s <= 7; ++s) {
+    const RkTableau t = radau_iia(s);
+    const StabilityReport r = check_a_stability(t);
+    INFO(t.name);
+    CHECK(r.l_stable());
+    CHECK(stiffly_accurate(t));
+    // R is the block method's at the same points.
+    const StabilityFunction b = stability_function(generate_block_method({1, s, 0, BlockNodes::radau}));
+    for (std::complex<double> z : {std::complex<double>(-3, 1), std::complex<double>(0.5, -2)})
+      CHECK(std::abs(stability_value(t, z) - b(z)) < 1e-12);
+  }
+  const StabilityReport g = check_a_stability(rk_tableau("gauss3"));
+  CHECK(g.a_stable);
+  CHECK_FALSE(g.l_stable());
+  CHECK(g.at_infinity == Approx(1.0));
+  CHECK_FALSE(stiffly_accurate(rk_tableau("gauss3")));
+  CHECK(check_a_stability(rk_tableau("lobatto3c")).l_stable());
+  // R(z) = e^z + O(z^(p+1)) for every tableau.
+  for (const std::string& name : rk_tableau_names()) {
+    const RkTableau t = rk_tableau(name);
+    const double e1 = std::abs(stability_value(t, 0.1) - std::exp(0.1)), e2 = std::abs(stability_value(t, 0.05) - std::exp(0.05));
+    INFO(name << ": " << e1 << " " << e2);
+    if (e1 > 1e-13) CHECK(std::log2(e1 / e2) > t.order + 0.5);
+  }
 }

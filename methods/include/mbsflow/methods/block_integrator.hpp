@@ -2,7 +2,8 @@
 // Integration of an OdeProblem with collocation block methods and the seed's parallel step
 // control: the s-point and the (s+1)-point block are computed side by side from the same
 // start and step (two subgraphs of one oneTBB flow graph, one node per block point and
-// slice of equations); their difference at the s shared points decides: within the global
+// slice of equations); their difference at the points they share (the s points of
+// equidistant blocks, the common end of blocks at Radau points) decides: within the global
 // tolerance the (s+1)-point solution is taken, within the local tolerance the s-point one,
 // otherwise the step is cut.
 #include "mbsflow/error.hpp"
@@ -22,11 +23,19 @@ const char* to_string(BlockIteration i);
 BlockIteration block_iteration_from_string(const std::string& name);  // throws InputError
 
 struct BlockSettings {
-  BlockMethodSpec method;  // the s-point method; the (s+1)-point one has order + 1 (or its maximal order)
+  // The s-point method; the (s+1)-point one has order + 1 (or its maximal order) and the
+  // same nodes. Default: Radau points, s = 3 (L-stable blocks of order 5 and 7).
+  BlockMethodSpec method = default_block_method();
   double rtol = 1e-6, atol = 1e-6;
+  // Per-component tolerances (one value per equation), in place of rtol / atol when not
+  // empty. The error is measured in the weighted RMS norm with w_i = atol_i + rtol_i |y_i|.
+  Eigen::VectorXd rtols, atols;
   // The (s+1)-point block is taken when the scaled difference is at most this fraction of
-  // the tolerance (the seed's global tolerance); the step controller aims at it.
-  double global_fraction = 0.1;
+  // the tolerance (the seed's global tolerance); the step controller aims at it. 0: 0.1
+  // for equidistant blocks (the seed's choice), 1 for Radau points, whose difference at
+  // the end is the s-point block's own error (so the higher-order block is always taken,
+  // as an embedded pair does).
+  double global_fraction = 0;
   double safety = 0.9, facmin = 0.2, facmax = 4.0;
   double initial_step = 0;  // 0: chosen from the problem (Hairer-Wanner's starting step)
   double fixed_step = 0;    // > 0: no step control, the s-point method alone with this step
@@ -63,9 +72,9 @@ struct AcceptedBlock {
   const BlockCoefficients* method = nullptr;
   const std::vector<Eigen::VectorXd>* past_u = nullptr;  // m values at t0 - (m-1) tau .. t0
   const std::vector<Eigen::VectorXd>* past_f = nullptr;
-  const std::vector<Eigen::VectorXd>* u = nullptr;  // points values at t0 + i tau, i = 1..points
+  const std::vector<Eigen::VectorXd>* u = nullptr;  // values at t0 + positions(i) tau, i = 1..points
   const std::vector<Eigen::VectorXd>* f = nullptr;
-  Eigen::VectorXd interpolate(double t) const;  // dense output, t in [t0 - (m-1) tau, t0 + points tau]
+  Eigen::VectorXd interpolate(double t) const;  // dense output, t in [t0 - (m-1) tau, t0 + span tau]
 };
 
 struct BlockResult {

@@ -8,21 +8,41 @@
 // The coefficients are generated in exact rational arithmetic from exactness on
 // polynomials (order conditions below); the doubles used by the solvers are rounded from
 // the exact values.
+//
+// Equidistant one-step blocks are A-stable with R(infinity) = 0 for s <= 2 only (the
+// stability table of docs/methods.md), so the stiff default is the other node family:
+// one-step blocks whose points are the right Radau points t0 + c_i tau of one block of
+// length tau (Radau IIA collocation, order 2s - 1, L-stable for every s). Their s- and
+// (s+1)-point blocks cover the same interval and share its end point, where the step
+// control compares them. Radau points are irrational from s = 3 on: that family's
+// coefficients are computed in long double and carry no exact text.
 #include "mbsflow/error.hpp"
 #include <Eigen/Core>
 #include <complex>
 #include <string>
 #include <vector>
 
+#include "mbsflow/methods/stability.hpp"
+
 namespace mbsflow {
+
+enum class BlockNodes { equidistant, radau };
+const char* to_string(BlockNodes n);
 
 struct BlockMethodSpec {
   int m = 1;      // steps (points before the block, the last one is the block start)
   int s = 2;      // points in the block
-  int order = 0;  // 0: the maximal order 2m + s - 1; else a lower order q >= 1
-  int maximal_order() const { return 2 * m + s - 1; }
+  int order = 0;  // 0: the maximal order; else a lower order q >= 1 (equidistant only)
+  BlockNodes nodes = BlockNodes::equidistant;
+  int maximal_order() const { return nodes == BlockNodes::radau ? 2 * s - 1 : 2 * m + s - 1; }
   int effective_order() const { return order > 0 ? order : maximal_order(); }
 };
+// The stiff default of the colloc method: Radau points, s = 3 (order 5, the (s+1)-point
+// partner of order 7).
+BlockMethodSpec default_block_method();
+// "radau", "radau,S", "m,s" or "m,s,order" (equidistant); empty: the default. InputError otherwise.
+BlockMethodSpec parse_block_method(const std::string& text);
+std::string describe_block_method(const BlockMethodSpec& spec);  // e.g. "radau s = 3" or "m = 2, s = 3, order 4"
 
 // Where the free coefficients of a lower-order method go. A method of order q needs
 // q + 1 of the 2m + s coefficients of a row; the other 2m + s - 1 - q are set to zero in
@@ -36,7 +56,12 @@ struct BlockCoefficients {
   BlockMethodSpec spec;
   int order = 0;                    // exact order of every row
   Eigen::MatrixXd q, d, g;          // s x m, s x m, s x s (column j <-> point j-(m-1), resp. j+1)
-  std::vector<std::string> q_exact, d_exact, g_exact;  // row-major, as "p/q"
+  // Where the block points lie, in steps tau after the block start: 1..s (equidistant) or
+  // the Radau points c_i (the block ends at 1).
+  Eigen::VectorXd positions;
+  double span() const { return positions(positions.size() - 1); }
+  bool exact = true;                                   // false: no exact text (Radau points)
+  std::vector<std::string> q_exact, d_exact, g_exact;  // row-major, as "p/q" (decimal when !exact)
   std::vector<bool> keep_u, keep_f;  // m and m + s flags: which data the method uses
 };
 
@@ -57,20 +82,14 @@ DenseWeights dense_output_weights(const BlockCoefficients& method, double theta)
 struct StabilityFunction {
   std::vector<std::string> numerator_exact, denominator_exact;
   Eigen::VectorXd numerator, denominator;
+  double infinity = 0;  // |R(z)| as |z| -> infinity
   std::complex<double> operator()(std::complex<double> z) const;
-  double at_infinity() const;  // |R(z)| as |z| -> infinity
+  double at_infinity() const { return infinity; }
 };
 StabilityFunction stability_function(const BlockCoefficients& method);
 
-// A-stability checked numerically: no pole of R in the closed left half-plane (the
-// eigenvalues 1/mu of the implicit part, mu of g, all have Re mu > 0), |R(iy)| <= 1 on a
-// logarithmic grid of the imaginary axis, and |R(infinity)| <= 1.
-struct StabilityReport {
-  bool a_stable = false;
-  double max_on_imaginary_axis = 0;  // max |R(iy)| over the grid
-  double at_infinity = 0;
-  double min_pole_real_part = 0;  // smallest Re of the poles 1/mu (must be > 0)
-};
+// A-stability of a one-step block method (stability.hpp; the poles are 1/mu for the
+// eigenvalues mu of g).
 StabilityReport check_a_stability(const BlockCoefficients& method);
 
 // Zero-stability (root condition) of a multistep block method: with f = 0 a step maps the
@@ -85,7 +104,8 @@ struct ZeroStability {
 ZeroStability check_zero_stability(const BlockCoefficients& method);
 
 // Order-condition residuals in exact arithmetic: the largest |residual| over all rows and
-// l = 0..order as a string ("0" when they all hold exactly). For tests and --describe.
+// l = 0..order as a string ("0" when they all hold exactly; in doubles, "%.3g", for a
+// method without exact coefficients). For tests and --describe.
 std::string order_condition_residual(const BlockCoefficients& method);
 
 }  // namespace mbsflow

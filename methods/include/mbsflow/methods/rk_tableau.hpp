@@ -9,8 +9,11 @@
 // tirk_integrator.hpp.
 #include "mbsflow/error.hpp"
 #include <Eigen/Core>
+#include <complex>
 #include <string>
 #include <vector>
+
+#include "mbsflow/methods/stability.hpp"
 
 namespace mbsflow {
 
@@ -61,7 +64,18 @@ EmbeddedFormula embedded_formula(const RkTableau& t, double gamma);
 // iteration's estimate filters through its system).
 double largest_real_eigenvalue(const RkTableau& t);
 
-// By name; throws InputError with the list of names otherwise.
+// Radau IIA with s stages (1..12): collocation at the right Radau points, order 2s - 1,
+// L-stable. InputError outside 1..12.
+RkTableau radau_iia(int s);
+
+// The stability function R(z) = 1 + z b^T (I - z A)^-1 1 and its report (stability.hpp).
+std::complex<double> stability_value(const RkTableau& t, std::complex<double> z);
+StabilityReport check_a_stability(const RkTableau& t);
+// Stiffly accurate: the last row of A is b^T (and c_s = 1), so the step's end is the last
+// stage and stiff components are as damped as the stages are.
+bool stiffly_accurate(const RkTableau& t);
+
+// By name ("radau1".."radau12" for every stage count); throws InputError with the list of names otherwise.
 RkTableau rk_tableau(const std::string& name);
 std::vector<std::string> rk_tableau_names();
 

@@ -44,6 +44,7 @@ struct StepperSystem {
 struct StepperSettings {
   double step = 0.0;  // fixed-step methods: the step; adaptive ones: the first step (0: their own choice)
   double rtol = 1e-6, atol = 1e-8;
+  Eigen::VectorXd rtols, atols;  // implicit methods: per-component tolerances (empty: rtol, atol)
   int threads = 1;      // threads inside one step (the implicit methods' stage nodes); 0: all cores
   std::string variant;  // method-specific: tirk's tableau, colloc's "m,s[,order]"; empty: the default
   std::string linear_solver = "auto";  // implicit methods: auto, dense, banded, klu or sparselu

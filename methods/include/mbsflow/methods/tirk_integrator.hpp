@@ -53,6 +53,9 @@ struct TirkSettings {
   // problems it needs a third of the triangular iteration's f evaluations (docs/methods.md).
   TirkIteration iteration = TirkIteration::newton;
   double rtol = 1e-6, atol = 1e-6;
+  // Per-component tolerances (one value per equation), in place of rtol / atol when not
+  // empty. The error is measured in the weighted RMS norm with w_i = atol_i + rtol_i |y_i|.
+  Eigen::VectorXd rtols, atols;
   double safety = 0.9, facmin = 0.2, facmax = 4.0;
   double initial_step = 0;  // 0: chosen from the problem
   double fixed_step = 0;    // > 0: no step control
