@@ -39,9 +39,7 @@ BlockMethodSpec spec_of(const OdeArgs& a) {
 
 void print_stability(const StabilityReport& rep) {
   std::cout << "  max |R(iy)| = " << rep.max_on_imaginary_axis << ", |R(inf)| = " << rep.at_infinity
-            << ", smallest Re(pole) = " << rep.min_pole_real_part << ": "
-            << (rep.l_stable() ? "L-stable" : rep.a_stable ? "A-stable, not L-stable (stiff components are not damped)" : "not A-stable")
-            << "\n";
+            << ", smallest Re(pole) = " << rep.min_pole_real_part << ": " << stability_verdict(rep) << "\n";
 }
 
 int describe(const OdeArgs& a) {
@@ -63,11 +61,9 @@ int describe(const OdeArgs& a) {
     std::cout << "stability function R(z) = P(z)/Q(z), z = lambda tau, u_s = R(z) u_0\n"
               << "  P(z) = " << polynomial(r.numerator_exact) << "\n  Q(z) = " << polynomial(r.denominator_exact) << "\n";
     print_stability(check_a_stability(c));
-    BlockMethodSpec partner = spec;
-    ++partner.s;
-    if (partner.order > 0) ++partner.order;
-    std::cout << "the step control's (s+1)-point block (order " << generate_block_method(partner).order << "):\n";
-    print_stability(check_a_stability(generate_block_method(partner)));
+    const BlockCoefficients partner = generate_block_method(step_control_partner(spec));
+    std::cout << "the step control's (s+1)-point block (order " << partner.order << "):\n";
+    print_stability(check_a_stability(partner));
   } else {
     const ZeroStability z = check_zero_stability(c);
     std::cout << "zero-stability: largest parasitic root " << z.parasitic_radius << ": "

@@ -41,7 +41,7 @@ int describe_tableau(const std::string& name) {
   const StabilityReport st = check_a_stability(t);
   std::printf("stability: R(z) = 1 + z b^T (I - z A)^-1 1; max |R(iy)| = %.4g, |R(inf)| = %.3g, smallest Re(pole) = %.4g: %s%s\n",
               st.max_on_imaginary_axis, st.at_infinity, st.min_pole_real_part,
-              st.l_stable() ? "L-stable" : st.a_stable ? "A-stable, not L-stable (stiff components are not damped)" : "not A-stable",
+              stability_verdict(st),
               stiffly_accurate(t) ? ", stiffly accurate" : ", not stiffly accurate (the step's end is not its last stage)");
   print_matrix("A", t.a);
   print_matrix("b", t.b.transpose());

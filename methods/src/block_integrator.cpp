@@ -56,8 +56,6 @@ struct LastBlock {
   AcceptedBlock view() const { return {t0, tau, static_cast<int>(u.size()), method, &past_u, &past_f, &u, &f}; }
 };
 
-BlockMethodSpec larger(const BlockMethodSpec& s) { return {s.m, s.s + 1, s.order > 0 ? s.order + 1 : 0, s.nodes}; }
-
 // The first m - 1 points of a multistep method come from a one-step block method with
 // max(s, m - 1, p - 1) points at the same spacing, of order at least p (so the start does
 // not lower the order).
@@ -76,7 +74,7 @@ class BlockIntegrator::Driver {
         slice_(s.slice_size > 0 ? s.slice_size : p.size >= 8192 ? 4096 : p.size),
         arena_(s.threads > 0 ? s.threads : tbb::task_arena::automatic),
         small_(generate_block_method(s.method), p, s, slice_),
-        large_(generate_block_method(larger(s.method)), p, s, slice_) {
+        large_(generate_block_method(step_control_partner(s.method)), p, s, slice_) {
     if (s.method.m > 1) starter_ = std::make_unique<BlockSolve>(generate_block_method(start_up_method(s.method)), p, s, slice_);
     // A flow graph runs its nodes in the arena it was made in.
     arena_.execute([&] {

@@ -210,6 +210,10 @@ std::string describe_block_method(const BlockMethodSpec& spec) {
          std::to_string(spec.effective_order());
 }
 
+BlockMethodSpec step_control_partner(const BlockMethodSpec& s) {
+  return {s.m, s.s + 1, s.order > 0 ? s.order + 1 : 0, s.nodes};
+}
+
 BlockCoefficients generate_block_method(const BlockMethodSpec& spec) {
   check_spec(spec);
   if (spec.nodes == BlockNodes::radau) return radau_block(spec);
@@ -424,12 +428,7 @@ ZeroStability check_zero_stability(const BlockCoefficients& method) {
 
 StabilityReport check_a_stability(const BlockCoefficients& method) {
   const StabilityFunction r = stability_function(method);
-  const Eigen::VectorXcd mu = method.g.eigenvalues();
-  std::vector<std::complex<double>> poles;
-  for (Eigen::Index i = 0; i < mu.size(); ++i)
-    if (std::abs(mu(i)) > 1e-14) poles.push_back(1.0 / mu(i));
-  return stability_report(r, Eigen::Map<const Eigen::VectorXcd>(poles.data(), static_cast<Eigen::Index>(poles.size())),
-                          r.at_infinity());
+  return stability_report(r, method.g, r.at_infinity());
 }
 
 }  // namespace mbsflow

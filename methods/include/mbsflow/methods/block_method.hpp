@@ -42,7 +42,10 @@ struct BlockMethodSpec {
 BlockMethodSpec default_block_method();
 // "radau", "radau,S", "m,s" or "m,s,order" (equidistant); empty: the default. InputError otherwise.
 BlockMethodSpec parse_block_method(const std::string& text);
-std::string describe_block_method(const BlockMethodSpec& spec);  // e.g. "radau s = 3" or "m = 2, s = 3, order 4"
+std::string describe_block_method(const BlockMethodSpec& spec);
+// The (s+1)-point block the step control runs beside an s-point one: same steps and
+// nodes, order + 1 (or its maximal order).
+BlockMethodSpec step_control_partner(const BlockMethodSpec& spec);  // e.g. "radau s = 3" or "m = 2, s = 3, order 4"
 
 // Where the free coefficients of a lower-order method go. A method of order q needs
 // q + 1 of the 2m + s coefficients of a row; the other 2m + s - 1 - q are set to zero in

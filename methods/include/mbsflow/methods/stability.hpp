@@ -19,8 +19,11 @@ struct StabilityReport {
   bool l_stable() const { return a_stable && at_infinity < 1e-12; }
 };
 
-// poles: the poles of R (1 / the nonzero eigenvalues of the implicit matrix).
+// implicit: the method's implicit matrix (A of a tableau, g of a block), whose nonzero
+// eigenvalues mu give the poles 1/mu of R.
 StabilityReport stability_report(const std::function<std::complex<double>(std::complex<double>)>& r,
-                                 const Eigen::VectorXcd& poles, double at_infinity);
+                                 const Eigen::MatrixXd& implicit, double at_infinity);
+// "L-stable", "A-stable, not L-stable (...)" or "not A-stable", for --describe.
+const char* stability_verdict(const StabilityReport& r);
 
 }  // namespace mbsflow
