@@ -24,9 +24,11 @@ struct BenchArgs {
   std::string tableau;                // iterations: default radau3
   std::vector<double> frequencies;    // stiff: the chain's bushing frequencies (default 1e3, 1e4, 1e5 rad/s)
   double t_end = 0;                   // stiff: model time (default per model)
-  double reference_tol = 1e-6;        // stiff: tolerance of the reference run (1e-7 is slow on the 2000-body chain at 1e5: docs/methods.md)
+  // Tolerance of the reference run; 0: stiff 1e-6 (1e-7 is slow on the 2000-body chain at
+  // 1e5: docs/methods.md), ivp 1e-12.
+  double reference_tol = 0;
   double target_error = 1e-3;         // stiff: the error at which methods are compared
-  std::vector<std::string> methods;   // stiff: which methods run beside the reference (default all)
+  std::vector<std::string> methods;   // stiff, ivp: which methods run (default all)
 };
 
 // The CSV file of a benchmark: --csv, or bench_WHAT.csv; InputError if it cannot be written.
@@ -50,6 +52,7 @@ int bench_latency(const BenchArgs& a);
 int bench_ode(const BenchArgs& a);
 int bench_iterations(const BenchArgs& a);
 int bench_stiff(const BenchArgs& a);
+int bench_ivp(const BenchArgs& a);
 
 // Where the example models are: --dir, or examples/models (run from the source tree).
 inline std::string examples_dir(const BenchArgs& a) { return a.dir == "." ? "examples/models" : a.dir; }

@@ -130,9 +130,8 @@ int bench_ode(const BenchArgs& a) {
   std::printf("%-8s %8s %-22s %3s %7s %10s %10s %10s %8s\n", "problem", "N", "solver", "thr", "tol", "seconds", "max error",
               "f evals", "steps");
   for (const std::string& name : problems) {
-    const bool heat = name.rfind("heat", 0) == 0;
-    const long n = heat ? std::stol(name.substr(4)) : 4;
-    const OdeProblem p = builtin_problem(heat ? "heat" : name, n);
+    const OdeProblem p = builtin_problem(name, 4);
+    if (!p.exact) throw InputError("bench ode: problem '" + name + "' has no exact solution (bench ivp runs it against its reference)");
     auto row = [&](const std::string& solver, int threads, double tol, const Outcome& o) {
       std::printf("%-8s %8ld %-22s %3d %7.0e %10.4f %10.3e %10ld %8ld %s\n", p.name.c_str(), long(p.size), solver.c_str(), threads,
                   tol, o.seconds, o.max_error, o.evaluations, o.steps, o.ok ? "" : ("failed: " + o.note).c_str());

@@ -19,30 +19,36 @@ Action add_bench(CLI::App& app) {
                   "iterations: iteration error after 1, 2, ... iterations of the tirk schemes (seed 004's claim); "
                   "iftomm: the IFToMM examples against their reduced equations; "
                   "stiff: work-precision on stiff multibody models (chain at several bushing frequencies, train, A05) "
-                  "against RK4 at its stable step, DOPRI5 and CVODE with KLU")
-      ->check(CLI::IsMember({"rhs", "output", "parallel", "cluster", "latency", "ode", "iterations", "iftomm", "stiff"}));
+                  "against RK4 at its stable step, DOPRI5 and CVODE with KLU; "
+                  "ivp: work-precision (correct digits at the end vs CPU time, rtol 1e-3..1e-10) of the implicit methods against "
+                  "CVODE on Van der Pol (mu 1e3, 1e6), Robertson and the seed's problems")
+      ->check(CLI::IsMember({"rhs", "output", "parallel", "cluster", "latency", "ode", "iterations", "iftomm", "stiff", "ivp"}));
   sub->add_option("--problems", a->problems,
                   "ode, iterations: hnw, b1, heatN (default ode: hnw,b1,heat1000,heat100000,heat1000000; iterations: hnw,b1,heat200); "
+                  "ivp: also vdpMU, robertson (default vdp1e3,vdp1e6,robertson,hnw,b1,heat1000); "
                   "stiff: chain, train, a05 (default all)")
       ->delimiter(',');
   sub->add_option("--tableau", a->tableau, "iterations: the tirk tableau (default radau3)");
-  sub->add_option("--tolerances", a->tolerances, "ode: tolerances (default 1e-4,1e-6,1e-8,1e-10); stiff: rtol = atol (default 1e-1,1e-2,1e-3,1e-4)")
+  sub->add_option("--tolerances", a->tolerances, "ode: tolerances (default 1e-4,1e-6,1e-8,1e-10); stiff: rtol = atol (default 1e-1,1e-2,1e-3,1e-4); "
+                  "ivp: rtol, atol = rtol times the problem's absolute scale (default 1e-3,1e-4,...,1e-10)")
       ->delimiter(',');
   sub->add_option("--frequencies", a->frequencies, "stiff: the chain's bushing frequencies in rad/s (default 1e3,1e4,1e5)")
       ->delimiter(',')
       ->check(CLI::PositiveNumber);
   sub->add_option("--t-end", a->t_end, "stiff: model time in s (default: chain 0.2, train 1, A05 its file's 10)")->check(CLI::PositiveNumber);
-  sub->add_option("--reference-tol", a->reference_tol, "stiff: tolerance of the tirk reference run")->check(CLI::PositiveNumber);
+  sub->add_option("--reference-tol", a->reference_tol, "stiff: tolerance of the tirk reference run (default 1e-6); ivp: of the colloc "
+                  "reference run where a problem has neither exact solution nor published value (default 1e-12)")->check(CLI::PositiveNumber);
   sub->add_option("--target-error", a->target_error, "stiff: the position error (m) at which the summary compares methods")
       ->check(CLI::PositiveNumber);
   sub->add_option("--methods", a->methods,
                   "stiff: the methods compared with the reference: rk4, dopri5, tirk-newton, tirk-newton-triangular, colloc, "
-                  "cvode-klu (default all)")
+                  "cvode-klu (default all); ivp: colloc, colloc-s2, tirk-newton, tirk-newton-triangular, cvode-bdf (default all)")
       ->delimiter(',')
-      ->check(CLI::IsMember({"rk4", "dopri5", "tirk-newton", "tirk-newton-triangular", "colloc", "cvode-klu"}));
+      ->check(CLI::IsMember({"rk4", "dopri5", "tirk-newton", "tirk-newton-triangular", "colloc", "colloc-s2", "cvode-klu", "cvode-bdf"}));
   sub->add_option("--bodies", a->bodies, "Chain sizes (rhs: 2000,6500,100000; output: 6500; parallel, cluster: 2000,4000,6500; stiff: 2000)")
       ->delimiter(',');
-  sub->add_option("--threads", a->threads, "parallel: up to this many threads (default: all cores)")->check(CLI::PositiveNumber);
+  sub->add_option("--threads", a->threads, "parallel: up to this many threads (default: all cores); ivp: the thread count "
+                  "of the parallel runs beside the sequential ones, on problems of 100 or more equations (default 2)")->check(CLI::PositiveNumber);
   sub->add_option("--seconds", a->seconds, "rhs: time per measurement")->check(CLI::PositiveNumber);
   sub->add_option("--steps", a->steps, "output: steps per run")->check(CLI::PositiveNumber);
   sub->add_option("--repeats", a->repeats, "output, parallel, cluster, iftomm: runs per case; the fastest counts")->check(CLI::PositiveNumber);
@@ -57,6 +63,7 @@ Action add_bench(CLI::App& app) {
     if (a->what == "iterations") return bench_iterations(*a);
     if (a->what == "iftomm") return bench_iftomm(*a);
     if (a->what == "stiff") return bench_stiff(*a);
+    if (a->what == "ivp") return bench_ivp(*a);
     return bench_parallel(*a);
   };
 }

@@ -98,7 +98,7 @@ int stability_table() {
 }
 
 int run(const OdeArgs& a) {
-  if (a.problem.empty()) throw InputError("ode: --problem is required (hnw, b1 or heat)");
+  if (a.problem.empty()) throw InputError(std::string("ode: --problem is required (") + builtin_problem_names + ")");
   if (a.method == "tirk") return run_tirk(a);
   OdeProblem p;
   BlockSettings s;
@@ -106,7 +106,7 @@ int run(const OdeArgs& a) {
     p = builtin_problem(a.problem, a.n);
     s.method = spec_of(a);
     s.iteration = block_iteration_from_string(a.iteration.empty() ? "newton" : a.iteration);
-    apply_common_options(a, s);
+    apply_common_options(a, p, s);
   } catch (const InputError& e) {
     throw InputError(std::string("ode: ") + e.what());
   }
@@ -136,6 +136,7 @@ int run(const OdeArgs& a) {
               st.iterations, st.jacobians, st.factorizations,
               s.iteration == BlockIteration::newton ? to_string(st.linear_solver) : "none");
   if (p.exact) std::printf("max error %.3e (against the exact solution, all accepted points)\n", rec.max_error());
+  report_end_error(p, r.y);
   std::printf("wall time %.3f s\n", seconds);
   rec.write(a.output, r.steps,
             {{"problem", p.name}, {"method", a.method}, {"iteration", to_string(s.iteration)}},
@@ -151,8 +152,9 @@ Action add_ode(CLI::App& app) {
   auto a = std::make_shared<OdeArgs>();
   CLI::App* sub = app.add_subcommand(
       "ode", "Integrate an ODE test problem with the collocation block methods (colloc) or triangularised implicit Runge-Kutta methods (tirk)");
-  sub->add_option("--problem", a->problem, "hnw (eq. 10, Hairer-Wanner), b1 (eq. 11, DETEST B1), heat (eq. 12, N equations)")
-      ->check(CLI::IsMember({"hnw", "b1", "heat"}));
+  sub->add_option("--problem", a->problem,
+                  "hnw (eq. 10, Hairer-Wanner), b1 (eq. 11, DETEST B1), heat (eq. 12, --n equations) or heatN, vdp (Van der Pol, "
+                  "mu = 1e3, scaled form on [0, 2]) or vdpMU (e.g. vdp1e6), robertson (kinetics on [0, 1e11], per-component atol)");
   sub->add_option("--n", a->n, "heat: number of equations")->check(CLI::PositiveNumber)->capture_default_str();
   sub->add_option("--method", a->method, "colloc (block methods, seed 001) or tirk (Runge-Kutta iterated through T, seed 004)")
       ->check(CLI::IsMember({"colloc", "tirk"}))->capture_default_str();
@@ -168,7 +170,14 @@ Action add_ode(CLI::App& app) {
                   "block methods)")
       ->capture_default_str();
   sub->add_option("--tol", a->tol, "relative (and, without --atol, absolute) tolerance")->check(CLI::PositiveNumber)->capture_default_str();
-  sub->add_option("--atol", a->atol, "absolute tolerance (default: --tol)")->check(CLI::PositiveNumber);
+  sub->add_option("--rtol", a->rtols, "relative tolerance: one value, or one per equation (default: --tol)")
+      ->delimiter(',')
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--atol", a->atols,
+                  "absolute tolerance: one value, or one per equation (default: --tol, times the problem's absolute scale where it "
+                  "has one: robertson 1e-4,1e-10,1e-2)")
+      ->delimiter(',')
+      ->check(CLI::PositiveNumber);
   sub->add_option("--iteration", a->iteration,
                   "colloc: newton (default) or functional; tirk: newton (default, as Radau5: one real and one complex LU for radau3), newton-triangular (the seed's PTIRK), newton-diagonal, triangular, "
                   "diagonal or jacobi")

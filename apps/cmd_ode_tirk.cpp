@@ -84,7 +84,7 @@ int run_tirk(const OdeArgs& a) {
     s.tableau = a.tableau;
     tab = rk_tableau(a.tableau);
     s.iteration = iteration_of(a);
-    apply_common_options(a, s);
+    apply_common_options(a, p, s);
   } catch (const InputError& e) {
     throw InputError(std::string("ode: ") + e.what());
   }
@@ -116,6 +116,7 @@ int run_tirk(const OdeArgs& a) {
                 st.contraction_m, l, st.lipschitz_start, st.lipschitz_observed, l > 0 ? 1.0 / (l * st.contraction_m) : INFINITY);
   }
   if (p.exact) std::printf("max error %.3e (against the exact solution, all accepted steps)\n", rec.max_error());
+  report_end_error(p, r.y);
   std::printf("wall time %.3f s\n", seconds);
   rec.write(a.output, r.steps, {{"problem", p.name}, {"method", "tirk"}, {"tableau", tab.name}, {"iteration", to_string(s.iteration)}},
             {{"n", double(p.size)}, {"s", double(tab.stages())}, {"order", double(tab.order)}, {"tol", a.tol}, {"wall_seconds", seconds},

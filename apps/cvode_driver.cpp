@@ -83,7 +83,8 @@ int jacobian(sunrealtype t, N_Vector y, N_Vector fy, SUNMatrix j, void* data, N_
 }  // namespace
 
 CvodeOutcome run_cvode(const OdeProblem& p, double rtol, double atol, CvodeLinearSolver solver,
-                       const std::vector<double>& outputs, const std::function<void(double, const double*)>& on_output) {
+                       const std::vector<double>& outputs, const std::function<void(double, const double*)>& on_output,
+                       const Eigen::VectorXd& atols) {
   CvodeOutcome o;
   SUNContext ctx;
   SUNContext_Create(nullptr, &ctx);
@@ -112,7 +113,14 @@ CvodeOutcome run_cvode(const OdeProblem& p, double rtol, double atol, CvodeLinea
   }
   void* mem = CVodeCreate(CV_BDF, ctx);
   CVodeInit(mem, rhs, p.t0, y);
-  CVodeSStolerances(mem, rtol, atol);
+  N_Vector atol_vector = nullptr;
+  if (atols.size() > 0) {
+    atol_vector = N_VNew_Serial(p.size, ctx);
+    Eigen::Map<Eigen::VectorXd>(N_VGetArrayPointer(atol_vector), p.size) = atols;
+    CVodeSVtolerances(mem, rtol, atol_vector);
+  } else {
+    CVodeSStolerances(mem, rtol, atol);
+  }
   CVodeSetUserData(mem, &d);
   CVodeSetLinearSolver(mem, ls, a);
   CVodeSetJacFn(mem, jacobian);
@@ -166,6 +174,7 @@ CvodeOutcome run_cvode(const OdeProblem& p, double rtol, double atol, CvodeLinea
   SUNLinSolFree(ls);
   SUNMatDestroy(a);
   N_VDestroy(y);
+  if (atol_vector) N_VDestroy(atol_vector);
   SUNContext_Free(&ctx);
   return o;
 }

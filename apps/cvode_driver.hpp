@@ -22,7 +22,9 @@ struct CvodeOutcome {
 
 // From p.t0 to p.t_end at tolerances rtol, atol. With output times, on_output(t, y) sees
 // CVODE's interpolated solution at each of them; without, the solution after every step.
+// atols (one per equation), when given, replaces the scalar atol.
 CvodeOutcome run_cvode(const OdeProblem& p, double rtol, double atol, CvodeLinearSolver solver,
-                       const std::vector<double>& outputs, const std::function<void(double t, const double* y)>& on_output);
+                       const std::vector<double>& outputs, const std::function<void(double t, const double* y)>& on_output,
+                       const Eigen::VectorXd& atols = {});
 
 }  // namespace mbsflow::cli

@@ -1,6 +1,7 @@
 #include "ode_common.hpp"
 
 #include <algorithm>
+#include <cstdio>
 #include <iostream>
 
 #include "commands.hpp"
@@ -20,6 +21,23 @@ void OdeRecorder::add(double t, const Eigen::VectorXd& y) {
   out_.time.push_back(t);
   for (long c : out_.components) out_.values.push_back(y(c));
   if (p_.exact) out_.error.push_back(err);
+}
+
+void set_tolerance(const std::vector<double>& given, double& scalar, Eigen::VectorXd& vector) {
+  if (given.size() == 1) {
+    scalar = given[0];
+    vector.resize(0);
+  } else if (given.size() > 1) {
+    vector = Eigen::Map<const Eigen::VectorXd>(given.data(), Eigen::Index(given.size()));
+  }
+}
+
+double report_end_error(const OdeProblem& p, const Eigen::VectorXd& y_end) {
+  if (p.exact || p.end_reference.size() != y_end.size()) return 0;
+  const double e = (y_end - p.end_reference).cwiseAbs().maxCoeff();
+  std::printf("error at t_end %.3e (max over components; relative: %.3e), against %s\n", e,
+              ((y_end - p.end_reference).array() / p.end_reference.array().abs()).abs().maxCoeff(), p.end_reference_source.c_str());
+  return e;
 }
 
 void OdeRecorder::write(const std::string& path, std::vector<BlockStepRecord> steps,

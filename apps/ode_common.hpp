@@ -16,7 +16,8 @@ struct OdeArgs {
   std::string nodes;  // colloc: radau or equidistant; empty: radau unless --m > 1 or --order is given
   long n = 1000;
   int s = 3, m = 1, order = 0, threads = 0, iterations = 0, inner = 3;
-  double tol = 1e-6, atol = 0, fixed_step = 0, initial_step = 0;
+  double tol = 1e-6, fixed_step = 0, initial_step = 0;
+  std::vector<double> rtols, atols;  // one value, or one per equation; empty: --tol (atol: --tol times the problem's absolute scale)
   bool stability_table = false, quiet = false;
 };
 
@@ -38,18 +39,27 @@ class OdeRecorder {
   double max_error_ = 0;
 };
 
+// A tolerance of the command line: one value (scalar) or one per equation (vector).
+void set_tolerance(const std::vector<double>& given, double& scalar, Eigen::VectorXd& vector);
+
 // The settings both integrators share, from the arguments (the linear solver's name is
 // checked by the caller, which turns InputError into an input error).
 template <class Settings>
-void apply_common_options(const OdeArgs& a, Settings& s) {
+void apply_common_options(const OdeArgs& a, const OdeProblem& p, Settings& s) {
   s.linear_solver = linear_solver_from_string(a.solver);
   s.finite_difference_jacobian = a.jacobian == "fd";
-  s.rtol = a.tol;
-  s.atol = a.atol > 0 ? a.atol : a.tol;
+  s.rtol = s.atol = a.tol;
+  if (a.atols.empty() && p.absolute_scale.size() > 0) s.atols = a.tol * p.absolute_scale;
+  set_tolerance(a.rtols, s.rtol, s.rtols);
+  set_tolerance(a.atols, s.atol, s.atols);
   s.fixed_step = a.fixed_step;
   s.initial_step = a.initial_step;
   s.threads = a.threads;
 }
+
+// The end point's error against the problem's published reference value, when it has one
+// (and no exact solution): printed, and returned (0 without a reference).
+double report_end_error(const OdeProblem& p, const Eigen::VectorXd& y_end);
 
 int run_tirk(const OdeArgs& a);
 int describe_tableau(const std::string& name);

@@ -283,9 +283,9 @@ bool BlockIntegrator::Driver::advance() {
   const int s = s_.method.s, q = small_.method().order;
   double& tau = tau_;
   const double t_end = p_.t_end, eps_t = 1e-12 * std::max(1.0, std::abs(t_end));
-  auto fail = [&](const std::string& why) {
+  auto fail = [&](const std::string& why, const char* hint = "") {
     std::ostringstream os;
-    os << why << " at t = " << t_ << " (step " << tau << ")";
+    os << why << " at t = " << t_ << " (step " << tau << ")" << hint;
     throw RunError(os.str());
   };
   // After an iteration that did not converge: a fresh Jacobian first, then a smaller step.
@@ -299,8 +299,8 @@ bool BlockIntegrator::Driver::advance() {
   };
   while (t_end - t_ > eps_t) {
     if (st.steps >= s_.max_steps) fail("reached the maximum number of steps");
-    const double min_step = s_.min_step > 0 ? s_.min_step : 1e-14 * std::max(1.0, std::abs(t_));
-    if (tau < min_step) fail("step size underflow");
+    const double min_step = s_.min_step > 0 ? s_.min_step : smallest_step(t_);
+    if (tau < min_step) fail("step size underflow", s_.min_step > 0 ? "" : step_underflow_hint);
     if (past_u_.size() < static_cast<std::size_t>(m())) {  // start-up of a multistep method
       tau = std::min(tau, (t_end - t_) / starter_->points());
       if (!solve({starter_.get()}, tau)) {

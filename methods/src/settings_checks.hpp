@@ -3,6 +3,7 @@
 // (tolerances, step factors, steps, threads); throws InputError.
 #include "mbsflow/error.hpp"
 #include <string>
+#include <utility>
 
 #include "mbsflow/methods/ode_problem.hpp"
 
@@ -14,10 +15,10 @@ void check_common_settings(const OdeProblem& p, const Settings& s) {
   if (p.size < 1 || p.y0.size() != p.size || !p.rhs) bad("the problem needs a size, y0 of that size and a right-hand side");
   if (!(p.t_end > p.t0)) bad("the end time must be after the start time");
   if (!(s.rtol > 0) || !(s.atol > 0)) bad("tolerances must be positive");
-  for (const Eigen::VectorXd* v : {&s.rtols, &s.atols}) {
+  for (const auto& [name, v] : {std::pair{"rtol", &s.rtols}, std::pair{"atol", &s.atols}}) {
     if (v->size() == 0) continue;
     if (v->size() != p.size)
-      bad("per-component tolerances need one value per equation (" + std::to_string(v->size()) + " given for " +
+      bad(std::string("per-component ") + name + " needs one value per equation (" + std::to_string(v->size()) + " given for " +
           std::to_string(p.size) + ")");
     if (!(v->array() > 0).all() || !v->allFinite()) bad("tolerances must be positive");
   }

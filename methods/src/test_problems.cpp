@@ -1,8 +1,12 @@
-// The test problems of seed 001 (eqs. 10-12), with exact solutions and Jacobians.
+// The test problems of seed 001 (eqs. 10-12), with exact solutions and Jacobians, and two
+// standard stiff problems with published reference values.
 #include "mbsflow/error.hpp"
 #include <cmath>
 #include <memory>
 #include <numbers>
+#include <optional>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "mbsflow/methods/ode_problem.hpp"
@@ -126,11 +130,80 @@ OdeProblem heat_problem(Eigen::Index n) {
   return p;
 }
 
+OdeProblem van_der_pol_problem(double mu) {
+  if (!(mu > 0)) throw InputError("vdp: mu must be positive");
+  const double eps = 1 / (mu * mu);
+  Eigen::VectorXd y0(2);
+  y0 << 2, 0;
+  OdeProblem p = make_ode_problem("vdp", 0, 2, y0, [eps](double, const Eigen::VectorXd& y, Eigen::VectorXd& dy) {
+    dy(0) = y(1);
+    dy(1) = ((1 - y(0) * y(0)) * y(1) - y(0)) / eps;
+  });
+  p.sparsity = from_triplets(2, {{0, 1, 1}, {1, 0, 1}, {1, 1, 1}});
+  p.jacobian = [eps](double, const Eigen::VectorXd& y, Eigen::SparseMatrix<double>& j) {
+    j = from_triplets(2, {{0, 1, 1}, {1, 0, (-2 * y(0) * y(1) - 1) / eps}, {1, 1, (1 - y(0) * y(0)) / eps}});
+  };
+  if (mu == 1e3) {
+    p.end_reference = Eigen::Vector2d(0.1706167732170483e1, -0.8928097010247975e0);
+    p.end_reference_source = "Test Set for IVP Solvers, problem VDPOL (RADAU in extended precision, rtol = atol = 1.1e-18)";
+  }
+  return p;
+}
+
+OdeProblem robertson_problem() {
+  OdeProblem p = make_ode_problem("robertson", 0, 1e11, Eigen::Vector3d(1, 0, 0), [](double, const Eigen::VectorXd& y, Eigen::VectorXd& dy) {
+    const double slow = 0.04 * y(0), back = 1e4 * y(1) * y(2), fast = 3e7 * y(1) * y(1);
+    dy(0) = -slow + back;
+    dy(1) = slow - back - fast;
+    dy(2) = fast;
+  });
+  p.sparsity = from_triplets(3, {{0, 0, 1}, {0, 1, 1}, {0, 2, 1}, {1, 0, 1}, {1, 1, 1}, {1, 2, 1}, {2, 1, 1}});
+  p.jacobian = [](double, const Eigen::VectorXd& y, Eigen::SparseMatrix<double>& j) {
+    j = from_triplets(3, {{0, 0, -0.04},
+                          {0, 1, 1e4 * y(2)},
+                          {0, 2, 1e4 * y(1)},
+                          {1, 0, 0.04},
+                          {1, 1, -1e4 * y(2) - 6e7 * y(1)},
+                          {1, 2, -1e4 * y(1)},
+                          {2, 1, 6e7 * y(1)}});
+  };
+  // y2 stays below 4e-5 and ends near 1e-13: controlled in absolute terms below 1e-10 of
+  // the relative tolerance's scale (SUNDIALS' cvRoberts example: atol = (1e-8, 1e-14, 1e-6) at rtol 1e-4).
+  p.absolute_scale = Eigen::Vector3d(1e-4, 1e-10, 1e-2);
+  p.end_reference = Eigen::Vector3d(0.2083340149701255e-07, 0.8333360770334713e-13, 0.9999999791665050e+00);
+  p.end_reference_source = "Test Set for IVP Solvers, problem ROBER";
+  return p;
+}
+
 OdeProblem builtin_problem(const std::string& name, Eigen::Index n) {
+  // A number after the name: "heat1000" (equations), "vdp1e6" (mu).
+  auto suffix = [&](const std::string& stem) -> std::optional<std::string> {
+    if (name.rfind(stem, 0) != 0 || name.size() == stem.size()) return std::nullopt;
+    return name.substr(stem.size());
+  };
+  auto number = [&](const std::string& text) {
+    std::size_t used = 0;
+    double v = 0;
+    try {
+      v = std::stod(text, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used != text.size() || !(v > 0)) throw InputError("problem '" + name + "': '" + text + "' is not a positive number");
+    return v;
+  };
   if (name == "hnw") return hairer_wanner_problem();
   if (name == "b1") return detest_b1_problem();
   if (name == "heat") return heat_problem(n);
-  throw InputError("unknown problem '" + name + "' (hnw, b1 or heat)");
+  if (auto k = suffix("heat")) return heat_problem(Eigen::Index(number(*k)));
+  if (name == "vdp") return van_der_pol_problem(1e3);
+  if (auto mu = suffix("vdp")) {
+    OdeProblem p = van_der_pol_problem(number(*mu));
+    p.name = name;
+    return p;
+  }
+  if (name == "robertson") return robertson_problem();
+  throw InputError("unknown problem '" + name + "' (" + builtin_problem_names + ")");
 }
 
 }  // namespace mbsflow

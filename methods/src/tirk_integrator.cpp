@@ -149,7 +149,7 @@ class TirkIntegrator::Driver {
   Eigen::VectorXd step_end(const Eigen::VectorXd& x, double tau) const;
   double estimate(double t, const Eigen::VectorXd& x, const Eigen::VectorXd& x_new, const Eigen::VectorXd& fx, double tau,
                   bool first_or_rejected);
-  [[noreturn]] void fail(const std::string& why, double tau) const;
+  [[noreturn]] void fail(const std::string& why, double tau, const char* hint = "") const;
 
   const OdeProblem& p_;
   const TirkSettings& s_;
@@ -190,9 +190,9 @@ class TirkIntegrator::Driver {
   int renew_every_step_ = 0;  // accepted steps that still renew the Jacobian, after an old one failed
 };
 
-void TirkIntegrator::Driver::fail(const std::string& why, double tau) const {
+void TirkIntegrator::Driver::fail(const std::string& why, double tau, const char* hint) const {
   std::ostringstream os;
-  os << why << " at t = " << t_ << " (step " << tau << ")";
+  os << why << " at t = " << t_ << " (step " << tau << ")" << hint;
   if (result_.stats.iteration_failures > 0 && culprit_ >= 0)
     os << "; the iteration failed " << result_.stats.iteration_failures << " times, last driven by "
        << (p_.describe ? p_.describe(culprit_) : "unknown " + std::to_string(culprit_));
@@ -404,8 +404,8 @@ bool TirkIntegrator::Driver::advance() {
   const double t_end = p_.t_end, eps_t = 1e-12 * std::max(1.0, std::abs(t_end));
   while (t_end - t > eps_t) {
     if (st.steps >= s_.max_steps) fail("reached the maximum number of steps", tau);
-    const double min_step = s_.min_step > 0 ? s_.min_step : 1e-14 * std::max(1.0, std::abs(t));
-    if (tau < min_step) fail("step size underflow", tau);
+    const double min_step = s_.min_step > 0 ? s_.min_step : smallest_step(t);
+    if (tau < min_step) fail("step size underflow", tau, s_.min_step > 0 ? "" : step_underflow_hint);
     const bool lands = tau >= t_end - t;
     const double h = lands ? t_end - t : tau;
     begin_step(t, x, fx, h, extrapolate(t, h));

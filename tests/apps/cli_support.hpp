@@ -10,6 +10,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <vector>
 
 namespace fs = std::filesystem;
 
@@ -48,6 +49,14 @@ inline std::string read_text(const fs::path& p) {
   std::stringstream s;
   s << in.rdbuf();
   return s.str();
+}
+
+// The cells of a CSV line (no quoted commas).
+inline std::vector<std::string> csv_cells(const std::string& line) {
+  std::vector<std::string> cells;
+  std::istringstream cs(line);
+  for (std::string cell; std::getline(cs, cell, ',');) cells.push_back(cell);
+  return cells;
 }
 
 inline std::string trim(std::string s) {

@@ -1,9 +1,11 @@
 // mbsflow bench stiff end to end on a small chain: every method runs, CVODE included,
 // each row has a finite error against the reference, and the work-precision plot draws it.
 #include <catch2/catch.hpp>
+#include <cmath>
 #include <cstdlib>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "cli_support.hpp"
 
@@ -25,9 +27,7 @@ TEST_CASE("cli bench stiff: a stiff chain against RK4, DOPRI5 and CVODE, CSV and
   std::string methods;
   while (std::getline(csv, line)) {
     ++rows;
-    std::vector<std::string> cells;
-    std::istringstream cs(line);
-    for (std::string cell; std::getline(cs, cell, ',');) cells.push_back(cell);
+    const std::vector<std::string> cells = csv_cells(line);
     REQUIRE(cells.size() >= 10);
     methods += cells[1] + " ";
     const double error = std::stod(cells[9]);
@@ -43,5 +43,42 @@ TEST_CASE("cli bench stiff: a stiff chain against RK4, DOPRI5 and CVODE, CSV and
                                    .c_str());
   CHECK(plot == 0);
   CHECK(fs::file_size(fs::path(dir) / "stiff.png") > 10000);
+  fs::remove_all(fs::path(dir).parent_path());
+}
+
+TEST_CASE("cli bench ivp: work-precision against CVODE on Robertson and eq. 11, CSV, summary and plot", "[cli][bench]") {
+  const std::string dir = scratch("bench_ivp").string();
+  const Result r = run("bench ivp --problems robertson,b1 --tolerances 1e-4,1e-6 --csv ivp.csv", dir, true);
+  INFO(r.err << r.out);
+  REQUIRE(r.code == 0);
+  CHECK(r.out.find("robertson: reference Test Set for IVP Solvers, problem ROBER") != std::string::npos);
+  CHECK(r.out.find("b1: exact solution") != std::string::npos);
+  CHECK(r.out.find("time / CVODE's time at equal correct digits") != std::string::npos);
+  std::istringstream csv(read_text(fs::path(dir) / "ivp.csv"));
+  std::string line;
+  std::getline(csv, line);
+  CHECK(line == "problem,n,solver,threads,rtol,ok,seconds,scd,steps,rejected,rhs_evaluations,jacobians,factorizations,note");
+  int rows = 0, cvode = 0;
+  while (std::getline(csv, line)) {
+    ++rows;
+    const std::vector<std::string> cells = csv_cells(line);
+    REQUIRE(cells.size() >= 13);
+    INFO(line);
+    CHECK(cells[5] == "1");  // every run succeeds
+    // mbsflow's methods: correct digits at least those asked for less one (rtol 1e-4: 3
+    // digits). CVODE is the peer, not under test (it gets fewer than asked on b1).
+    if (cells[2] != "cvode-bdf") CHECK(std::stod(cells[7]) >= -std::log10(std::stod(cells[4])) - 1);
+    CHECK(std::stol(cells[11]) >= 1);  // Jacobians counted
+    cvode += cells[2] == "cvode-bdf";
+  }
+  // 2 problems x (4 methods x 2 tolerances + CVODE at 4 tolerances: two decades below the tightest too)
+  CHECK(rows == 2 * (4 * 2 + 4));
+  CHECK(cvode == 8);
+  const std::string python = MBSFLOW_PYTHON;
+  const int plot = std::system((python + " '" + MBSFLOW_SOURCE + "/scripts/plot_work_precision.py' '" + dir + "/ivp.csv' -o '" + dir +
+                                "/ivp.png' >/dev/null")
+                                   .c_str());
+  CHECK(plot == 0);
+  CHECK(fs::file_size(fs::path(dir) / "ivp.png") > 10000);
   fs::remove_all(fs::path(dir).parent_path());
 }

@@ -119,3 +119,21 @@ TEST_CASE("cli ode: --describe NAME prints the tableau and its splitting", "[cli
   CHECK(run("ode --problem b1 --method tirk --iteration functional").code == 2);
   CHECK(r.out.find("newton (default)") != std::string::npos);
 }
+
+TEST_CASE("cli ode: Robertson with per-component atol, against its published end value", "[cli][ode]") {
+  // Default atol: --tol times the problem's absolute scale (1e-4, 1e-10, 1e-2).
+  const Result d = run("ode --problem robertson --tol 1e-6 -q", ".", true);
+  INFO(d.err << d.out);
+  REQUIRE(d.code == 0);
+  CHECK(reported(d.out, "error at t_end") <= 1e-10);
+  CHECK(d.out.find("problem ROBER") != std::string::npos);
+  // The same tolerances given explicitly, for tirk: one value per equation.
+  const Result t = run("ode --problem robertson --method tirk --rtol 1e-6 --atol 1e-10,1e-16,1e-8 -q", ".", true);
+  INFO(t.err << t.out);
+  REQUIRE(t.code == 0);
+  CHECK(reported(t.out, "error at t_end") <= 1e-10);
+  // A vector of the wrong length is an input error.
+  const Result bad = run("ode --problem robertson --atol 1e-8,1e-14 -q");
+  CHECK(bad.code == 2);
+  CHECK(bad.err.find("atol") != std::string::npos);
+}

@@ -39,7 +39,7 @@ struct BlockSettings {
   double safety = 0.9, facmin = 0.2, facmax = 4.0;
   double initial_step = 0;  // 0: chosen from the problem (Hairer-Wanner's starting step)
   double fixed_step = 0;    // > 0: no step control, the s-point method alone with this step
-  double min_step = 0;      // 0: 1e-14 |t|
+  double min_step = 0;      // 0: 10 eps |t| (Radau5's limit)
   long max_steps = 10'000'000;
   BlockIteration iteration = BlockIteration::newton;
   int max_iterations = 0;       // 0: 7 for Newton, 50 for functional iteration

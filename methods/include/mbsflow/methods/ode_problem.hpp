@@ -37,6 +37,13 @@ struct OdeProblem {
   std::function<std::string(Eigen::Index i)> describe;
   // Optional: the exact solution, for error reports and tests.
   std::function<Eigen::VectorXd(double t)> exact;
+  // Optional: a published value of y(t_end) (where no exact solution is known), and its source.
+  Eigen::VectorXd end_reference;
+  std::string end_reference_source;
+  // Optional: per component, the magnitude below which it is controlled in absolute terms
+  // (atol_i = rtol * absolute_scale_i: chemical kinetics with components of 1e-14 next to
+  // ones of 1); empty: 1 for all, i.e. atol = rtol.
+  Eigen::VectorXd absolute_scale;
 
   void evaluate(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const { rhs(t, y, dydt, {0, size}); }
 };
@@ -69,7 +76,17 @@ OdeProblem make_ode_problem(std::string name, double t0, double t_end, Eigen::Ve
 OdeProblem hairer_wanner_problem();  // eq. 10 on [0, 2.5]
 OdeProblem detest_b1_problem();      // eq. 11 on [0, 20]
 OdeProblem heat_problem(Eigen::Index n);  // eq. 12 on [0, 4]
-// By name: "hnw", "b1", "heat" (n used by heat); throws InputError otherwise.
+// Standard stiff problems of the Test Set for IVP Solvers (Mazzia, Magherini et al.,
+// Bari): Van der Pol in Hairer-Wanner's scaled form y1' = y2, y2' = ((1 - y1^2) y2 - y1) / eps
+// with eps = 1 / mu^2, y(0) = (2, 0), on [0, 2] (the test set's VDPOL is mu = 1e3, whose
+// y(2) is the published reference); Robertson's kinetics on [0, 1e11] (ROBER, with its
+// published y(1e11)).
+OdeProblem van_der_pol_problem(double mu);
+OdeProblem robertson_problem();
+// By name: "hnw", "b1", "heat" (n equations) or "heatN", "vdp" (mu = 1e3) or "vdpMU"
+// ("vdp1e6"), "robertson"; throws InputError otherwise.
 OdeProblem builtin_problem(const std::string& name, Eigen::Index n);
+// The names builtin_problem knows, for help texts.
+inline constexpr const char* builtin_problem_names = "hnw, b1, heat, heatN, vdp, vdpMU (e.g. vdp1e6), robertson";
 
 }  // namespace mbsflow

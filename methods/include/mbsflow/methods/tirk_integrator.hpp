@@ -59,7 +59,7 @@ struct TirkSettings {
   double safety = 0.9, facmin = 0.2, facmax = 4.0;
   double initial_step = 0;  // 0: chosen from the problem
   double fixed_step = 0;    // > 0: no step control
-  double min_step = 0;      // 0: 1e-14 |t|
+  double min_step = 0;      // 0: 10 eps |t| (Radau5's limit)
   long max_steps = 10'000'000;
   int max_iterations = 0;    // 0: 10 for Newton-type, 50 for functional iterations
   int fixed_iterations = 0;  // > 0: exactly this many iterations per step, no convergence test

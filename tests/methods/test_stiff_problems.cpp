@@ -1,0 +1,98 @@
+// The standard stiff problems (Van der Pol, Robertson): their Jacobians are df/dy, both
+// implicit methods land within 10 tolerances of the Test Set's published end values,
+// Robertson's conservation law holds, and an initial layer thinner than 1e-14 at t = 0
+// (Van der Pol with mu = 1e6) is integrated, not refused as a step size underflow.
+#include <catch2/catch.hpp>
+#include <cmath>
+
+#include "mbsflow/methods/block_integrator.hpp"
+#include "mbsflow/methods/jacobian.hpp"
+#include "mbsflow/methods/tirk_integrator.hpp"
+
+using namespace mbsflow;
+
+namespace {
+
+// atol_i = rtol * absolute_scale_i, as bench ivp and `mbsflow ode` set them.
+Eigen::VectorXd atols_for(const OdeProblem& p, double rtol) {
+  return rtol * (p.absolute_scale.size() > 0 ? p.absolute_scale : Eigen::VectorXd::Ones(p.size));
+}
+
+template <class Settings>
+Settings settings_for(const OdeProblem& p, double rtol) {
+  Settings s;
+  s.rtol = rtol;
+  s.atols = atols_for(p, rtol);
+  s.threads = 1;
+  return s;
+}
+
+// The end error in units of the tolerance against the published value.
+double end_error_in_tolerances(const OdeProblem& p, const Eigen::VectorXd& y, double rtol) {
+  const Eigen::VectorXd& ref = p.end_reference;
+  return ((y - ref).array().abs() / (atols_for(p, rtol).array() + rtol * ref.array().abs())).maxCoeff();
+}
+
+}  // namespace
+
+TEST_CASE("stiff problems: analytic Jacobians agree with finite differences", "[methods][problems]") {
+  for (const OdeProblem& p : {builtin_problem("vdp", 0), builtin_problem("vdp1e6", 0), robertson_problem()}) {
+    // A state off the initial value, where every entry of J is non-zero.
+    Eigen::VectorXd y = p.y0;
+    if (p.size == 2) y << 1.3, -0.7;
+    else y << 0.9, 3e-5, 0.1;
+    Eigen::VectorXd f(p.size);
+    p.evaluate(0.0, y, f);
+    long evaluations = 0;
+    JacobianEvaluator exact(p, false), differences(p, true);
+    const Eigen::MatrixXd je = Eigen::MatrixXd(exact.evaluate(0.0, y, f, evaluations));
+    const Eigen::MatrixXd jd = Eigen::MatrixXd(differences.evaluate(0.0, y, f, evaluations));
+    INFO(p.name << "\nexact\n" << je << "\ndifferences\n" << jd);
+    CHECK(!exact.uses_differences());
+    CHECK((je - jd).cwiseAbs().maxCoeff() <= 1e-6 * je.cwiseAbs().maxCoeff());
+  }
+}
+
+TEST_CASE("stiff problems: names with parameters, and clear errors", "[methods][problems]") {
+  CHECK(builtin_problem("heat50", 0).size == 50);
+  CHECK(builtin_problem("vdp1e6", 0).name == "vdp1e6");
+  CHECK(builtin_problem("vdp", 0).end_reference.size() == 2);  // mu = 1e3: the Test Set's VDPOL
+  CHECK(builtin_problem("vdp1e6", 0).end_reference.size() == 0);
+  CHECK_THROWS_WITH(builtin_problem("vdpx", 0), Catch::Contains("not a positive number"));
+  CHECK_THROWS_WITH(builtin_problem("heat-3", 0), Catch::Contains("not a positive number"));
+  CHECK_THROWS_WITH(builtin_problem("nope", 0), Catch::Contains("robertson"));
+}
+
+TEST_CASE("stiff problems: end values within 10 tolerances of the published ones, rtol 1e-4 .. 1e-8", "[methods][problems]") {
+  for (const OdeProblem& p : {builtin_problem("vdp", 0), robertson_problem()}) {
+    for (int k = 4; k <= 8; ++k) {
+      const double rtol = std::pow(10.0, -k);
+      const TirkResult t = integrate_tirk(p, settings_for<TirkSettings>(p, rtol));
+      const BlockResult c = integrate_block(p, settings_for<BlockSettings>(p, rtol));
+      INFO(p.name << " at rtol " << rtol << ": tirk " << end_error_in_tolerances(p, t.y, rtol) << ", colloc "
+                  << end_error_in_tolerances(p, c.y, rtol) << " tolerances");
+      CHECK(t.t == p.t_end);
+      CHECK(c.t == p.t_end);
+      CHECK(end_error_in_tolerances(p, t.y, rtol) <= 10);
+      CHECK(end_error_in_tolerances(p, c.y, rtol) <= 10);
+      if (p.name == "robertson") {
+        // y1 + y2 + y3 = 1: every Newton correction solves with I - h gamma J, whose column
+        // sums are those of I (J's columns sum to zero), so only rounding moves the sum.
+        CHECK(std::abs(t.y.sum() - 1) < 1e-13);
+        CHECK(std::abs(c.y.sum() - 1) < 1e-13);
+      }
+    }
+  }
+}
+
+TEST_CASE("stiff problems: Van der Pol with mu = 1e6 through its initial layer and both jumps", "[methods][problems]") {
+  // The layer at t = 0 is about 3e-13 thick; at rtol 1e-9 it takes steps below 1e-14, which a
+  // floor of 1e-14 refused; both methods must agree on y(2).
+  const OdeProblem p = builtin_problem("vdp1e6", 0);
+  const TirkResult t = integrate_tirk(p, settings_for<TirkSettings>(p, 1e-9));
+  const BlockResult c = integrate_block(p, settings_for<BlockSettings>(p, 1e-9));
+  INFO("tirk " << t.y.transpose() << ", colloc " << c.y.transpose());
+  CHECK(t.t == p.t_end);
+  CHECK(c.t == p.t_end);
+  CHECK((t.y - c.y).cwiseAbs().maxCoeff() <= 1e-7 * c.y.cwiseAbs().maxCoeff());
+}
