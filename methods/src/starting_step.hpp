@@ -21,7 +21,7 @@ inline double smallest_step(double t) {
 
 // What a step size underflow at smallest_step means, for the failure message.
 inline constexpr const char* step_underflow_hint =
-    ": below 10 eps |t| a step no longer moves t, and the solution changes faster than double precision resolves at this t "
-    "(loosen the tolerance, or use a method of higher order)";
+    ": below 10 eps |t| a step no longer moves t reliably; the solution changes here faster than this method can follow "
+    "at this tolerance in double precision (loosen the tolerance, or use a method of higher order)";
 
 }  // namespace mbsflow

@@ -15,6 +15,7 @@
 #include "error_norm.hpp"
 #include "settings_checks.hpp"
 #include "starting_step.hpp"
+#include "step_controller.hpp"
 #include "tirk_stages.hpp"
 
 namespace mbsflow {
@@ -164,6 +165,7 @@ class TirkIntegrator::Driver {
   JacobianEvaluator jacobian_;
   Eigen::SparseMatrix<double> jac_;
   ConvergenceMonitor monitor_;
+  StepController controller_;
   TirkResult result_;
   bool stiffly_accurate_ = false;
   double t_ = 0;
@@ -389,6 +391,7 @@ void TirkIntegrator::Driver::begin() {
   t_now_ = t_old_ = t;
   have_last_ = false;
   slow_growth_ = 0;
+  controller_ = {s_.safety, s_.facmin, s_.facmax, monitor_.max_iterations, s_.predictive};
   renew_every_step_ = 0;
   after_rejection_ = false;  // the step after a rejected one does not grow (Hairer & Wanner, IV.8)
 }
@@ -446,8 +449,7 @@ bool TirkIntegrator::Driver::advance() {
     double err = 0, fac = s_.facmax;
     if (!fixed) {
       err = estimate(t, x, x_new, fx, h, st.accepted == 0 || after_rejection);
-      fac = err == 0 ? s_.facmax
-                     : std::min(s_.facmax, std::max(s_.facmin, s_.safety * std::pow(err, -1.0 / (embedded_.order + 1))));
+      fac = controller_.factor(h, err, 1.0 / (embedded_.order + 1), iterations_, err <= 1);
     }
     rec.error = err;
     if (err > 1) {

@@ -37,6 +37,9 @@ struct BlockSettings {
   // as an embedded pair does).
   double global_fraction = 0;
   double safety = 0.9, facmin = 0.2, facmax = 4.0;
+  // Gustafsson's predictive step control after accepted steps, as Radau5 (the smaller of
+  // its factor and the classical one); false: the classical controller alone.
+  bool predictive = true;
   double initial_step = 0;  // 0: chosen from the problem (Hairer-Wanner's starting step)
   double fixed_step = 0;    // > 0: no step control, the s-point method alone with this step
   double min_step = 0;      // 0: 10 eps |t| (Radau5's limit)
@@ -44,6 +47,9 @@ struct BlockSettings {
   BlockIteration iteration = BlockIteration::newton;
   int max_iterations = 0;       // 0: 7 for Newton, 50 for functional iteration
   double iteration_tol = 0.03;  // stop when the estimated iteration error is this fraction of the tolerance
+  // Newton: the matrices factorised for step tau_f serve a step tau while |tau / tau_f - 1|
+  // <= this (as TirkSettings::refactor_ratio); 0: refactorise at every change of step.
+  double refactor_ratio = 0.2;
   bool finite_difference_jacobian = false;
   LinearSolverKind linear_solver = LinearSolverKind::automatic;
   int threads = 0;                // 0: all cores; 1: sequential (the same numbers)

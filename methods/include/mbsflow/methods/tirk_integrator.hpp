@@ -57,6 +57,9 @@ struct TirkSettings {
   // empty. The error is measured in the weighted RMS norm with w_i = atol_i + rtol_i |y_i|.
   Eigen::VectorXd rtols, atols;
   double safety = 0.9, facmin = 0.2, facmax = 4.0;
+  // Gustafsson's predictive step control after accepted steps, as Radau5 (the smaller of
+  // its factor and the classical one); false: the classical controller alone.
+  bool predictive = true;
   double initial_step = 0;  // 0: chosen from the problem
   double fixed_step = 0;    // > 0: no step control
   double min_step = 0;      // 0: 10 eps |t| (Radau5's limit)
