@@ -2,6 +2,7 @@
 // last step shortened to land on t_end), the arithmetic of mbsflow::Rk4.
 #include "mbsflow/methods/rk4.hpp"
 #include "mbsflow/methods/step_grid.hpp"
+#include "cubic_hermite.hpp"
 #include "stepper_registry.hpp"
 #include "stepper_system.hpp"
 
@@ -17,6 +18,7 @@ class Rk4Stepper final : public Stepper {
   void start(double t, const Eigen::VectorXd& y, double t_end) override {
     grid_ = step_grid(t, t_end, h_);
     k_ = 0;
+    slopes_for_ = -1;
     t_ = t_previous_ = t;
     t_end_ = t_end;
     y_ = y;
@@ -34,10 +36,19 @@ class Rk4Stepper final : public Stepper {
     ++stats_.accepted;
     stats_.evaluations += Rk4::evaluations_per_step;
   }
-  // Linear between the step's ends: RK4 output falls on its steps.
+  // Cubic Hermite between the step's ends (third order, for events and output between
+  // steps). The slopes at the ends cost two evaluations, made only when dense output is
+  // asked for in a step (RK4's own stages are not kept).
   void dense(double t, Eigen::VectorXd& out) const override {
-    const double th = t_ > t_previous_ ? (t - t_previous_) / (t_ - t_previous_) : 1.0;
-    out = (1.0 - th) * y_previous_ + th * y_;
+    if (slopes_for_ != k_) {
+      f_previous_.resize(y_.size());
+      f_.resize(y_.size());
+      sys_.rhs(t_previous_, y_previous_, f_previous_);
+      sys_.rhs(t_, y_, f_);
+      stats_.evaluations += 2;
+      slopes_for_ = k_;
+    }
+    cubic_hermite(t_previous_, y_previous_, f_previous_, t_, y_, f_, t, out);
   }
 
  private:
@@ -47,6 +58,8 @@ class Rk4Stepper final : public Stepper {
   StepGrid grid_;
   long k_ = 0;
   Eigen::VectorXd y_previous_;
+  mutable Eigen::VectorXd f_previous_, f_;  // the slopes at the ends of step slopes_for_
+  mutable long slopes_for_ = -1;
 };
 
 }  // namespace

@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "mbsflow/methods/jacobian.hpp"
+#include "cubic_hermite.hpp"
 #include "error_norm.hpp"
 #include "settings_checks.hpp"
 #include "starting_step.hpp"
@@ -528,10 +529,7 @@ const Eigen::VectorXd& TirkIntegrator::y() const { return d_->y(); }
 const TirkStats& TirkIntegrator::stats() const { return d_->result().stats; }
 
 void TirkIntegrator::dense(double t, Eigen::VectorXd& out) const {
-  // Cubic Hermite interpolation between the last step's ends (values and derivatives).
-  const double h = d_->t() - d_->t_old(), th = h > 0 ? (t - d_->t_old()) / h : 1.0, th1 = th - 1.0;
-  const double h00 = (1 + 2 * th) * th1 * th1, h10 = th * th1 * th1, h01 = th * th * (3 - 2 * th), h11 = th * th * th1;
-  out = h00 * d_->x_old() + (h10 * h) * d_->f_old() + h01 * d_->y() + (h11 * h) * d_->f();
+  cubic_hermite(d_->t_old(), d_->x_old(), d_->f_old(), d_->t(), d_->y(), d_->f(), t, out);
 }
 
 TirkResult integrate_tirk(const OdeProblem& problem, const TirkSettings& settings,

@@ -7,20 +7,13 @@
 #include "convergence.hpp"
 #include "mbsflow/methods/stepper.hpp"
 
+#include "methods/oscillator_system.hpp"
+
 using namespace mbsflow;
 
 namespace {
 
-// y'' = -y with y(0) = 1, y'(0) = 0: y = cos t.
-StepperSystem oscillator() {
-  StepperSystem s;
-  s.size = 2;
-  s.rhs = [](double, const Eigen::VectorXd& y, Eigen::VectorXd& d) {
-    d.resize(2);
-    d << y[1], -y[0];
-  };
-  return s;
-}
+using test::oscillator;  // y = cos t
 Eigen::VectorXd exact(double t) { return Eigen::Vector2d(std::cos(t), -std::sin(t)); }
 
 double end_error(Method m, const StepperSettings& o, double t_end = 2.0) {

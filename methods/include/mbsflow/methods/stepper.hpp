@@ -87,7 +87,7 @@ class Stepper {
  protected:
   double t_ = 0.0, t_previous_ = 0.0, t_end_ = 0.0;
   Eigen::VectorXd y_;
-  StepperStats stats_;
+  mutable StepperStats stats_;  // mutable: dense output may evaluate f (rk4 does, for its slopes)
 };
 
 // The registry: one entry per method.
