@@ -27,15 +27,12 @@ struct Tolerance {
   double rtol = 0;
   Eigen::VectorXd atols;
 };
-Tolerance tolerance_for(const OdeProblem& p, double rtol) {
-  const Eigen::VectorXd scale = p.absolute_scale.size() > 0 ? p.absolute_scale : Eigen::VectorXd::Ones(p.size);
-  return {rtol, rtol * scale};
-}
+Tolerance tolerance_for(const OdeProblem& p, double rtol) { return {rtol, rtol * absolute_scales(p)}; }
 
 // Significant correct digits at the end, in the mixed sense of the test set: components
 // below their absolute scale count in absolute terms.
 double correct_digits(const OdeProblem& p, const Eigen::VectorXd& y, const Eigen::VectorXd& reference) {
-  const Eigen::VectorXd scale = p.absolute_scale.size() > 0 ? p.absolute_scale : Eigen::VectorXd::Ones(p.size);
+  const Eigen::VectorXd scale = absolute_scales(p);
   double worst = 0;
   for (Eigen::Index i = 0; i < p.size; ++i)
     worst = std::max(worst, std::abs(y(i) - reference(i)) / (std::abs(reference(i)) + scale(i)));

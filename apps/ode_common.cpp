@@ -32,12 +32,11 @@ void set_tolerance(const std::vector<double>& given, double& scalar, Eigen::Vect
   }
 }
 
-double report_end_error(const OdeProblem& p, const Eigen::VectorXd& y_end) {
-  if (p.exact || p.end_reference.size() != y_end.size()) return 0;
+void report_end_error(const OdeProblem& p, const Eigen::VectorXd& y_end) {
+  if (p.exact || p.end_reference.size() != y_end.size()) return;
   const double e = (y_end - p.end_reference).cwiseAbs().maxCoeff();
   std::printf("error at t_end %.3e (max over components; relative: %.3e), against %s\n", e,
               ((y_end - p.end_reference).array() / p.end_reference.array().abs()).abs().maxCoeff(), p.end_reference_source.c_str());
-  return e;
 }
 
 void OdeRecorder::write(const std::string& path, std::vector<BlockStepRecord> steps,

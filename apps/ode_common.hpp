@@ -57,9 +57,9 @@ void apply_common_options(const OdeArgs& a, const OdeProblem& p, Settings& s) {
   s.threads = a.threads;
 }
 
-// The end point's error against the problem's published reference value, when it has one
-// (and no exact solution): printed, and returned (0 without a reference).
-double report_end_error(const OdeProblem& p, const Eigen::VectorXd& y_end);
+// Prints the end point's error against the problem's published reference value, when it
+// has one (and no exact solution).
+void report_end_error(const OdeProblem& p, const Eigen::VectorXd& y_end);
 
 int run_tirk(const OdeArgs& a);
 int describe_tableau(const std::string& name);

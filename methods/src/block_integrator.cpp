@@ -308,8 +308,7 @@ bool BlockIntegrator::Driver::advance() {
   };
   while (t_end - t_ > eps_t) {
     if (st.steps >= s_.max_steps) fail("reached the maximum number of steps");
-    const double min_step = s_.min_step > 0 ? s_.min_step : smallest_step(t_);
-    if (tau < min_step) fail("step size underflow", s_.min_step > 0 ? "" : step_underflow_hint);
+    if (const char* hint = step_underflow(tau, t_, s_.min_step)) fail("step size underflow", hint);
     if (past_u_.size() < static_cast<std::size_t>(m())) {  // start-up of a multistep method
       tau = std::min(tau, (t_end - t_) / starter_->points());
       if (!solve({starter_.get()}, tau)) {

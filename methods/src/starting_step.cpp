@@ -7,7 +7,6 @@
 
 namespace mbsflow {
 
-
 // Hairer & Wanner's starting step (I, II.4) for a method of order q, with the block's
 // weighted RMS norm (error_norm.hpp).
 double starting_step(const OdeProblem& p, const Eigen::VectorXd& y0, const Eigen::VectorXd& f0, const Eigen::VectorXd& scale,

@@ -1,5 +1,5 @@
 #pragma once
-// Hairer & Wanner's starting step (I, II.4) for a method of order q, in the scaled max
+// Hairer & Wanner's starting step (I, II.4) for a method of order q, in the weighted RMS
 // norm, and the smallest step; shared by the implicit integrators.
 #include <algorithm>
 #include <cmath>
@@ -19,9 +19,14 @@ inline double smallest_step(double t) {
   return std::max(10 * std::numeric_limits<double>::epsilon() * std::abs(t), std::numeric_limits<double>::min());
 }
 
-// What a step size underflow at smallest_step means, for the failure message.
-inline constexpr const char* step_underflow_hint =
-    ": below 10 eps |t| a step no longer moves t reliably; the solution changes here faster than this method can follow "
-    "at this tolerance in double precision (loosen the tolerance, or use a method of higher order)";
+// Whether step tau at t is below the smallest step (the settings' min_step, or 0 for
+// smallest_step(t)): null if not, else what to add to the failure message (why a step below
+// smallest_step cannot be taken; nothing for the user's own minimum).
+inline const char* step_underflow(double tau, double t, double min_step) {
+  if (tau >= (min_step > 0 ? min_step : smallest_step(t))) return nullptr;
+  return min_step > 0 ? ""
+                      : ": below 10 eps |t| a step no longer moves t reliably; the solution changes here faster than this method "
+                        "can follow at this tolerance in double precision (loosen the tolerance, or use a method of higher order)";
+}
 
 }  // namespace mbsflow

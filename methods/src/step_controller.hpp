@@ -18,8 +18,6 @@ struct StepController {
   // The last accepted step and its error (max(err, 1e-2), as Radau5).
   double h_accepted = 0, err_accepted = 0;
 
-  void restart() { h_accepted = err_accepted = 0; }
-
   // Radau5: safe * (1 + 2 nit) / (newt + 2 nit): 0.9 after one iteration, 0.64 after seven.
   double newton_safety(int iterations) const {
     return std::min(safety, safety * (1 + 2 * max_iterations) / (std::max(iterations, 1) + 2 * max_iterations));

@@ -408,8 +408,7 @@ bool TirkIntegrator::Driver::advance() {
   const double t_end = p_.t_end, eps_t = 1e-12 * std::max(1.0, std::abs(t_end));
   while (t_end - t > eps_t) {
     if (st.steps >= s_.max_steps) fail("reached the maximum number of steps", tau);
-    const double min_step = s_.min_step > 0 ? s_.min_step : smallest_step(t);
-    if (tau < min_step) fail("step size underflow", tau, s_.min_step > 0 ? "" : step_underflow_hint);
+    if (const char* hint = step_underflow(tau, t, s_.min_step)) fail("step size underflow", tau, hint);
     const bool lands = tau >= t_end - t;
     const double h = lands ? t_end - t : tau;
     begin_step(t, x, fx, h, extrapolate(t, h));

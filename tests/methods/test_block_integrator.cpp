@@ -8,6 +8,7 @@
 #include "convergence.hpp"
 #include "mbsflow/methods/block_integrator.hpp"
 #include "mbsflow/methods/dopri5.hpp"
+#include "methods/error_in_tolerances.hpp"
 
 using namespace mbsflow;
 
@@ -18,7 +19,6 @@ double final_error(const OdeProblem& p, const BlockSettings& s) {
   return (r.y - p.exact(r.t)).cwiseAbs().maxCoeff();
 }
 
-// Largest error over every accepted point.
 // The largest error at the accepted points: absolute, or in_tolerances in units of the
 // tolerance at each component, |e_i| / (atol + rtol |y_i|).
 double max_error(const OdeProblem& p, const BlockSettings& s, BlockResult* out = nullptr, bool in_tolerances = false) {
@@ -26,9 +26,9 @@ double max_error(const OdeProblem& p, const BlockSettings& s, BlockResult* out =
   BlockResult r = integrate_block(p, s, [&](const AcceptedBlock& b) {
     for (int i = 0; i < b.points; ++i) {
       const Eigen::VectorXd exact = p.exact(b.t0 + b.method->positions(i) * b.tau);
-      Eigen::ArrayXd e = ((*b.u)[static_cast<std::size_t>(i)] - exact).array().abs();
-      if (in_tolerances) e /= s.atol + s.rtol * exact.array().abs();
-      err = std::max(err, e.maxCoeff());
+      const Eigen::VectorXd& u = (*b.u)[static_cast<std::size_t>(i)];
+      err = std::max(err, in_tolerances ? test::error_in_tolerances(u, exact, s.rtol, Eigen::ArrayXd::Constant(p.size, s.atol))
+                                        : (u - exact).cwiseAbs().maxCoeff());
     }
   });
   if (out) *out = std::move(r);

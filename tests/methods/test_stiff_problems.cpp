@@ -8,6 +8,7 @@
 #include "mbsflow/methods/block_integrator.hpp"
 #include "mbsflow/methods/jacobian.hpp"
 #include "mbsflow/methods/tirk_integrator.hpp"
+#include "methods/error_in_tolerances.hpp"
 
 using namespace mbsflow;
 
@@ -15,7 +16,7 @@ namespace {
 
 // atol_i = rtol * absolute_scale_i, as bench ivp and `mbsflow ode` set them.
 Eigen::VectorXd atols_for(const OdeProblem& p, double rtol) {
-  return rtol * (p.absolute_scale.size() > 0 ? p.absolute_scale : Eigen::VectorXd::Ones(p.size));
+  return rtol * absolute_scales(p);
 }
 
 template <class Settings>
@@ -29,8 +30,7 @@ Settings settings_for(const OdeProblem& p, double rtol) {
 
 // The end error in units of the tolerance against the published value.
 double end_error_in_tolerances(const OdeProblem& p, const Eigen::VectorXd& y, double rtol) {
-  const Eigen::VectorXd& ref = p.end_reference;
-  return ((y - ref).array().abs() / (atols_for(p, rtol).array() + rtol * ref.array().abs())).maxCoeff();
+  return test::error_in_tolerances(y, p.end_reference, rtol, atols_for(p, rtol).array());
 }
 
 }  // namespace

@@ -14,7 +14,10 @@
 #include "mbsflow/methods/block_integrator.hpp"
 #include "mbsflow/methods/tirk_integrator.hpp"
 
+#include "methods/error_in_tolerances.hpp"
+
 using namespace mbsflow;
+using test::error_in_tolerances;
 
 namespace {
 
@@ -31,12 +34,6 @@ OdeProblem prothero_robinson(double lambda) {
   };
   p.exact = [](double t) { return Eigen::VectorXd::Constant(1, std::sin(t)); };
   return p;
-}
-
-// The error at the end in units of the tolerance: max |e_i| / (atol_i + rtol |y_i|).
-double error_in_tolerances(const OdeProblem& p, const Eigen::VectorXd& y, double t, double rtol, const Eigen::VectorXd& atol) {
-  const Eigen::VectorXd exact = p.exact(t);
-  return ((y - exact).array().abs() / (atol.array() + rtol * exact.array().abs())).maxCoeff();
 }
 
 struct Solver {
@@ -73,7 +70,7 @@ TEST_CASE("tolerances: the end error stays within 10 tolerances over rtol 1e-3 .
         const double rtol = std::pow(10.0, -k);
         const Eigen::VectorXd atols = Eigen::VectorXd::Constant(p.size, rtol);
         const auto [t, y] = solver.run(p, rtol, atols);
-        const double err = error_in_tolerances(p, y, t, rtol, atols);
+        const double err = error_in_tolerances(y, p.exact(t), rtol, atols.array());
         INFO(p.name << ", " << solver.name << ", rtol " << rtol << ": end error " << err << " tolerances");
         CHECK(t == p.t_end);
         CHECK(err <= 10);

@@ -48,6 +48,11 @@ struct OdeProblem {
   void evaluate(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const { rhs(t, y, dydt, {0, size}); }
 };
 
+// The problem's absolute_scale, or ones where it has none.
+inline Eigen::VectorXd absolute_scales(const OdeProblem& p) {
+  return p.absolute_scale.size() > 0 ? p.absolute_scale : Eigen::VectorXd::Ones(p.size);
+}
+
 // A problem from a whole-vector right-hand side f(t, y, dydt) (no slicing).
 template <class F>
 OdeProblem make_ode_problem(std::string name, double t0, double t_end, Eigen::VectorXd y0, F f) {
