@@ -362,7 +362,7 @@ bool BlockIntegrator::Driver::advance() {
     // next block. (Renewing only when the contraction rate grows, as tirk does, and
     // starting blocks from the last block's polynomial, as Radau5 does, were measured with
     // bench ivp and are worse here: the extrapolated start failed on Van der Pol mu = 1e6
-    // at two tolerances and doubled the steps on Robertson.)
+    // at two tolerances and took 318 blocks on Robertson at rtol 1e-6 where this takes 107.)
     if (newton() && (small_.iterations > 2 || large_.iterations > 2)) jacobian_stale_ = true;
     double tau_new = tau * fac;
     if (newton() && s_.refactor_ratio == 0 && fac >= 1 && fac <= 1.2) tau_new = tau;  // keep the factorisations
