@@ -12,6 +12,7 @@
 #include "mbsflow/error.hpp"
 #include "mbsflow/graph/force_element.hpp"
 #include "metis_partition.hpp"
+#include "submodel_links.hpp"
 
 namespace mbsflow {
 namespace {
@@ -72,7 +73,8 @@ int Submodel::local_index(int global) const {
     return it != v.end() && *it == global ? static_cast<int>(it - v.begin()) : -1;
   };
   if (const int i = find(own); i >= 0) return i;
-  if (const int i = find(ghosts); i >= 0) return static_cast<int>(own.size()) + i;
+  if (const int i = find(borrowed); i >= 0) return static_cast<int>(own.size()) + i;
+  if (const int i = find(ghosts); i >= 0) return integrated() + i;
   return -1;
 }
 
@@ -217,50 +219,9 @@ Decomposition decompose(const Model& m, const std::vector<int>& part, int k) {
                        m.bodies[static_cast<std::size_t>(j.body2)].name + "' (part " +
                        std::to_string(part[static_cast<std::size_t>(j.body2)]) +
                        "): a cut may only pass through compliant joints, bushings and springs");
-  // Joints, ghosts and cut joints.
-  std::vector<std::set<int>> ghosts(static_cast<std::size_t>(k));
-  for (std::size_t j = 0; j < m.joints.size(); ++j) {
-    const Joint& jt = m.joints[j];
-    const int p2 = part[static_cast<std::size_t>(jt.body2)];
-    const int p1 = is_body(jt.body1) ? part[static_cast<std::size_t>(jt.body1)] : p2;
-    d.submodels[static_cast<std::size_t>(p2)].joints.push_back(static_cast<int>(j));
-    if (p1 != p2) {
-      d.submodels[static_cast<std::size_t>(p1)].joints.push_back(static_cast<int>(j));
-      ghosts[static_cast<std::size_t>(p2)].insert(jt.body1);
-      ghosts[static_cast<std::size_t>(p1)].insert(jt.body2);
-      ++d.submodels[static_cast<std::size_t>(p1)].cut_joints;
-      ++d.submodels[static_cast<std::size_t>(p2)].cut_joints;
-      ++d.cut_joints;
-    }
-  }
-  // A force element joins its bodies like a joint: each submodel with one of them sees
-  // the others as ghosts.
-  for (const auto& e : m.force_elements) {
-    const std::vector<int> bodies = e->bodies();
-    for (int a : bodies)
-      for (int b : bodies) {
-        const auto pa = static_cast<std::size_t>(part[static_cast<std::size_t>(a)]);
-        if (part[static_cast<std::size_t>(b)] != part[static_cast<std::size_t>(a)]) ghosts[pa].insert(b);
-      }
-  }
-  for (std::size_t p = 0; p < d.submodels.size(); ++p) {
-    Submodel& s = d.submodels[p];
-    std::sort(s.joints.begin(), s.joints.end());
-    s.ghosts.assign(ghosts[p].begin(), ghosts[p].end());
-  }
-  // Exchange plans: p receives each ghost from its owner, in ascending global order.
-  for (std::size_t p = 0; p < d.submodels.size(); ++p) {
-    Submodel& s = d.submodels[p];
-    std::map<int, Submodel::Exchange> by_owner;
-    for (int g : s.ghosts) {
-      const int owner = part[static_cast<std::size_t>(g)];
-      Submodel::Exchange& e = by_owner[owner];
-      e.neighbour = owner;
-      e.from.push_back(d.submodels[static_cast<std::size_t>(owner)].local_index(g));
-      e.to.push_back(s.local_index(g));
-    }
-    for (auto& [owner, e] : by_owner) s.exchanges.push_back(std::move(e));
-  }
+  for (const Joint& j : m.joints)
+    if (is_body(j.body1) && part[static_cast<std::size_t>(j.body1)] != part[static_cast<std::size_t>(j.body2)]) ++d.cut_joints;
+  link_submodels(m, d);
   double max_cost = 0.0, sum = 0.0;
   for (const Submodel& s : d.submodels) {
     max_cost = std::max(max_cost, s.cost);
@@ -276,6 +237,7 @@ Model submodel_model(const Model& m, const Submodel& s) {
   local.gravity = m.gravity;
   local.simulation = m.simulation;
   for (int b : s.own) local.bodies.push_back(m.bodies[static_cast<std::size_t>(b)]);
+  for (int b : s.borrowed) local.bodies.push_back(m.bodies[static_cast<std::size_t>(b)]);
   for (int b : s.ghosts) local.bodies.push_back(m.bodies[static_cast<std::size_t>(b)]);
   for (int j : s.joints) {
     Joint jt = m.joints[static_cast<std::size_t>(j)];
@@ -285,7 +247,7 @@ Model submodel_model(const Model& m, const Submodel& s) {
   }
   for (const Load& l : m.loads) {
     const int i = s.local_index(l.body);
-    if (i >= 0 && i < static_cast<int>(s.own.size())) {
+    if (i >= 0 && i < s.integrated()) {
       Load copy = l;
       copy.body = i;
       local.loads.push_back(copy);
@@ -299,8 +261,8 @@ Model submodel_model(const Model& m, const Submodel& s) {
       local.drivers.push_back(copy);
     }
   }
-  // Force elements on own bodies, in model order, reading their bodies at local indices.
-  const auto n_own = static_cast<int>(s.own.size());
+  // Force elements on own and borrowed bodies, in model order, reading their bodies at local indices.
+  const int n_own = s.integrated();
   for (const auto& e : m.force_elements) {
     std::vector<int> bodies = e->bodies(), at;
     for (int b : bodies) at.push_back(s.local_index(b));

@@ -96,6 +96,36 @@ StableStep estimate_stable_step(const Model& model) {
   return out;
 }
 
+std::vector<double> joint_rates(const Model& model) {
+  std::vector<bool> driven(model.bodies.size(), false);
+  for (const Driver& d : model.drivers) driven[static_cast<std::size_t>(d.body)] = true;
+  auto held = [&](int b) { return b == ground || driven[static_cast<std::size_t>(b)]; };
+  std::vector<double> out;
+  out.reserve(model.joints.size());
+  for (const Joint& j : model.joints) {
+    if (is_kinematic(j.type) && j.rigid) {
+      out.push_back(std::numeric_limits<double>::infinity());
+      continue;
+    }
+    const JointRates r = rates(j);
+    const int ends[2] = {j.body1, j.body2};
+    const Vec3* points[2] = {&j.point1, &j.point2};
+    double trans = 0.0, rot[3] = {0.0, 0.0, 0.0};
+    for (int s = 0; s < 2; ++s) {
+      if (held(ends[s])) continue;
+      const Body& b = model.bodies[static_cast<std::size_t>(ends[s])];
+      trans += r.kt / b.mass;
+      const Vec3& p = *points[s];
+      for (std::size_t axis = 0; axis < 3; ++axis) {
+        const double lever2 = p[0] * p[0] + p[1] * p[1] + p[2] * p[2] - p[axis] * p[axis];
+        rot[axis] += (r.kr + r.kt * lever2) / b.inertia[axis];
+      }
+    }
+    out.push_back(std::sqrt(std::max({trans, rot[0], rot[1], rot[2]})));
+  }
+  return out;
+}
+
 std::string StableStep::describe(const Model& model) const {
   char buf[256];
   if (joint < 0) return "no joint limits the step";

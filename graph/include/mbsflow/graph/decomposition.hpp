@@ -29,20 +29,28 @@ enum class Partitioner {
 const char* partitioner_name(Partitioner p);
 
 struct Submodel {
-  std::vector<int> own;     // global body indices, ascending
-  std::vector<int> ghosts;  // bodies of other submodels joined to own bodies, ascending
-  std::vector<int> joints;  // joints with at least one own body, ascending global index
+  std::vector<int> own;  // global body indices, ascending
+  // Bodies of other submodels integrated here as well (an overlap, see with_overlap):
+  // their derivatives are computed here, their values come from their owners at each
+  // exchange. Empty in a plain decomposition.
+  std::vector<int> borrowed;
+  std::vector<int> ghosts;  // bodies of other submodels joined to own or borrowed bodies, ascending
+  std::vector<int> joints;  // joints with at least one own or borrowed body, ascending global index
   int cut_joints = 0;       // of those, the ones that reach a ghost
   double cost = 0.0;
-  // Per neighbour that owns some of this submodel's ghosts: which of its bodies (its local
-  // indices) fill which ghost slots here (local indices), in ascending global order.
+  // Per neighbour that owns some of this submodel's borrowed bodies or ghosts: which of its
+  // bodies (its local indices) fill which slots here (local indices), in ascending global order.
   struct Exchange {
     int neighbour = 0;
     std::vector<int> from;  // the neighbour's local indices
-    std::vector<int> to;    // this submodel's local ghost slots
+    std::vector<int> to;    // this submodel's local borrowed or ghost slots
+    std::vector<int> near;  // positions in from/to of the bodies joined to own bodies
   };
   std::vector<Exchange> exchanges;
-  int local_index(int global) const;  // own bodies first, then ghosts; -1 if neither
+  // Own bodies first, then borrowed ones, then ghosts; -1 if none of them.
+  int local_index(int global) const;
+  // Bodies whose derivatives are computed here: own and borrowed.
+  int integrated() const { return static_cast<int>(own.size() + borrowed.size()); }
   // Estimated stage time (ns): its cost, plus the other half of each cut joint (computed
   // on both sides) and the copying of ghosts.
   double estimated_time() const { return cost + 39.0 * cut_joints + 10.0 * static_cast<double>(ghosts.size()); }
@@ -65,9 +73,16 @@ Decomposition decompose(const Model& model, int k, Partitioner partitioner = Par
 // no rigid joint between two parts).
 Decomposition decompose(const Model& model, const std::vector<int>& part_of_body, int k);
 
-// The local model of a submodel: own bodies, then ghosts; its joints, loads of own bodies
-// and drivers of local bodies, in global order, so that every own body's derivative is
-// bit for bit the one of the whole model.
+// The decomposition with overlapping submodels, for loose coupling: each submodel also
+// integrates (borrows) the bodies of other submodels that a disturbance at its boundary
+// reaches within `reach` seconds, a joint taking 1 / (its fastest rate) to cross (see
+// joint_rates) and a rigid joint none. Own bodies are those of d; ghosts lie beyond the
+// borrowed bodies. reach <= 0: d itself.
+Decomposition with_overlap(const Model& model, const Decomposition& d, double reach);
+
+// The local model of a submodel: own bodies, then borrowed ones, then ghosts; its joints,
+// loads of own and borrowed bodies and drivers of local bodies, in global order, so that
+// every own body's derivative is bit for bit the one of the whole model.
 Model submodel_model(const Model& model, const Submodel& sub);
 
 // The partitioned body/joint graph in Graphviz dot.

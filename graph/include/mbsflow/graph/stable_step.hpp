@@ -3,6 +3,7 @@
 // discs of the mass-scaled stiffness and damping of every body, and the RK4 step
 // that keeps h * lambda inside RK4's stability region.
 #include <string>
+#include <vector>
 
 #include "mbsflow/graph/model.hpp"
 
@@ -21,5 +22,10 @@ struct StableStep {
 inline constexpr double rk4_stability_radius = 2.5;
 
 StableStep estimate_stable_step(const Model& model);
+
+// Per joint, the fastest undamped rate (1/s) of its two bodies joined by it alone (a
+// driven body or the ground held still): infinity for a rigid joint, 0 for one without
+// stiffness. The RK4 stable step of joint j alone is rk4_stability_radius / rate[j].
+std::vector<double> joint_rates(const Model& model);
 
 }  // namespace mbsflow

@@ -1,0 +1,17 @@
+#pragma once
+// What a submodel needs from the rest once its own (and borrowed) bodies are chosen.
+#include "mbsflow/graph/decomposition.hpp"
+
+namespace mbsflow {
+
+// Per body, the joints and force elements that reach it (ground joints included).
+struct BodyLinks {
+  explicit BodyLinks(const Model& m);
+  std::vector<std::vector<int>> joints, elements;
+};
+
+// Fills each submodel's joints, ghosts, cut_joints and exchanges from its own and borrowed
+// bodies and d.part_of_body (each body's owner).
+void link_submodels(const Model& m, Decomposition& d);
+
+}  // namespace mbsflow
