@@ -54,6 +54,7 @@ struct RunArgs {
   std::optional<double> coupling_tol;
   double exchange_delay = 0.0;  // s, added to every boundary message between processes
   int max_lag = 0;
+  std::optional<double> overlap;
   bool exact_lag = false;
   std::string submodel_methods;  // comma-separated, one per submodel
 };
@@ -73,8 +74,18 @@ std::vector<Method> parse_methods(const std::string& list) {
 }
 
 // The closing lines of a loosely coupled run: its coupling errors, lags and macro steps.
-void print_coupling(const LooseStats& ls, bool adaptive, int max_lag) {
+void print_coupling(const LooseStats& ls, bool adaptive, int max_lag, double tol) {
   char adapt[128] = "", lag[96] = "";
+  if (adaptive && ls.over_tolerance > 0)
+    std::fprintf(stderr,
+                 "mbsflow: warning: %ld macro steps kept a coupling error above --coupling-tol %.3g m at the smallest "
+                 "macro step (1/1024 of --macro-step); a larger --overlap may help\n",
+                 ls.over_tolerance, tol);
+  if (!adaptive && tol > 0.0 && ls.max_position_error > tol)
+    std::fprintf(stderr,
+                 "mbsflow: warning: the coupling error %.3g m is above --coupling-tol %.3g m; a run across processes "
+                 "takes a fixed macro step: give a smaller --macro-step or a larger --overlap\n",
+                 ls.max_position_error, tol);
   if (adaptive)
     std::snprintf(adapt, sizeof adapt, "; macro step %.3g .. %.3g s, %ld taken again", ls.smallest_macro_step,
                   ls.largest_macro_step, ls.rejected);
@@ -188,15 +199,20 @@ int run(const RunArgs& a) {
   const bool cluster = !a.cluster.empty() || a.processes > 0;
   const bool loose = a.coupling == "loose";
   if (a.exchange_delay > 0.0 && !cluster) throw InputError("--exchange-delay: only with --cluster or --processes");
-  if (!loose && (a.macro_step || a.coupling_tol || a.max_lag > 0 || a.exact_lag || !a.submodel_methods.empty()))
-    throw InputError("--macro-step, --coupling-tol, --max-lag, --exact-lag, --submodel-methods: only with --coupling loose");
+  if (!loose && (a.macro_step || a.coupling_tol || a.max_lag > 0 || a.exact_lag || !a.submodel_methods.empty() || a.overlap))
+    throw InputError(
+        "--macro-step, --coupling-tol, --max-lag, --exact-lag, --submodel-methods, --overlap: only with --coupling loose");
   if (a.exact_lag && a.max_lag == 0) throw InputError("--exact-lag: needs --max-lag L > 0");
-  // A tenth of the RK4 stability estimate: explicit coupling of stiff joints over longer
-  // macro steps can blow up (an undamped chain does at four tenths).
-  const double macro_step = a.macro_step ? *a.macro_step : 0.1 * stable.step;
+  // Many steps per exchange: the overlap keeps even stiff cut joints stable (loose_coupling.hpp).
+  const double macro_step = a.macro_step ? *a.macro_step : default_macro_steps * (std::isfinite(stable.step) ? stable.step : o.step);
   if (loose && !std::isfinite(macro_step)) throw InputError("--coupling loose: no joints to estimate a macro step from; give --macro-step");
-  const LooseOptions lo{macro_step,  a.extrapolation, threads, a.coupling_tol.value_or(0.0),
-                        a.max_lag,   a.exact_lag,     parse_methods(a.submodel_methods)};
+  // Error control by default where the macro step can adapt (in one process, without a lag)
+  // and none was given (a given --macro-step alone is a fixed one).
+  const double coupling_tol =
+      a.coupling_tol.value_or(cluster || a.max_lag > 0 || a.macro_step ? 0.0 : default_coupling_tol);
+  LooseOptions lo{macro_step, a.extrapolation, threads, coupling_tol,
+                  a.max_lag,  a.exact_lag,     parse_methods(a.submodel_methods)};
+  if (a.overlap) lo.overlap = *a.overlap;
   const ClusterCoupling coupling{loose ? &lo : nullptr, a.exchange_delay};
   if (cluster) check_cluster_run(m, o, coupling);  // before any worker is started
   std::optional<LocalWorkers> local;
@@ -218,9 +234,14 @@ int run(const RunArgs& a) {
     std::fprintf(stderr, "mbsflow: %zu submodels on %zu worker processes (%s), %d cut joints, load imbalance %.1f %%%s\n",
                  d->submodels.size(), cc.workers.size(), cc.transport.c_str(), d->cut_joints, 100.0 * d->imbalance, coupling);
   }
+  else if (loose && !a.quiet && d->submodels.size() == 1)
+    std::fprintf(stderr, "mbsflow: 1 submodel: nothing to couple loosely, a plain run\n");
   else if (loose && !a.quiet)
-    std::fprintf(stderr, "mbsflow: %zu submodels on %d threads, loosely coupled: macro step %.4g s, extrapolation order %d\n",
-                 d->submodels.size(), threads, macro_step, a.extrapolation);
+    std::fprintf(stderr,
+                 "mbsflow: %zu submodels on %d threads, loosely coupled: macro step %.4g s, extrapolation order %d, "
+                 "overlap %.4g s%s\n",
+                 d->submodels.size(), threads, macro_step, a.extrapolation, overlap_reach(lo),
+                 lo.coupling_tol > 0.0 ? ", error control" : "");
   else if (d && !a.quiet)
     std::fprintf(stderr, "mbsflow: %zu submodels on %d threads (%s), %d cut joints, load imbalance %.1f %%\n",
                  d->submodels.size(), threads, a.executor == "flow" ? "flow graph" : "barrier per stage", d->cut_joints,
@@ -255,7 +276,8 @@ int run(const RunArgs& a) {
       stats.loose.records = stats.cluster.coupling;
       summarise_records(stats.loose);
     }
-    if (loose && !a.quiet) print_coupling(stats.loose, !cluster && a.coupling_tol.has_value(), a.max_lag);
+    if (loose && !a.quiet && d->submodels.size() > 1) print_coupling(stats.loose, !cluster && lo.coupling_tol > 0.0, a.max_lag,
+                                              a.coupling_tol.value_or(default_coupling_tol));
   } catch (const RunError& e) {
     progress.finish();
     const int sig = stop_signal();
@@ -348,12 +370,14 @@ Action add_run(CLI::App& app) {
       ->check(CLI::IsMember({"tight", "loose"}))
       ->capture_default_str();
   sub->add_option("--macro-step", a->macro_step,
-                  "Loose coupling: the exchange interval H in s (default: a tenth of the RK4 stability estimate; "
-                  "with --coupling-tol, the first try)")
+                  "Loose coupling: the exchange interval H in s, fixed (default: 16 RK4 stable steps, the first and "
+                  "largest try of error control)")
       ->check(CLI::PositiveNumber);
   sub->add_option("--coupling-tol", a->coupling_tol,
-                  "Loose coupling: adapt the macro step so that ghost positions are extrapolated within this many m")
-      ->check(CLI::PositiveNumber);
+                  "Loose coupling: take a macro step again, shorter, when the neighbours' bodies at the cut are off by "
+                  "more than this many m (default 1e-06 in one process without --max-lag or --macro-step; across "
+                  "processes the macro step is fixed and a larger error warns); 0: fixed macro step")
+      ->check(CLI::NonNegativeNumber);
   sub->add_option("--max-lag", a->max_lag,
                   "Loose coupling: a submodel may run up to L macro steps ahead of its slowest neighbour, taking the "
                   "newest neighbour values it has, while messages travel (results then depend on timing)")
@@ -368,6 +392,9 @@ Action add_run(CLI::App& app) {
   sub->add_option("--exchange-delay", a->exchange_delay,
                   "With --cluster or --processes: hold every boundary message back this many s (a slow network, for tests)")
       ->check(CLI::NonNegativeNumber);
+  sub->add_option("--overlap", a->overlap,
+                  "Loose coupling: each submodel also integrates the neighbours' bodies that a disturbance at the cut "
+                  "reaches within this many s, extrapolating only beyond them; 0: none (default: one macro step)");
   sub->add_option("--extrapolation", a->extrapolation, "Loose coupling: order of the neighbours' extrapolation, 0, 1 or 2")
       ->check(CLI::Range(0, 2))
       ->capture_default_str();

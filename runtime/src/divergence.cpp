@@ -80,18 +80,25 @@ std::string divergence_message(const Model& model, const Divergence& d, double t
 }
 
 std::string loose_divergence_message(const Model& model, const Divergence& d, double t, Method method, double step,
-                                     double macro_step, int lag) {
+                                     double macro_step, int lag, double overlap) {
   const StableStep s = estimate_stable_step(model);
   if (method == Method::rk4 && step > s.step) return divergence_message(model, d, t, method, step);
-  char buf[512];
+  char advice[160];
+  if (lag > 0)
+    std::snprintf(advice, sizeof advice, "{max_lag=0} (then each submodel integrates its neighbours' bodies near the cut)");
+  else if (overlap < macro_step)
+    std::snprintf(advice, sizeof advice, "{overlap=%.3g} (each submodel integrates its neighbours' bodies near the cut)",
+                  macro_step);
+  else
+    std::snprintf(advice, sizeof advice, "{overlap=%.3g}", 2.0 * overlap);
+  char buf[640];
   std::snprintf(buf, sizeof buf,
-                "run diverged at t = %.6g s: body '%s': %s. Loosely coupled with a macro step of %.3g s and neighbour "
-                "values up to %d macro steps old: explicit coupling of stiff joints needs a macro step well inside their "
-                "period (estimated stability limit %s); try {macro_step=%.3g} or a smaller {max_lag}",
-                t, model.bodies.at(static_cast<std::size_t>(d.body)).name.c_str(), d.what.c_str(), macro_step, lag + 1,
-                s.describe(model).c_str(), 0.5 * macro_step);
+                "run diverged at t = %.6g s: body '%s': %s. Loosely coupled with a macro step of %.3g s, an overlap of "
+                "%.3g s and neighbour values up to %d macro steps old: extrapolated neighbours of stiff joints (estimated "
+                "stability limit %s) make the coupling unstable unless the overlap covers a macro step; try %s",
+                t, model.bodies.at(static_cast<std::size_t>(d.body)).name.c_str(), d.what.c_str(), macro_step, overlap,
+                lag + 1, s.describe(model).c_str(), advice);
   return buf;
 }
-
 
 }  // namespace mbsflow

@@ -4,11 +4,13 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <memory>
 
 #include "loose_part.hpp"
 #include "loose_rounds.hpp"
 #include "mbsflow/error.hpp"
+#include "mbsflow/graph/stable_step.hpp"
 #include "sink_runner.hpp"
 
 namespace mbsflow {
@@ -18,7 +20,8 @@ using loose::LoosePart;
 using Clock = std::chrono::steady_clock;
 
 // Takes the adaptive macro steps one at a time: each is taken again from its start with a
-// shorter H while its coupling error is above the tolerance.
+// shorter H while its coupling error is above the tolerance, down to
+// smallest_macro_fraction of lo.macro_step (then it is taken and counted in over_tolerance).
 template <class AtEnd>
 void adaptive_macro_steps(const RunOptions& o, const LooseOptions& lo, std::vector<std::unique_ptr<LoosePart>>& parts,
                           loose::LooseRounds& rounds, loose::MacroGrid& ends, LooseStats& st, AtEnd at_end) {
@@ -35,24 +38,20 @@ void adaptive_macro_steps(const RunOptions& o, const LooseOptions& lo, std::vect
     const loose::CouplingError e = rounds.peek(m + 1);
     // Step-size factor from the error model e ~ H^(order).
     const double factor = std::clamp(0.9 * std::pow(lo.coupling_tol / std::max(e.position, 1e-300), 1.0 / order), 0.2, 2.0);
-    if (e.position > lo.coupling_tol) {  // too far off: back to t with a shorter macro step
+    const double smallest = lo.macro_step * smallest_macro_fraction;
+    if (e.position > lo.coupling_tol && t1 - t > smallest * (1.0 + 1e-9)) {  // too far off: back to t, shorter
       for (auto& p : parts) p->restore(m + 1);
       rounds.discard(m + 1);
-      H = (t1 - t) * factor;
+      H = std::max(smallest, (t1 - t) * factor);
       ++st.rejected;
-      if (H < 1e-6 * lo.macro_step) {
-        char buf[160];
-        std::snprintf(buf, sizeof buf,
-                      "coupling error %.3g m above {coupling_tol} %.3g m even with a macro step of %.3g s at t = %.6g s",
-                      e.position, lo.coupling_tol, t1 - t, t);
-        throw RunError(buf);
-      }
       continue;
     }
+    if (e.position > lo.coupling_tol) ++st.over_tolerance;  // at the smallest macro step: taken, counted
     ++m;
     at_end(m, on_output);
     ends.forget_before(m - 8);
-    H = on_output && factor >= 1.0 ? std::max(H, (t1 - t) * factor) : (t1 - t) * factor;
+    // No longer than lo.macro_step, for which the overlap was chosen.
+    H = std::min(lo.macro_step, on_output && factor >= 1.0 ? std::max(H, (t1 - t) * factor) : (t1 - t) * factor);
     t = t1;
   }
 }
@@ -64,9 +63,31 @@ void check_loose_options(const LooseOptions& lo, std::size_t submodels) {
   if (lo.extrapolation < 0 || lo.extrapolation > 2) throw InputError("{extrapolation}: must be 0, 1 or 2");
   if (lo.max_lag < 0) throw InputError("{max_lag}: must be >= 0");
   if (lo.max_lag > 0 && lo.coupling_tol > 0.0) throw InputError("{max_lag}: needs a fixed macro step (not with {coupling_tol})");
+  if (lo.max_lag > 0 && lo.overlap > 0.0) throw InputError("{max_lag}: not with an overlap (set {overlap} to 0)");
+  if (!std::isfinite(lo.overlap)) throw InputError("{overlap}: must be a time, 0 (none) or negative (automatic)");
   if (submodels > 0 && !lo.methods.empty() && lo.methods.size() != submodels)
     throw InputError("{methods}: one method per submodel: " + std::to_string(submodels) + " submodels, " +
                      std::to_string(lo.methods.size()) + " methods");
+}
+
+double overlap_reach(const LooseOptions& lo) {
+  if (lo.max_lag > 0) return 0.0;
+  return lo.overlap < 0.0 ? overlap_factor * lo.macro_step : lo.overlap;
+}
+
+Decomposition loose_decomposition(const Model& model, const Decomposition& d, const LooseOptions& lo) {
+  return with_overlap(model, d, overlap_reach(lo));
+}
+
+double cut_joint_stable_step(const Model& model, const Decomposition& d) {
+  const std::vector<double> rate = joint_rates(model);
+  double fastest = 0.0;
+  for (std::size_t j = 0; j < model.joints.size(); ++j) {
+    const Joint& jt = model.joints[j];
+    if (jt.body1 != ground && d.part_of_body[static_cast<std::size_t>(jt.body1)] != d.part_of_body[static_cast<std::size_t>(jt.body2)])
+      fastest = std::max(fastest, rate[j]);
+  }
+  return fastest > 0.0 ? rk4_stability_radius / fastest : std::numeric_limits<double>::infinity();
 }
 
 void summarise_records(LooseStats& st) {
@@ -88,10 +109,11 @@ void summarise_records(LooseStats& st) {
   }
 }
 
-RunSummary run_loose(const Model& model, const Decomposition& d, const RunOptions& o, const LooseOptions& lo,
+RunSummary run_loose(const Model& model, const Decomposition& cut, const RunOptions& o, const LooseOptions& lo,
                      ResultSink* sink, LooseStats* stats) {
   check_options(o);
-  check_loose_options(lo, d.submodels.size());
+  check_loose_options(lo, cut.submodels.size());
+  const Decomposition d = loose_decomposition(model, cut, lo);
   std::vector<std::unique_ptr<LoosePart>> parts;
   for (std::size_t q = 0; q < d.submodels.size(); ++q)
     parts.push_back(loose::make_part(model, d.submodels[q], o, lo, q));

@@ -31,7 +31,7 @@ void LoosePart::ghosted_rhs(double t, const Eigen::VectorXd& y, Eigen::VectorXd&
   extrapolate_ghosts(t, work_);
   part.system.rhs(t, work_, dydt);
   const StateLayout& l = part.system.layout();
-  const Eigen::Index own = part.own, ghosts = l.bodies - own;
+  const Eigen::Index own = part.sub->integrated(), ghosts = l.bodies - own;
   dydt.segment(l.position(own), 3 * ghosts).setZero();
   dydt.segment(l.orientation(own), 4 * ghosts).setZero();
   dydt.segment(l.velocity(own), 3 * ghosts).setZero();
@@ -41,7 +41,14 @@ void LoosePart::ghosted_rhs(double t, const Eigen::VectorXd& y, Eigen::VectorXd&
 LoosePart::LoosePart(const Model& model, const Submodel& sub, const RunOptions& o, Method method, int extrapolation,
                      int retain)
     : part(model, sub, extrapolation + 1), o_(o), order_(extrapolation), retain_(static_cast<std::size_t>(retain)),
-      history_(sub.exchanges.size()), predicted_(sub.exchanges.size()) {
+      history_(sub.exchanges.size()), predicted_(sub.exchanges.size()), ghost_at_(sub.exchanges.size()),
+      borrowed_at_(sub.exchanges.size()), ghost_slots_(sub.exchanges.size()) {
+  for (std::size_t e = 0; e < sub.exchanges.size(); ++e) {
+    const std::vector<int>& to = sub.exchanges[e].to;
+    for (std::size_t i = 0; i < to.size(); ++i)
+      (to[i] < sub.integrated() ? borrowed_at_ : ghost_at_)[e].push_back(static_cast<int>(i));
+    for (int i : ghost_at_[e]) ghost_slots_[e].push_back(to[static_cast<std::size_t>(i)]);
+  }
   system_.size = part.system.dimension();
   system_.rhs = [this](double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) { ghosted_rhs(t, y, dydt); };
   system_.after_step = [this](double t, Eigen::VectorXd& y) { part.system.after_step(t, y); };
@@ -72,25 +79,37 @@ void LoosePart::start(double t0, double H) {
   publish(0, t0);
 }
 
-void LoosePart::extrapolate(std::size_t e, double t, std::vector<double>& out) const {
+void LoosePart::extrapolate(std::size_t e, double t, const std::vector<int>& positions, std::vector<double>& out) const {
   const std::deque<Sample>& h = history_[e];
   double w[3];
   lagrange_weights(h, t, w);
-  const std::size_t n = h.front().bodies.size();
-  out.assign(n, 0.0);
-  for (std::size_t j = 0; j < h.size(); ++j) {
-    const double* s = h[j].bodies.data();
-    for (std::size_t i = 0; i < n; ++i) out[i] += w[j] * s[i];
-  }
+  out.assign(positions.size() * numbers, 0.0);
+  for (std::size_t j = 0; j < h.size(); ++j)
+    for (std::size_t i = 0; i < positions.size(); ++i) {
+      const double* s = h[j].bodies.data() + static_cast<std::size_t>(positions[i]) * numbers;
+      double* o = out.data() + i * numbers;
+      for (int c = 0; c < numbers; ++c) o[c] += w[j] * s[c];
+    }
 }
 
 void LoosePart::extrapolate_ghosts(double t, Eigen::VectorXd& y) {
   const StateLayout& l = part.system.layout();
   for (std::size_t e = 0; e < history_.size(); ++e) {
+    extrapolate(e, t, ghost_at_[e], ghost_buffer_);
+    partitioned::unpack_bodies(l, y, ghost_slots_[e], ghost_buffer_.data());
+    for (int g : ghost_slots_[e]) y.segment<4>(l.orientation(g)).normalize();
+  }
+}
+
+void LoosePart::reset_borrowed(long index) {
+  const StateLayout& l = part.system.layout();
+  for (std::size_t e = 0; e < history_.size(); ++e) {
+    const Sample& newest = history_[e].front();
+    if (newest.index != index) continue;
     const std::vector<int>& to = part.sub->exchanges[e].to;
-    extrapolate(e, t, ghost_buffer_);
-    partitioned::unpack_bodies(l, y, to, ghost_buffer_.data());
-    for (int g : to) y.segment<4>(l.orientation(g)).normalize();
+    for (int i : borrowed_at_[e])
+      partitioned::unpack_bodies(l, part.x[0], {to[static_cast<std::size_t>(i)]},
+                                 newest.bodies.data() + static_cast<std::size_t>(i) * numbers);
   }
 }
 
@@ -106,12 +125,16 @@ void LoosePart::integrate(double t0, double t1) {
 }
 
 namespace {
-CouplingError distance(const std::vector<double>& guess, const double* packed) {
+// The largest distances between the guesses (packed, one per near body) and the sample's
+// near bodies.
+CouplingError distance(const std::vector<double>& guess, const std::vector<int>& near, const double* packed) {
   CouplingError err;
-  for (std::size_t b = 0; b < guess.size(); b += numbers) {
-    const Eigen::Map<const Eigen::Vector3d> p(packed + b), v(packed + b + 7);
-    err.position = std::max(err.position, (Eigen::Map<const Eigen::Vector3d>(guess.data() + b) - p).norm());
-    err.velocity = std::max(err.velocity, (Eigen::Map<const Eigen::Vector3d>(guess.data() + b + 7) - v).norm());
+  for (std::size_t i = 0; i < near.size(); ++i) {
+    const double* g = guess.data() + i * numbers;
+    const double* s = packed + static_cast<std::size_t>(near[i]) * numbers;
+    const Eigen::Map<const Eigen::Vector3d> p(s), v(s + 7);
+    err.position = std::max(err.position, (Eigen::Map<const Eigen::Vector3d>(g) - p).norm());
+    err.velocity = std::max(err.velocity, (Eigen::Map<const Eigen::Vector3d>(g + 7) - v).norm());
   }
   return err;
 }
@@ -119,14 +142,21 @@ CouplingError distance(const std::vector<double>& guess, const double* packed) {
 
 std::optional<CouplingError> LoosePart::prediction_error(std::size_t e, long index, const double* packed) const {
   for (const Sample& p : predicted_[e])
-    if (p.index == index) return distance(p.bodies, packed);
+    if (p.index == index) return distance(p.bodies, part.sub->exchanges[e].near, packed);
   return std::nullopt;
 }
 
 void LoosePart::predict(long index, double t) {
+  const StateLayout& l = part.system.layout();
+  const int integrated = part.sub->integrated();
   for (std::size_t e = 0; e < predicted_.size(); ++e) {
+    const Submodel::Exchange& x = part.sub->exchanges[e];
     Sample s{index, t, {}};
-    extrapolate(e, t, s.bodies);
+    extrapolate(e, t, x.near, s.bodies);
+    for (std::size_t i = 0; i < x.near.size(); ++i) {
+      const int slot = x.to[static_cast<std::size_t>(x.near[i])];
+      if (slot < integrated) partitioned::pack_bodies(l, part.x[0], {slot}, s.bodies.data() + i * numbers);
+    }
     predicted_[e].push_back(std::move(s));
   }
 }

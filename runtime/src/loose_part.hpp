@@ -38,8 +38,12 @@ class LoosePart {
   // stepper (any registered method) takes its own steps inside the macro step.
   void integrate(double t0, double t1);
 
-  // Before the macro step to end `index` (time t): what the ghosts are extrapolated to
-  // there, kept until that end's samples are taken.
+  // Before the macro step from end `index`: the borrowed bodies (an overlap) take their
+  // owners' values at that end, if they are in (not with a lag).
+  void reset_borrowed(long index);
+  // After the macro step to end `index` (time t): what this submodel has for the bodies of
+  // each exchange that are joined to own bodies (extrapolated ghosts, integrated borrowed
+  // bodies), kept until that end's samples are taken.
   void predict(long index, double t);
   // Neighbour exchange e's sample: its bodies e.from at macro-step end `index` (time t),
   // packed (partitioned::pack_bodies, in the order of e.to). take() makes it the newest
@@ -73,15 +77,18 @@ class LoosePart {
     double t;
     Eigen::VectorXd x;
   };
-  // Exchange e's ghosts extrapolated to t, packed.
-  void extrapolate(std::size_t e, double t, std::vector<double>& out) const;
+  // Exchange e's bodies at `positions` (in its order) extrapolated to t, packed.
+  void extrapolate(std::size_t e, double t, const std::vector<int>& positions, std::vector<double>& out) const;
   void extrapolate_ghosts(double t, Eigen::VectorXd& y);
 
   const RunOptions& o_;
   int order_;
   std::size_t retain_;
   std::vector<std::deque<Sample>> history_;    // per exchange, newest first
-  std::vector<std::deque<Sample>> predicted_;  // per exchange, oldest first
+  std::vector<std::deque<Sample>> predicted_;  // per exchange, oldest first, its near bodies
+  // Per exchange: positions of its ghosts (extrapolated) and of its borrowed bodies.
+  std::vector<std::vector<int>> ghost_at_, borrowed_at_;
+  std::vector<std::vector<int>> ghost_slots_;  // per exchange, its ghosts' local indices
   mutable std::mutex board_mutex_;
   std::deque<Published> board_;  // oldest first
   StepperSystem system_;

@@ -27,7 +27,7 @@ int arena_threads(const LooseOptions& lo, const std::vector<std::unique_ptr<Loos
 LooseRounds::LooseRounds(const Model& model, const Decomposition& d, const RunOptions& o, const LooseOptions& lo,
                          std::vector<std::unique_ptr<LoosePart>>& parts, const MacroGrid& grid, int chunk,
                          RemoteSamples* remote)
-    : model_(model), o_(o), lag_(lo.max_lag), exact_(lo.exact_lag), parts_(parts), grid_(grid), remote_(remote),
+    : model_(model), o_(o), lag_(lo.max_lag), reach_(overlap_reach(lo)), exact_(lo.exact_lag), parts_(parts), grid_(grid), remote_(remote),
       logs_(parts.size()), scratch_(parts.size()), arena_(arena_threads(lo, parts, remote != nullptr)) {
   if (remote_) {
     inputs_.local.resize(parts.size());
@@ -101,10 +101,11 @@ void LooseRounds::step(std::size_t p, long m) {
     for (std::size_t e = 0; e < lp.part.sub->exchanges.size(); ++e) newest = std::min(newest, lp.taken(e));
     const double t0 = grid_.end(m), t1 = grid_.end(m + 1);
     logs_[p].push_back({m + 1, t0, t1, 0.0, 0.0, static_cast<int>(m - std::max(newest, 0L))});
-    lp.predict(m + 1, t1);
+    lp.reset_borrowed(m);
     lp.integrate(t0, t1);
+    lp.predict(m + 1, t1);
     if (auto dv = partitioned::check(lp.part))
-      return fail(loose_divergence_message(model_, *dv, t1, o_.method, o_.step, t1 - t0, lag_));
+      return fail(loose_divergence_message(model_, *dv, t1, o_.method, o_.step, t1 - t0, lag_, reach_));
     lp.publish(m + 1, t1);
     if (remote_) remote_->send(static_cast<int>(p), m + 1);
   } catch (const std::exception& e) {

@@ -75,6 +75,7 @@ class LooseRounds {
   const Model& model_;
   const RunOptions& o_;
   int lag_;
+  double reach_;  // the overlap's
   bool exact_;
   std::vector<std::unique_ptr<LoosePart>>& parts_;
   const MacroGrid& grid_;

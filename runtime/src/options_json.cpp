@@ -47,7 +47,7 @@ json loose_to_json(const LooseOptions& l) {
   json methods = json::array();
   for (Method m : l.methods) methods.push_back(method_name(m));
   return {{"macro_step", l.macro_step}, {"extrapolation", l.extrapolation}, {"max_lag", l.max_lag},
-          {"exact_lag", l.exact_lag},   {"methods", methods}};
+          {"exact_lag", l.exact_lag},   {"methods", methods},         {"overlap", l.overlap}};
 }
 
 LooseOptions loose_from_json(const json& j) {
@@ -57,6 +57,7 @@ LooseOptions loose_from_json(const json& j) {
     l.extrapolation = j.at("extrapolation").get<int>();
     l.max_lag = j.at("max_lag").get<int>();
     l.exact_lag = j.at("exact_lag").get<bool>();
+    l.overlap = j.at("overlap").get<double>();
     for (const std::string& name : j.at("methods").get<std::vector<std::string>>()) l.methods.push_back(method_of(name));
   } catch (const json::exception& e) {
     throw InputError(std::string("loose-coupling options from the coordinator: ") + e.what());

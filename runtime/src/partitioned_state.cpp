@@ -21,7 +21,7 @@ void copy_body(const StateLayout& from_layout, const Eigen::VectorXd& from, Eige
 }  // namespace
 
 Part::Part(const Model& model, const Submodel& s, int stages)
-    : sub(&s), system(submodel_model(model, s), static_cast<int>(s.own.size())), own(static_cast<Eigen::Index>(s.own.size())) {
+    : sub(&s), system(submodel_model(model, s), s.integrated()), own(static_cast<Eigen::Index>(s.own.size())) {
   x.assign(static_cast<std::size_t>(stages), system.initial_state());
   k.assign(static_cast<std::size_t>(stages), Eigen::VectorXd::Zero(system.dimension()));
   global_element = own_elements(s, StateLayout{static_cast<Eigen::Index>(model.bodies.size())});

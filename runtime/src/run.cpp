@@ -33,8 +33,10 @@ RunSummary run(const Model& model, const RunPlan& plan, ResultSink* sink, RunSta
   if (plan.cluster)
     return run_cluster(model, plan.model_json, *plan.partition, *plan.cluster, plan.options, sink, &st.cluster,
                        {loose, plan.exchange_delay_s});
-  if (loose) return run_loose(model, *plan.partition, plan.options, *loose, sink, &st.loose);
-  if (plan.partition) return run_partitioned(model, *plan.partition, plan.options, plan.parallel, sink, &st.parallel);
+  // Loose coupling of one submodel is a plain run (no macro steps to restart the method at).
+  const bool one = plan.partition && plan.partition->submodels.size() == 1;
+  if (loose && !one) return run_loose(model, *plan.partition, plan.options, *loose, sink, &st.loose);
+  if (plan.partition && !loose) return run_partitioned(model, *plan.partition, plan.options, plan.parallel, sink, &st.parallel);
   MultibodySystem system(model);
   RunOptions whole = plan.options;
   if (whole.threads == 0) whole.threads = plan.parallel.threads;

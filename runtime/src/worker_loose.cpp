@@ -36,6 +36,7 @@ Outcome run_loose_part(Session& s, WorkerIo& io, zmq::context_t& ctx, zmq::socke
                        int threads, const std::atomic<bool>* stop) {
   LooseOptions lo = *s.loose;
   lo.threads = threads;
+  s.d = loose_decomposition(s.model, s.d, lo);  // the same overlap in every worker
   const std::size_t k = s.d.submodels.size();
   std::vector<std::unique_ptr<LoosePart>> lp(k);
   std::vector<partitioned::Part*> parts(k, nullptr);

@@ -36,17 +36,20 @@ TEST_CASE("run --coupling loose writes results close to the tight run and report
   CHECK(gap < 1e-5);
   CHECK(gap > 0.0);  // loosely coupled: close, not the same
 
-  // Defaults: a tenth of the stable step; adaptive with a tolerance.
-  const Result defaults = run("run chain.json --t-end 0.01 --coupling loose --threads 2", dir);
+  // Defaults: 16 stable steps, an overlap of one macro step, error control.
+  const Result defaults = run("run chain.json --t-end 0.05 --coupling loose --threads 2 --partitions 2", dir);
+  INFO(defaults.err);
   CHECK(defaults.code == 0);
-  CHECK(defaults.err.find("loosely coupled: macro step ") != std::string::npos);
-  const Result adaptive = run("run chain.json --t-end 0.01 --coupling loose --coupling-tol 1e-9 --threads 2", dir);
+  CHECK(defaults.err.find("2 submodels on 2 threads, loosely coupled: macro step 0.01099 s, extrapolation order 1, overlap 0.01099 s, error control") !=
+        std::string::npos);
+  const Result adaptive = run("run chain.json --t-end 0.05 --coupling loose --coupling-tol 1e-9 --overlap 0.002 --threads 2 --partitions 2", dir);
   INFO(adaptive.err);
   CHECK(adaptive.code == 0);
   CHECK(adaptive.err.find(" taken again") != std::string::npos);
   const Result h_only = run("run chain.json --macro-step 1e-3", dir);
   CHECK(h_only.code == 2);
-  CHECK(h_only.err.find("--macro-step, --coupling-tol, --max-lag, --exact-lag, --submodel-methods: only with --coupling loose") != std::string::npos);
+  CHECK(h_only.err.find("--macro-step, --coupling-tol, --max-lag, --exact-lag, --submodel-methods, --overlap: only with "
+                        "--coupling loose") != std::string::npos);
   // Across processes: the same numbers as in one process; a slow network changes nothing.
   const std::string common = "run chain.json --t-end 0.05 --step 1e-4 --every 100 --partitions 3 -q --coupling loose "
                              "--macro-step 2e-4 --extrapolation 2 -o ";

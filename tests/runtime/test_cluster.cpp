@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <catch2/catch.hpp>
+#include <tuple>
 #include <filesystem>
 #include <future>
 #include <thread>
@@ -203,16 +204,19 @@ TEST_CASE("loosely coupled cluster runs equal the one-process loose run bit for 
   ChainParams chain;
   chain.bodies = 30;
   Model m = short_run(make_chain(chain), 42);
-  for (auto [method, lag] : {std::pair{Method::rk4, 0}, std::pair{Method::dopri5, 0}, std::pair{Method::rk4, 2}}) {
+  // The last case: an overlap across the whole chain, from neighbours' neighbours too.
+  for (auto [method, lag, steps] : {std::tuple{Method::rk4, 0, 3}, std::tuple{Method::dopri5, 0, 3},
+                                    std::tuple{Method::rk4, 2, 3}, std::tuple{Method::rk4, 0, 14}}) {
     m.simulation.method = method;
     RunOptions o = options_from_model(m);
     o.rtol = o.atol = 1e-9;
     LooseOptions lo;
-    lo.macro_step = 3 * o.step;
+    lo.macro_step = steps * o.step;
     lo.extrapolation = 2;
     lo.max_lag = lag;
     lo.exact_lag = true;
     const Decomposition d = decompose(m, 3);
+    if (steps > 3) CHECK(loose_decomposition(m, d, lo).submodels[0].borrowed.size() > d.submodels[1].own.size());
     test::MemorySink reference;
     run_loose(m, d, o, lo, &reference);
     REQUIRE(reference.states.size() == 7);  // the start and every 7 steps
@@ -222,7 +226,7 @@ TEST_CASE("loosely coupled cluster runs equal the one-process loose run bit for 
     c.workers[0].weight = 2;
     test::MemorySink sink;
     run_cluster(m, model_to_json(m), d, c, o, &sink, nullptr, {&lo, method == Method::rk4 ? 0.002 : 0.0});
-    INFO(method_name(method) << ", lag " << lag);
+    INFO(method_name(method) << ", lag " << lag << ", macro step of " << steps << " steps");
     CHECK(sink.times == reference.times);
     CHECK(sink.states == reference.states);
   }

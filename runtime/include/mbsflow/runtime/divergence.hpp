@@ -28,8 +28,10 @@ std::string describe_unknown(const Model& model, Eigen::Index i);
 // The message of a diverged run: time, body, and a step that would work.
 std::string divergence_message(const Model& model, const Divergence& d, double t, Method method, double step);
 // The same for a loosely coupled run (loose_coupling.hpp), where the coupling is the
-// likely cause unless the RK4 step itself is beyond the stability limit.
+// likely cause unless the RK4 step itself is beyond the stability limit. `overlap`: the
+// run's overlap reach (s). The advice: with a lag, none (a lag rules out the overlap);
+// with an overlap shorter than the macro step, one macro step of overlap; else twice it.
 std::string loose_divergence_message(const Model& model, const Divergence& d, double t, Method method, double step,
-                                     double macro_step, int lag);
+                                     double macro_step, int lag, double overlap);
 
 }  // namespace mbsflow

@@ -17,8 +17,9 @@ struct LooseOptions {
   double macro_step = 0.0;  // H, a whole number of RunOptions::step for RK4
   int extrapolation = 1;    // polynomial order 0, 1 or 2 over the last 1, 2 or 3 samples
   int threads = 0;          // 0: all cores
-  // > 0: adapt the macro step so that the coupling error (m, ghost positions) stays below
-  // this; a macro step above it is taken again from its start with a shorter one.
+  // > 0: adapt the macro step (at most macro_step) so that the coupling error (m, positions
+  // of the neighbours' bodies at the cut) stays below this; a macro step above it is taken
+  // again from its start with a shorter one. One process only.
   double coupling_tol = 0.0;
   // L > 0: a submodel may run up to L macro steps ahead of its slowest neighbour, taking
   // the newest neighbour values it has (asynchronous: the numbers depend on timing).
@@ -30,6 +31,10 @@ struct LooseOptions {
   // Per submodel, its method (RK4 with substeps of RunOptions::step, or DOPRI5 with its
   // own steps); empty: RunOptions::method for all.
   std::vector<Method> methods;
+  // Overlap (with_overlap's reach, s): each submodel also integrates the neighbours' bodies
+  // that a disturbance at the cut reaches within this time, and extrapolates only beyond
+  // them. < 0: overlap_factor macro steps; 0: none (extrapolated values at the cut).
+  double overlap = -1.0;
 };
 
 struct LooseStats {
@@ -43,6 +48,9 @@ struct LooseStats {
   double max_position_error = 0.0;
   int largest_lag = 0;
   long rejected = 0;  // macro steps taken again (adaptive)
+  // Adaptive: macro steps taken with a coupling error above the tolerance at the smallest
+  // macro step (smallest_macro_fraction of LooseOptions::macro_step).
+  long over_tolerance = 0;
   double smallest_macro_step = 0.0, largest_macro_step = 0.0;
 };
 
@@ -57,6 +65,23 @@ void summarise_records(LooseStats& stats);
 // negative lag, a lag with the adaptive macro step, or methods not one per submodel
 // (submodels = 0: the count is not known yet).
 void check_loose_options(const LooseOptions& loose, std::size_t submodels = 0);
+
+// Defaults of a loose run: a macro step of this many RunOptions::step, and a coupling
+// tolerance (m) for one-process runs without a lag.
+inline constexpr int default_macro_steps = 16;
+inline constexpr double default_coupling_tol = 1e-6;
+// The adaptive macro step goes no lower than this fraction of LooseOptions::macro_step.
+inline constexpr double smallest_macro_fraction = 1.0 / 1024.0;
+// The automatic overlap, in macro steps of signal time.
+inline constexpr double overlap_factor = 1.0;
+// The overlap's reach (s) of these options: none with a lag (the borrowed bodies take their
+// owners' values of the macro step's start, which a lagging run does not have).
+double overlap_reach(const LooseOptions& loose);
+// The decomposition a loose run integrates: d with the options' overlap.
+Decomposition loose_decomposition(const Model& model, const Decomposition& d, const LooseOptions& loose);
+// The RK4 stable step of the stiffest joint that d cuts (each joint alone, joint_rates);
+// infinity if it cuts none.
+double cut_joint_stable_step(const Model& model, const Decomposition& d);
 
 RunSummary run_loose(const Model& model, const Decomposition& d, const RunOptions& options, const LooseOptions& loose,
                      ResultSink* sink, LooseStats* stats = nullptr);
