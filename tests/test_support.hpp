@@ -15,10 +15,7 @@ namespace mbsflow::test {
 
 // Largest distance between the centres of mass of the same body in two states.
 inline double position_gap(const MultibodySystem& sys, const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
-  const StateLayout& l = sys.layout();
-  double gap = 0.0;
-  for (Eigen::Index i = 0; i < l.bodies; ++i) gap = std::max(gap, (a.segment<3>(l.position(i)) - b.segment<3>(l.position(i))).norm());
-  return gap;
+  return largest_position_gap(sys.layout(), a, b);
 }
 
 inline Body make_body(const char* name, double mass, Vec6 inertia, Vec3 position = {}) {

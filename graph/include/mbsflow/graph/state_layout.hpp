@@ -2,6 +2,7 @@
 // Where each body's numbers sit in the state vector. Structure of arrays by field:
 // all positions (3 per body), then all quaternions (4), velocities (3), angular velocities (3).
 #include <Eigen/Core>
+#include <algorithm>
 
 namespace mbsflow {
 
@@ -13,5 +14,13 @@ struct StateLayout {
   Eigen::Index velocity(Eigen::Index i) const { return 7 * bodies + 3 * i; }
   Eigen::Index angular_velocity(Eigen::Index i) const { return 10 * bodies + 3 * i; }
 };
+
+// Largest distance between the centres of mass of the same body in two states.
+inline double largest_position_gap(const StateLayout& l, const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+  double gap = 0.0;
+  for (Eigen::Index i = 0; i < l.bodies; ++i)
+    gap = std::max(gap, (a.segment<3>(l.position(i)) - b.segment<3>(l.position(i))).norm());
+  return gap;
+}
 
 }  // namespace mbsflow
