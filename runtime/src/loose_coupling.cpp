@@ -31,7 +31,6 @@ void adaptive_macro_steps(const RunOptions& o, const LooseOptions& lo, std::vect
   while (t < o.t_end) {
     ends.add(m, H);
     const double t1 = ends.end(m + 1);
-    const bool on_output = ends.output(m + 1);
     for (auto& p : parts) p->save();
     const std::string failure = rounds.run(m, 1);
     if (!failure.empty()) throw RunError(failure);
@@ -48,10 +47,9 @@ void adaptive_macro_steps(const RunOptions& o, const LooseOptions& lo, std::vect
     }
     if (e.position > lo.coupling_tol) ++st.over_tolerance;  // at the smallest macro step: taken, counted
     ++m;
-    at_end(m, on_output);
+    at_end(m);
     ends.forget_before(m - 8);
-    // No longer than lo.macro_step, for which the overlap was chosen.
-    H = std::min(lo.macro_step, on_output && factor >= 1.0 ? std::max(H, (t1 - t) * factor) : (t1 - t) * factor);
+    H = std::min(lo.macro_step, (t1 - t) * factor);  // no longer than the one the overlap was chosen for
     t = t1;
   }
 }
@@ -128,15 +126,17 @@ RunSummary run_loose(const Model& model, const Decomposition& cut, const RunOpti
   const bool adaptive = lo.coupling_tol > 0.0;
   loose::MacroGrid grid(o, adaptive ? 0.0 : lo.macro_step);
   loose::LooseRounds rounds(model, d, o, lo, parts, grid, grid.steps_per_run());
+  rounds.keep_snapshots = sink != nullptr;
   loose::CouplingLog log;
-  long done = 0;  // macro steps
-  // At macro-step end m: the snapshot, the stop request, the progress.
-  auto at_end = [&](long m, bool on_output) {
+  long done = 0, next_output = 1;  // macro steps; the snapshot to come
+  // At macro-step end m: the snapshots up to it (the submodels kept them from their dense
+  // output), the stop request, the progress.
+  auto at_end = [&](long m) {
     done = m;
     const double t = grid.end(m);
-    if (on_output && sink) {
-      for (auto& p : parts) partitioned::gather(p->part, global, y);
-      emit(whole, sink, t, y, out);
+    for (; sink && next_output <= grid.outputs() && loose::at_or_before(grid.output_time(next_output), t); ++next_output) {
+      for (auto& p : parts) p->take_snapshot(next_output, global, y);
+      emit(whole, sink, grid.output_time(next_output), y, out);
     }
     check_stop(o, t);
     if (o.progress) o.progress(t, m);
@@ -154,7 +154,7 @@ RunSummary run_loose(const Model& model, const Decomposition& cut, const RunOpti
           loose::for_each_run(grid, loose::ends_kept(lo), [&](long m, int n) {
             const std::string failure = rounds.run(m, n);
             if (!failure.empty()) throw RunError(failure);
-            at_end(m + n, grid.output(m + n));
+            at_end(m + n);
             return true;
           });
         }

@@ -113,15 +113,40 @@ void LoosePart::reset_borrowed(long index) {
   }
 }
 
-void LoosePart::integrate(double t0, double t1) {
+void LoosePart::integrate(double t0, double t1, const std::vector<std::pair<long, double>>& outputs) {
   const StepperStats before = stepper_->stats();
   stepper_->start(t0, part.x[0], t1);  // the ghosts moved on: what the method kept of f is stale
-  while (!stepper_->done()) stepper_->step();
+  std::size_t next = 0;
+  auto keep = [&](bool last) {  // the snapshots up to the stepper's time
+    while (next < outputs.size() && (last || at_or_before(outputs[next].second, stepper_->t()))) {
+      const auto [index, t] = outputs[next++];
+      Published s{index, t, {}};
+      if (at_or_before(stepper_->t(), t)) {  // a step ends on it
+        s.x = stepper_->y();
+      } else {
+        stepper_->dense(t, s.x);
+        part.system.after_step(t, s.x);  // as a step's end: quaternions normalised, drivers imposed
+      }
+      snapshots_.push_back(std::move(s));
+    }
+  };
+  while (!stepper_->done()) {
+    stepper_->step();
+    keep(false);
+  }
+  keep(true);
   part.x[0] = stepper_->y();
   const StepperStats& after = stepper_->stats();
   steps += after.accepted - before.accepted;
   rejected += after.rejected - before.rejected;
   evaluations += after.evaluations - before.evaluations;
+}
+
+void LoosePart::take_snapshot(long index, const StateLayout& global, Eigen::VectorXd& y) {
+  if (snapshots_.empty() || snapshots_.front().index != index)
+    throw RunError("internal: snapshot " + std::to_string(index) + " was not kept");
+  partitioned::gather(part, snapshots_.front().x, global, y);
+  snapshots_.pop_front();
 }
 
 namespace {
@@ -207,11 +232,13 @@ double LoosePart::pack_published(long index, const std::vector<int>& bodies, dou
 void LoosePart::save() {
   saved_ = part.x[0];
   saved_h_ = stepper_->next_step();
+  saved_snapshots_ = snapshots_.size();
 }
 
 void LoosePart::restore(long index) {
   part.x[0] = saved_;
   stepper_->set_next_step(saved_h_);
+  snapshots_.resize(saved_snapshots_);
   for (auto& p : predicted_)
     while (!p.empty() && p.back().index >= index) p.pop_back();
   std::lock_guard lock(board_mutex_);
@@ -219,7 +246,10 @@ void LoosePart::restore(long index) {
 }
 
 MacroGrid::MacroGrid(const RunOptions& o, double H) : o_(o), H_(H), grid_(step_grid(o.t_start, o.t_end, o.step)) {
-  ends_.push_back({o.t_start, true, 0});
+  // An output interval that is not a whole number of steps (adaptive methods) is rounded onto the grid.
+  every_ = std::max(1, output_steps(o));
+  outputs_ = (grid_.steps + every_ - 1) / every_;
+  ends_.push_back(o.t_start);
 }
 
 void MacroGrid::extend(long m) {
@@ -227,21 +257,9 @@ void MacroGrid::extend(long m) {
 }
 
 void MacroGrid::add(long m, double H) {
-  while (last() > m) {
-    if (ends_.back().output) --next_out_;
-    ends_.pop_back();
-  }
-  // Macro-step ends lie on the grid of o.step: an output interval that is not a whole
-  // number of steps (adaptive methods) is rounded onto it.
-  const long every = std::max(1, output_steps(o_));
-  const long out_step = std::min(next_out_ * every, grid_.steps);
-  const double t_out = grid_.time(out_step), t = end(m) + H;
-  if (t >= t_out - 1e-12 * std::max(1.0, std::abs(t_out))) {
-    ends_.push_back({t_out, true, out_step});
-    ++next_out_;
-  } else {
-    ends_.push_back({t, false, std::lround((t - o_.t_start) / o_.step)});
-  }
+  while (last() > m) ends_.pop_back();
+  const double t = end(m) + H;
+  ends_.push_back(t >= grid_.t_end - 1e-12 * std::max(1.0, std::abs(grid_.t_end)) ? grid_.t_end : t);
 }
 
 void MacroGrid::forget_before(long m) {
@@ -255,6 +273,20 @@ int MacroGrid::steps_per_run() const {
   if (!(H_ > 0.0)) return 1;
   const double per_output = output_dt(o_) / H_;
   return static_cast<int>(std::clamp(std::ceil(per_output - 1e-9) + 1.0, 1.0, 64.0));
+}
+
+std::vector<std::pair<long, double>> MacroGrid::outputs_in(double t0, double t1) const {
+  std::vector<std::pair<long, double>> out;
+  const double span = static_cast<double>(every_) * grid_.h;
+  long k = std::max(1L, static_cast<long>(std::floor((t0 - grid_.t_start) / span)) - 1);
+  while (k > 1 && !at_or_before(output_time(k - 1), t0)) --k;
+  for (; k <= outputs_; ++k) {
+    const double t = output_time(k);
+    if (at_or_before(t, t0)) continue;
+    if (!at_or_before(t, t1)) break;
+    out.emplace_back(k, t);
+  }
+  return out;
 }
 
 }  // namespace mbsflow::loose

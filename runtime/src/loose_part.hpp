@@ -5,10 +5,13 @@
 // last few of that neighbour's states at macro-step ends, which may be of different ages
 // for different neighbours (asynchronous runs). The own state at every macro-step end is
 // published for the neighbours in this process; remote ones get it as a message.
+#include <algorithm>
+#include <cmath>
 #include <deque>
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include "mbsflow/methods/step_grid.hpp"
@@ -35,8 +38,12 @@ class LoosePart {
   // they become the first samples (macro-step ends -k..0), and x[0] is published as end 0.
   void start(double t0, double H);
   // Integrates the own bodies from t0 to t1 with the ghosts extrapolated: the submodel's
-  // stepper (any registered method) takes its own steps inside the macro step.
-  void integrate(double t0, double t1);
+  // stepper (any registered method) takes its own steps inside the macro step. The
+  // snapshots numbered `outputs` (index, time in (t0, t1]) are kept from its dense output,
+  // projected like a step's end (its state where a step ends on one).
+  void integrate(double t0, double t1, const std::vector<std::pair<long, double>>& outputs = {});
+  // Own bodies of kept snapshot `index` into y (global layout); it is then forgotten.
+  void take_snapshot(long index, const StateLayout& global, Eigen::VectorXd& y);
 
   // Before the macro step from end `index`: the borrowed bodies (an overlap) take their
   // owners' values at that end, if they are in (not with a lag).
@@ -59,8 +66,10 @@ class LoosePart {
   // Bodies of the published end `index` packed into out, and its time.
   double pack_published(long index, const std::vector<int>& bodies, double* out) const;
 
-  void save();               // x[0] and the integrator's step, to take a macro step again
-  void restore(long index);  // back to the saved state; forgets the ends from `index` on
+  // x[0] and the integrator's step, to take a macro step again
+  void save();
+  // Back to the saved state; forgets the ends from `index` on and the snapshots since.
+  void restore(long index);
 
   long steps = 0, rejected = 0, evaluations = 0;
 
@@ -72,11 +81,13 @@ class LoosePart {
     double t;
     std::vector<double> bodies;  // packed, 13 numbers a ghost
   };
-  struct Published {
+  struct Published {  // also a snapshot: its number, time and local state
     long index;
     double t;
     Eigen::VectorXd x;
   };
+  std::deque<Published> snapshots_;
+  std::size_t saved_snapshots_ = 0;
   // Exchange e's bodies at `positions` (in its order) extrapolated to t, packed.
   void extrapolate(std::size_t e, double t, const std::vector<int>& positions, std::vector<double>& out) const;
   void extrapolate_ghosts(double t, Eigen::VectorXd& y);
@@ -109,52 +120,54 @@ inline void copy_local_ghosts(std::vector<std::unique_ptr<LoosePart>>& parts, in
   }
 }
 
-// The macro-step ends of a run: end(0) = t_start, whether a snapshot is taken at each, and
-// the tight grid's step there. With a fixed macro step they are made as the run goes and
-// forgotten behind it (a long run has millions); an adaptive run adds them itself.
+// The macro-step ends of a run, end(0) = t_start, and its snapshots, which do not depend
+// on them: number k = 1 .. outputs() at output_time(k), on the grid of the run's step
+// (RunOptions' output_every or output_interval, rounded onto it), the last at t_end. With
+// a fixed macro step the ends are made as the run goes and forgotten behind it (a long
+// run has millions); an adaptive run adds them itself.
 class MacroGrid {
  public:
   MacroGrid(const RunOptions& o, double H);  // H = 0: adaptive, the run add()s the ends
-  double end(long m) const { return at(m).t; }
-  bool output(long m) const { return at(m).output; }
-  long tight_step(long m) const { return at(m).tight_step; }
+  double end(long m) const { return ends_[static_cast<std::size_t>(m - base_)]; }
+  // The tight grid's step nearest to end m (progress reports).
+  long tight_step(long m) const { return std::lround((end(m) - grid_.t_start) / grid_.h); }
   long last() const { return base_ + static_cast<long>(ends_.size()) - 1; }  // the latest end known
-  bool complete() const { return end(last()) >= o_.t_end; }
+  bool complete() const { return end(last()) >= grid_.t_end; }
   // Fixed macro step: makes the ends up to m known (or up to t_end, if it comes first).
   void extend(long m);
-  // End m + 1, a macro step H after end m, or on the next output time (the tight run's
-  // step time, to the bit) when it reaches that; any later ends are forgotten (a macro
-  // step taken again).
+  // End m + 1, a macro step H after end m, or t_end where it reaches it; any later ends
+  // are forgotten (a macro step taken again).
   void add(long m, double H);
   void forget_before(long m);
-  // Macro steps per flow-graph run: up to the next snapshot, at most 64.
+  // Macro steps per flow-graph run: about one output interval's worth, at most 64.
   int steps_per_run() const;
+  long outputs() const { return outputs_; }
+  double output_time(long k) const { return grid_.time(std::min(k * every_, grid_.steps)); }
+  long output_step(long k) const { return std::min(k * every_, grid_.steps); }
+  // The snapshots whose times lie in (t0, t1] (within rounding): (number, time), in order.
+  std::vector<std::pair<long, double>> outputs_in(double t0, double t1) const;
 
  private:
-  struct End {
-    double t;
-    bool output;
-    long tight_step;
-  };
-  const End& at(long m) const { return ends_[static_cast<std::size_t>(m - base_)]; }
   const RunOptions& o_;
   double H_;
   StepGrid grid_;
-  long next_out_ = 1, base_ = 0;  // the output step to come after the last end
-  std::deque<End> ends_;
+  long every_ = 1, outputs_ = 0, base_ = 0;
+  std::deque<double> ends_;
 };
 
-// Walks the run's macro steps in flow-graph runs that end at snapshots or earlier:
-// run(m, n) takes macro steps m .. m + n - 1, and stops the walk when it returns false.
-// Ends more than `keep` behind are forgotten.
+// Within rounding of a macro-step end: what counts as on or before it.
+inline bool at_or_before(double t, double end) { return t <= end + 1e-12 * std::max(1.0, std::abs(end)); }
+
+// Walks the run's macro steps in flow-graph runs of steps_per_run() macro steps (fewer at
+// the end): run(m, n) takes macro steps m .. m + n - 1, and stops the walk when it returns
+// false. Ends more than `keep` behind are forgotten.
 template <class Run>
 void for_each_run(MacroGrid& g, long keep, Run run) {
   const int most = g.steps_per_run();
   for (long m = 0;;) {
     g.extend(m + most);
     if (m >= g.last()) return;
-    int n = 1;
-    while (m + n < g.last() && !g.output(m + n) && n < most) ++n;
+    const int n = static_cast<int>(std::min<long>(most, g.last() - m));
     if (!run(m, n)) return;
     m += n;
     g.forget_before(m - keep);

@@ -102,7 +102,7 @@ void LooseRounds::step(std::size_t p, long m) {
     const double t0 = grid_.end(m), t1 = grid_.end(m + 1);
     logs_[p].push_back({m + 1, t0, t1, 0.0, 0.0, static_cast<int>(m - std::max(newest, 0L))});
     lp.reset_borrowed(m);
-    lp.integrate(t0, t1);
+    lp.integrate(t0, t1, keep_snapshots ? grid_.outputs_in(t0, t1) : std::vector<std::pair<long, double>>{});
     lp.predict(m + 1, t1);
     if (auto dv = partitioned::check(lp.part))
       return fail(loose_divergence_message(model_, *dv, t1, o_.method, o_.step, t1 - t0, lag_, reach_));

@@ -56,6 +56,9 @@ class LooseRounds {
 
   // Macro steps first .. first + n - 1 (n <= chunk). A failure message, empty if none.
   std::string run(long first, int n);
+  // Whether the submodels keep the snapshots that fall in their macro steps (none are
+  // wanted when nothing takes the results).
+  bool keep_snapshots = true;
   // Takes every neighbour value up to end `index` (waiting for remote ones).
   void catch_up(long index);
   // The largest coupling error of the neighbour values at end `index` against what was

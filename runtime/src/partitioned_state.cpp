@@ -222,9 +222,11 @@ void dopri5_dense(const Part& part, double theta, Eigen::VectorXd& out) {
   });
 }
 
-void gather(const Part& p, const StateLayout& global, Eigen::VectorXd& y) {
-  for (Eigen::Index i = 0; i < p.own; ++i) copy_body(p.system.layout(), p.x[0], i, global, y, p.sub->own[static_cast<std::size_t>(i)]);
+void gather(const Part& p, const Eigen::VectorXd& local, const StateLayout& global, Eigen::VectorXd& y) {
+  for (Eigen::Index i = 0; i < p.own; ++i) copy_body(p.system.layout(), local, i, global, y, p.sub->own[static_cast<std::size_t>(i)]);
 }
+
+void gather(const Part& p, const StateLayout& global, Eigen::VectorXd& y) { gather(p, p.x[0], global, y); }
 
 void gather(const std::vector<Part>& parts, const StateLayout& global, Eigen::VectorXd& y) {
   y.resize(global.size());

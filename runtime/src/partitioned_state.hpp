@@ -77,6 +77,7 @@ void dopri5_dense(const Part& part, double theta, Eigen::VectorXd& out);
 // Own bodies' states (x[0]) into the global state vector (sized by the first form).
 void gather(const std::vector<Part>& parts, const StateLayout& global, Eigen::VectorXd& y);
 void gather(const Part& part, const StateLayout& global, Eigen::VectorXd& y);
+void gather(const Part& part, const Eigen::VectorXd& local, const StateLayout& global, Eigen::VectorXd& y);  // from `local`
 std::optional<Divergence> check(const std::vector<Part>& parts);  // body index is global
 std::optional<Divergence> check(const Part& part);
 

@@ -66,7 +66,9 @@ Outcome run_loose_part(Session& s, WorkerIo& io, zmq::context_t& ctx, zmq::socke
   for (int j = 1; j <= lo.extrapolation && failure.empty(); ++j)
     if (!exchange_past(w, lp, j)) failure = w.exchange.why();
   for (int p : w.mine) lp[static_cast<std::size_t>(p)]->start(s.o.t_start, lo.macro_step);
-  long done = 0;  // macro steps
+  long done = 0, next_output = 1;  // macro steps; the snapshot to come
+  Eigen::VectorXd y = Eigen::VectorXd::Zero(13 * static_cast<Eigen::Index>(s.model.bodies.size()));
+  const StateLayout global{static_cast<Eigen::Index>(s.model.bodies.size())};
   if (failure.empty())
     loose::for_each_run(grid, loose::ends_kept(lo), [&](long m, int n) {
       failure = rounds.run(m, n);
@@ -74,8 +76,14 @@ Outcome run_loose_part(Session& s, WorkerIo& io, zmq::context_t& ctx, zmq::socke
       if (!failure.empty()) return false;
       done = m + n;
       report_coupling();
+      // The snapshots the local submodels kept (projected already).
+      for (; next_output <= grid.outputs() && loose::at_or_before(grid.output_time(next_output), grid.end(done));
+           ++next_output) {
+        for (int p : w.mine) lp[static_cast<std::size_t>(p)]->take_snapshot(next_output, global, y);
+        w.report_dense(grid.output_step(next_output), grid.output_time(next_output), next_output, y, false);
+      }
       const long step = grid.tight_step(done);
-      w.report_state(step, tight.time(step), grid.output(done) ? step : -1);
+      w.report_state(step, tight.time(step), -1);
       return true;
     });
   if (failure.empty()) {

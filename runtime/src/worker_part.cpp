@@ -66,10 +66,11 @@ void WorkerPart::report_state(long steps, double t, long snapshot) {
   report(wire::ResultKind::snapshot, steps, t, snapshot, snapshot_.data(), snapshot_.size() * sizeof(double));
 }
 
-void WorkerPart::report_dense(long steps, double t, long index, const Eigen::VectorXd& y) {
+void WorkerPart::report_dense(long steps, double t, long index, const Eigen::VectorXd& y, bool project) {
   snapshot_.resize(bodies_.size() * partitioned::body_numbers);
   partitioned::pack_bodies(StateLayout{static_cast<Eigen::Index>(s.model.bodies.size())}, y, bodies_, snapshot_.data());
-  report(wire::ResultKind::dense, steps, t, index, snapshot_.data(), snapshot_.size() * sizeof(double));
+  report(project ? wire::ResultKind::dense : wire::ResultKind::snapshot, steps, t, index, snapshot_.data(),
+         snapshot_.size() * sizeof(double));
 }
 
 void WorkerPart::report_coupling(const std::vector<CouplingRecord>& records) {

@@ -51,8 +51,9 @@ class WorkerPart {
   // Own bodies of the local submodels (x[0]) to the coordinator as snapshot number
   // `snapshot` at t, after `steps` steps; or with snapshot < 0 only the progress.
   void report_state(long steps, double t, long snapshot);
-  // Own bodies of the local submodels from y (global layout): dense output at t.
-  void report_dense(long steps, double t, long index, const Eigen::VectorXd& y);
+  // Own bodies of the local submodels from y (global layout): dense output at t, which the
+  // coordinator projects (after_step), or a snapshot as it is (projected: false).
+  void report_dense(long steps, double t, long index, const Eigen::VectorXd& y, bool project = true);
   // Loose coupling: macro-step records (loose_rounds.hpp) to the coordinator.
   void report_coupling(const std::vector<CouplingRecord>& records);
   // Reports done (with the counts) or the failure, then waits for the coordinator's
