@@ -73,6 +73,13 @@ std::vector<Method> parse_methods(const std::string& list) {
   return out;
 }
 
+// How many bodies the submodels of a loose run borrow, all together.
+std::size_t borrowed_bodies(const Model& m, const Decomposition& d, const LooseOptions& lo) {
+  std::size_t n = 0;
+  for (const Submodel& s : loose_decomposition(m, d, lo).submodels) n += s.borrowed.size();
+  return n;
+}
+
 // The closing lines of a loosely coupled run: its coupling errors, lags and macro steps.
 void print_coupling(const LooseStats& ls, bool adaptive, int max_lag, double tol) {
   char adapt[128] = "", lag[96] = "";
@@ -204,7 +211,9 @@ int run(const RunArgs& a) {
         "--macro-step, --coupling-tol, --max-lag, --exact-lag, --submodel-methods, --overlap: only with --coupling loose");
   if (a.exact_lag && a.max_lag == 0) throw InputError("--exact-lag: needs --max-lag L > 0");
   // Many steps per exchange: the overlap keeps even stiff cut joints stable (loose_coupling.hpp).
-  const double macro_step = a.macro_step ? *a.macro_step : default_macro_steps * (std::isfinite(stable.step) ? stable.step : o.step);
+  // A lag rules the overlap out: then a tenth of a step, well inside the joints' period.
+  const double step = std::isfinite(stable.step) ? stable.step : o.step;
+  const double macro_step = a.macro_step ? *a.macro_step : a.max_lag > 0 ? 0.1 * step : default_macro_steps * step;
   if (loose && !std::isfinite(macro_step)) throw InputError("--coupling loose: no joints to estimate a macro step from; give --macro-step");
   // Error control by default where the macro step can adapt (in one process, without a lag)
   // and none was given (a given --macro-step alone is a fixed one).
@@ -239,8 +248,8 @@ int run(const RunArgs& a) {
   else if (loose && !a.quiet)
     std::fprintf(stderr,
                  "mbsflow: %zu submodels on %d threads, loosely coupled: macro step %.4g s, extrapolation order %d, "
-                 "overlap %.4g s%s\n",
-                 d->submodels.size(), threads, macro_step, a.extrapolation, overlap_reach(lo),
+                 "overlap %.4g s (%zu bodies borrowed)%s\n",
+                 d->submodels.size(), threads, macro_step, a.extrapolation, overlap_reach(lo), borrowed_bodies(m, *d, lo),
                  lo.coupling_tol > 0.0 ? ", error control" : "");
   else if (d && !a.quiet)
     std::fprintf(stderr, "mbsflow: %zu submodels on %d threads (%s), %d cut joints, load imbalance %.1f %%\n",
@@ -371,7 +380,7 @@ Action add_run(CLI::App& app) {
       ->capture_default_str();
   sub->add_option("--macro-step", a->macro_step,
                   "Loose coupling: the exchange interval H in s, fixed (default: 16 RK4 stable steps, the first and "
-                  "largest try of error control)")
+                  "largest try of error control; with --max-lag, a tenth of one)")
       ->check(CLI::PositiveNumber);
   sub->add_option("--coupling-tol", a->coupling_tol,
                   "Loose coupling: take a macro step again, shorter, when the neighbours' bodies at the cut are off by "
