@@ -81,7 +81,7 @@ std::size_t borrowed_bodies(const Model& m, const Decomposition& d, const LooseO
 }
 
 // The closing lines of a loosely coupled run: its coupling errors, lags and macro steps.
-void print_coupling(const LooseStats& ls, bool adaptive, int max_lag, double tol) {
+void print_coupling(const LooseStats& ls, bool adaptive, int max_lag, double tol, bool cluster) {
   char adapt[128] = "", lag[96] = "";
   if (adaptive && ls.over_tolerance > 0)
     std::fprintf(stderr,
@@ -90,10 +90,12 @@ void print_coupling(const LooseStats& ls, bool adaptive, int max_lag, double tol
                  ls.over_tolerance, tol);
   if (!adaptive && tol > 0.0 && ls.max_position_error > tol)
     std::fprintf(stderr,
-                 "mbsflow: warning: the coupling error %.3g m is above --coupling-tol %.3g m; a run across processes "
-                 "takes a fixed macro step: give a smaller --macro-step or a larger --overlap\n",
+                 "mbsflow: warning: the coupling error %.3g m is above %.3g m with a fixed macro step: give a "
+                 "smaller --macro-step, a larger --overlap or --coupling-tol\n",
                  ls.max_position_error, tol);
-  if (adaptive)
+  if (adaptive && cluster)  // the workers do not report how many they took again
+    std::snprintf(adapt, sizeof adapt, "; macro step %.3g .. %.3g s", ls.smallest_macro_step, ls.largest_macro_step);
+  else if (adaptive)
     std::snprintf(adapt, sizeof adapt, "; macro step %.3g .. %.3g s, %ld taken again", ls.smallest_macro_step,
                   ls.largest_macro_step, ls.rejected);
   if (max_lag > 0) {
@@ -215,10 +217,9 @@ int run(const RunArgs& a) {
   const double step = std::isfinite(stable.step) ? stable.step : o.step;
   const double macro_step = a.macro_step ? *a.macro_step : a.max_lag > 0 ? 0.1 * step : default_macro_steps * step;
   if (loose && !std::isfinite(macro_step)) throw InputError("--coupling loose: no joints to estimate a macro step from; give --macro-step");
-  // Error control by default where the macro step can adapt (in one process, without a lag)
-  // and none was given (a given --macro-step alone is a fixed one).
-  const double coupling_tol =
-      a.coupling_tol.value_or(cluster || a.max_lag > 0 || a.macro_step ? 0.0 : default_coupling_tol);
+  // Error control by default where the macro step can adapt (without a lag) and none was
+  // given (a given --macro-step alone is a fixed one).
+  const double coupling_tol = a.coupling_tol.value_or(a.max_lag > 0 || a.macro_step ? 0.0 : default_coupling_tol);
   LooseOptions lo{macro_step, a.extrapolation, threads, coupling_tol,
                   a.max_lag,  a.exact_lag,     parse_methods(a.submodel_methods)};
   if (a.overlap) lo.overlap = *a.overlap;
@@ -285,8 +286,8 @@ int run(const RunArgs& a) {
       stats.loose.records = stats.cluster.coupling;
       summarise_records(stats.loose);
     }
-    if (loose && !a.quiet && d->submodels.size() > 1) print_coupling(stats.loose, !cluster && lo.coupling_tol > 0.0, a.max_lag,
-                                              a.coupling_tol.value_or(default_coupling_tol));
+    if (loose && !a.quiet && d->submodels.size() > 1) print_coupling(stats.loose, lo.coupling_tol > 0.0, a.max_lag,
+                                              a.coupling_tol.value_or(default_coupling_tol), cluster);
   } catch (const RunError& e) {
     progress.finish();
     const int sig = stop_signal();
@@ -384,8 +385,8 @@ Action add_run(CLI::App& app) {
       ->check(CLI::PositiveNumber);
   sub->add_option("--coupling-tol", a->coupling_tol,
                   "Loose coupling: take a macro step again, shorter, when the neighbours' bodies at the cut are off by "
-                  "more than this many m (default 1e-06 in one process without --max-lag or --macro-step; across "
-                  "processes the macro step is fixed and a larger error warns); 0: fixed macro step")
+                  "more than this many m (default 1e-06 without --max-lag or --macro-step, also across processes, "
+                  "which all take the same macro steps); 0: fixed macro step")
       ->check(CLI::NonNegativeNumber);
   sub->add_option("--max-lag", a->max_lag,
                   "Loose coupling: a submodel may run up to L macro steps ahead of its slowest neighbour, taking the "

@@ -179,11 +179,7 @@ json setup_message(const std::string& model_json, const Decomposition& d, const 
 
 void check_cluster_run(const Model& model, const RunOptions& o, const ClusterCoupling& coupling) {
   check_options(o);
-  if (coupling.loose) {
-    check_loose_options(*coupling.loose);
-    if (coupling.loose->coupling_tol > 0.0)
-      throw InputError("{coupling_tol}: the adaptive macro step runs in one process for now");
-  }
+  if (coupling.loose) check_loose_options(*coupling.loose);
   if (!coupling.loose) tight_stages(o.method);  // a method whose stages the workers exchange
   if (!model.force_elements.empty())
     throw InputError("the model has " + std::to_string(model.force_elements.size()) +

@@ -19,41 +19,6 @@ namespace {
 using loose::LoosePart;
 using Clock = std::chrono::steady_clock;
 
-// Takes the adaptive macro steps one at a time: each is taken again from its start with a
-// shorter H while its coupling error is above the tolerance, down to
-// smallest_macro_fraction of lo.macro_step (then it is taken and counted in over_tolerance).
-template <class AtEnd>
-void adaptive_macro_steps(const RunOptions& o, const LooseOptions& lo, std::vector<std::unique_ptr<LoosePart>>& parts,
-                          loose::LooseRounds& rounds, loose::MacroGrid& ends, LooseStats& st, AtEnd at_end) {
-  const double order = lo.extrapolation + 1.0;
-  double t = o.t_start, H = lo.macro_step;
-  long m = 0;
-  while (t < o.t_end) {
-    ends.add(m, H);
-    const double t1 = ends.end(m + 1);
-    for (auto& p : parts) p->save();
-    const std::string failure = rounds.run(m, 1);
-    if (!failure.empty()) throw RunError(failure);
-    const loose::CouplingError e = rounds.peek(m + 1);
-    // Step-size factor from the error model e ~ H^(order).
-    const double factor = std::clamp(0.9 * std::pow(lo.coupling_tol / std::max(e.position, 1e-300), 1.0 / order), 0.2, 2.0);
-    const double smallest = lo.macro_step * smallest_macro_fraction;
-    if (e.position > lo.coupling_tol && t1 - t > smallest * (1.0 + 1e-9)) {  // too far off: back to t, shorter
-      for (auto& p : parts) p->restore(m + 1);
-      rounds.discard(m + 1);
-      H = std::max(smallest, (t1 - t) * factor);
-      ++st.rejected;
-      continue;
-    }
-    if (e.position > lo.coupling_tol) ++st.over_tolerance;  // at the smallest macro step: taken, counted
-    ++m;
-    at_end(m);
-    ends.forget_before(m - 8);
-    H = std::min(lo.macro_step, (t1 - t) * factor);  // no longer than the one the overlap was chosen for
-    t = t1;
-  }
-}
-
 }  // namespace
 
 void check_loose_options(const LooseOptions& lo, std::size_t submodels) {
@@ -149,7 +114,7 @@ RunSummary run_loose(const Model& model, const Decomposition& cut, const RunOpti
         for (int j = 1; j <= lo.extrapolation; ++j) loose::copy_local_ghosts(parts, j);
         for (auto& p : parts) p->start(o.t_start, lo.macro_step);
         if (adaptive) {
-          adaptive_macro_steps(o, lo, parts, rounds, grid, st, at_end);
+          loose::adaptive_macro_steps(o, lo, parts, rounds, grid, st, at_end);
         } else {
           loose::for_each_run(grid, loose::ends_kept(lo), [&](long m, int n) {
             const std::string failure = rounds.run(m, n);

@@ -25,11 +25,17 @@ void lagrange_weights(const Samples& s, double t, double* w) {
 }  // namespace
 
 // The local system whose ghost bodies follow the extrapolation, whatever the integrator
-// puts in their places; their derivatives are zero.
+// puts in their places; their derivatives are zero. rhs()'s phases, with the ghosts'
+// kinematics taken again from their extrapolated values (in work_'s ghost slots): the
+// same arithmetic as rhs() of y with the ghosts replaced, without copying y.
 void LoosePart::ghosted_rhs(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) {
-  work_ = y;
   extrapolate_ghosts(t, work_);
-  part.system.rhs(t, work_, dydt);
+  MultibodySystem& s = part.system;
+  s.update_kinematics(t, y);
+  s.kinematics_of(t, work_, ghost_bodies_);
+  s.compute_joint_forces();
+  dydt.resize(y.size());
+  s.compute_derivatives(t, y, dydt);
   const StateLayout& l = part.system.layout();
   const Eigen::Index own = part.sub->integrated(), ghosts = l.bodies - own;
   dydt.segment(l.position(own), 3 * ghosts).setZero();
@@ -43,6 +49,8 @@ LoosePart::LoosePart(const Model& model, const Submodel& sub, const RunOptions& 
     : part(model, sub, extrapolation + 1), o_(o), order_(extrapolation), retain_(static_cast<std::size_t>(retain)),
       history_(sub.exchanges.size()), predicted_(sub.exchanges.size()), ghost_at_(sub.exchanges.size()),
       borrowed_at_(sub.exchanges.size()), ghost_slots_(sub.exchanges.size()) {
+  work_ = part.x[0];
+  for (int g = sub.integrated(); g < static_cast<int>(part.system.layout().bodies); ++g) ghost_bodies_.push_back(g);
   for (std::size_t e = 0; e < sub.exchanges.size(); ++e) {
     const std::vector<int>& to = sub.exchanges[e].to;
     for (std::size_t i = 0; i < to.size(); ++i)
@@ -233,12 +241,14 @@ void LoosePart::save() {
   saved_ = part.x[0];
   saved_h_ = stepper_->next_step();
   saved_snapshots_ = snapshots_.size();
+  saved_history_ = history_;
 }
 
 void LoosePart::restore(long index) {
   part.x[0] = saved_;
   stepper_->set_next_step(saved_h_);
   snapshots_.resize(saved_snapshots_);
+  history_ = saved_history_;
   for (auto& p : predicted_)
     while (!p.empty() && p.back().index >= index) p.pop_back();
   std::lock_guard lock(board_mutex_);

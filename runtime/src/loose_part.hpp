@@ -66,9 +66,10 @@ class LoosePart {
   // Bodies of the published end `index` packed into out, and its time.
   double pack_published(long index, const std::vector<int>& bodies, double* out) const;
 
-  // x[0] and the integrator's step, to take a macro step again
+  // x[0], the integrator's step and the neighbour samples, to take a macro step again
   void save();
-  // Back to the saved state; forgets the ends from `index` on and the snapshots since.
+  // Back to the saved state and samples; forgets the ends from `index` on and the
+  // snapshots since.
   void restore(long index);
 
   long steps = 0, rejected = 0, evaluations = 0;
@@ -95,11 +96,12 @@ class LoosePart {
   const RunOptions& o_;
   int order_;
   std::size_t retain_;
-  std::vector<std::deque<Sample>> history_;    // per exchange, newest first
+  std::vector<std::deque<Sample>> history_, saved_history_;  // per exchange, newest first
   std::vector<std::deque<Sample>> predicted_;  // per exchange, oldest first, its near bodies
   // Per exchange: positions of its ghosts (extrapolated) and of its borrowed bodies.
   std::vector<std::vector<int>> ghost_at_, borrowed_at_;
   std::vector<std::vector<int>> ghost_slots_;  // per exchange, its ghosts' local indices
+  std::vector<int> ghost_bodies_;              // all ghosts' local indices
   mutable std::mutex board_mutex_;
   std::deque<Published> board_;  // oldest first
   StepperSystem system_;

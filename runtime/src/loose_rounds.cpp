@@ -124,25 +124,15 @@ void LooseRounds::catch_up(long index) {
   }
 }
 
-CouplingError LooseRounds::peek(long index) {
-  CouplingError worst;
-  for (std::size_t p = 0; p < parts_.size(); ++p) {
-    if (!parts_[p]) continue;
-    const LoosePart& lp = *parts_[p];
-    const std::vector<Submodel::Exchange>& exchanges = lp.part.sub->exchanges;
-    for (std::size_t e = 0; e < exchanges.size(); ++e) {
-      const LoosePart* owner = parts_[static_cast<std::size_t>(exchanges[e].neighbour)].get();
-      if (!owner) continue;
-      std::vector<double>& buffer = scratch_[p];
-      buffer.resize(exchanges[e].from.size() * partitioned::body_numbers);
-      owner->pack_published(index, exchanges[e].from, buffer.data());
-      // The node of the macro step to `index` made the prediction.
-      const CouplingError err = lp.prediction_error(e, index, buffer.data()).value();
-      worst.position = std::max(worst.position, err.position);
-      worst.velocity = std::max(worst.velocity, err.velocity);
-    }
-  }
-  return worst;
+CouplingError LooseRounds::worst(long index) const {
+  CouplingError most;
+  for (const auto& records : logs_)
+    for (const CouplingRecord& r : records)
+      if (r.index == index) {
+        most.position = std::max(most.position, r.position_error);
+        most.velocity = std::max(most.velocity, r.velocity_error);
+      }
+  return most;
 }
 
 void LooseRounds::drain(CouplingLog& log) {

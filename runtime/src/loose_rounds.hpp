@@ -10,7 +10,9 @@
 // extrapolated for it: the coupling error, recorded per macro-step end.
 #include <oneapi/tbb/task_arena.h>
 
+#include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <functional>
 #include <memory>
 #include <mutex>
@@ -18,6 +20,7 @@
 #include <vector>
 
 #include "coupling_log.hpp"
+#include "mbsflow/error.hpp"
 #include "loose_part.hpp"
 #include "mbsflow/runtime/loose_coupling.hpp"
 #include "schedules.hpp"
@@ -61,9 +64,8 @@ class LooseRounds {
   bool keep_snapshots = true;
   // Takes every neighbour value up to end `index` (waiting for remote ones).
   void catch_up(long index);
-  // The largest coupling error of the neighbour values at end `index` against what was
-  // predicted for it; they are not taken (neighbours in this process only).
-  CouplingError peek(long index);
+  // The largest coupling error of this process's submodels at end `index` (after catch_up).
+  CouplingError worst(long index) const;
   // The records since the last call, into log; discard(index) forgets those from
   // macro-step end `index` on (a macro step to be taken again).
   void drain(CouplingLog& log);
@@ -93,5 +95,54 @@ class LooseRounds {
   tbb::task_arena arena_;
   std::unique_ptr<Scheduler> schedule_;  // built in the arena; goes before it
 };
+
+// Takes the adaptive macro steps one at a time: each is taken again from its start with a
+// shorter H while its coupling error is above the tolerance, down to
+// smallest_macro_fraction of lo.macro_step (then it is taken and counted in over_tolerance).
+// worst(attempt, e): the largest error over all processes (every process takes the same
+// decision), attempt numbering the tries; retake(index): before a macro step to end
+// `index` is taken again, after the local parts went back.
+template <class AtEnd, class Worst, class Retake>
+void adaptive_macro_steps(const RunOptions& o, const LooseOptions& lo, std::vector<std::unique_ptr<LoosePart>>& parts,
+                          LooseRounds& rounds, MacroGrid& ends, LooseStats& st, AtEnd at_end, Worst worst, Retake retake) {
+  const double order = lo.extrapolation + 1.0;
+  double t = o.t_start, H = lo.macro_step;
+  long m = 0, attempt = 0;
+  while (t < o.t_end) {
+    ends.add(m, H);
+    const double t1 = ends.end(m + 1);
+    for (auto& p : parts)
+      if (p) p->save();
+    const std::string failure = rounds.run(m, 1);
+    if (!failure.empty()) throw RunError(failure);
+    rounds.catch_up(m + 1);  // every neighbour value of the new end: the coupling errors
+    const double e = worst(++attempt, rounds.worst(m + 1).position);
+    // Step-size factor from the error model e ~ H^(order).
+    const double factor = std::clamp(0.9 * std::pow(lo.coupling_tol / std::max(e, 1e-300), 1.0 / order), 0.2, 2.0);
+    const double smallest = lo.macro_step * smallest_macro_fraction;
+    if (e > lo.coupling_tol && t1 - t > smallest * (1.0 + 1e-9)) {  // too far off: back to t, shorter
+      for (auto& p : parts)
+        if (p) p->restore(m + 1);
+      rounds.discard(m + 1);
+      retake(m + 1);
+      H = std::max(smallest, (t1 - t) * factor);
+      ++st.rejected;
+      continue;
+    }
+    if (e > lo.coupling_tol) ++st.over_tolerance;  // at the smallest macro step: taken, counted
+    ++m;
+    at_end(m);
+    ends.forget_before(m - 8);
+    H = std::min(lo.macro_step, (t1 - t) * factor);  // no longer than the one the overlap was chosen for
+    t = t1;
+  }
+}
+
+// One process: its own errors are all there are; nothing else to go back.
+template <class AtEnd>
+void adaptive_macro_steps(const RunOptions& o, const LooseOptions& lo, std::vector<std::unique_ptr<LoosePart>>& parts,
+                          LooseRounds& rounds, MacroGrid& ends, LooseStats& st, AtEnd at_end) {
+  adaptive_macro_steps(o, lo, parts, rounds, ends, st, at_end, [](long, double e) { return e; }, [](long) {});
+}
 
 }  // namespace mbsflow::loose

@@ -47,7 +47,8 @@ json loose_to_json(const LooseOptions& l) {
   json methods = json::array();
   for (Method m : l.methods) methods.push_back(method_name(m));
   return {{"macro_step", l.macro_step}, {"extrapolation", l.extrapolation}, {"max_lag", l.max_lag},
-          {"exact_lag", l.exact_lag},   {"methods", methods},         {"overlap", l.overlap}};
+          {"exact_lag", l.exact_lag},   {"methods", methods},         {"overlap", l.overlap},
+          {"coupling_tol", l.coupling_tol}};
 }
 
 LooseOptions loose_from_json(const json& j) {
@@ -58,6 +59,7 @@ LooseOptions loose_from_json(const json& j) {
     l.max_lag = j.at("max_lag").get<int>();
     l.exact_lag = j.at("exact_lag").get<bool>();
     l.overlap = j.at("overlap").get<double>();
+    l.coupling_tol = j.at("coupling_tol").get<double>();
     for (const std::string& name : j.at("methods").get<std::vector<std::string>>()) l.methods.push_back(method_of(name));
   } catch (const json::exception& e) {
     throw InputError(std::string("loose-coupling options from the coordinator: ") + e.what());

@@ -75,13 +75,14 @@ void RemoteExchange::deliver_delayed() {
 bool RemoteExchange::store(zmq::message_t& header, zmq::message_t& payload) {
   const auto h = wire::read_header<wire::ExchangeHeader>(header);
   const auto k = static_cast<int>(d_.submodels.size());
-  if (!h || h->to < 0 || h->to >= k || h->from < 0 || h->from >= k || h->stage < 0 || h->stage > stages_ ||
+  if (!h || h->to < 0 || h->to >= k || h->from < 0 || h->from >= k || h->stage < 0 || h->stage > stages_ + 1 ||
       !parts_[static_cast<std::size_t>(h->to)] || parts_[static_cast<std::size_t>(h->from)])
     return false;
-  if (h->stage == stages_) {  // a worker's error squares, from its first submodel to ours
+  if (h->stage >= stages_) {  // a worker's error squares or its one number, from its first submodel to ours
     const auto w = static_cast<std::size_t>(worker_of_[static_cast<std::size_t>(h->from)]);
+    const std::size_t numbers = h->stage == stages_ ? elements_of_[w].size() : 1;
     if (h->from != first_of_[w] || h->to != first_of_[static_cast<std::size_t>(me_)] ||
-        payload.size() != elements_of_[w].size() * sizeof(double))
+        payload.size() != numbers * sizeof(double))
       return false;
   } else {
     const Submodel& to = d_.submodels[static_cast<std::size_t>(h->to)];
@@ -169,11 +170,10 @@ void RemoteExchange::take(std::size_t p, long n, int s) {
   receive(static_cast<int>(p), n, s);
 }
 
-double RemoteExchange::error_sum(long n, Eigen::VectorXd& squares) {
+void RemoteExchange::to_every_worker(long n, int stage, const std::vector<double>& own,
+                                     const std::function<void(std::size_t, const double*)>& theirs) {
   const auto me = static_cast<std::size_t>(me_);
   const int mine = first_of_[me];
-  std::vector<double> own(elements_of_[me].size());  // the same message for every other worker
-  for (std::size_t i = 0; i < own.size(); ++i) own[i] = squares[elements_of_[me][i]];
   for (std::size_t w = 0; w < first_of_.size(); ++w) {
     if (w == me || first_of_[w] < 0) continue;
     auto [it, added] = senders_.try_emplace({mine, static_cast<int>(w)}, wire::make_socket(ctx_, zmq::socket_type::push));
@@ -185,22 +185,44 @@ double RemoteExchange::error_sum(long n, Eigen::VectorXd& squares) {
     wire::ExchangeHeader h;
     h.from = mine;
     h.to = first_of_[w];
-    h.stage = stages_;
+    h.stage = stage;
     h.step = n;
     if (!post(it->second, h, std::move(payload))) throw RunError(why());
   }
   for (std::size_t w = 0; w < first_of_.size(); ++w) {
     if (w == me || first_of_[w] < 0) continue;
-    wait(n, stages_, first_of_[w], mine);
+    wait(n, stage, first_of_[w], mine);
     if (aborted()) throw RunError(why());
-    const zmq::message_t m = pop({mine, first_of_[w], stages_}, n, "the error norm's terms of worker " + worker_names_[w]);
-    const auto* in = static_cast<const unsigned char*>(m.data());
-    for (const Eigen::Index e : elements_of_[w]) {
-      std::memcpy(&squares[e], in, sizeof(double));
-      in += sizeof(double);
-    }
+    const zmq::message_t m = pop({mine, first_of_[w], stage}, n, "the all-worker values of worker " + worker_names_[w]);
+    std::vector<double> in(m.size() / sizeof(double));  // the message need not be aligned for doubles
+    std::memcpy(in.data(), m.data(), in.size() * sizeof(double));
+    theirs(w, in.data());
   }
+}
+
+double RemoteExchange::error_sum(long n, Eigen::VectorXd& squares) {
+  const auto me = static_cast<std::size_t>(me_);
+  std::vector<double> own(elements_of_[me].size());  // the same message for every other worker
+  for (std::size_t i = 0; i < own.size(); ++i) own[i] = squares[elements_of_[me][i]];
+  to_every_worker(n, stages_, own, [&](std::size_t w, const double* in) {
+    for (const Eigen::Index e : elements_of_[w]) squares[e] = *in++;
+  });
   return dopri5::ordered_sum(squares);
+}
+
+void RemoteExchange::rewind(int s, long n) {
+  std::lock_guard lock(mutex_);
+  for (auto& [slot, newest] : newest_) {
+    if (std::get<2>(slot) != s) continue;
+    const auto it = inbox_.find(slot);
+    newest = it == inbox_.end() || it->second.empty() ? std::min(newest, n - 1) : it->second.back().step;
+  }
+}
+
+double RemoteExchange::max_over_workers(long n, double mine) {
+  double most = mine;
+  to_every_worker(n, stages_ + 1, {mine}, [&](std::size_t, const double* in) { most = std::max(most, *in); });
+  return most;
 }
 
 void RemoteExchange::fail(std::exception_ptr e) {

@@ -60,6 +60,14 @@ class RemoteExchange final : public BoundaryExchange {
   // that hold them as ghosts.
   void send(int p, long n, int s);
 
+  // Loose coupling's error control, before a macro step to end n is taken again: the
+  // messages of stage input s of step n that were taken are forgotten, so that waiting
+  // for step n waits for the new ones (any that are in already count).
+  void rewind(int s, long n);
+  // The largest of every worker's `mine` (loose coupling's error control: all take the
+  // same decision); n numbers the call (the same in every worker).
+  double max_over_workers(long n, double mine);
+
   // Stops the exchange: waiting proxies return and stages skip their work.
   void abort(const std::string& why);
   bool aborted() const;
@@ -82,6 +90,10 @@ class RemoteExchange final : public BoundaryExchange {
   bool store(zmq::message_t& header, zmq::message_t& payload);
   // Sends one message, or queues it for the delayer; false if the exchange stopped.
   bool post(zmq::socket_t& socket, const wire::ExchangeHeader& h, zmq::message_t payload);
+  // Sends `own` to every other worker as (stage, n) and gives each one's message of the
+  // same (stage, n) to theirs(worker, numbers).
+  void to_every_worker(long n, int stage, const std::vector<double>& own,
+                       const std::function<void(std::size_t, const double*)>& theirs);
   // The first message of a slot, which must be of step n (RunError if it is not).
   zmq::message_t pop(const Slot& slot, long n, const std::string& what);
   // Waits up to `ms` for the inbox, then stores everything in it; false on a malformed message.

@@ -6,6 +6,7 @@
 #include <memory>
 
 #include "loose_part.hpp"
+#include "mbsflow/error.hpp"
 #include "loose_rounds.hpp"
 #include "mbsflow/methods/step_grid.hpp"
 #include "worker_part.hpp"
@@ -43,7 +44,8 @@ Outcome run_loose_part(Session& s, WorkerIo& io, zmq::context_t& ctx, zmq::socke
   for (std::size_t q = 0; q < k; ++q)
     if (s.worker_of[q] == s.me) parts[q] = &(lp[q] = loose::make_part(s.model, s.d.submodels[q], s.o, lo, q))->part;
   WorkerPart w(s, io, ctx, inbox, start, parts, 4, stop);
-  loose::MacroGrid grid(s.o, lo.macro_step);
+  const bool adaptive = lo.coupling_tol > 0.0;
+  loose::MacroGrid grid(s.o, adaptive ? 0.0 : lo.macro_step);
   const StepGrid tight = step_grid(s.o.t_start, s.o.t_end, s.o.step);  // the coordinator's snapshot times
   loose::RemoteSamples remote;
   remote.wait = [&](long index, int q, int p) { w.exchange.wait(index, 0, q, p); };
@@ -69,23 +71,43 @@ Outcome run_loose_part(Session& s, WorkerIo& io, zmq::context_t& ctx, zmq::socke
   long done = 0, next_output = 1;  // macro steps; the snapshot to come
   Eigen::VectorXd y = Eigen::VectorXd::Zero(13 * static_cast<Eigen::Index>(s.model.bodies.size()));
   const StateLayout global{static_cast<Eigen::Index>(s.model.bodies.size())};
-  if (failure.empty())
+  // At macro-step end m: the coupling records, the snapshots the local submodels kept
+  // (projected already), the progress.
+  auto at_end = [&](long m) {
+    done = m;
+    report_coupling();
+    for (; next_output <= grid.outputs() && loose::at_or_before(grid.output_time(next_output), grid.end(done));
+         ++next_output) {
+      for (int p : w.mine) lp[static_cast<std::size_t>(p)]->take_snapshot(next_output, global, y);
+      w.report_dense(grid.output_step(next_output), grid.output_time(next_output), next_output, y, false);
+    }
+    const long step = grid.tight_step(done);
+    w.report_state(step, tight.time(step), -1);
+  };
+  if (failure.empty() && adaptive) {
+    // Every worker takes the same macro steps: the largest error over all decides.
+    LooseStats st;
+    try {
+      loose::adaptive_macro_steps(
+          s.o, lo, lp, rounds, grid, st,
+          [&](long m) {
+            if (const std::string why = w.check(grid.end(m)); !why.empty()) throw RunError(why);
+            at_end(m);
+          },
+          [&](long attempt, double e) { return w.exchange.max_over_workers(attempt, e); },
+          [&](long index) { w.exchange.rewind(0, index); });
+    } catch (const std::exception& e) {
+      failure = error_text(e);
+    }
+  } else if (failure.empty()) {
     loose::for_each_run(grid, loose::ends_kept(lo), [&](long m, int n) {
       failure = rounds.run(m, n);
       if (failure.empty()) failure = w.check(grid.end(m + n));
       if (!failure.empty()) return false;
-      done = m + n;
-      report_coupling();
-      // The snapshots the local submodels kept (projected already).
-      for (; next_output <= grid.outputs() && loose::at_or_before(grid.output_time(next_output), grid.end(done));
-           ++next_output) {
-        for (int p : w.mine) lp[static_cast<std::size_t>(p)]->take_snapshot(next_output, global, y);
-        w.report_dense(grid.output_step(next_output), grid.output_time(next_output), next_output, y, false);
-      }
-      const long step = grid.tight_step(done);
-      w.report_state(step, tight.time(step), -1);
+      at_end(m + n);
       return true;
     });
+  }
   if (failure.empty()) {
     rounds.catch_up(done);  // the coupling errors of the last macro steps
     failure = w.check(grid.end(done));
