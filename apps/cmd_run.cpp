@@ -248,10 +248,10 @@ int run(const RunArgs& a) {
     std::fprintf(stderr, "mbsflow: 1 submodel: nothing to couple loosely, a plain run\n");
   else if (loose && !a.quiet)
     std::fprintf(stderr,
-                 "mbsflow: %zu submodels on %d threads, loosely coupled: macro step %.4g s, extrapolation order %d, "
-                 "overlap %.4g s (%zu bodies borrowed)%s\n",
-                 d->submodels.size(), threads, macro_step, a.extrapolation, overlap_reach(lo), borrowed_bodies(m, *d, lo),
-                 lo.coupling_tol > 0.0 ? ", error control" : "");
+                 "mbsflow: %zu submodels on %d threads, loosely coupled: macro step %.4g s (%.3g x the cut joints' "
+                 "RK4 stable step), extrapolation order %d, overlap %.4g s (%zu bodies borrowed)%s\n",
+                 d->submodels.size(), threads, macro_step, macro_step / cut_joint_stable_step(m, *d), a.extrapolation,
+                 overlap_reach(lo), borrowed_bodies(m, *d, lo), lo.coupling_tol > 0.0 ? ", error control" : "");
   else if (d && !a.quiet)
     std::fprintf(stderr, "mbsflow: %zu submodels on %d threads (%s), %d cut joints, load imbalance %.1f %%\n",
                  d->submodels.size(), threads, a.executor == "flow" ? "flow graph" : "barrier per stage", d->cut_joints,

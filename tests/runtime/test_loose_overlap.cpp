@@ -156,7 +156,7 @@ TEST_CASE("error control: a macro step taken again ends where a run that took th
   CHECK(once.records[0].velocity_error == first.velocity_error);
 }
 
-TEST_CASE("overlap: the train, macro steps of 16 steps, RK4 or DOPRI5 inside", "[runtime][loose][overlap]") {
+TEST_CASE("overlap: the train, macro steps of 16 steps and of 10x the couplers' stable step, RK4 or DOPRI5 inside", "[runtime][loose][overlap]") {
   TrainParams t;
   t.wagons = 9;
   Model m = make_train(t);
@@ -170,7 +170,19 @@ TEST_CASE("overlap: the train, macro steps of 16 steps, RK4 or DOPRI5 inside", "
   const double gap = test::position_gap(sys, run_loose(m, d, o, lo, nullptr).final_state, tight);
   INFO("macro step " << lo.macro_step << " s, gap " << gap << " m");
   CHECK(gap < 1e-6);
+  // Ten times the couplers' stable step: far off without an overlap, close with one (which
+  // here reaches over the whole train: a disturbance crosses it within a macro step).
+  lo.macro_step = std::ceil(10.0 * cut_joint_stable_step(m, d) / o.step) * o.step;
+  lo.overlap = 0.0;
+  const double without = test::position_gap(sys, run_loose(m, d, o, lo, nullptr).final_state, tight);
+  lo.overlap = -1.0;
+  const double with = test::position_gap(sys, run_loose(m, d, o, lo, nullptr).final_state, tight);
+  INFO("10x the cut joints' stable step, H = " << lo.macro_step << " s: " << without << " m without an overlap, " << with
+                                              << " m with");
+  CHECK(without > 1e-3);
+  CHECK(with < 1e-6);
   // A DOPRI5 submodel between two RK4 ones: as close as the two methods' own errors allow.
+  lo.macro_step = 16 * o.step;
   lo.methods = {Method::rk4, Method::dopri5, Method::rk4};
   o.rtol = o.atol = 1e-10;
   CHECK(test::position_gap(sys, run_loose(m, d, o, lo, nullptr).final_state, tight) < 1e-4);
