@@ -101,6 +101,7 @@ void MultibodySystem::compile_constraints() {
     rows[c] += cj.rows;
     joints[c].push_back(cj);
   }
+  k.clusters.reserve(bodies.size());  // no copies of clusters not yet factored
   for (std::size_t c = 0; c < bodies.size(); ++c) {
     if (bodies[c].back() >= active_)
       throw InputError("rigid joint '" + model_.joints[static_cast<std::size_t>(joints[c].front().joint)].name +

@@ -89,8 +89,9 @@ RigidCluster::RigidCluster(const RigidCluster& o)
     : rows(o.rows), inv_mass(o.inv_mass), inv_inertia(o.inv_inertia), bodies_(o.bodies_), joints_(o.joints_),
       rows_count_(o.rows_count_), row_a_(o.row_a_), row_b_(o.row_b_), on_body_(o.on_body_), scatter_(o.scatter_),
       diagonal_(o.diagonal_), position_(o.position_), dense_(o.dense_), dense_matrix_(o.dense_matrix_),
-      dense_ldlt_(o.dense_ldlt_), sparse_matrix_(o.sparse_matrix_), shift_(o.shift_), permuted_(o.permuted_),
+      dense_factored_(o.dense_factored_), sparse_matrix_(o.sparse_matrix_), shift_(o.shift_), permuted_(o.permuted_),
       rhs_(o.rhs_), residual_(o.residual_) {
+  if (dense_factored_) dense_ldlt_ = o.dense_ldlt_;
   if (!dense_) analyse();
 }
 
@@ -141,10 +142,12 @@ void RigidCluster::factor() {
     shift_[r] = relative_shift * value[diagonal_[r]] + 1e-300;
     value[diagonal_[r]] += shift_[r];
   }
-  if (dense_)
+  if (dense_) {
     dense_ldlt_.compute(dense_matrix_);
-  else
+    dense_factored_ = true;
+  } else {
     sparse_ldlt_->factorize(sparse_matrix_);
+  }
 }
 
 // In the permuted numbering: y <- S_eps^-1 y.

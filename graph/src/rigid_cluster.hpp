@@ -78,6 +78,7 @@ class RigidCluster {
   bool dense_ = true;
   Eigen::MatrixXd dense_matrix_;
   Eigen::LDLT<Eigen::MatrixXd, Eigen::Upper> dense_ldlt_;
+  bool dense_factored_ = false;  // an LDLT not yet computed must not be copied (its state is unset)
   Eigen::SparseMatrix<double> sparse_matrix_;  // upper triangle, permuted
   using SparseLdlt = Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Upper, Eigen::NaturalOrdering<int>>;
   std::unique_ptr<SparseLdlt> sparse_ldlt_;

@@ -26,7 +26,8 @@ Part::Part(const Model& model, const Submodel& s, int stages)
   k.assign(static_cast<std::size_t>(stages), Eigen::VectorXd::Zero(system.dimension()));
   global_element = own_elements(s, StateLayout{static_cast<Eigen::Index>(model.bodies.size())});
   const auto n_own = static_cast<int>(own);
-  std::vector<char> edge(static_cast<std::size_t>(n_own), 0);
+  // Clusters of borrowed bodies (loose coupling's overlap) have local indices past the own ones.
+  std::vector<char> edge(static_cast<std::size_t>(s.integrated()), 0);
   const std::vector<Joint>& joints = system.model().joints;
   for (std::size_t k = 0; k < joints.size(); ++k) {
     const int a = joints[k].body1, b = joints[k].body2;  // local; ground is -1
