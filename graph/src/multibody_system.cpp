@@ -41,7 +41,7 @@ void build_csr(int bodies, int items, BodyOf body_of, std::vector<int>& start, s
 
 MultibodySystem::MultibodySystem(const Model& model) : MultibodySystem(model, static_cast<int>(model.bodies.size())) {}
 
-MultibodySystem::MultibodySystem(const Model& model, int active) : model_(model) {
+MultibodySystem::MultibodySystem(const Model& model, int active) : model_((check_model(model), model)) {
   const int n = static_cast<int>(model.bodies.size());
   layout_.bodies = n;
   active_ = std::clamp(active, 0, n);

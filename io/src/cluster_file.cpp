@@ -1,5 +1,6 @@
 #include "mbsflow/io/cluster_file.hpp"
 
+#include <limits>
 #include <set>
 
 #include "json_node.hpp"
@@ -50,9 +51,14 @@ ClusterConfig read(const JsonNode& root) {
   if (auto t = root.find("timeouts")) {
     t->expect_object();
     t->allow_only({"connect_s", "heartbeat_s", "lost_s"});
-    if (auto v = t->find("connect_s")) c.timeouts.connect_s = v->positive();
-    if (auto v = t->find("heartbeat_s")) c.timeouts.heartbeat_s = v->positive();
-    if (auto v = t->find("lost_s")) c.timeouts.lost_s = v->positive();
+    auto seconds = [](const JsonNode& v, const char* key, double max) {
+      const double x = v.positive();
+      if (x > max) v.fail(std::string(key) + " must be at most " + number_text(max) + " s (got " + number_text(x) + ")");
+      return x;
+    };
+    if (auto v = t->find("connect_s")) c.timeouts.connect_s = seconds(*v, "connect_s", ClusterTimeouts::max_connect_s);
+    if (auto v = t->find("heartbeat_s")) c.timeouts.heartbeat_s = seconds(*v, "heartbeat_s", ClusterTimeouts::max_heartbeat_s);
+    if (auto v = t->find("lost_s")) c.timeouts.lost_s = seconds(*v, "lost_s", ClusterTimeouts::max_lost_s);
     if (c.timeouts.lost_s <= 2.0 * c.timeouts.heartbeat_s)
       t->fail("lost_s must be more than twice heartbeat_s, or a peer that is merely slow counts as lost");
   }
@@ -88,12 +94,12 @@ ClusterConfig read(const JsonNode& root) {
       w[w.has("address") ? "address" : "listen"].fail(cw.address + " is the address of two workers");
     cw.data_bind = endpoint(w["data_bind"], c.transport);
     cw.data_address = address_for(w, "data_address", cw.data_bind, "data_bind", c.transport);
-    if (auto v = w.find("weight")) cw.weight = static_cast<int>(v->integer(1));
-    if (auto v = w.find("threads")) cw.threads = static_cast<int>(v->integer(0));
+    if (auto v = w.find("weight")) cw.weight = static_cast<int>(v->integer(1, 1'000'000));
+    if (auto v = w.find("threads")) cw.threads = static_cast<int>(v->integer(0, 65536));
     if (auto v = w.find("submodels")) {
       const std::size_t m = v->array_size();
       if (m == 0) v->fail("must list at least one submodel");
-      for (std::size_t j = 0; j < m; ++j) cw.submodels.push_back(static_cast<int>(v->item(j).integer(0)));
+      for (std::size_t j = 0; j < m; ++j) cw.submodels.push_back(static_cast<int>(v->item(j).integer(0, std::numeric_limits<int>::max())));
     }
     if ((i > 0) && (cw.submodels.empty() != c.workers.front().submodels.empty()))
       w.fail("list \"submodels\" for every worker or for none");
@@ -111,7 +117,7 @@ ClusterConfig read_cluster_text(const std::string& text, const std::string& name
 }
 
 ClusterConfig read_cluster_file(const std::string& path) {
-  return read_cluster_text(read_input_file(path, "cluster file"), path);
+  return read_cluster_text(read_input_file(path, "cluster file", std::size_t{16} << 20), path);
 }
 
 }  // namespace mbsflow

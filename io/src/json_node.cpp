@@ -6,6 +6,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "json_depth.hpp"
 #include "mbsflow/error.hpp"
 
 namespace mbsflow {
@@ -24,6 +25,15 @@ std::string syntax_error(const nlohmann::json::parse_error& e, const std::string
   return format_input_error(name, {line, column}, "", "invalid JSON: " + detail);
 }
 
+// Line and column of a byte offset.
+SourceLocation location_of(const std::string& text, std::size_t offset) {
+  SourceLocation at;
+  at.line = 1 + static_cast<int>(std::count(text.begin(), text.begin() + static_cast<long>(offset), '\n'));
+  const std::size_t line_start = text.rfind('\n', offset);
+  at.column = static_cast<int>(offset - (line_start == std::string::npos ? 0 : line_start + 1)) + 1;
+  return at;
+}
+
 // A number too large for a double ("1e999"): nlohmann names the literal, in quotes, but
 // not its place; the first occurrence in the text gives line and column.
 std::string overflow_error(const nlohmann::json::out_of_range& e, const std::string& text, const std::string& name) {
@@ -31,26 +41,31 @@ std::string overflow_error(const nlohmann::json::out_of_range& e, const std::str
   const std::size_t open = what.find('\''), close = what.rfind('\'');
   const std::string number = open != std::string::npos && close > open ? what.substr(open + 1, close - open - 1) : "";
   SourceLocation at;
-  if (const std::size_t offset = number.empty() ? std::string::npos : text.find(number); offset != std::string::npos) {
-    at.line = 1 + static_cast<int>(std::count(text.begin(), text.begin() + static_cast<long>(offset), '\n'));
-    const std::size_t line_start = text.rfind('\n', offset);
-    at.column = static_cast<int>(offset - (line_start == std::string::npos ? 0 : line_start + 1)) + 1;
-  }
+  if (const std::size_t offset = number.empty() ? std::string::npos : text.find(number); offset != std::string::npos)
+    at = location_of(text, offset);
   return format_input_error(name, at, "", "number out of range" + (number.empty() ? "" : " (" + number + ")") +
                                               ": must be a finite number");
 }
 
 }  // namespace
 
-std::string read_input_file(const std::string& path, const std::string& what) {
-  std::ifstream in(path, std::ios::binary);
+std::string read_input_file(const std::string& path, const std::string& what, std::size_t max_bytes) {
+  std::ifstream in(path, std::ios::binary | std::ios::ate);
   if (!in) throw InputError(path + ": cannot open the " + what);
+  const auto size = static_cast<std::streamoff>(in.tellg());
+  if (size > 0 && static_cast<std::size_t>(size) > max_bytes)
+    throw InputError(path + ": the " + what + " has " + std::to_string(size) + " bytes, more than the " +
+                     std::to_string(max_bytes) + " a " + what + " may have");
+  in.seekg(0);
   std::ostringstream text;
   text << in.rdbuf();
   return text.str();
 }
 
 nlohmann::json parse_json_document(const std::string& text, const std::string& name) {
+  if (const std::size_t at = json_too_deep(text, max_json_depth); at != std::string::npos) {
+    throw InputError(format_input_error(name, location_of(text, at), "", "nested deeper than " + std::to_string(max_json_depth) + " levels"));
+  }
   try {
     return nlohmann::json::parse(text);
   } catch (const nlohmann::json::parse_error& e) {
@@ -139,10 +154,12 @@ double JsonNode::non_negative() const {
   return v;
 }
 
-long JsonNode::integer(long min) const {
+long JsonNode::integer(long min, long max) const {
   const double v = number();
-  if (v != std::floor(v) || std::abs(v) > 9e15) fail("must be an integer (got " + number_text(v) + ")");
+  if (v != std::floor(v) || std::abs(v) > static_cast<double>(max_integer))
+    fail("must be an integer (got " + number_text(v) + ")");
   if (v < static_cast<double>(min)) fail("must be >= " + std::to_string(min) + " (got " + number_text(v) + ")");
+  if (v > static_cast<double>(max)) fail("must be <= " + std::to_string(max) + " (got " + number_text(v) + ")");
   return static_cast<long>(v);
 }
 

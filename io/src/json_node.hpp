@@ -42,7 +42,9 @@ class JsonNode {
   double number() const;  // finite
   double positive() const;
   double non_negative() const;
-  long integer(long min) const;
+  // An integer in [min, max]; nothing is converted before it is known to fit.
+  long integer(long min, long max = max_integer) const;
+  static constexpr long max_integer = 9'000'000'000'000'000;  // below 2^53: every one exact in a double
   std::string string() const;
   std::vector<double> numbers() const;  // array of finite numbers, any length
   template <std::size_t N>
@@ -64,9 +66,14 @@ class JsonNode {
 // "file:line:col: path: what" with whatever of these is known.
 std::string format_input_error(const std::string& file, SourceLocation at, const std::string& path, const std::string& what);
 std::string number_text(double v);  // shortest text that reads back as v
-// The whole of an input file; InputError("path: cannot open the WHAT") if it cannot be read.
-std::string read_input_file(const std::string& path, const std::string& what);
-// Parses a JSON document; InputError("name:line:col: invalid JSON: ...") if it is not one.
+// The whole of an input file; InputError("path: cannot open the WHAT") if it cannot be
+// read, or if it is larger than max_bytes (checked before anything is read).
+std::string read_input_file(const std::string& path, const std::string& what, std::size_t max_bytes);
+// Input files nest no deeper than this (a model needs 5 levels): deeper text is refused
+// before it is parsed, since parsing and locating cost grows with depth.
+inline constexpr int max_json_depth = 64;
+// Parses a JSON document; InputError("name:line:col: invalid JSON: ...") if it is not one,
+// or if it nests deeper than max_json_depth.
 nlohmann::json parse_json_document(const std::string& text, const std::string& name);
 
 }  // namespace mbsflow

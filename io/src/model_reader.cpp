@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <sstream>
 
@@ -67,7 +68,7 @@ TimeFunction time_function(const JsonNode& n) {
     f.amplitude = n["amplitude"].non_negative();
     f.cutoff = n["cutoff"].positive();
     f.seed = static_cast<std::uint64_t>(n.find("seed") ? n["seed"].integer(0) : 0);
-    f.components = static_cast<int>(n.find("components") ? n["components"].integer(1) : 32);
+    f.components = static_cast<int>(n.find("components") ? n["components"].integer(1, TimeFunction::max_components) : 32);
   } else {
     n["type"].fail("must be one of constant, harmonic, table, random (got '" + type + "')");
   }
@@ -302,7 +303,7 @@ class Reader {
       s.method = *m;
     }
     if (auto v = n.find("variant")) s.variant = v->string();
-    if (auto v = n.find("output_every")) s.output_every = static_cast<int>(v->integer(1));
+    if (auto v = n.find("output_every")) s.output_every = static_cast<int>(v->integer(1, std::numeric_limits<int>::max()));
     if (auto v = n.find("output_interval")) s.output_interval = v->positive();
     if (auto v = n.find("rtol")) s.rtol = v->positive();
     if (auto v = n.find("atol")) s.atol = v->positive();
@@ -323,7 +324,7 @@ Model read_model_text(const std::string& text, const std::string& name) {
 }
 
 Model read_model_file(const std::string& path) {
-  return read_model_text(read_input_file(path, "model file"), path);
+  return read_model_text(read_input_file(path, "model file", max_model_bytes), path);
 }
 
 }  // namespace mbsflow

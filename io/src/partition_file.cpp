@@ -1,9 +1,11 @@
 #include "mbsflow/io/partition_file.hpp"
 
+#include <algorithm>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "json_node.hpp"
 #include "mbsflow/error.hpp"
 
 namespace mbsflow {
@@ -19,29 +21,24 @@ void write_partition_file(const Model& model, const Decomposition& d, const std:
 }
 
 Decomposition read_partition_file(const Model& model, const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path + ": cannot open the partition file");
-  nlohmann::json j;
+  const std::string text = read_input_file(path, "partition file", std::size_t{256} << 20);
+  const nlohmann::json j = parse_json_document(text, path);
+  const JsonSource src{path, JsonLocations(text)};
+  const JsonNode root(j, "", src);
+  root.expect_object();
+  const std::string name = root["model"].string();
+  const long bodies = root["bodies"].integer(0);
+  const long k = root["partitions"].integer(1, std::max<long>(1, static_cast<long>(model.bodies.size())));
+  if (name != model.name || bodies != static_cast<long>(model.bodies.size()))
+    throw InputError(path + ": the partition is for model '" + name + "' with " + std::to_string(bodies) +
+                     " bodies, not for '" + model.name + "' with " + std::to_string(model.bodies.size()));
+  const JsonNode list = root["part_of_body"];
+  std::vector<int> part(list.array_size());
+  for (std::size_t i = 0; i < part.size(); ++i) part[i] = static_cast<int>(list.item(i).integer(0, k - 1));
   try {
-    j = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::exception& e) {
-    throw InputError(path + ": not a partition file (" + std::string(e.what()) + ")");
-  }
-  try {
-    const std::string name = j.at("model").get<std::string>();
-    const auto bodies = j.at("bodies").get<std::size_t>();
-    const int k = j.at("partitions").get<int>();
-    const auto part = j.at("part_of_body").get<std::vector<int>>();
-    if (name != model.name || bodies != model.bodies.size())
-      throw InputError(path + ": the partition is for model '" + name + "' with " + std::to_string(bodies) +
-                       " bodies, not for '" + model.name + "' with " + std::to_string(model.bodies.size()));
-    try {
-      return decompose(model, part, k);
-    } catch (const InputError& e) {
-      throw InputError(path + ": " + e.what());
-    }
-  } catch (const nlohmann::json::exception& e) {
-    throw InputError(path + ": not a partition file (" + std::string(e.what()) + ")");
+    return decompose(model, part, static_cast<int>(k));
+  } catch (const InputError& e) {
+    throw InputError(path + ": " + e.what());
   }
 }
 

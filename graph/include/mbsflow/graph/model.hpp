@@ -134,6 +134,11 @@ struct Model {
   std::vector<std::shared_ptr<const ForceElement>> force_elements;
 };
 
+// Checks every field of the model (finite numbers, positive masses and inertias, body
+// indices in range, unit-able quaternions, time functions, run settings); InputError
+// naming the first bad field. MultibodySystem calls it, so every run does.
+void check_model(const Model& model);
+
 // Index of the body called name, ground for "ground", nullopt if unknown.
 std::optional<int> find_body(const Model& model, const std::string& name);
 

@@ -16,7 +16,8 @@ struct TimeFunction {
   std::vector<double> times, values;  // table: piecewise linear, held constant outside
   std::uint64_t seed = 0;  // random
   double cutoff = 0.0;     // random: highest frequency in Hz
-  int components = 32;     // random: number of sinusoids
+  int components = 32;     // random: number of sinusoids, 1 to max_components
+  static constexpr int max_components = 65536;
   double delay = 0.0;      // every kind: evaluated at t - delay
 
   static TimeFunction constant(double v) { TimeFunction f; f.value = v; return f; }

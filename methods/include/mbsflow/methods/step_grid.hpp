@@ -3,6 +3,9 @@
 // that both step through bit-identical times.
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+
+#include "mbsflow/error.hpp"
 
 namespace mbsflow {
 
@@ -12,9 +15,19 @@ struct StepGrid {
   double time(long n) const { return n >= steps ? t_end : t_start + static_cast<double>(n) * h; }
 };
 
+// More steps than this are refused: a run would never end, and beyond 2^53 steps the
+// times t_start + n h are no longer distinct.
+inline constexpr double max_grid_steps = 0x1p53;
+
 inline StepGrid step_grid(double t_start, double t_end, double h) {
   StepGrid g{t_start, t_end, h, 0};
   const double x = (t_end - t_start) / h;
+  if (!(x >= 0.0 && x <= max_grid_steps)) {
+    char buf[200];
+    std::snprintf(buf, sizeof buf, "{step=%.6g} over [%.6g, %.6g] makes %.3g steps, more than a run can take (2^53)", h,
+                  t_start, t_end, x);
+    throw InputError(buf);
+  }
   const double r = std::round(x);
   g.steps = std::abs(x - r) <= 1e-9 * std::max(1.0, x) ? static_cast<long>(r) : static_cast<long>(std::ceil(x));
   return g;
