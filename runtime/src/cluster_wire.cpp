@@ -1,14 +1,36 @@
 #include "cluster_wire.hpp"
 
+#include <algorithm>
 #include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <random>
 
+#include "json_depth.hpp"
 #include "mbsflow/error.hpp"
 
 namespace mbsflow::wire {
 
-zmq::socket_t make_socket(zmq::context_t& ctx, zmq::socket_type type) {
+std::uint64_t new_run_id() {
+  std::random_device rd;
+  return (static_cast<std::uint64_t>(rd()) << 32) ^ rd();
+}
+
+std::string run_text(std::uint64_t run) {
+  char buf[20];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(run));
+  return buf;
+}
+
+std::int64_t max_data_bytes(std::size_t bodies) {
+  // 13 numbers a body, twice for headroom, and 64 MiB for the coupling records of a run.
+  return static_cast<std::int64_t>(bodies) * 13 * 8 * 2 + (std::int64_t{64} << 20);
+}
+
+zmq::socket_t make_socket(zmq::context_t& ctx, zmq::socket_type type, std::int64_t max_bytes) {
   zmq::socket_t s(ctx, type);
   s.set(zmq::sockopt::linger, 0);
+  s.set(zmq::sockopt::maxmsgsize, max_bytes);
   return s;
 }
 
@@ -38,7 +60,9 @@ std::string reachable_address(zmq::socket_t& bound, const std::string& configure
 
 int poll(zmq::pollitem_t* items, std::size_t n, double seconds) {
   try {
-    return zmq::poll(items, n, std::chrono::milliseconds(static_cast<long>(seconds * 1000.0)));
+    // Clamped: a wait computed from a huge or NaN timeout must not overflow the cast.
+    const double ms = std::clamp(seconds * 1000.0, 0.0, 3.6e6);
+    return zmq::poll(items, n, std::chrono::milliseconds(static_cast<long>(std::isnan(ms) ? 0.0 : ms)));
   } catch (const zmq::error_t& e) {
     if (e.num() == EINTR) return 0;
     throw;
@@ -73,9 +97,36 @@ bool send_json(zmq::socket_t& s, const nlohmann::json& j, zmq::send_flags flags)
   return send(s, zmq::buffer(text), flags).has_value();
 }
 
-nlohmann::json parse_json(const zmq::message_t& m) {
-  return nlohmann::json::parse(static_cast<const char*>(m.data()), static_cast<const char*>(m.data()) + m.size(),
-                               nullptr, false);
+std::optional<nlohmann::json> parse_control(const zmq::message_t& m, std::optional<std::uint64_t> run) {
+  const char* text = static_cast<const char*>(m.data());
+  // The control messages nest 4 levels: deeper text is not parsed at all.
+  if (json_too_deep({text, m.size()}, 16) != std::string_view::npos) return std::nullopt;
+  nlohmann::json j = nlohmann::json::parse(text, text + m.size(), nullptr, false);
+  if (!j.is_object() || !j.contains("type") || !j["type"].is_string()) return std::nullopt;
+  if (run && wire::text(j, "run") != run_text(*run)) return std::nullopt;
+  return j;
+}
+
+std::string text(const nlohmann::json& j, const char* key, const std::string& otherwise) {
+  const auto it = j.find(key);
+  return it != j.end() && it->is_string() ? it->get<std::string>() : otherwise;
+}
+
+std::optional<double> number(const nlohmann::json& j, const char* key, double lo, double hi) {
+  const auto it = j.find(key);
+  if (it == j.end() || !it->is_number()) return std::nullopt;
+  const double v = it->get<double>();
+  if (!(v >= lo && v <= hi)) return std::nullopt;
+  return v;
+}
+
+void skip_rest(zmq::socket_t& s, const zmq::message_t& last) {
+  bool more = last.more();
+  while (more) {
+    zmq::message_t part;
+    if (!recv(s, part)) return;
+    more = part.more();
+  }
 }
 
 }  // namespace mbsflow::wire

@@ -14,12 +14,27 @@
 namespace mbsflow::wire {
 
 constexpr std::uint32_t magic = 0x4d42'5346;  // "MBSF"
+constexpr std::uint32_t frame_version = 2;     // of the binary headers below; 2: run ids
+
+// Every message of a run carries its run id, which the coordinator draws at random and
+// sends in its hello: a message of another run (replayed, or a late one of a run that
+// ended) is dropped.
+std::uint64_t new_run_id();
+std::string run_text(std::uint64_t run);  // 16 hex digits, as control messages carry it
+
+// The size caps of messages: ZeroMQ drops a peer whose message is larger before it is
+// received (ZMQ_MAXMSGSIZE). Control messages carry the model in the set-up.
+constexpr std::int64_t max_control_bytes = (std::int64_t{1} << 30) + (std::int64_t{16} << 20);
+// Boundary values and snapshots of a model of `bodies` bodies; coupling records of a run.
+std::int64_t max_data_bytes(std::size_t bodies);
 
 // Boundary values of submodel `from` for stage input `stage` of step `step`, for `to`.
 struct ExchangeHeader {
   std::uint32_t magic = wire::magic;
-  std::int32_t from = 0, to = 0, stage = 0;
+  std::uint32_t version = frame_version;
+  std::int32_t from = 0, to = 0, stage = 0, pad = 0;
   std::int64_t step = 0;
+  std::uint64_t run = 0;
 };
 
 // A dense snapshot (DOPRI5's dense output between steps) still needs the drivers imposed
@@ -35,7 +50,8 @@ struct ResultHeader {
   std::uint32_t magic = wire::magic;
   ResultKind kind = ResultKind::progress;
   std::int32_t worker = 0;
-  std::int32_t pad = 0;
+  std::uint32_t version = frame_version;
+  std::uint64_t run = 0;
   std::int64_t step = 0;   // steps completed
   std::int64_t index = 0;  // a snapshot's number: they complete in increasing order
   double t = 0.0;          // model time reached, or of the snapshot
@@ -47,8 +63,9 @@ constexpr std::size_t done_counts = 5;
 using Clock = std::chrono::steady_clock;
 inline double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
-// A socket that never holds the process at close (linger 0).
-zmq::socket_t make_socket(zmq::context_t& ctx, zmq::socket_type type);
+// A socket that never holds the process at close (linger 0) and takes no message larger
+// than max_bytes.
+zmq::socket_t make_socket(zmq::context_t& ctx, zmq::socket_type type, std::int64_t max_bytes = max_control_bytes);
 // Binds; InputError naming what the endpoint is for when it cannot.
 void bind(zmq::socket_t& s, const std::string& endpoint, const std::string& what);
 void connect(zmq::socket_t& s, const std::string& endpoint, const std::string& what);
@@ -68,7 +85,13 @@ zmq::send_result_t send(zmq::socket_t& s, zmq::message_t& m, zmq::send_flags fla
 // JSON control messages.
 // False when it would have to wait (the peer is gone or far behind).
 bool send_json(zmq::socket_t& s, const nlohmann::json& j, zmq::send_flags flags = zmq::send_flags::dontwait);
-nlohmann::json parse_json(const zmq::message_t& m);
+// A control message: a JSON object with a string "type"; nullopt for anything else. With
+// a run id, also nullopt unless the message carries that run's id ("run").
+std::optional<nlohmann::json> parse_control(const zmq::message_t& m, std::optional<std::uint64_t> run = std::nullopt);
+// Fields of a control message that may be anything: a string (else `otherwise`), a
+// number in [lo, hi] (else nullopt).
+std::string text(const nlohmann::json& j, const char* key, const std::string& otherwise = "");
+std::optional<double> number(const nlohmann::json& j, const char* key, double lo, double hi);
 
 // Header frame + payload frame.
 template <class Header>
@@ -76,13 +99,18 @@ bool send_framed(zmq::socket_t& s, const Header& h, const void* data, std::size_
   if (!send(s, zmq::const_buffer(&h, sizeof h), zmq::send_flags::sndmore)) return false;
   return send(s, zmq::const_buffer(data, bytes), zmq::send_flags::none).has_value();
 }
+// The header of a frame of run `run`; nullopt for anything else (size, magic, version,
+// another run).
 template <class Header>
-std::optional<Header> read_header(const zmq::message_t& m) {
+std::optional<Header> read_header(const zmq::message_t& m, std::uint64_t run) {
   if (m.size() != sizeof(Header)) return std::nullopt;
   Header h;
   std::memcpy(&h, m.data(), sizeof h);
-  if (h.magic != magic) return std::nullopt;
+  if (h.magic != magic || h.version != frame_version || h.run != run) return std::nullopt;
   return h;
 }
+
+// Receives the rest of a multipart message that is being dropped.
+void skip_rest(zmq::socket_t& s, const zmq::message_t& last);
 
 }  // namespace mbsflow::wire

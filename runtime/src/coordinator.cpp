@@ -19,6 +19,11 @@ namespace {
 using nlohmann::json;
 using wire::Clock;
 
+bool known_kind(wire::ResultKind k) {
+  const auto v = static_cast<std::uint32_t>(k);
+  return v >= static_cast<std::uint32_t>(wire::ResultKind::snapshot) && v <= static_cast<std::uint32_t>(wire::ResultKind::dense);
+}
+
 struct Peer {
   const ClusterWorker* config;
   zmq::socket_t control;  // DEALER connected to the worker's --listen endpoint
@@ -32,7 +37,8 @@ struct Peer {
 
 class Coordinator {
  public:
-  Coordinator(const ClusterConfig& c, const RunOptions& o) : c_(c), o_(o), results_(wire::make_socket(ctx_, zmq::socket_type::pull)) {
+  Coordinator(const ClusterConfig& c, const RunOptions& o, std::size_t bodies)
+      : c_(c), o_(o), results_(wire::make_socket(ctx_, zmq::socket_type::pull, wire::max_data_bytes(bodies))) {
     wire::bind(results_, c.results_bind, "the coordinator's results inbox");
     results_address_ = wire::reachable_address(results_, c.results_address, "the coordinator's results inbox " + c.results_bind);
     for (const ClusterWorker& w : c.workers) {
@@ -44,11 +50,14 @@ class Coordinator {
 
   std::string who(std::size_t w) const { return "worker " + peers_[w].config->name + " (" + peers_[w].config->address + ")"; }
 
-  void send(std::size_t w, const json& j) {
+  void send(std::size_t w, json j) {
     // A full queue means the worker has not taken anything for a long time; the heartbeat
     // check reports it.
+    j["run"] = wire::run_text(run_);
     (void)wire::send_json(peers_[w].control, j);
   }
+  std::uint64_t run() const { return run_; }
+  long dropped() const { return dropped_; }
   void send_all(const json& j) {
     for (std::size_t w = 0; w < peers_.size(); ++w) send(w, j);
   }
@@ -60,12 +69,12 @@ class Coordinator {
     while (std::any_of(peers_.begin(), peers_.end(), [](const Peer& p) { return !p.answered; })) {
       pump(
           [&](std::size_t w, const json& j) {
-            const std::string type = j.value("type", "");
+            const std::string type = wire::text(j, "type");
             if (type == want) {
               peers_[w].answered = true;
               take(w, j);
             } else if (type == "error") {
-              throw RunError(who(w) + ": " + j.value("message", std::string("failed")));
+              throw RunError(who(w) + ": " + wire::text(j, "message", "failed"));
             }
           },
           nullptr);
@@ -94,18 +103,29 @@ class Coordinator {
       if (!(items[w].revents & ZMQ_POLLIN)) continue;
       zmq::message_t m;
       while (wire::recv(peers_[w].control, m, zmq::recv_flags::dontwait)) {
+        // A worker's error before it knew the run (a refused hello) carries no run id.
+        auto j = wire::parse_control(m);
+        if (!j || (wire::text(*j, "run") != wire::run_text(run_) && wire::text(*j, "type") != "error")) {
+          ++dropped_;
+          continue;
+        }
         peers_[w].heard = Clock::now();
-        const json j = wire::parse_json(m);
-        if (j.is_object() && j.value("type", "") != "heartbeat") on_control(w, j);
+        if (wire::text(*j, "type") != "heartbeat") on_control(w, *j);
       }
     }
     if (items.back().revents & ZMQ_POLLIN) {
       zmq::message_t header, payload;
       while (wire::recv(results_, header, zmq::recv_flags::dontwait)) {
+        payload = zmq::message_t();
         if (header.more()) (void)wire::recv(results_, payload);
-        const auto h = wire::read_header<wire::ResultHeader>(header);
-        if (!h || h->worker < 0 || h->worker >= static_cast<int>(peers_.size()))
-          throw RunError("a malformed result message arrived at the coordinator");
+        wire::skip_rest(results_, payload);
+        // Anything but a result of this run from one of its workers is dropped: a stray or
+        // forged frame can neither end nor stop the run.
+        const auto h = wire::read_header<wire::ResultHeader>(header, run_);
+        if (!h || h->worker < 0 || h->worker >= static_cast<int>(peers_.size()) || !known_kind(h->kind)) {
+          ++dropped_;
+          continue;
+        }
         peers_[static_cast<std::size_t>(h->worker)].heard = Clock::now();
         if (on_result) on_result(*h, payload);
       }
@@ -132,7 +152,7 @@ class Coordinator {
     std::size_t left = peers_.size();
     const auto start = Clock::now();
     while (left > 0 && wire::seconds_since(start) < c_.timeouts.lost_s)
-      pump([&](std::size_t, const json& j) { left -= j.value("type", "") == "bye"; }, nullptr);
+      pump([&](std::size_t, const json& j) { left -= wire::text(j, "type") == "bye"; }, nullptr);
   }
   // Stops every worker. The sockets of the workers still heard from then close with a
   // linger of one second instead of none: bounded, and long enough for the abort to go
@@ -154,6 +174,8 @@ class Coordinator {
   std::string results_address_;
   std::vector<Peer> peers_;
   Clock::time_point beat_ = Clock::now();
+  std::uint64_t run_ = wire::new_run_id();
+  long dropped_ = 0;  // messages dropped as malformed or of another run
 };
 
 json setup_message(const std::string& model_json, const Decomposition& d, const std::vector<int>& worker_of, std::size_t w,
@@ -193,7 +215,7 @@ RunSummary run_cluster(const Model& model, const std::string& model_json, const 
   check_cluster_run(model, o, coupling);
   if (coupling.loose) check_loose_options(*coupling.loose, d.submodels.size());
   const std::vector<int> worker_of = assign_submodels(cluster, static_cast<int>(d.submodels.size()));
-  Coordinator co(cluster, o);
+  Coordinator co(cluster, o, model.bodies.size());
   auto& peers = co.peers();
   for (std::size_t q = 0; q < d.submodels.size(); ++q) {
     auto& b = peers[static_cast<std::size_t>(worker_of[q])].bodies;
@@ -221,7 +243,7 @@ RunSummary run_cluster(const Model& model, const std::string& model_json, const 
       co.gather("hello_ok", cluster.timeouts.connect_s, [](std::size_t, const json&) {});
       for (std::size_t w = 0; w < peers.size(); ++w)
         co.send(w, setup_message(model_json, d, worker_of, w, cluster.workers[w], o, co.results_address(), coupling));
-      co.gather("ready", 0.0, [&](std::size_t w, const json& j) { peers[w].data_address = j.value("data_address", ""); });
+      co.gather("ready", 0.0, [&](std::size_t w, const json& j) { peers[w].data_address = wire::text(j, "data_address"); });
       json names = json::array(), addresses = json::array();
       for (const Peer& p : peers) {
         names.push_back(p.config->name);
@@ -297,7 +319,7 @@ RunSummary run_cluster(const Model& model, const std::string& model_json, const 
       while (std::any_of(peers.begin(), peers.end(), [](const Peer& p) { return !p.done; })) {
         co.pump(
             [&](std::size_t w, const json& j) {
-              if (j.value("type", "") == "error") throw RunError(co.who(w) + ": " + j.value("message", std::string()));
+              if (wire::text(j, "type") == "error") throw RunError(co.who(w) + ": " + wire::text(j, "message"));
             },
             on_result);
         long all = peers.front().completed;
@@ -314,6 +336,9 @@ RunSummary run_cluster(const Model& model, const std::string& model_json, const 
         co.check_alive(where);
         check_stop(o, reached);
       }
+      if (!pending.empty())
+        throw RunError("every worker reported done, but snapshot " + std::to_string(pending.begin()->first) +
+                       " lacks the bodies of some of them");
       out.wall_seconds = std::chrono::duration<double>(Clock::now() - start_clock).count();
       co.finish();
     } catch (const std::exception& e) {

@@ -12,9 +12,9 @@ namespace mbsflow {
 RemoteExchange::RemoteExchange(zmq::context_t& ctx, zmq::socket_t& inbox, const Decomposition& d, std::vector<partitioned::Part*> parts,
                                std::vector<int> worker_of, const std::vector<std::string>& worker_names,
                                const std::vector<std::string>& data_addresses, int stages, double send_timeout_s,
-                               double delay_s)
+                               double delay_s, std::uint64_t run)
     : ctx_(ctx), inbox_socket_(inbox), data_addresses_(data_addresses), send_timeout_s_(send_timeout_s), d_(d), parts_(std::move(parts)), worker_of_(std::move(worker_of)), worker_names_(worker_names), stages_(stages),
-      outgoing_(d.submodels.size()), delay_s_(delay_s) {
+      outgoing_(d.submodels.size()), run_(run), delay_s_(delay_s) {
   const std::size_t workers = worker_names.size();
   first_of_.assign(workers, -1);
   elements_of_.resize(workers);
@@ -73,7 +73,7 @@ void RemoteExchange::deliver_delayed() {
 }
 
 bool RemoteExchange::store(zmq::message_t& header, zmq::message_t& payload) {
-  const auto h = wire::read_header<wire::ExchangeHeader>(header);
+  const auto h = wire::read_header<wire::ExchangeHeader>(header, run_);
   const auto k = static_cast<int>(d_.submodels.size());
   if (!h || h->to < 0 || h->to >= k || h->from < 0 || h->from >= k || h->stage < 0 || h->stage > stages_ + 1 ||
       !parts_[static_cast<std::size_t>(h->to)] || parts_[static_cast<std::size_t>(h->from)])
@@ -104,8 +104,20 @@ bool RemoteExchange::read_inbox(int ms) {
   zmq::pollitem_t item{inbox_socket_.handle(), 0, ZMQ_POLLIN, 0};
   if (wire::poll(&item, 1, ms / 1000.0) <= 0) return true;
   zmq::message_t header, payload;
+  // A message that is not two frames of this run with the sizes the model gives is
+  // dropped and counted: whoever could send it, it cannot stop or corrupt the run.
   while (wire::recv(inbox_socket_, header, zmq::recv_flags::dontwait)) {
-    if (!header.more() || !wire::recv(inbox_socket_, payload) || payload.more() || !store(header, payload)) return false;
+    if (!header.more()) {
+      ++dropped_;
+      continue;
+    }
+    if (!wire::recv(inbox_socket_, payload)) return false;
+    if (payload.more()) {
+      wire::skip_rest(inbox_socket_, payload);
+      ++dropped_;
+      continue;
+    }
+    if (!store(header, payload)) ++dropped_;
   }
   return true;
 }
@@ -187,6 +199,7 @@ void RemoteExchange::to_every_worker(long n, int stage, const std::vector<double
     h.to = first_of_[w];
     h.stage = stage;
     h.step = n;
+    h.run = run_;
     if (!post(it->second, h, std::move(payload))) throw RunError(why());
   }
   for (std::size_t w = 0; w < first_of_.size(); ++w) {
@@ -270,6 +283,7 @@ void RemoteExchange::send(int p, long n, int s) {
     h.to = o.to;
     h.stage = s;
     h.step = n;
+    h.run = run_;
     if (!post(*o.socket, h, std::move(payload))) return;
   }
 }

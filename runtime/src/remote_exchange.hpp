@@ -34,7 +34,8 @@ class RemoteExchange final : public BoundaryExchange {
   // parts[q]: local submodel q's state, null where q runs elsewhere; worker_of[q] its worker.
   RemoteExchange(zmq::context_t& ctx, zmq::socket_t& inbox, const Decomposition& d, std::vector<partitioned::Part*> parts,
                  std::vector<int> worker_of, const std::vector<std::string>& worker_names,
-                 const std::vector<std::string>& data_addresses, int stages, double send_timeout_s, double delay_s = 0.0);
+                 const std::vector<std::string>& data_addresses, int stages, double send_timeout_s, double delay_s,
+                 std::uint64_t run);
   ~RemoteExchange() override;
 
   // BoundaryExchange: local ghosts copied, remote ones received; values sent; the error
@@ -141,6 +142,8 @@ class RemoteExchange final : public BoundaryExchange {
   void deliver_delayed();
   // Sends one message now; stops the exchange, naming the receiving worker, if it cannot.
   bool transmit(zmq::socket_t& socket, const wire::ExchangeHeader& h, zmq::message_t& payload);
+  std::uint64_t run_;  // the run id of every message sent and taken
+  long dropped_ = 0;   // inbox messages dropped as malformed or of another run
   double delay_s_ = 0.0;
   std::mutex delay_mutex_;
   std::condition_variable delay_changed_;

@@ -1,4 +1,5 @@
 // mbsflow worker: one session with a coordinator (see cluster.hpp, docs/cluster.md).
+#include <algorithm>
 #include <cstdio>
 
 #include "cluster_wire.hpp"
@@ -27,10 +28,10 @@ json expect(WorkerIo& io, const std::string& want, double timeout_s, const std::
     }
     j = io.next_command(0.1);
   }
-  const std::string type = j->value("type", "");
+  const std::string type = wire::text(*j, "type");
   if (type == want) return *j;
-  if (type == "lost") throw RunError(j->value("reason", "the coordinator was lost"));
-  if (type == "abort") throw RunError("stopped by the coordinator: " + j->value("reason", std::string()));
+  if (type == "lost") throw RunError(wire::text(*j, "reason", "the coordinator was lost"));
+  if (type == "abort") throw RunError("stopped by the coordinator: " + wire::text(*j, "reason"));
   throw RunError("the coordinator sent '" + type + "' where '" + want + "' was due");
 }
 
@@ -42,15 +43,66 @@ json expect(WorkerIo& io, const std::string& want, double timeout_s, const std::
   throw RunError(why);
 }
 
-Session read_setup(const WorkerOptions& wo, const json& setup) {
-  Session s{wo.read_model(setup.at("model").get<std::string>()), {}, {}, 0, {}, {}, std::nullopt, 0.0};
-  s.d = decompose(s.model, setup.at("part_of_body").get<std::vector<int>>(), setup.at("submodels").get<int>());
-  s.worker_of = setup.at("worker_of").get<std::vector<int>>();
-  s.me = setup.at("worker").get<int>();
+// An integer of a set-up message in [lo, hi]; RunError otherwise (nothing converted
+// before it is known to fit).
+int setup_integer(const json& v, const char* what, int lo, int hi) {
+  if (!v.is_number_integer() || v.get<long long>() < lo || v.get<long long>() > hi)
+    throw RunError(std::string("the set-up's ") + what + " is not an integer in [" + std::to_string(lo) + ", " +
+                   std::to_string(hi) + "]");
+  return static_cast<int>(v.get<long long>());
+}
+
+std::vector<int> setup_integers(const json& v, const char* what, int lo, int hi) {
+  if (!v.is_array()) throw RunError(std::string("the set-up's ") + what + " is not a list");
+  std::vector<int> out;
+  out.reserve(v.size());
+  for (const json& x : v) out.push_back(setup_integer(x, what, lo, hi));
+  return out;
+}
+
+// A set-up endpoint must use the transport of this worker's --listen endpoint and, for
+// an ipc bind, lie in its directory: a coordinator cannot make a worker bind over any
+// file (ZeroMQ removes what is at an ipc path it binds).
+void check_endpoint(const std::string& e, const std::string& listen, const char* what, bool bind = false) {
+  const auto scheme = [](const std::string& x) { return x.substr(0, x.find("://")); };
+  if (scheme(e) != scheme(listen) || e.find("://") == std::string::npos)
+    throw RunError(std::string("the set-up's ") + what + " " + e + " is not a " + scheme(listen) + " endpoint like --listen");
+  if (bind && scheme(e) == "ipc") {
+    const auto dir = [](const std::string& x) { return x.substr(0, x.rfind('/') + 1); };
+    if (dir(e) != dir(listen) || e.find("..") != std::string::npos)
+      throw RunError(std::string("the set-up's ") + what + " " + e + " is not in the directory of --listen " + listen);
+  }
+}
+
+// The start message: a name and a data address (checked like the set-up's) per worker.
+void check_start(const json& start, const Session& s, const std::string& listen) {
+  const std::size_t workers = static_cast<std::size_t>(*std::max_element(s.worker_of.begin(), s.worker_of.end())) + 1;
+  for (const char* key : {"names", "data_addresses"}) {
+    const auto it = start.find(key);
+    if (it == start.end() || !it->is_array() || it->size() != workers)
+      throw RunError(std::string("the start's ") + key + " is not a list of " + std::to_string(workers) + " strings");
+    for (const json& v : *it) {
+      if (!v.is_string()) throw RunError(std::string("the start's ") + key + " is not a list of strings");
+      if (key == std::string("data_addresses")) check_endpoint(v.get<std::string>(), listen, "data address");
+    }
+  }
+}
+
+Session read_setup(const WorkerOptions& wo, const json& setup, const std::string& listen) {
+  Session s;
+  s.model = wo.read_model(setup.at("model").get<std::string>());
+  const int bodies = static_cast<int>(s.model.bodies.size());
+  const int k = setup_integer(setup.at("submodels"), "submodels", 1, std::max(1, bodies));
+  s.d = decompose(s.model, setup_integers(setup.at("part_of_body"), "part_of_body", 0, k - 1), k);
+  s.worker_of = setup_integers(setup.at("worker_of"), "worker_of", 0, k - 1);
+  s.me = setup_integer(setup.at("worker"), "worker", 0, k - 1);
   s.o = options_from_json(setup.at("options"));
   s.results_address = setup.at("results_address").get<std::string>();
+  check_endpoint(s.results_address, listen, "results address");
+  check_endpoint(setup.at("data_bind").get<std::string>(), listen, "data_bind", true);
   if (setup.contains("loose")) s.loose = loose_from_json(setup.at("loose"));
-  s.exchange_delay_s = setup.value("exchange_delay_s", 0.0);
+  s.exchange_delay_s = wire::number(setup, "exchange_delay_s", 0.0, 60.0).value_or(0.0);
+  s.threads = setup.contains("threads") ? setup_integer(setup.at("threads"), "threads", 0, 65536) : 0;
   return s;
 }
 
@@ -64,8 +116,8 @@ void serve_worker(const WorkerOptions& wo) {
   };
   if (wo.listening) wo.listening(io.endpoint());
   const json hello = expect(io, "hello", wo.idle_timeout_s, wo.stop);
-  const std::string program = hello.value("program", "?");
-  const int protocol = hello.value("protocol", -1);
+  const std::string program = wire::text(hello, "program", "?");
+  const int protocol = static_cast<int>(wire::number(hello, "protocol", -1e9, 1e9).value_or(-1));
   if (program != MBSFLOW_PROGRAM_VERSION || protocol != wo.protocol_version) {
     char buf[256];
     std::snprintf(buf, sizeof buf, "version mismatch: coordinator runs mbsflow %s (protocol %d), this worker %s (protocol %d)",
@@ -73,27 +125,33 @@ void serve_worker(const WorkerOptions& wo) {
     refuse(io, buf);
   }
   io.send({{"type", "hello_ok"}, {"program", MBSFLOW_PROGRAM_VERSION}, {"protocol", wo.protocol_version}});
-  log("coordinator " + hello.value("coordinator", std::string("?")) + " connected; this is worker " +
-      hello.value("name", std::string("?")));
+  log("coordinator " + wire::text(hello, "coordinator", "?") + " connected; this is worker " +
+      wire::text(hello, "name", "?"));
   // Setup: the model can be large; the coordinator's heartbeats tell it is still there.
   const json setup = expect(io, "setup", 0.0, wo.stop);
   Session s;
   try {
-    s = read_setup(wo, setup);
+    s = read_setup(wo, setup, io.endpoint());
+    s.run = std::stoull(wire::text(hello, "run"), nullptr, 16);  // WorkerIo took only a valid one
   } catch (const std::exception& e) {
     refuse(io, "cannot set up the run: " + error_text(e));
   }
-  zmq::socket_t inbox = wire::make_socket(ctx, zmq::socket_type::pull);
+  zmq::socket_t inbox = wire::make_socket(ctx, zmq::socket_type::pull, wire::max_data_bytes(s.model.bodies.size()));
   std::string data_address;
   try {
     const std::string bind = setup.at("data_bind").get<std::string>();
     wire::bind(inbox, bind, "the worker's inbox for boundary values");
-    data_address = wire::reachable_address(inbox, setup.value("data_address", std::string()), "the worker's inbox " + bind);
+    data_address = wire::reachable_address(inbox, wire::text(setup, "data_address"), "the worker's inbox " + bind);
   } catch (const std::exception& e) {
     refuse(io, error_text(e));
   }
   io.send({{"type", "ready"}, {"data_address", data_address}});
   const json start = expect(io, "start", 0.0, wo.stop);
+  try {
+    check_start(start, s, io.endpoint());
+  } catch (const std::exception& e) {
+    refuse(io, "cannot start the run: " + error_text(e));
+  }
   int own = 0;
   std::string list;
   for (std::size_t q = 0; q < s.worker_of.size(); ++q)
@@ -103,14 +161,14 @@ void serve_worker(const WorkerOptions& wo) {
     }
   log("running submodels " + list + " of " + std::to_string(s.worker_of.size()) + " (" + std::to_string(own) +
       " bodies), inbox " + data_address);
-  const int threads = setup.value("threads", 0) > 0 ? setup.value("threads", 0) : wo.threads;
+  const int threads = s.threads > 0 ? s.threads : wo.threads;
   const Outcome outcome = (s.loose ? run_loose_part : run_tight)(s, io, ctx, inbox, start, threads, wo.stop);
   const auto& [failure, last] = outcome;
   if (!failure.empty()) throw RunError(failure);
-  if (last && last->value("type", "") == "finish") io.goodbye();
-  if (!last || last->value("type", "") != "finish")
-    throw RunError(last ? "the run ended with '" + last->value("type", std::string()) + "' from the coordinator: " +
-                              last->value("reason", std::string())
+  if (last && wire::text(*last, "type") == "finish") io.goodbye();
+  if (!last || wire::text(*last, "type") != "finish")
+    throw RunError(last ? "the run ended with '" + wire::text(*last, "type") + "' from the coordinator: " +
+                              wire::text(*last, "reason")
                         : std::string("the coordinator did not finish the run"));
   log("run finished");
 }

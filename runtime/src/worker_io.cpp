@@ -55,7 +55,9 @@ void WorkerIo::send(nlohmann::json message) {
     if (coordinator_.empty()) return;
     try {
       wire::send(control_, zmq::buffer(coordinator_), zmq::send_flags::sndmore);
-      wire::send_json(control_, m);
+      nlohmann::json with_run = m;
+      with_run["run"] = wire::run_text(run_);
+      wire::send_json(control_, with_run);
     } catch (const zmq::error_t& e) {
       lose(std::string("the coordinator was lost: its connection is gone (") + e.what() + ")");
     }
@@ -79,15 +81,23 @@ ClusterTimeouts WorkerIo::timeouts() const {
   return timeouts_;
 }
 
-// Called with mutex_ not held, on the I/O thread.
+// The timeouts of a hello, nullopt unless each is in its range and lost_s is more than
+// twice heartbeat_s (a cluster file's rule): a coordinator cannot hold a worker forever.
+std::optional<ClusterTimeouts> hello_timeouts(const nlohmann::json& hello) {
+  const auto t = hello.find("timeouts");
+  if (t == hello.end() || !t->is_object()) return std::nullopt;
+  const auto connect = wire::number(*t, "connect_s", 1e-3, ClusterTimeouts::max_connect_s);
+  const auto beat = wire::number(*t, "heartbeat_s", 1e-3, ClusterTimeouts::max_heartbeat_s);
+  const auto lost = wire::number(*t, "lost_s", 1e-3, ClusterTimeouts::max_lost_s);
+  if (!connect || !beat || !lost || !(*lost > 2.0 * *beat)) return std::nullopt;
+  return ClusterTimeouts{*connect, *beat, *lost};
+}
+
+// Called with mutex_ not held, on the I/O thread; j is a valid control message.
 void WorkerIo::command(nlohmann::json j) {
-  const std::string type = j.value("type", "");
+  const std::string type = wire::text(j, "type");
   std::lock_guard lock(mutex_);
-  if (type == "hello" && j.contains("timeouts")) {
-    const auto& t = j["timeouts"];
-    timeouts_ = {t.value("connect_s", 10.0), t.value("heartbeat_s", 0.5), t.value("lost_s", 3.0)};
-  }
-  if (type == "abort" && exchange_) exchange_->abort("stopped by the coordinator: " + j.value("reason", std::string()));
+  if (type == "abort" && exchange_) exchange_->abort("stopped by the coordinator: " + wire::text(j, "reason"));
   commands_.push_back(std::move(j));
   changed_.notify_all();
 }
@@ -99,6 +109,14 @@ void WorkerIo::lose(const std::string& why) {
   if (exchange_) exchange_->abort(why);
   commands_.push_back({{"type", "lost"}, {"reason", why}});
   changed_.notify_all();
+}
+
+void WorkerIo::reply_error(const std::string& to, const std::string& message) {
+  try {
+    wire::send(control_, zmq::buffer(to), zmq::send_flags::sndmore);
+    wire::send_json(control_, {{"type", "error"}, {"message", message}});
+  } catch (const zmq::error_t&) {
+  }
 }
 
 void WorkerIo::loop() {
@@ -129,20 +147,31 @@ void WorkerIo::loop() {
       zmq::message_t id, body;
       (void)wire::recv(control_, id);
       if (id.more()) (void)wire::recv(control_, body);
+      wire::skip_rest(control_, body);
       const std::string from = id.to_string();
-      nlohmann::json j = wire::parse_json(body);
-      if (!j.is_object()) j = {{"type", "garbage"}};
-      if (coordinator_.empty() && j.value("type", "") == "hello") coordinator_ = from;
-      if (from != coordinator_) {
-        // Another coordinator while this one is busy: tell it so, once.
-        try {
-          wire::send(control_, zmq::buffer(from), zmq::send_flags::sndmore);
-          wire::send_json(control_, {{"type", "error"}, {"message", "this worker is busy with another run"}});
-        } catch (const zmq::error_t&) {
+      // Before the hello, only a hello with a run id and sane timeouts is taken; after it,
+      // only the coordinator's messages of its run. Anything else is dropped unread.
+      std::optional<nlohmann::json> j = wire::parse_control(body, coordinator_.empty() ? std::optional<std::uint64_t>() : std::optional<std::uint64_t>(run_));
+      if (coordinator_.empty() && j && wire::text(*j, "type") == "hello") {
+        const std::string run = wire::text(*j, "run");
+        const auto t = hello_timeouts(*j);
+        if (run.size() == 16 && run.find_first_not_of("0123456789abcdef") == std::string::npos && t) {
+          coordinator_ = from;
+          run_ = std::stoull(run, nullptr, 16);
+          std::lock_guard lock(mutex_);
+          timeouts_ = *t;
+        } else {
+          reply_error(from, "refused a hello without a run id or with timeouts out of range");
+          continue;
         }
+      }
+      if (!j && from == coordinator_) continue;
+      if (coordinator_.empty()) continue;
+      if (from != coordinator_) {
+        if (j) reply_error(from, "this worker is busy with another run");  // another coordinator
       } else {
         heard_ = Clock::now();
-        if (j.value("type", "") != "heartbeat") command(std::move(j));
+        if (wire::text(*j, "type") != "heartbeat") command(std::move(*j));
       }
     }
     if (!coordinator_.empty() && !lost) {
@@ -150,7 +179,7 @@ void WorkerIo::loop() {
         beat_ = Clock::now();
         try {
           wire::send(control_, zmq::buffer(coordinator_), zmq::send_flags::sndmore);
-          wire::send_json(control_, {{"type", "heartbeat"}});
+          wire::send_json(control_, {{"type", "heartbeat"}, {"run", wire::run_text(run_)}});
         } catch (const zmq::error_t& e) {
           lose(std::string("the coordinator was lost: its connection is gone (") + e.what() + ")");
         }

@@ -43,6 +43,7 @@ class WorkerIo {
   void loop();
   void command(nlohmann::json j);
   void lose(const std::string& why);
+  void reply_error(const std::string& to, const std::string& message);  // I/O thread
   void post_locked(std::function<void()> f);  // runs f on the I/O thread; call with mutex_ held
 
   zmq::context_t& ctx_;
@@ -61,6 +62,7 @@ class WorkerIo {
   bool lost_ = false;
   // I/O thread only.
   std::string coordinator_;  // its routing id
+  std::uint64_t run_ = 0;    // the run id of its hello (read by send() only after the hello)
   std::chrono::steady_clock::time_point heard_, beat_;
 };
 

@@ -12,7 +12,8 @@ WorkerPart::WorkerPart(Session& session, WorkerIo& io, zmq::context_t& ctx, zmq:
                        std::vector<partitioned::Part*> local, int stages, const std::atomic<bool>* stop)
     : s(session), parts(std::move(local)),
       exchange(ctx, inbox, s.d, parts, s.worker_of, start.at("names").get<std::vector<std::string>>(),
-               start.at("data_addresses").get<std::vector<std::string>>(), stages, io.timeouts().lost_s, s.exchange_delay_s),
+               start.at("data_addresses").get<std::vector<std::string>>(), stages, io.timeouts().lost_s, s.exchange_delay_s,
+               s.run),
       io_(io), results_(wire::make_socket(ctx, zmq::socket_type::push)), stop_(stop) {
   for (std::size_t q = 0; q < parts.size(); ++q)
     if (parts[q]) {
@@ -33,6 +34,7 @@ void WorkerPart::report(wire::ResultKind kind, long steps, double t, long index,
   h.step = steps;
   h.index = index;
   h.t = t;
+  h.run = s.run;
   bool ok = false;
   try {
     ok = wire::send_framed(results_, h, data, bytes);

@@ -26,6 +26,8 @@ struct Session {
   std::string results_address;
   std::optional<LooseOptions> loose;  // loose coupling, else tight
   double exchange_delay_s = 0.0;      // added to every boundary message (tests, benchmark)
+  std::uint64_t run = 0;              // the run id every message carries
+  int threads = 0;                    // > 0: the cluster file's threads for this worker
 };
 
 struct Outcome {

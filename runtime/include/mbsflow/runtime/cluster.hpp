@@ -15,12 +15,15 @@
 namespace mbsflow {
 
 // Raised with every incompatible change of the messages between processes.
-constexpr int cluster_protocol_version = 3;  // 2: loose coupling records, newest-value lag; 3: tight DOPRI5
+constexpr int cluster_protocol_version = 4;  // 2: loose coupling records, newest-value lag; 3: tight DOPRI5; 4: run ids, frame versions
 
 struct ClusterTimeouts {
   double connect_s = 10.0;   // every worker must answer the coordinator's hello within this
   double heartbeat_s = 0.5;  // both directions
   double lost_s = 3.0;       // silence after which a peer counts as lost
+  // The largest values accepted from a cluster file or the wire: beyond them a peer could
+  // hold the other side forever (and milliseconds overflow).
+  static constexpr double max_connect_s = 3600.0, max_heartbeat_s = 60.0, max_lost_s = 3600.0;
 };
 
 struct ClusterWorker {
