@@ -1,17 +1,26 @@
 #include "mbsflow/io/hdf5_sink.hpp"
 
 #include <algorithm>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <chrono>
 #include <optional>
 #include <type_traits>
 #include <array>
 #include <vector>
 
 #include "hdf5_handle.hpp"
+#include "writer_lock.hpp"
 #include "mbsflow/version.hpp"
 #include "xdmf_writer.hpp"
 
 namespace mbsflow {
 namespace {
+
+double now_seconds() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
 
 constexpr std::size_t buffer_bytes = std::size_t{32} << 20;  // bounds the chunk row kept in memory
 constexpr hsize_t chunk_samples = 4096;                       // time rows x bodies per chunk
@@ -85,6 +94,7 @@ void append(Series& s, hsize_t first_row) {
 }  // namespace
 
 struct Hdf5Sink::File {
+  WriterLock lock;  // first: released after the file is closed
   h5::Handle file;
   Series time;
   std::vector<std::pair<std::size_t, Series>> bodies;  // (index into body_fields, series)
@@ -111,11 +121,16 @@ void Hdf5Sink::begin(const MultibodySystem& system) {
   const Model& m = system.model();
   const auto n = static_cast<hsize_t>(m.bodies.size()), joints = static_cast<hsize_t>(m.joints.size());
   auto f = std::make_unique<File>();
-  // Dense attribute storage (file format 1.8+) so that large model texts fit as attributes.
+  // The file is made under another name and renamed when its layout is on disk: the path
+  // holds either what was there or a readable file, never a half-made one. A file that
+  // another run is writing (locked) is neither truncated nor replaced.
+  WriterLock::check_free(path_);
+  const std::string making = path_ + ".part";
+  f->lock = WriterLock(making);  // before H5Fcreate, which truncates  // Dense attribute storage (file format 1.8+) so that large model texts fit as attributes.
   const h5::Handle fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose, "create a file access list");
   h5::check(H5Pset_libver_bounds(fapl.get(), H5F_LIBVER_V18, H5F_LIBVER_LATEST), "set the file format");
-  f->file = h5::Handle(H5Fcreate(path_.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get()), H5Fclose,
-                       "create the results file " + path_);
+  f->file = h5::Handle(H5Fcreate(making.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get()), H5Fclose,
+                       "create the results file " + making);
   // Time rows per chunk: up to 16, fewer for very large models so the buffer stays bounded;
   // few rows also keep short what is left to write when a run ends.
   const std::size_t row_bytes = static_cast<std::size_t>(system.dimension() + 6 * static_cast<Eigen::Index>(joints) + 4) * 8;
@@ -152,6 +167,11 @@ void Hdf5Sink::begin(const MultibodySystem& system) {
   if (info_.output_interval > 0.0) h5::write_number_attribute(root, "output_interval", info_.output_interval);
   h5::write_string_attribute(root, "command_line", info_.command_line);
   h5::write_string_attribute(root, "fields", fields_text(fields_));
+  // The layout on disk now: a run killed before its first rows leaves a readable file.
+  h5::check(H5Fflush(root, H5F_SCOPE_GLOBAL), "flush " + path_);
+  if (std::rename(making.c_str(), path_.c_str()) != 0)
+    throw InputError("cannot rename " + making + " to " + path_ + ": " + std::strerror(errno));
+  last_flush_ = now_seconds();
   file_ = std::move(f);
 }
 
@@ -173,7 +193,8 @@ void Hdf5Sink::write(Snapshot&& s) {
   }
   if (f.joint_force) f.joint_force->buffer.insert(f.joint_force->buffer.end(), s.joint_wrench.data(), s.joint_wrench.data() + s.joint_wrench.size());
   if (f.motor_effort) f.motor_effort->buffer.insert(f.motor_effort->buffer.end(), s.motor_effort.data(), s.motor_effort.data() + s.motor_effort.size());
-  if (static_cast<hsize_t>(f.time.buffer.size()) >= f.rows_per_chunk) flush();
+  if (static_cast<hsize_t>(f.time.buffer.size()) >= f.rows_per_chunk || now_seconds() - last_flush_ >= flush_interval_s)
+    flush();
 }
 
 void Hdf5Sink::flush() {
@@ -188,6 +209,7 @@ void Hdf5Sink::flush() {
   append(f.time, first);  // last: a reader never sees a time without its data
   rows_written_ += rows;
   h5::check(H5Fflush(f.file.get(), H5F_SCOPE_GLOBAL), "flush " + path_);
+  last_flush_ = now_seconds();
 }
 
 void Hdf5Sink::write_coupling(const std::vector<CouplingRecord>& records) {

@@ -25,8 +25,12 @@ struct RunInfo {
   double output_interval = 0.0;  // s; 0: the grid is output_every steps
 };
 
+// Writes a run's results. The file is locked against a second run (which is refused, not
+// allowed to truncate it), its layout is flushed at creation and its rows at least every
+// second, so a killed run leaves a file that reads up to its last flush.
 class Hdf5Sink : public ResultSink {
  public:
+  static constexpr double flush_interval_s = 1.0;
   Hdf5Sink(std::string path, FieldSet fields, RunInfo info);
   ~Hdf5Sink() override;
   SnapshotContent content() const override { return {fields_.joint_force, fields_.energy}; }
@@ -38,7 +42,7 @@ class Hdf5Sink : public ResultSink {
   long snapshots_written() const { return rows_written_; }
 
  private:
-  struct File;  // HDF5 handles, in the .cpp
+  struct File;  // HDF5 handles and the writer lock, in the .cpp
   void flush();
 
   std::string path_;
@@ -47,6 +51,7 @@ class Hdf5Sink : public ResultSink {
   std::unique_ptr<File> file_;
   const MultibodySystem* system_ = nullptr;
   long rows_written_ = 0;
+  double last_flush_ = 0.0;  // steady-clock seconds: buffered rows are written at least every flush_interval_s
 };
 
 // Path of the XDMF sidecar of a results file: FILE.h5 -> FILE.xdmf.
