@@ -268,6 +268,7 @@ int run(const RunArgs& a) {
   ProgressLine progress(o.t_start, o.t_end, !a.quiet);
   o.progress = [&](double t, long steps) { progress.update(t, steps); };
   o.stop = install_stop_handlers();
+  if (sink) sink->set_stop(o.stop);
   RunPlan plan;
   plan.options = o;
   plan.partition = d;

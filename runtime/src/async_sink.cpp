@@ -29,8 +29,14 @@ void AsyncSink::write(Snapshot&& snapshot) {
   if (queue_.size() >= capacity_ && !error_) {
     const auto start = std::chrono::steady_clock::now();
     ++stats_.waits;
-    not_full_.wait(lock, [&] { return queue_.size() < capacity_ || error_; });
+    // Waits in slices: a stop request does not signal the condition.
+    while (!not_full_.wait_for(lock, std::chrono::milliseconds(50), [&] { return queue_.size() < capacity_ || error_; }))
+      if (stopping()) break;
     stats_.wait_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (queue_.size() >= capacity_ && !error_) {  // stopping: this one is not kept
+      ++dropped_;
+      return;
+    }
   }
   if (error_) {
     lock.unlock();
@@ -52,10 +58,20 @@ void AsyncSink::write_coupling(const std::vector<CouplingRecord>& records) { cou
 void AsyncSink::end() {
   if (writer_.joinable()) {
     {
-      std::lock_guard lock(mutex_);
+      std::unique_lock lock(mutex_);
       closing_ = true;
+      not_empty_.notify_one();
+      // Drains the queue, unless a stop request comes meanwhile (checked in slices: it
+      // does not signal): then what is still queued is dropped.
+      while (!queue_.empty()) {
+        if (stopping()) {
+          dropped_ += static_cast<long>(queue_.size());
+          queue_.clear();
+          break;
+        }
+        not_full_.wait_for(lock, std::chrono::milliseconds(50));
+      }
     }
-    not_empty_.notify_one();
     writer_.join();
     try {
       if (!coupling_.empty()) inner_->write_coupling(coupling_);
@@ -66,6 +82,13 @@ void AsyncSink::end() {
     inner_->end();
   }
   rethrow_writer_error();
+}
+
+bool AsyncSink::stopping() const { return stop_ && stop_->load(std::memory_order_relaxed); }
+
+SinkLoss AsyncSink::loss() const {
+  std::lock_guard lock(mutex_);
+  return {dropped_, took_any_ ? t_taken_ : 0.0};
 }
 
 void AsyncSink::rethrow_writer_error() {
@@ -86,6 +109,8 @@ void AsyncSink::run() {
       if (queue_.empty()) return;  // closing and drained
       s = std::move(queue_.front());
       queue_.pop_front();
+      t_taken_ = s.t;
+      took_any_ = true;
     }
     not_full_.notify_one();
     try {

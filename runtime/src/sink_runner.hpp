@@ -27,6 +27,18 @@ inline void emit(MultibodySystem& sys, ResultSink* sink, double t, const Eigen::
   out.t_last_snapshot = t;
 }
 
+// "; results keep N snapshots up to t = T s", after what a stop dropped unwritten.
+inline std::string results_kept(const ResultSink& sink, const RunSummary& out) {
+  char buf[200];
+  const SinkLoss loss = sink.loss();
+  if (loss.dropped > 0)
+    std::snprintf(buf, sizeof buf, "; %ld snapshots not yet written were dropped to stop in time; results keep %ld snapshots up to t = %.6g s",
+                  loss.dropped, out.snapshots - loss.dropped, loss.t_last_kept);
+  else
+    std::snprintf(buf, sizeof buf, "; results keep %ld snapshots up to t = %.6g s", out.snapshots, out.t_last_snapshot);
+  return buf;
+}
+
 // Runs body(); closes the sink whatever happens; a RunError gets told how far the
 // results go.
 // before_end() runs first on every way out (a loosely coupled run's coupling records).
@@ -50,14 +62,15 @@ void run_with_sink(ResultSink* sink, RunSummary& out, F body, G before_end = [] 
   } catch (const RunError& e) {
     close_quietly();
     if (!sink) throw;
-    char buf[128];
-    std::snprintf(buf, sizeof buf, "; results keep %ld snapshots up to t = %.6g s", out.snapshots, out.t_last_snapshot);
-    throw RunError(e.text() + buf);
+    throw RunError(e.text() + results_kept(*sink, out));
   } catch (...) {
     close_quietly();
     throw;
   }
-  if (sink) sink->end();
+  if (!sink) return;
+  sink->end();
+  // Stopped while the last snapshots were being written: the run is not complete.
+  if (sink->loss().dropped > 0) throw RunError("interrupted while writing the results" + results_kept(*sink, out));
 }
 
 // The registry entry of the run's method (InputError naming the methods there are).

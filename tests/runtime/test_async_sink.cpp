@@ -65,3 +65,49 @@ TEST_CASE("an error in the writer thread ends the run with that error", "[runtim
   CHECK(seen->times.size() == 10);
   CHECK(seen->ended);  // closed all the same
 }
+
+namespace {
+// A disk slower than the run: every write takes 100 ms.
+struct CrawlingSink : test::MemorySink {
+  void write(Snapshot&& s) override {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    test::MemorySink::write(std::move(s));
+  }
+};
+}  // namespace
+
+TEST_CASE("a stopped run with output outrunning the disk drops what is queued and says how much", "[runtime]") {
+  auto inner = std::make_unique<CrawlingSink>();
+  CrawlingSink* seen = inner.get();
+  AsyncSink sink(std::move(inner), std::size_t{1} << 20);  // room for every snapshot of the run
+  std::atomic<bool> stop{false};
+  sink.set_stop(&stop);
+  MultibodySystem sys(falling_body());
+  RunOptions o;
+  o.t_end = 1.0;
+  o.step = 0.005;
+  o.stop = &stop;
+  std::thread stopper([&] {  // once the run has queued snapshots faster than they are written
+    while (sink.waits() == 0 && seen->times.empty()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    stop = true;
+  });
+  // The 201 snapshots are queued at once: without a stop the writer would need 20 s.
+  std::string message;
+  const auto start = std::chrono::steady_clock::now();
+  try {
+    run_simulation(sys, o, &sink);
+  } catch (const RunError& e) {
+    message = e.what();
+  }
+  stopper.join();
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const SinkLoss loss = sink.loss();
+  INFO(message);
+  // The run may have finished computing before the stop came; it still ends interrupted.
+  CHECK(loss.dropped > 0);
+  CHECK_THAT(message, Catch::Contains(std::to_string(loss.dropped) + " snapshots not yet written were dropped to stop in time"));
+  CHECK(loss.dropped + static_cast<long>(seen->times.size()) == 201);
+  CHECK(seen->ended);
+  CHECK(loss.t_last_kept == seen->times.back());
+  CHECK(seconds < 10.0);  // 20 s if it had written them all
+}

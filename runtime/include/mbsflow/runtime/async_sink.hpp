@@ -1,4 +1,5 @@
 #pragma once
+#include <atomic>
 // Runs another sink on its own thread behind a bounded queue, so that writing results
 // never holds the computation back unless the queue is full. What the inner sink wants
 // besides the state (energies, joint wrenches) is computed on the writer thread too,
@@ -34,11 +35,17 @@ class AsyncSink : public ResultSink {
   void write_coupling(const std::vector<CouplingRecord>& records) override;  // handed on at end()
   void end() override;
   const AsyncSinkStats& stats() const { return stats_; }  // after end()
+  // Once *stop is set, end() drops the queued snapshots instead of writing them (and a full
+  // queue takes no more), so that a stopped run ends within a second or so whatever the
+  // disk's speed; loss() says how many.
+  void set_stop(const std::atomic<bool>* stop) { stop_ = stop; }
+  SinkLoss loss() const override;
   long waits() const;  // times the computation found the queue full so far (any thread)
 
  private:
   void run();
   void rethrow_writer_error();
+  bool stopping() const;
 
   std::unique_ptr<ResultSink> inner_;
   std::unique_ptr<MultibodySystem> system_;  // the writer's copy, for energies and joint wrenches
@@ -52,6 +59,10 @@ class AsyncSink : public ResultSink {
   std::exception_ptr error_;
   std::thread writer_;
   AsyncSinkStats stats_;
+  const std::atomic<bool>* stop_ = nullptr;
+  long dropped_ = 0;
+  double t_taken_ = 0.0;  // of the last snapshot the writer took
+  bool took_any_ = false;
 };
 
 }  // namespace mbsflow

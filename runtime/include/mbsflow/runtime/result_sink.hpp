@@ -33,6 +33,13 @@ struct CouplingRecord {
   int lag = 0;
 };
 
+// What a stopped run did not write: snapshots handed to write() but dropped so that the
+// run ends in time (AsyncSink), and the time of the last one kept.
+struct SinkLoss {
+  long dropped = 0;
+  double t_last_kept = 0.0;
+};
+
 class ResultSink {
  public:
   virtual ~ResultSink() = default;
@@ -43,6 +50,7 @@ class ResultSink {
   virtual void write_coupling(const std::vector<CouplingRecord>& records) { (void)records; }
   // Flushes and closes; called on every way out of a run, failed runs included.
   virtual void end() = 0;
+  virtual SinkLoss loss() const { return {}; }  // after end()
 };
 
 }  // namespace mbsflow
