@@ -11,6 +11,7 @@ packages=(
   iproute2  # ip netns, for the test across two network namespaces
   libsundials-dev libboost-dev
   libsuitesparse-dev  # KLU, the sparse LU of the implicit methods
+  clang libclang-rt-14-dev  # libFuzzer targets (tests/fuzz); Debian 12's clang is 14
 )
 missing=()
 for p in "${packages[@]}"; do
