@@ -47,6 +47,7 @@ struct RunArgs {
   std::string partitioner = "best";
   std::string cluster;  // cluster file
   int processes = 0;    // local worker processes
+  bool insecure = false, insecure_network = false;  // a cluster run without keys
   std::string transport = "tcp";
   std::string coupling = "tight";
   std::optional<double> macro_step;
@@ -227,7 +228,11 @@ int run(const RunArgs& a) {
   if (cluster) check_cluster_run(m, o, coupling);  // before any worker is started
   std::optional<LocalWorkers> local;
   ClusterConfig cc;
-  if (!a.cluster.empty()) cc = read_cluster_file(a.cluster);
+  if (!a.cluster.empty()) {
+    cc = read_cluster_file(a.cluster);
+    cc.insecure = a.insecure_network ? Insecure::anywhere : a.insecure ? Insecure::loopback : Insecure::no;
+    check_cluster_security(cc);  // before the run is set up
+  }
   if (a.processes > 0) {
     // Each worker gets its share of the cores unless --threads says how many.
     local.emplace(a.processes, a.transport, a.threads > 0 ? a.threads : std::max(1, threads / a.processes));
@@ -375,6 +380,13 @@ Action add_run(CLI::App& app) {
       ->check(CLI::IsMember({"tcp", "ipc"}))
       ->capture_default_str();
   sub->get_option("--cluster")->excludes(sub->get_option("--processes"));
+  sub->add_flag("--insecure", a->insecure,
+                "With --cluster: run without the cluster file's keys, on this host only (loopback endpoints): any local user "
+                "who can reach the ports could join the run")
+      ->needs(sub->get_option("--cluster"));
+  sub->add_flag("--insecure-network", a->insecure_network,
+                "With --cluster: run without keys on any network: only where everyone who can reach the ports is trusted")
+      ->needs(sub->get_option("--cluster"));
   sub->add_option("--coupling", a->coupling,
                   "tight: neighbours exchange every stage (bitwise the one-thread run); loose: each submodel integrates a "
                   "macro step on its own with extrapolated neighbours (co-simulation)")

@@ -4,6 +4,7 @@
 
 #include "commands.hpp"
 #include "mbsflow/error.hpp"
+#include "mbsflow/io/cluster_file.hpp"
 #include "mbsflow/io/model_reader.hpp"
 #include "mbsflow/runtime/cluster.hpp"
 #include "signals.hpp"
@@ -17,6 +18,8 @@ struct WorkerArgs {
   double idle_timeout = 0.0;
   bool quiet = false;
   int protocol = cluster_protocol_version;
+  std::string cluster, key;
+  bool insecure = false, insecure_network = false;
 };
 
 int worker(const WorkerArgs& a) {
@@ -25,6 +28,16 @@ int worker(const WorkerArgs& a) {
   o.threads = a.threads;
   o.idle_timeout_s = a.idle_timeout;
   o.protocol_version = a.protocol;
+  if (!a.cluster.empty()) {
+    const ClusterKeyFile f = read_cluster_keys(a.cluster);
+    o.admit = f.keys;
+    const std::string secret = a.key.empty() ? f.secret_key_file : a.key;
+    if (secret.empty()) throw InputError(a.cluster + ": names no secret_key; give this host's with --key");
+    o.keys = read_secret_key_file(secret);
+  } else if (!a.key.empty()) {
+    throw InputError("--key needs --cluster: the cluster file lists the keys this worker admits");
+  }
+  o.insecure = a.insecure_network ? Insecure::anywhere : a.insecure ? Insecure::loopback : Insecure::no;
   o.read_model = [](const std::string& text) { return read_model_text(text, "the coordinator's model"); };
   std::string name = a.listen;
   o.listening = [&](const std::string& endpoint) {
@@ -60,6 +73,15 @@ Action add_worker(CLI::App& app) {
   sub->add_option("--idle-timeout", a->idle_timeout, "Give up after this many seconds without a coordinator (default: wait)")
       ->check(CLI::PositiveNumber);
   sub->add_flag("-q,--quiet", a->quiet, "Print only errors");
+  sub->add_option("--cluster", a->cluster,
+                  "The cluster file: this worker admits only the coordinator and workers whose public keys it lists "
+                  "(ZeroMQ CURVE), with this host's secret key from its secret_key or --key");
+  sub->add_option("--key", a->key, "This host's secret key file (mbsflow keygen), if not the cluster file's secret_key");
+  sub->add_flag("--insecure", a->insecure, "Serve without keys, on a loopback endpoint only: any local user could drive it")
+      ->excludes(sub->get_option("--cluster"));
+  sub->add_flag("--insecure-network", a->insecure_network,
+                "Serve without keys on any endpoint: only where everyone who can reach the port is trusted")
+      ->excludes(sub->get_option("--cluster"));
   // For tests of the version check: pretend another protocol version.
   sub->add_option("--protocol-version", a->protocol)->group("");
   return [a] { return worker(*a); };

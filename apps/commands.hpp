@@ -16,6 +16,7 @@ Action add_info(CLI::App& app);
 Action add_export(CLI::App& app);
 Action add_worker(CLI::App& app);
 Action add_ode(CLI::App& app);
+Action add_keygen(CLI::App& app);
 
 // How the CLI names a setting that a library message mentions (mbsflow/error.hpp): its
 // flag, "--step 1e-05"; the per-submodel methods are --submodel-methods.

@@ -10,6 +10,8 @@
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
 #include <thread>
 
 #include "mbsflow/error.hpp"
@@ -72,19 +74,29 @@ std::string read_announcement(int fd, double timeout_s) {
 LocalWorkers::LocalWorkers(int n, const std::string& transport, int threads) {
   cluster_.transport = transport;
   cluster_.coordinator_name = "local";
-  if (transport == "ipc") {
-    char dir[] = "/tmp/mbsflow-XXXXXX";
-    if (!::mkdtemp(dir)) throw RunError("cannot make a directory for ipc endpoints in /tmp");
-    ipc_dir_ = dir;
-    cluster_.results_bind = "ipc://" + ipc_dir_ + "/results";
-  } else {
-    cluster_.results_bind = "tcp://127.0.0.1:*";
+  // An owner-only folder for the ipc endpoints and the run's keys: a key pair per process,
+  // made for this run, so that no other local user can join it (mkdtemp makes it 0700).
+  char dir[] = "/tmp/mbsflow-XXXXXX";
+  if (!::mkdtemp(dir)) throw RunError("cannot make a directory for the local workers in /tmp");
+  ipc_dir_ = dir;
+  cluster_.results_bind = transport == "ipc" ? "ipc://" + ipc_dir_ + "/results" : "tcp://127.0.0.1:*";
+  cluster_.keys = make_curve_keys();
+  cluster_.coordinator_key = cluster_.keys->public_key;
+  nlohmann::json keys = {{"coordinator", {{"public_key", cluster_.coordinator_key}}}, {"workers", nlohmann::json::array()}};
+  std::vector<CurveKeyPair> pairs;
+  for (int i = 0; i < n; ++i) {
+    pairs.push_back(make_curve_keys());
+    write_key_files(pairs.back(), ipc_dir_ + "/local" + std::to_string(i));
+    keys["workers"].push_back({{"public_key", pairs.back().public_key}});
   }
+  const std::string key_list = ipc_dir_ + "/keys.json";
+  std::ofstream(key_list) << keys.dump() << '\n';
   for (int i = 0; i < n; ++i) {
     const std::string name = "local" + std::to_string(i);
     const std::string listen = transport == "ipc" ? "ipc://" + ipc_dir_ + "/" + name + ".control" : "tcp://127.0.0.1:*";
     std::vector<std::string> args = {"worker", "--listen", listen, "--threads", std::to_string(threads),
-                                     "--idle-timeout", "60", "--quiet"};
+                                     "--idle-timeout", "60", "--quiet", "--cluster", key_list,
+                                     "--key", ipc_dir_ + "/" + name + ".key"};
     auto [pid, fd] = spawn_worker(args);
     pids_.push_back(pid);
     const std::string endpoint = read_announcement(fd, 30.0);
@@ -94,6 +106,7 @@ LocalWorkers::LocalWorkers(int n, const std::string& transport, int threads) {
     w.name = name;
     w.address = endpoint;
     w.data_bind = transport == "ipc" ? "ipc://" + ipc_dir_ + "/" + name + ".data" : "tcp://127.0.0.1:*";
+    w.public_key = pairs[static_cast<std::size_t>(i)].public_key;
     cluster_.workers.push_back(w);
   }
 }
@@ -114,7 +127,7 @@ LocalWorkers::~LocalWorkers() {
       std::this_thread::sleep_for(std::chrono::milliseconds(10));
     }
   }
-  if (!ipc_dir_.empty()) {
+  {
     std::error_code ignored;
     std::filesystem::remove_all(ipc_dir_, ignored);
   }

@@ -1,6 +1,7 @@
 #pragma once
 // mbsflow run --processes N: N workers on this host, started as child processes of this
-// program (`mbsflow worker`), listening on loopback tcp or ipc, and stopped with it.
+// program (`mbsflow worker`), listening on loopback tcp or ipc, and stopped with it; the
+// run is authenticated with key pairs made for it (CURVE).
 #include <sys/types.h>
 
 #include <string>
@@ -23,7 +24,7 @@ class LocalWorkers {
 
  private:
   std::vector<pid_t> pids_;
-  std::string ipc_dir_;  // for ipc endpoints; removed at the end
+  std::string ipc_dir_;  // owner-only: ipc endpoints and the run's keys; removed at the end
   ClusterConfig cluster_;
 };
 

@@ -25,6 +25,7 @@ int main(int argc, char** argv) {
   add(mbsflow::cli::add_bench);
   add(mbsflow::cli::add_worker);
   add(mbsflow::cli::add_ode);
+  add(mbsflow::cli::add_keygen);
   mbsflow::cli::set_invocation(argc, argv);
   try {
     app.parse(argc, argv);

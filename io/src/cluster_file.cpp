@@ -1,5 +1,6 @@
 #include "mbsflow/io/cluster_file.hpp"
 
+#include <filesystem>
 #include <limits>
 #include <set>
 
@@ -8,6 +9,13 @@
 
 namespace mbsflow {
 namespace {
+
+constexpr std::size_t max_cluster_bytes = std::size_t{16} << 20;
+
+std::string folder_of(const std::string& path) {
+  const std::string parent = std::filesystem::path(path).parent_path().string();
+  return parent.empty() ? "." : parent;
+}
 
 // An endpoint of the cluster's transport; "host:port" or "/path" get the transport's prefix.
 std::string endpoint(const JsonNode& n, const std::string& transport) {
@@ -40,10 +48,30 @@ std::string address_for(const JsonNode& owner, const char* key, const std::strin
   return "";  // what the bind gets
 }
 
-ClusterConfig read(const JsonNode& root) {
+std::string public_key(const JsonNode& n) {
+  const std::string k = n.string();
+  if (!is_curve_key(k)) n.fail("must be a CURVE public key: 40 characters of Z85, as `mbsflow keygen` writes in NAME.pub");
+  return k;
+}
+
+std::string secret_key_path(const JsonNode& root, const std::string& base_dir) {
+  const auto v = root.find("secret_key");
+  if (!v) return "";
+  const std::filesystem::path p = v->string();
+  return (p.is_absolute() ? p : std::filesystem::path(base_dir) / p).string();
+}
+
+ClusterConfig read(const JsonNode& root, const std::string& base_dir) {
   root.expect_object();
-  root.allow_only({"transport", "timeouts", "coordinator", "workers"});
+  root.allow_only({"transport", "timeouts", "coordinator", "workers", "secret_key"});
   ClusterConfig c;
+  if (const std::string secret = secret_key_path(root, base_dir); !secret.empty()) {
+    try {
+      c.keys = read_secret_key_file(secret);
+    } catch (const InputError& e) {
+      root["secret_key"].fail(e.what());
+    }
+  }
   if (auto t = root.find("transport")) {
     c.transport = t->string();
     if (c.transport != "tcp" && c.transport != "ipc") t->fail("must be \"tcp\" or \"ipc\" (got \"" + c.transport + "\")");
@@ -64,8 +92,9 @@ ClusterConfig read(const JsonNode& root) {
   }
   const JsonNode co = root["coordinator"];
   co.expect_object();
-  co.allow_only({"name", "bind", "address"});
+  co.allow_only({"name", "bind", "address", "public_key"});
   if (auto v = co.find("name")) c.coordinator_name = v->string();
+  if (auto v = co.find("public_key")) c.coordinator_key = public_key(*v);
   c.results_bind = endpoint(co["bind"], c.transport);
   c.results_address = address_for(co, "address", c.results_bind, "bind", c.transport);
 
@@ -76,7 +105,7 @@ ClusterConfig read(const JsonNode& root) {
   for (std::size_t i = 0; i < n; ++i) {
     const JsonNode w = ws.item(i);
     w.expect_object();
-    w.allow_only({"name", "listen", "address", "data_bind", "data_address", "weight", "submodels", "threads"});
+    w.allow_only({"name", "listen", "address", "data_bind", "data_address", "weight", "submodels", "threads", "public_key"});
     ClusterWorker cw;
     cw.name = w.has("name") ? w["name"].string() : "worker" + std::to_string(i);
     if (!names.insert(cw.name).second) w["name"].fail("\"" + cw.name + "\" names two workers");
@@ -95,6 +124,7 @@ ClusterConfig read(const JsonNode& root) {
     cw.data_bind = endpoint(w["data_bind"], c.transport);
     cw.data_address = address_for(w, "data_address", cw.data_bind, "data_bind", c.transport);
     if (auto v = w.find("weight")) cw.weight = static_cast<int>(v->integer(1, 1'000'000));
+    if (auto v = w.find("public_key")) cw.public_key = public_key(*v);
     if (auto v = w.find("threads")) cw.threads = static_cast<int>(v->integer(0, 65536));
     if (auto v = w.find("submodels")) {
       const std::size_t m = v->array_size();
@@ -110,14 +140,33 @@ ClusterConfig read(const JsonNode& root) {
 
 }  // namespace
 
-ClusterConfig read_cluster_text(const std::string& text, const std::string& name) {
+ClusterConfig read_cluster_text(const std::string& text, const std::string& name, const std::string& base_dir) {
   const nlohmann::json j = parse_json_document(text, name);
   JsonSource src{name, JsonLocations(text)};
-  return read(JsonNode(j, "", src));
+  return read(JsonNode(j, "", src), base_dir);
 }
 
 ClusterConfig read_cluster_file(const std::string& path) {
-  return read_cluster_text(read_input_file(path, "cluster file", std::size_t{16} << 20), path);
+  return read_cluster_text(read_input_file(path, "cluster file", max_cluster_bytes), path, folder_of(path));
+}
+
+ClusterKeyFile read_cluster_keys(const std::string& path) {
+  const std::string text = read_input_file(path, "cluster file", max_cluster_bytes);
+  const nlohmann::json j = parse_json_document(text, path);
+  JsonSource src{path, JsonLocations(text)};
+  const JsonNode root(j, "", src);
+  root.expect_object();
+  ClusterKeyFile out;
+  out.secret_key_file = secret_key_path(root, folder_of(path));
+  const JsonNode co = root["coordinator"];
+  co.expect_object();
+  out.keys.coordinator = public_key(co["public_key"]);
+  const JsonNode ws = root["workers"];
+  for (std::size_t i = 0; i < ws.array_size(); ++i) {
+    ws.item(i).expect_object();
+    out.keys.workers.push_back(public_key(ws.item(i)["public_key"]));
+  }
+  return out;
 }
 
 }  // namespace mbsflow

@@ -34,6 +34,27 @@ zmq::socket_t make_socket(zmq::context_t& ctx, zmq::socket_type type, std::int64
   return s;
 }
 
+void curve_server(zmq::socket_t& s, const Security* security, const char* domain) {
+  if (!security) return;
+  s.set(zmq::sockopt::curve_server, true);
+  s.set(zmq::sockopt::curve_secretkey, security->mine.secret_key);
+  s.set(zmq::sockopt::zap_domain, domain);
+}
+
+void curve_client(zmq::socket_t& s, const Security* security, const std::string& server_key) {
+  if (!security) return;
+  s.set(zmq::sockopt::curve_serverkey, server_key);
+  s.set(zmq::sockopt::curve_publickey, security->mine.public_key);
+  s.set(zmq::sockopt::curve_secretkey, security->mine.secret_key);
+}
+
+bool loopback(const std::string& e) {
+  if (e.rfind("ipc://", 0) == 0 || e.rfind("inproc://", 0) == 0) return true;
+  if (e.rfind("tcp://", 0) != 0) return false;
+  const std::string host = e.substr(6, e.rfind(':') == std::string::npos || e.rfind(':') < 6 ? std::string::npos : e.rfind(':') - 6);
+  return host.rfind("127.", 0) == 0 || host == "localhost" || host == "[::1]";
+}
+
 void bind(zmq::socket_t& s, const std::string& endpoint, const std::string& what) {
   try {
     s.bind(endpoint);

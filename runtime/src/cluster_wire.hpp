@@ -9,7 +9,10 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <vector>
 #include <zmq.hpp>
+
+#include "mbsflow/runtime/curve_keys.hpp"
 
 namespace mbsflow::wire {
 
@@ -66,6 +69,21 @@ inline double seconds_since(Clock::time_point t) { return std::chrono::duration<
 // A socket that never holds the process at close (linger 0) and takes no message larger
 // than max_bytes.
 zmq::socket_t make_socket(zmq::context_t& ctx, zmq::socket_type type, std::int64_t max_bytes = max_control_bytes);
+// CURVE for the sockets of one process of a run: its own pair and the peers' public keys
+// (a worker connects to the coordinator's results inbox and to other workers' inboxes as a
+// client that must know the server's key). Null where a run is insecure.
+struct Security {
+  CurveKeyPair mine;
+  std::string coordinator;           // public key
+  std::vector<std::string> workers;  // public keys, by worker number
+};
+// Before bind: a CURVE server whose clients the context's ZapGuard admits for `domain`.
+void curve_server(zmq::socket_t& s, const Security* security, const char* domain);
+// Before connect: a CURVE client of the server with public key server_key.
+void curve_client(zmq::socket_t& s, const Security* security, const std::string& server_key);
+// True for ipc and for tcp on 127.x.x.x, localhost or [::1].
+bool loopback(const std::string& endpoint);
+
 // Binds; InputError naming what the endpoint is for when it cannot.
 void bind(zmq::socket_t& s, const std::string& endpoint, const std::string& what);
 void connect(zmq::socket_t& s, const std::string& endpoint, const std::string& what);

@@ -12,6 +12,7 @@
 #include "sink_runner.hpp"
 #include "mbsflow/methods/step_grid.hpp"
 #include "tight_coupling.hpp"
+#include "zap_guard.hpp"
 
 namespace mbsflow {
 namespace {
@@ -39,10 +40,18 @@ class Coordinator {
  public:
   Coordinator(const ClusterConfig& c, const RunOptions& o, std::size_t bodies)
       : c_(c), o_(o), results_(wire::make_socket(ctx_, zmq::socket_type::pull, wire::max_data_bytes(bodies))) {
+    if (c.keys) {
+      security_ = wire::Security{*c.keys, c.coordinator_key, {}};
+      for (const ClusterWorker& w : c.workers) security_->workers.push_back(w.public_key);
+      zap_.emplace(ctx_, [](const std::string& line) { std::fprintf(stderr, "mbsflow coordinator: %s\n", line.c_str()); });
+      for (const ClusterWorker& w : c.workers) zap_->allow("results", w.public_key);
+    }
+    wire::curve_server(results_, security(), "results");
     wire::bind(results_, c.results_bind, "the coordinator's results inbox");
     results_address_ = wire::reachable_address(results_, c.results_address, "the coordinator's results inbox " + c.results_bind);
     for (const ClusterWorker& w : c.workers) {
       Peer p{&w, wire::make_socket(ctx_, zmq::socket_type::dealer), Clock::now(), {}, {}, 0, o.t_start, false, false};
+      wire::curve_client(p.control, security(), w.public_key);
       wire::connect(p.control, w.address, "worker " + w.name);
       peers_.push_back(std::move(p));
     }
@@ -57,6 +66,7 @@ class Coordinator {
     (void)wire::send_json(peers_[w].control, j);
   }
   std::uint64_t run() const { return run_; }
+  const wire::Security* security() const { return security_ ? &*security_ : nullptr; }
   long dropped() const { return dropped_; }
   void send_all(const json& j) {
     for (std::size_t w = 0; w < peers_.size(); ++w) send(w, j);
@@ -170,6 +180,8 @@ class Coordinator {
   const ClusterConfig& c_;
   const RunOptions& o_;
   zmq::context_t ctx_;
+  std::optional<ZapGuard> zap_;  // before the sockets: it outlives them
+  std::optional<wire::Security> security_;
   zmq::socket_t results_;
   std::string results_address_;
   std::vector<Peer> peers_;
@@ -180,7 +192,7 @@ class Coordinator {
 
 json setup_message(const std::string& model_json, const Decomposition& d, const std::vector<int>& worker_of, std::size_t w,
                    const ClusterWorker& cw, const RunOptions& o, const std::string& results_address,
-                   const ClusterCoupling& coupling) {
+                   const ClusterCoupling& coupling, const wire::Security* security) {
   json j = {{"type", "setup"},
           {"model", model_json},
           {"part_of_body", d.part_of_body},
@@ -194,6 +206,7 @@ json setup_message(const std::string& model_json, const Decomposition& d, const 
           {"threads", cw.threads},
           {"exchange_delay_s", coupling.exchange_delay_s}};
   if (coupling.loose) j["loose"] = loose_to_json(*coupling.loose);
+  if (security) j["worker_keys"] = security->workers;  // the peers' inboxes' server keys
   return j;
 }
 
@@ -213,6 +226,7 @@ RunSummary run_cluster(const Model& model, const std::string& model_json, const 
                        const ClusterConfig& cluster, const RunOptions& o, ResultSink* sink, ClusterStats* stats,
                        ClusterCoupling coupling) {
   check_cluster_run(model, o, coupling);
+  check_cluster_security(cluster);
   if (coupling.loose) check_loose_options(*coupling.loose, d.submodels.size());
   const std::vector<int> worker_of = assign_submodels(cluster, static_cast<int>(d.submodels.size()));
   Coordinator co(cluster, o, model.bodies.size());
@@ -225,7 +239,6 @@ RunSummary run_cluster(const Model& model, const std::string& model_json, const 
   MultibodySystem whole(model);  // for the sink: layout, energies, joint forces
   auto start_clock = Clock::now();
   Eigen::VectorXd y = whole.initial_state();
-  if (sink) sink->begin(whole);
   long evaluations = 0, steps = 0, rejected = 0;  // as the workers count them
   loose::CouplingLog coupling_log;  // loose coupling: the workers' records, merged
   run_with_sink(sink, out, [&] {
@@ -242,7 +255,8 @@ RunSummary run_cluster(const Model& model, const std::string& model_json, const 
                       {"lost_s", cluster.timeouts.lost_s}}}});
       co.gather("hello_ok", cluster.timeouts.connect_s, [](std::size_t, const json&) {});
       for (std::size_t w = 0; w < peers.size(); ++w)
-        co.send(w, setup_message(model_json, d, worker_of, w, cluster.workers[w], o, co.results_address(), coupling));
+        co.send(w, setup_message(model_json, d, worker_of, w, cluster.workers[w], o, co.results_address(), coupling,
+                                 co.security()));
       co.gather("ready", 0.0, [&](std::size_t w, const json& j) { peers[w].data_address = wire::text(j, "data_address"); });
       json names = json::array(), addresses = json::array();
       for (const Peer& p : peers) {
@@ -253,7 +267,11 @@ RunSummary run_cluster(const Model& model, const std::string& model_json, const 
       // Like run_partitioned's, the run's clock starts when the parts are set up.
       if (stats) stats->setup_seconds = std::chrono::duration<double>(Clock::now() - start_clock).count();
       start_clock = Clock::now();
-      if (sink) emit(whole, sink, o.t_start, y, out);
+      // The results file only once every worker is in: a refused run writes nothing.
+      if (sink) {
+        sink->begin(whole);
+        emit(whole, sink, o.t_start, y, out);
+      }
 
       struct Pending {
         Eigen::VectorXd y;

@@ -12,9 +12,9 @@ namespace mbsflow {
 RemoteExchange::RemoteExchange(zmq::context_t& ctx, zmq::socket_t& inbox, const Decomposition& d, std::vector<partitioned::Part*> parts,
                                std::vector<int> worker_of, const std::vector<std::string>& worker_names,
                                const std::vector<std::string>& data_addresses, int stages, double send_timeout_s,
-                               double delay_s, std::uint64_t run)
+                               double delay_s, std::uint64_t run, const wire::Security* security)
     : ctx_(ctx), inbox_socket_(inbox), data_addresses_(data_addresses), send_timeout_s_(send_timeout_s), d_(d), parts_(std::move(parts)), worker_of_(std::move(worker_of)), worker_names_(worker_names), stages_(stages),
-      outgoing_(d.submodels.size()), run_(run), delay_s_(delay_s) {
+      outgoing_(d.submodels.size()), run_(run), security_(security), delay_s_(delay_s) {
   const std::size_t workers = worker_names.size();
   first_of_.assign(workers, -1);
   elements_of_.resize(workers);
@@ -35,13 +35,16 @@ RemoteExchange::RemoteExchange(zmq::context_t& ctx, zmq::socket_t& inbox, const 
       if (!parts_[p]) continue;
       const int w = worker_of_[r];
       auto [it, added] = senders_.try_emplace({static_cast<int>(p), w}, wire::make_socket(ctx, zmq::socket_type::push));
-      if (added) {
-        it->second.set(zmq::sockopt::sndtimeo, static_cast<int>(send_timeout_s * 1000.0));
-        wire::connect(it->second, data_addresses[static_cast<std::size_t>(w)], "worker " + worker_names_[static_cast<std::size_t>(w)]);
-      }
+      if (added) open_sender(it->second, static_cast<std::size_t>(w));
       outgoing_[p].push_back({static_cast<int>(r), &e.from, &it->second});
     }
   }
+}
+
+void RemoteExchange::open_sender(zmq::socket_t& s, std::size_t w) {
+  s.set(zmq::sockopt::sndtimeo, static_cast<int>(send_timeout_s_ * 1000.0));
+  if (security_) wire::curve_client(s, security_, security_->workers.at(w));
+  wire::connect(s, data_addresses_[w], "worker " + worker_names_[w]);
 }
 
 RemoteExchange::~RemoteExchange() {
@@ -189,10 +192,7 @@ void RemoteExchange::to_every_worker(long n, int stage, const std::vector<double
   for (std::size_t w = 0; w < first_of_.size(); ++w) {
     if (w == me || first_of_[w] < 0) continue;
     auto [it, added] = senders_.try_emplace({mine, static_cast<int>(w)}, wire::make_socket(ctx_, zmq::socket_type::push));
-    if (added) {
-      it->second.set(zmq::sockopt::sndtimeo, static_cast<int>(send_timeout_s_ * 1000.0));
-      wire::connect(it->second, data_addresses_[w], "worker " + worker_names_[w]);
-    }
+    if (added) open_sender(it->second, w);
     zmq::message_t payload(own.data(), own.size() * sizeof(double));
     wire::ExchangeHeader h;
     h.from = mine;

@@ -35,7 +35,7 @@ class RemoteExchange final : public BoundaryExchange {
   RemoteExchange(zmq::context_t& ctx, zmq::socket_t& inbox, const Decomposition& d, std::vector<partitioned::Part*> parts,
                  std::vector<int> worker_of, const std::vector<std::string>& worker_names,
                  const std::vector<std::string>& data_addresses, int stages, double send_timeout_s, double delay_s,
-                 std::uint64_t run);
+                 std::uint64_t run, const wire::Security* security);
   ~RemoteExchange() override;
 
   // BoundaryExchange: local ghosts copied, remote ones received; values sent; the error
@@ -142,7 +142,9 @@ class RemoteExchange final : public BoundaryExchange {
   void deliver_delayed();
   // Sends one message now; stops the exchange, naming the receiving worker, if it cannot.
   bool transmit(zmq::socket_t& socket, const wire::ExchangeHeader& h, zmq::message_t& payload);
+  void open_sender(zmq::socket_t& s, std::size_t worker);  // timeout, CURVE, connect to its inbox
   std::uint64_t run_;  // the run id of every message sent and taken
+  const wire::Security* security_;  // CURVE client keys for the other workers' inboxes, or null
   long dropped_ = 0;   // inbox messages dropped as malformed or of another run
   double delay_s_ = 0.0;
   std::mutex delay_mutex_;

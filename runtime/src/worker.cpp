@@ -8,6 +8,7 @@
 #include "mbsflow/runtime/cluster.hpp"
 #include "options_json.hpp"
 #include "worker_part.hpp"
+#include "zap_guard.hpp"
 
 namespace mbsflow {
 namespace {
@@ -106,14 +107,37 @@ Session read_setup(const WorkerOptions& wo, const json& setup, const std::string
   return s;
 }
 
+// The worker's CURVE settings, or null for an insecure worker (InputError unless asked for,
+// and on loopback unless asked for anywhere).
+std::optional<wire::Security> worker_security(const WorkerOptions& wo) {
+  if (wo.keys) {
+    if (!is_curve_key(wo.admit.coordinator)) throw InputError("the cluster file gives no public_key of the coordinator");
+    return wire::Security{*wo.keys, wo.admit.coordinator, {}};
+  }
+  if (wo.insecure == Insecure::no)
+    throw InputError("no key: give the cluster file and this host's secret key (mbsflow keygen), or --insecure to "
+                     "serve any coordinator on this host");
+  if (wo.insecure == Insecure::loopback && !wire::loopback(wo.listen))
+    throw InputError("--insecure serves this host only, and " + wo.listen +
+                     " is not a loopback endpoint: give keys, or --insecure-network");
+  return std::nullopt;
+}
+
 }  // namespace
 
 void serve_worker(const WorkerOptions& wo) {
+  const std::optional<wire::Security> security = worker_security(wo);
   zmq::context_t ctx;
-  WorkerIo io(ctx, wo.listen);
   auto log = [&](const std::string& line) {
     if (wo.log) wo.log(line);
   };
+  std::optional<ZapGuard> zap;  // before the sockets: it outlives them
+  if (security) {
+    zap.emplace(ctx, [&](const std::string& line) { log(line); });
+    zap->allow("control", wo.admit.coordinator);
+    for (const std::string& k : wo.admit.workers) zap->allow("data", k);
+  }
+  WorkerIo io(ctx, wo.listen, security ? &*security : nullptr);
   if (wo.listening) wo.listening(io.endpoint());
   const json hello = expect(io, "hello", wo.idle_timeout_s, wo.stop);
   const std::string program = wire::text(hello, "program", "?");
@@ -133,10 +157,22 @@ void serve_worker(const WorkerOptions& wo) {
   try {
     s = read_setup(wo, setup, io.endpoint());
     s.run = std::stoull(wire::text(hello, "run"), nullptr, 16);  // WorkerIo took only a valid one
+    if (security) {
+      s.security = security;
+      const auto keys = setup.find("worker_keys");
+      if (keys == setup.end() || !keys->is_array() || keys->size() != static_cast<std::size_t>(*std::max_element(s.worker_of.begin(), s.worker_of.end())) + 1)
+        throw RunError("the set-up gives no public key per worker");
+      for (const json& k : *keys) {
+        if (!k.is_string() || std::find(wo.admit.workers.begin(), wo.admit.workers.end(), k.get<std::string>()) == wo.admit.workers.end())
+          throw RunError("the set-up names a worker key that this worker's cluster file does not list");
+        s.security->workers.push_back(k.get<std::string>());
+      }
+    }
   } catch (const std::exception& e) {
     refuse(io, "cannot set up the run: " + error_text(e));
   }
   zmq::socket_t inbox = wire::make_socket(ctx, zmq::socket_type::pull, wire::max_data_bytes(s.model.bodies.size()));
+  wire::curve_server(inbox, s.security ? &*s.security : nullptr, "data");
   std::string data_address;
   try {
     const std::string bind = setup.at("data_bind").get<std::string>();

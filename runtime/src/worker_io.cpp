@@ -10,13 +10,14 @@ namespace {
 std::atomic<int> io_count{0};  // distinct inproc names for several workers in one process (tests)
 }
 
-WorkerIo::WorkerIo(zmq::context_t& ctx, const std::string& listen)
+WorkerIo::WorkerIo(zmq::context_t& ctx, const std::string& listen, const wire::Security* security)
     : ctx_(ctx), control_(wire::make_socket(ctx, zmq::socket_type::router)),
       wake_in_(wire::make_socket(ctx, zmq::socket_type::pair)), wake_out_(wire::make_socket(ctx, zmq::socket_type::pair)) {
   const std::string wake = "inproc://mbsflow-worker-io-" + std::to_string(io_count++);
   wake_in_.bind(wake);
   wake_out_.connect(wake);
   control_.set(zmq::sockopt::router_mandatory, 1);  // a reply to a vanished coordinator fails, never drops
+  wire::curve_server(control_, security, "control");
   wire::bind(control_, listen, "the worker's control socket");
   endpoint_ = control_.get(zmq::sockopt::last_endpoint);
   thread_ = std::thread([this] { loop(); });

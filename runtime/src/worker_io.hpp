@@ -13,6 +13,7 @@
 #include <thread>
 #include <zmq.hpp>
 
+#include "cluster_wire.hpp"
 #include "mbsflow/runtime/cluster.hpp"
 
 namespace mbsflow {
@@ -22,7 +23,8 @@ class RemoteExchange;
 class WorkerIo {
  public:
   // Binds the control socket (InputError if it cannot) and starts the thread.
-  WorkerIo(zmq::context_t& ctx, const std::string& listen);
+  // security: CURVE on the control socket (the context's ZapGuard admits the coordinator).
+  WorkerIo(zmq::context_t& ctx, const std::string& listen, const wire::Security* security);
   ~WorkerIo();
   WorkerIo(const WorkerIo&) = delete;
   WorkerIo& operator=(const WorkerIo&) = delete;

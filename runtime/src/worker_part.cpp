@@ -13,7 +13,7 @@ WorkerPart::WorkerPart(Session& session, WorkerIo& io, zmq::context_t& ctx, zmq:
     : s(session), parts(std::move(local)),
       exchange(ctx, inbox, s.d, parts, s.worker_of, start.at("names").get<std::vector<std::string>>(),
                start.at("data_addresses").get<std::vector<std::string>>(), stages, io.timeouts().lost_s, s.exchange_delay_s,
-               s.run),
+               s.run, s.security ? &*s.security : nullptr),
       io_(io), results_(wire::make_socket(ctx, zmq::socket_type::push)), stop_(stop) {
   for (std::size_t q = 0; q < parts.size(); ++q)
     if (parts[q]) {
@@ -22,6 +22,7 @@ WorkerPart::WorkerPart(Session& session, WorkerIo& io, zmq::context_t& ctx, zmq:
     }
   io.attach(&exchange);
   results_.set(zmq::sockopt::sndtimeo, static_cast<int>(io.timeouts().lost_s * 1000.0));
+  if (s.security) wire::curve_client(results_, &*s.security, s.security->coordinator);
   wire::connect(results_, s.results_address, "the coordinator's results inbox");
 }
 

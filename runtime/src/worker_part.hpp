@@ -28,6 +28,7 @@ struct Session {
   double exchange_delay_s = 0.0;      // added to every boundary message (tests, benchmark)
   std::uint64_t run = 0;              // the run id every message carries
   int threads = 0;                    // > 0: the cluster file's threads for this worker
+  std::optional<wire::Security> security;  // CURVE: the peers' public keys
 };
 
 struct Outcome {

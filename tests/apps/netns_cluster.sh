@@ -47,20 +47,23 @@ fi
 
 rm -rf "$work" && mkdir -p "$work" && cd "$work" || fail "cannot make $work"
 "$exe" generate chain --bodies 60 -o chain.json >/dev/null || fail "generate"
+# A key pair per process (CURVE): the run across the two namespaces is authenticated.
+kc=$("$exe" keygen coordinator 2>/dev/null) && ka=$("$exe" keygen a 2>/dev/null) && kb=$("$exe" keygen b 2>/dev/null) ||
+  fail "keygen"
 cat > cluster.json <<JSON
-{"transport": "tcp", "timeouts": {"connect_s": 10, "heartbeat_s": 0.5, "lost_s": 5},
- "coordinator": {"name": "a", "bind": "tcp://$net.1:5550"},
+{"transport": "tcp", "timeouts": {"connect_s": 10, "heartbeat_s": 0.5, "lost_s": 5}, "secret_key": "coordinator.key",
+ "coordinator": {"name": "a", "bind": "tcp://$net.1:5550", "public_key": "$kc"},
  "workers": [
-   {"name": "a", "listen": "tcp://$net.1:5560", "data_bind": "tcp://$net.1:5561", "threads": 1},
-   {"name": "b", "listen": "tcp://$net.2:5560", "data_bind": "tcp://$net.2:5561", "threads": 1}]}
+   {"name": "a", "listen": "tcp://$net.1:5560", "data_bind": "tcp://$net.1:5561", "threads": 1, "public_key": "$ka"},
+   {"name": "b", "listen": "tcp://$net.2:5560", "data_bind": "tcp://$net.2:5561", "threads": 1, "public_key": "$kb"}]}
 JSON
 common="--t-end 0.05 --step 1e-4 --every 100 --partitions 3 --coupling loose --extrapolation 2"
 
 # One run on the two namespaces' workers (each serves one run and exits).
 across() {
   pids=()
-  ip netns exec "$a" "$exe" worker --listen "tcp://$net.1:5560" >"worker_a.log" 2>&1 & pids+=($!)
-  ip netns exec "$b" "$exe" worker --listen "tcp://$net.2:5560" >"worker_b.log" 2>&1 & pids+=($!)
+  ip netns exec "$a" "$exe" worker --listen "tcp://$net.1:5560" --cluster cluster.json --key a.key >"worker_a.log" 2>&1 & pids+=($!)
+  ip netns exec "$b" "$exe" worker --listen "tcp://$net.2:5560" --cluster cluster.json --key b.key >"worker_b.log" 2>&1 & pids+=($!)
   ip netns exec "$a" "$exe" run chain.json $common --cluster cluster.json $delay "$@"
   local rc=$?
   wait "${pids[@]}" 2>/dev/null

@@ -27,7 +27,7 @@ struct Workers {
   std::vector<std::string> endpoints;
   Workers(int n, const fs::path& dir, const std::vector<std::string>& extra = {}, const std::string& name = "w") {
     for (int i = 0; i < n; ++i) {
-      std::vector<std::string> args{"worker", "--listen", "tcp://127.0.0.1:*", "--threads", "1"};
+      std::vector<std::string> args{"worker", "--listen", "tcp://127.0.0.1:*", "--threads", "1", "--insecure"};
       args.insert(args.end(), extra.begin(), extra.end());
       procs.push_back(std::make_unique<Child>(args, dir, name + std::to_string(i)));
       endpoints.push_back(procs.back()->endpoint());
@@ -77,7 +77,7 @@ TEST_CASE("runs on 2, 3 and 4 processes write the one-process results bit for bi
   // A cluster file with workers started by hand, two submodels on the first.
   Workers w(2, d);
   write_cluster(d / "cluster.json", w.endpoints);
-  const Result r = run("run grid.json --t-end 0.05 --every 10 -q -o grid-c.h5 --cluster cluster.json --partitions 3", dir);
+  const Result r = run("run grid.json --t-end 0.05 --every 10 -q -o grid-c.h5 --cluster cluster.json --insecure --partitions 3", dir);
   INFO(r.err);
   CHECK(r.code == 0);
   CHECK(same_results(d / "grid-1.h5", d / "grid-c.h5"));
@@ -133,7 +133,7 @@ TEST_CASE("a worker killed mid-run: the coordinator names it, keeps the results 
     REQUIRE(run("generate chain --bodies 400 -o chain.json", dir).code == 0);
     Workers w(2, d);
     write_cluster(d / "cluster.json", w.endpoints);
-    std::vector<std::string> args{"run", "chain.json", "--cluster", "cluster.json", "--t-end", "1000", "--every", "20", "-o", "out.h5"};
+    std::vector<std::string> args{"run", "chain.json", "--cluster", "cluster.json", "--insecure", "--t-end", "1000", "--every", "20", "-o", "out.h5"};
     if (loose) args.insert(args.end(), {"--coupling", "loose"});
     Child coordinator(args, d, "coordinator");
     std::this_thread::sleep_for(std::chrono::milliseconds(3000));  // also long enough under sanitizers
@@ -168,7 +168,7 @@ TEST_CASE("the coordinator killed: every worker notices and exits within 5 s", "
   REQUIRE(run("generate chain --bodies 2000 -o chain.json", dir).code == 0);
   Workers w(3, d);
   write_cluster(d / "cluster.json", w.endpoints);
-  Child coordinator({"run", "chain.json", "--cluster", "cluster.json", "--t-end", "1000", "-o", "out.h5"}, d, "coordinator");
+  Child coordinator({"run", "chain.json", "--cluster", "cluster.json", "--insecure", "--t-end", "1000", "-o", "out.h5"}, d, "coordinator");
   std::this_thread::sleep_for(std::chrono::milliseconds(2500));
   REQUIRE(!coordinator.wait(0.0));
   coordinator.kill(SIGKILL);
@@ -209,7 +209,7 @@ TEST_CASE("cluster set-up errors: unreachable worker, port in use, bad cluster f
   // Nothing listens at the worker's address.
   write_cluster(d / "nobody.json", {"tcp://127.0.0.1:1"}, "  \"timeouts\": {\"connect_s\": 1},\n");
   const auto start = Clock::now();
-  const Result unreachable = run("run chain.json --t-end 0.01 --cluster nobody.json", dir);
+  const Result unreachable = run("run chain.json --t-end 0.01 --cluster nobody.json --insecure", dir);
   CHECK(unreachable.code == 1);
   CHECK(unreachable.err.find("worker w0 (tcp://127.0.0.1:1) did not answer within 1 s") != std::string::npos);
   CHECK(std::chrono::duration<double>(Clock::now() - start).count() < 5.0);
@@ -222,25 +222,25 @@ TEST_CASE("cluster set-up errors: unreachable worker, port in use, bad cluster f
 
   // A second worker on a port that is taken.
   Workers first(1, d);
-  Child second({"worker", "--listen", first.endpoints[0]}, d, "second");
+  Child second({"worker", "--listen", first.endpoints[0], "--insecure"}, d, "second");
   CHECK(second.wait(5.0) == std::optional<int>(2));
   CHECK(second.err().find("cannot bind the worker's control socket at " + first.endpoints[0] + ": Address already in use") !=
         std::string::npos);
 
   // A malformed cluster file.
   std::ofstream(d / "bad.json") << "{\n  \"transport\": \"tcp\",\n  \"workers\": [\n    {\"address\": 5}\n  ]\n}\n";
-  const Result bad = run("run chain.json --cluster bad.json", dir);
+  const Result bad = run("run chain.json --cluster bad.json --insecure", dir);
   CHECK(bad.code == 2);
   CHECK(bad.err.find("bad.json:1:1: missing field 'coordinator'") != std::string::npos);
   std::ofstream(d / "broken.json") << "{\n  \"transport\": \"tcp\",\n";
-  const Result broken = run("run chain.json --cluster broken.json", dir);
+  const Result broken = run("run chain.json --cluster broken.json --insecure", dir);
   CHECK(broken.code == 2);
   CHECK(broken.err.find("broken.json:3:1: invalid JSON") != std::string::npos);
 
   // A worker of another protocol version: the coordinator says so and both exit 1.
   Workers other(1, d, {"--protocol-version", "999"}, "other");
   write_cluster(d / "other.json", other.endpoints);
-  const Result mismatch = run("run chain.json --t-end 0.01 --cluster other.json", dir);
+  const Result mismatch = run("run chain.json --t-end 0.01 --cluster other.json --insecure", dir);
   CHECK(mismatch.code == 1);
   CHECK(mismatch.err.find("version mismatch: coordinator runs mbsflow") != std::string::npos);
   CHECK(mismatch.err.find("(protocol 999)") != std::string::npos);

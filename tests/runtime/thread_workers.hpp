@@ -35,6 +35,7 @@ struct ThreadWorkers {
         WorkerOptions o;
         o.listen = l;
         o.threads = 1;
+        o.insecure = Insecure::loopback;  // the keyed runs: test_cluster_security.cpp
         o.idle_timeout_s = 30.0;
         o.read_model = [](const std::string& text) { return read_model_text(text, "model from the coordinator"); };
         o.listening = [this, i](const std::string& e) { bound[i].set_value(e); };
@@ -59,6 +60,7 @@ struct ThreadWorkers {
 inline ClusterConfig cluster_of(const std::vector<std::string>& controls, const std::string& data_bind,
                          const std::string& results_bind) {
   ClusterConfig c;
+  c.insecure = Insecure::loopback;
   c.results_bind = results_bind;
   for (std::size_t i = 0; i < controls.size(); ++i) {
     ClusterWorker w;

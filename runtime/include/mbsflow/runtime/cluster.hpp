@@ -6,10 +6,12 @@
 // protocol.
 #include <atomic>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "mbsflow/graph/decomposition.hpp"
+#include "mbsflow/runtime/curve_keys.hpp"
 #include "mbsflow/runtime/simulation.hpp"
 
 namespace mbsflow {
@@ -34,7 +36,11 @@ struct ClusterWorker {
   int weight = 1;            // takes `weight` submodels when no explicit list is given
   std::vector<int> submodels;  // explicit submodel numbers; all workers or none have them
   int threads = 0;           // 0: the worker's own --threads (default all cores)
+  std::string public_key;    // its CURVE public key (Z85)
 };
+
+// A run without CURVE must be asked for, and only on loopback unless asked for anywhere.
+enum class Insecure { no, loopback, anywhere };
 
 struct ClusterConfig {
   std::string transport = "tcp";  // tcp or ipc
@@ -43,7 +49,16 @@ struct ClusterConfig {
   std::string results_address;  // where the workers reach it; empty: what results_bind bound
   std::vector<ClusterWorker> workers;
   ClusterTimeouts timeouts;
+  // Security (docs/reliability.md): the coordinator's public key and this host's key pair
+  // (the cluster file's secret_key file); without them the run is refused unless insecure.
+  std::string coordinator_key;
+  std::optional<CurveKeyPair> keys;
+  Insecure insecure = Insecure::no;
 };
+
+// InputError unless the run is secured by keys (every worker's public key, the local pair
+// the coordinator's) or insecure as asked (every endpoint on loopback for Insecure::loopback).
+void check_cluster_security(const ClusterConfig& c);
 
 // Submodels a cluster run is cut into when the user does not say: the explicit lists'
 // length, or the sum of the weights.
@@ -88,6 +103,12 @@ struct WorkerOptions {
   std::function<void(const std::string& endpoint)> listening;  // told the bound endpoint
   std::function<void(const std::string& line)> log;             // what the worker does, for its log
   const std::atomic<bool>* stop = nullptr;
+  // CURVE: this worker's key pair and the public keys it admits (the cluster file's): the
+  // coordinator's on the control socket, the workers' on the data inbox. Without keys the
+  // worker serves only when insecure is asked for (on loopback unless anywhere).
+  std::optional<CurveKeyPair> keys;
+  ClusterKeys admit;
+  Insecure insecure = Insecure::no;
 };
 
 // One worker session: waits for a coordinator, runs its part of one run and returns when
