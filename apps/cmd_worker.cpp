@@ -20,6 +20,7 @@ struct WorkerArgs {
   int protocol = cluster_protocol_version;
   std::string cluster, key;
   bool insecure = false, insecure_network = false;
+  double hang_after = -1.0;
 };
 
 int worker(const WorkerArgs& a) {
@@ -38,6 +39,7 @@ int worker(const WorkerArgs& a) {
     throw InputError("--key needs --cluster: the cluster file lists the keys this worker admits");
   }
   o.insecure = a.insecure_network ? Insecure::anywhere : a.insecure ? Insecure::loopback : Insecure::no;
+  o.hang_after_s = a.hang_after;
   o.read_model = [](const std::string& text) { return read_model_text(text, "the coordinator's model"); };
   std::string name = a.listen;
   o.listening = [&](const std::string& endpoint) {
@@ -84,6 +86,8 @@ Action add_worker(CLI::App& app) {
       ->excludes(sub->get_option("--cluster"));
   // For tests of the version check: pretend another protocol version.
   sub->add_option("--protocol-version", a->protocol)->group("");
+  // For tests of the watchdog: a step that never ends, this many seconds into the run.
+  sub->add_option("--test-hang-after", a->hang_after)->group("");
   return [a] { return worker(*a); };
 }
 

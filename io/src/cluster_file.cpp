@@ -78,7 +78,7 @@ ClusterConfig read(const JsonNode& root, const std::string& base_dir) {
   }
   if (auto t = root.find("timeouts")) {
     t->expect_object();
-    t->allow_only({"connect_s", "heartbeat_s", "lost_s"});
+    t->allow_only({"connect_s", "heartbeat_s", "lost_s", "stall_s"});
     auto seconds = [](const JsonNode& v, const char* key, double max) {
       const double x = v.positive();
       if (x > max) v.fail(std::string(key) + " must be at most " + number_text(max) + " s (got " + number_text(x) + ")");
@@ -87,6 +87,7 @@ ClusterConfig read(const JsonNode& root, const std::string& base_dir) {
     if (auto v = t->find("connect_s")) c.timeouts.connect_s = seconds(*v, "connect_s", ClusterTimeouts::max_connect_s);
     if (auto v = t->find("heartbeat_s")) c.timeouts.heartbeat_s = seconds(*v, "heartbeat_s", ClusterTimeouts::max_heartbeat_s);
     if (auto v = t->find("lost_s")) c.timeouts.lost_s = seconds(*v, "lost_s", ClusterTimeouts::max_lost_s);
+    if (auto v = t->find("stall_s")) c.timeouts.stall_s = seconds(*v, "stall_s", ClusterTimeouts::max_stall_s);
     if (c.timeouts.lost_s <= 2.0 * c.timeouts.heartbeat_s)
       t->fail("lost_s must be more than twice heartbeat_s, or a peer that is merely slow counts as lost");
   }

@@ -31,6 +31,8 @@ struct Peer {
   Clock::time_point heard;
   std::string data_address;
   std::vector<int> bodies;  // global indices of its own bodies, in the order it sends them
+  std::string submodels;    // "0,1": for messages
+  double stalled_s = 0.0;   // its computation's last report of how long it has not advanced
   long completed = 0;       // steps it has reported done
   double reached = 0.0;     // the model time it has reported
   bool answered = false, done = false;
@@ -50,14 +52,17 @@ class Coordinator {
     wire::bind(results_, c.results_bind, "the coordinator's results inbox");
     results_address_ = wire::reachable_address(results_, c.results_address, "the coordinator's results inbox " + c.results_bind);
     for (const ClusterWorker& w : c.workers) {
-      Peer p{&w, wire::make_socket(ctx_, zmq::socket_type::dealer), Clock::now(), {}, {}, 0, o.t_start, false, false};
+      Peer p{&w, wire::make_socket(ctx_, zmq::socket_type::dealer), Clock::now(), {}, {}, {}, 0.0, 0, o.t_start, false, false};
       wire::curve_client(p.control, security(), w.public_key);
       wire::connect(p.control, w.address, "worker " + w.name);
       peers_.push_back(std::move(p));
     }
   }
 
-  std::string who(std::size_t w) const { return "worker " + peers_[w].config->name + " (" + peers_[w].config->address + ")"; }
+  std::string who(std::size_t w) const {
+    const Peer& p = peers_[w];
+    return "worker " + p.config->name + " (" + p.config->address + (p.submodels.empty() ? "" : ", submodels " + p.submodels) + ")";
+  }
 
   void send(std::size_t w, json j) {
     // A full queue means the worker has not taken anything for a long time; the heartbeat
@@ -120,7 +125,10 @@ class Coordinator {
           continue;
         }
         peers_[w].heard = Clock::now();
-        if (wire::text(*j, "type") != "heartbeat") on_control(w, *j);
+        if (wire::text(*j, "type") == "heartbeat")
+          peers_[w].stalled_s = wire::number(*j, "stalled_s", 0.0, 1e12).value_or(0.0);
+        else
+          on_control(w, *j);
       }
     }
     if (items.back().revents & ZMQ_POLLIN) {
@@ -146,13 +154,21 @@ class Coordinator {
     }
   }
 
+  // RunError naming a worker that is silent (killed, stopped, cut off) or whose
+  // computation has not advanced for stall_s while it still answers (a hung step).
   void check_alive(const std::string& progress) {
-    for (std::size_t w = 0; w < peers_.size(); ++w)
+    for (std::size_t w = 0; w < peers_.size(); ++w) {
+      char buf[160];
       if (wire::seconds_since(peers_[w].heard) > c_.timeouts.lost_s) {
-        char buf[96];
         std::snprintf(buf, sizeof buf, " was lost: nothing heard from it for %.1f s", c_.timeouts.lost_s);
         throw RunError(who(w) + buf + progress);
       }
+      if (peers_[w].stalled_s > c_.timeouts.stall_s) {
+        std::snprintf(buf, sizeof buf, " is hung: its computation has not advanced for %.1f s (timeouts.stall_s %.3g)",
+                      peers_[w].stalled_s, c_.timeouts.stall_s);
+        throw RunError(who(w) + buf + progress);
+      }
+    }
   }
 
   // Ends the run and waits (lost_s at most) for every worker's goodbye, so that no socket
@@ -232,8 +248,9 @@ RunSummary run_cluster(const Model& model, const std::string& model_json, const 
   Coordinator co(cluster, o, model.bodies.size());
   auto& peers = co.peers();
   for (std::size_t q = 0; q < d.submodels.size(); ++q) {
-    auto& b = peers[static_cast<std::size_t>(worker_of[q])].bodies;
-    b.insert(b.end(), d.submodels[q].own.begin(), d.submodels[q].own.end());
+    Peer& p = peers[static_cast<std::size_t>(worker_of[q])];
+    p.bodies.insert(p.bodies.end(), d.submodels[q].own.begin(), d.submodels[q].own.end());
+    p.submodels += (p.submodels.empty() ? "" : ",") + std::to_string(q);
   }
   RunSummary out;
   MultibodySystem whole(model);  // for the sink: layout, energies, joint forces

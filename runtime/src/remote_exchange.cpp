@@ -134,6 +134,8 @@ void RemoteExchange::wait(long n, int s, int q, int p) {
     return it != newest_.end() && it->second >= n;
   };
   while (!aborted_ && !here()) {
+    if (progress_clock_)
+      progress_clock_->store(std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch()).count());
     if (reading_) {  // another proxy reads the inbox and tells when it has stored something
       arrived_.wait_for(lock, std::chrono::milliseconds(50));
       continue;
@@ -154,7 +156,7 @@ void RemoteExchange::read_inbox_as_reader(std::unique_lock<std::mutex>& lock, in
   reading_ = false;
   if (!ok && !aborted_) {
     aborted_ = true;
-    why_ = "a malformed boundary message arrived, or the inbox failed";
+    why_ = "the inbox for boundary values failed";
   }
   arrived_.notify_all();
 }

@@ -37,6 +37,8 @@ class RemoteExchange final : public BoundaryExchange {
                  const std::vector<std::string>& data_addresses, int stages, double send_timeout_s, double delay_s,
                  std::uint64_t run, const wire::Security* security);
   ~RemoteExchange() override;
+  // Marked (steady-clock ns) while wait() waits for peers: waiting is not a hung step.
+  void set_progress_clock(std::atomic<std::int64_t>* clock) { progress_clock_ = clock; }
 
   // BoundaryExchange: local ghosts copied, remote ones received; values sent; the error
   // norm summed over every worker.
@@ -143,6 +145,7 @@ class RemoteExchange final : public BoundaryExchange {
   // Sends one message now; stops the exchange, naming the receiving worker, if it cannot.
   bool transmit(zmq::socket_t& socket, const wire::ExchangeHeader& h, zmq::message_t& payload);
   void open_sender(zmq::socket_t& s, std::size_t worker);  // timeout, CURVE, connect to its inbox
+  std::atomic<std::int64_t>* progress_clock_ = nullptr;
   std::uint64_t run_;  // the run id of every message sent and taken
   const wire::Security* security_;  // CURVE client keys for the other workers' inboxes, or null
   long dropped_ = 0;   // inbox messages dropped as malformed or of another run

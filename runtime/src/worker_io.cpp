@@ -77,6 +77,10 @@ void WorkerIo::attach(RemoteExchange* exchange) {
   if (exchange_ && lost_) exchange_->abort("the coordinator was lost");
 }
 
+std::int64_t WorkerIo::now_ns() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
 ClusterTimeouts WorkerIo::timeouts() const {
   std::lock_guard lock(mutex_);
   return timeouts_;
@@ -180,7 +184,9 @@ void WorkerIo::loop() {
         beat_ = Clock::now();
         try {
           wire::send(control_, zmq::buffer(coordinator_), zmq::send_flags::sndmore);
-          wire::send_json(control_, {{"type", "heartbeat"}, {"run", wire::run_text(run_)}});
+          nlohmann::json beat = {{"type", "heartbeat"}, {"run", wire::run_text(run_)}};
+          if (const std::int64_t p = progress_ns_.load(); p > 0) beat["stalled_s"] = 1e-9 * static_cast<double>(now_ns() - p);
+          wire::send_json(control_, beat);
         } catch (const zmq::error_t& e) {
           lose(std::string("the coordinator was lost: its connection is gone (") + e.what() + ")");
         }

@@ -40,6 +40,10 @@ class WorkerIo {
   void goodbye();
   void attach(RemoteExchange* exchange);  // stopped on an abort or when the coordinator is lost
   ClusterTimeouts timeouts() const;
+  // The computation's clock for the watchdog: marked when a step completes and while it
+  // waits for peers; heartbeats carry how long ago that was (stalled_s).
+  std::atomic<std::int64_t>* progress_clock() { return &progress_ns_; }
+  static std::int64_t now_ns();
 
  private:
   void loop();
@@ -62,6 +66,7 @@ class WorkerIo {
   ClusterTimeouts timeouts_;
   bool stopping_ = false;
   bool lost_ = false;
+  std::atomic<std::int64_t> progress_ns_{0};  // 0: no run yet
   // I/O thread only.
   std::string coordinator_;  // its routing id
   std::uint64_t run_ = 0;    // the run id of its hello (read by send() only after the hello)

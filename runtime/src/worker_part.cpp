@@ -1,6 +1,7 @@
 #include "worker_part.hpp"
 
 #include <cstdio>
+#include <thread>
 
 #include "mbsflow/runtime/divergence.hpp"
 
@@ -21,6 +22,8 @@ WorkerPart::WorkerPart(Session& session, WorkerIo& io, zmq::context_t& ctx, zmq:
       bodies_.insert(bodies_.end(), parts[q]->sub->own.begin(), parts[q]->sub->own.end());
     }
   io.attach(&exchange);
+  exchange.set_progress_clock(io.progress_clock());
+  io.progress_clock()->store(WorkerIo::now_ns());
   results_.set(zmq::sockopt::sndtimeo, static_cast<int>(io.timeouts().lost_s * 1000.0));
   if (s.security) wire::curve_client(results_, &*s.security, s.security->coordinator);
   wire::connect(results_, s.results_address, "the coordinator's results inbox");
@@ -45,6 +48,9 @@ void WorkerPart::report(wire::ResultKind kind, long steps, double t, long index,
 }
 
 std::string WorkerPart::check(double t) const {
+  if (s.hang_after_s >= 0.0 && wire::seconds_since(started_) > s.hang_after_s)
+    while (!exchange.aborted()) std::this_thread::yield();  // tests: a step that never ends
+  io_.progress_clock()->store(WorkerIo::now_ns());
   if (exchange.aborted()) return exchange.why();
   for (int q : mine)
     if (auto dv = partitioned::check(*parts[static_cast<std::size_t>(q)]))

@@ -29,6 +29,7 @@ struct Session {
   std::uint64_t run = 0;              // the run id every message carries
   int threads = 0;                    // > 0: the cluster file's threads for this worker
   std::optional<wire::Security> security;  // CURVE: the peers' public keys
+  double hang_after_s = -1.0;              // tests (WorkerOptions::hang_after_s)
 };
 
 struct Outcome {
@@ -68,6 +69,7 @@ class WorkerPart {
   WorkerIo& io_;
   zmq::socket_t results_;
   const std::atomic<bool>* stop_;
+  wire::Clock::time_point started_ = wire::Clock::now();
   std::vector<double> snapshot_;
   std::vector<int> bodies_;  // global indices of the local submodels' own bodies, as the coordinator expects them
 };

@@ -146,7 +146,7 @@ TEST_CASE("a worker killed mid-run: the coordinator names it, keeps the results 
     INFO(err);
     CHECK(code == std::optional<int>(1));
     CHECK(took < 5.0);
-    CHECK(err.find("worker w1 (" + w.endpoints[1] + ") was lost") != std::string::npos);
+    CHECK(err.find("worker w1 (" + w.endpoints[1] + ", submodels 1) was lost") != std::string::npos);
     CHECK(err.find("every worker had completed t = ") != std::string::npos);
     // The results file holds the snapshots the message counts.
     const std::size_t at = err.find("results keep ");
@@ -158,6 +158,43 @@ TEST_CASE("a worker killed mid-run: the coordinator names it, keeps the results 
     // The other worker was told to stop and leaves nothing behind.
     CHECK(w.procs[0]->wait(5.0) == std::optional<int>(1));
     CHECK(w.procs[0]->err().find("stopped by the coordinator") != std::string::npos);
+  }
+  fs::remove_all(scratch("").parent_path());
+}
+
+TEST_CASE("a stopped (SIGSTOP) or hung worker is named and the run stopped like a killed one", "[apps][cluster][faults]") {
+  for (const std::string fault : {"SIGSTOP", "hung step"}) {
+    INFO(fault);
+    const fs::path d = scratch(fault == "SIGSTOP" ? "cluster-worker-stopped" : "cluster-worker-hung");
+    const std::string dir = d.string();
+    REQUIRE(run("generate chain --bodies 400 -o chain.json", dir).code == 0);
+    Workers w0(1, d, {}, "first");
+    // The second one's step never ends 3 s into the run (a test hook), while its I/O
+    // thread goes on sending heartbeats.
+    Workers w1(1, d, fault == "SIGSTOP" ? std::vector<std::string>{} : std::vector<std::string>{"--test-hang-after", "3"}, "second");
+    write_cluster(d / "cluster.json", {w0.endpoints[0], w1.endpoints[0]},
+                  "  \"timeouts\": {\"heartbeat_s\": 0.5, \"lost_s\": 3, \"stall_s\": 2},\n");
+    Child coordinator({"run", "chain.json", "--cluster", "cluster.json", "--insecure", "--t-end", "1000", "--every", "20", "-o", "out.h5"},
+                      d, "coordinator");
+    std::this_thread::sleep_for(std::chrono::milliseconds(3000));
+    REQUIRE(!coordinator.wait(0.0));
+    if (fault == "SIGSTOP") w1.procs[0]->kill(SIGSTOP);
+    const auto from = Clock::now();
+    const std::optional<int> code = coordinator.wait(15.0);
+    const double took = std::chrono::duration<double>(Clock::now() - from).count();
+    const std::string err = coordinator.err();
+    INFO(err);
+    CHECK(code == std::optional<int>(1));
+    // lost_s (3 s) after the stop; stall_s (2 s) after the hang, which begins 0 to 1 s from here.
+    CHECK(took < (fault == "SIGSTOP" ? 5.0 : 6.0));
+    CHECK(err.find("worker w1 (" + w1.endpoints[0] + ", submodels 1) " + (fault == "SIGSTOP" ? "was lost" : "is hung")) !=
+          std::string::npos);
+    const std::size_t at = err.find("results keep ");
+    REQUIRE(at != std::string::npos);
+    CHECK(static_cast<long>(mbsflow::ResultsFile((d / "out.h5").string()).time().size()) == std::stol(err.substr(at + 13)));
+    CHECK(w0.procs[0]->wait(5.0) == std::optional<int>(1));
+    if (fault == "SIGSTOP") w1.procs[0]->kill(SIGCONT);
+    CHECK(w1.procs[0]->wait(10.0).has_value());  // told to stop, or lost its coordinator
   }
   fs::remove_all(scratch("").parent_path());
 }
@@ -211,7 +248,7 @@ TEST_CASE("cluster set-up errors: unreachable worker, port in use, bad cluster f
   const auto start = Clock::now();
   const Result unreachable = run("run chain.json --t-end 0.01 --cluster nobody.json --insecure", dir);
   CHECK(unreachable.code == 1);
-  CHECK(unreachable.err.find("worker w0 (tcp://127.0.0.1:1) did not answer within 1 s") != std::string::npos);
+  CHECK(unreachable.err.find("worker w0 (tcp://127.0.0.1:1, submodels 0) did not answer within 1 s") != std::string::npos);
   CHECK(std::chrono::duration<double>(Clock::now() - start).count() < 5.0);
 
   // The implicit methods integrate whole models, not submodels whose stages are exchanged.

@@ -136,7 +136,7 @@ TEST_CASE("cluster: an unreachable worker is an error within the connect timeout
   c.timeouts.connect_s = 0.5;
   const auto start = std::chrono::steady_clock::now();
   CHECK_THROWS_WITH(run_cluster(m, model_to_json(m), decompose(m, 1), c, options_from_model(m), nullptr),
-                    Catch::Contains("worker w0 (tcp://127.0.0.1:1) did not answer within 0.5 s"));
+                    Catch::Contains("worker w0 (tcp://127.0.0.1:1, submodels 0) did not answer within 0.5 s"));
   CHECK(std::chrono::steady_clock::now() - start < std::chrono::seconds(3));
 }
 

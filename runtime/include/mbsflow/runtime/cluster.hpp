@@ -23,9 +23,12 @@ struct ClusterTimeouts {
   double connect_s = 10.0;   // every worker must answer the coordinator's hello within this
   double heartbeat_s = 0.5;  // both directions
   double lost_s = 3.0;       // silence after which a peer counts as lost
+  // A worker whose computation has not advanced this long (a step that never ends, while
+  // its heartbeats go on) is hung; time spent waiting for its peers does not count.
+  double stall_s = 60.0;
   // The largest values accepted from a cluster file or the wire: beyond them a peer could
   // hold the other side forever (and milliseconds overflow).
-  static constexpr double max_connect_s = 3600.0, max_heartbeat_s = 60.0, max_lost_s = 3600.0;
+  static constexpr double max_connect_s = 3600.0, max_heartbeat_s = 60.0, max_lost_s = 3600.0, max_stall_s = 86400.0;
 };
 
 struct ClusterWorker {
@@ -109,6 +112,7 @@ struct WorkerOptions {
   std::optional<CurveKeyPair> keys;
   ClusterKeys admit;
   Insecure insecure = Insecure::no;
+  double hang_after_s = -1.0;  // tests: >= 0 makes the computation spin (a hung step) this long into the run
 };
 
 // One worker session: waits for a coordinator, runs its part of one run and returns when
