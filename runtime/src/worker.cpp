@@ -96,6 +96,7 @@ Session read_setup(const WorkerOptions& wo, const json& setup, const std::string
   const int k = setup_integer(setup.at("submodels"), "submodels", 1, std::max(1, bodies));
   s.d = decompose(s.model, setup_integers(setup.at("part_of_body"), "part_of_body", 0, k - 1), k);
   s.worker_of = setup_integers(setup.at("worker_of"), "worker_of", 0, k - 1);
+  if (s.worker_of.size() != static_cast<std::size_t>(k)) throw RunError("the set-up's worker_of does not name a worker per submodel");
   s.me = setup_integer(setup.at("worker"), "worker", 0, k - 1);
   s.o = options_from_json(setup.at("options"));
   s.results_address = setup.at("results_address").get<std::string>();
