@@ -2,7 +2,6 @@
 #include <cmath>
 #include <csignal>
 #include <cstdio>
-#include <filesystem>
 #include <memory>
 #include <optional>
 #include <thread>
@@ -298,7 +297,7 @@ int run(const RunArgs& a) {
     progress.finish();
     const int sig = stop_signal();
     throw RunError(e.text() + (sig == SIGTERM ? " (SIGTERM)" : sig == SIGINT ? " (SIGINT)" : "") +
-                   (sink ? " in " + a.output : ""));
+                   (sink ? (sink->stats().snapshots > 0 ? " in " + a.output : "; no results file was written") : ""));
   }
   progress.finish();
   if (!a.quiet && !sink) {

@@ -106,6 +106,7 @@ TEST_CASE("a keyed run is the insecure run bit for bit; a wrong or missing key i
     CHECK(r.code == 1);
     CHECK_THAT(r.err, Catch::Contains("did not answer within 3 s"));
     CHECK_FALSE(fs::exists(d / "intruder.h5"));
+    CHECK_THAT(r.err, Catch::Contains("no results file was written"));
     for (int i = 0; i < 100 && w.procs[0]->err().find("refused") == std::string::npos; ++i)  // logged on its I/O thread
       std::this_thread::sleep_for(std::chrono::milliseconds(50));
     CHECK_THAT(w.procs[0]->err(), Catch::Contains("refused a CURVE client") && Catch::Contains("key " + intruder));
