@@ -45,6 +45,15 @@ void write_cluster(const fs::path& file, const std::vector<std::string>& endpoin
   f << "  ]\n}\n";
 }
 
+// Waits (a minute at most) until the run has written its results file's layout and first
+// rows, then `more_ms`: the set-up takes long under the sanitizers and on a busy machine.
+void wait_for_results(const fs::path& h5, int more_ms) {
+  const auto start = Clock::now();
+  while (!fs::exists(h5) && Clock::now() - start < std::chrono::seconds(60))
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  std::this_thread::sleep_for(std::chrono::milliseconds(more_ms));
+}
+
 }  // namespace
 
 TEST_CASE("runs on 2, 3 and 4 processes write the one-process results bit for bit", "[apps][cluster]") {
@@ -136,7 +145,7 @@ TEST_CASE("a worker killed mid-run: the coordinator names it, keeps the results 
     std::vector<std::string> args{"run", "chain.json", "--cluster", "cluster.json", "--insecure", "--t-end", "1000", "--every", "20", "-o", "out.h5"};
     if (loose) args.insert(args.end(), {"--coupling", "loose"});
     Child coordinator(args, d, "coordinator");
-    std::this_thread::sleep_for(std::chrono::milliseconds(3000));  // also long enough under sanitizers
+    wait_for_results(d / "out.h5", 1500);
     REQUIRE(!coordinator.wait(0.0));
     w.procs[1]->kill(SIGKILL);
     const auto killed = Clock::now();
@@ -176,7 +185,7 @@ TEST_CASE("a stopped (SIGSTOP) or hung worker is named and the run stopped like 
                   "  \"timeouts\": {\"heartbeat_s\": 0.5, \"lost_s\": 3, \"stall_s\": 2},\n");
     Child coordinator({"run", "chain.json", "--cluster", "cluster.json", "--insecure", "--t-end", "1000", "--every", "20", "-o", "out.h5"},
                       d, "coordinator");
-    std::this_thread::sleep_for(std::chrono::milliseconds(3000));
+    wait_for_results(d / "out.h5", 1500);
     REQUIRE(!coordinator.wait(0.0));
     if (fault == "SIGSTOP") w1.procs[0]->kill(SIGSTOP);
     const auto from = Clock::now();
@@ -294,7 +303,7 @@ TEST_CASE("Ctrl-C on the coordinator stops its workers and keeps the results", "
   REQUIRE(run("generate chain --bodies 400 -o chain.json", dir).code == 0);
   Child coordinator({"run", "chain.json", "--processes", "2", "--t-end", "1000", "--every", "20", "-o", "out.h5"}, d,
                     "coordinator");
-  std::this_thread::sleep_for(std::chrono::milliseconds(3000));
+  wait_for_results(d / "out.h5", 1500);
   REQUIRE(!coordinator.wait(0.0));
   const std::string children =
       read_text("/proc/" + std::to_string(coordinator.pid()) + "/task/" + std::to_string(coordinator.pid()) + "/children");

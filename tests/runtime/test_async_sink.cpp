@@ -1,3 +1,4 @@
+#include <atomic>
 #include <catch2/catch.hpp>
 #include <chrono>
 #include <thread>
@@ -69,9 +70,11 @@ TEST_CASE("an error in the writer thread ends the run with that error", "[runtim
 namespace {
 // A disk slower than the run: every write takes 100 ms.
 struct CrawlingSink : test::MemorySink {
+  std::atomic<int> written{0};  // what other threads may read while it writes
   void write(Snapshot&& s) override {
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
     test::MemorySink::write(std::move(s));
+    ++written;
   }
 };
 }  // namespace
@@ -88,7 +91,7 @@ TEST_CASE("a stopped run with output outrunning the disk drops what is queued an
   o.step = 0.005;
   o.stop = &stop;
   std::thread stopper([&] {  // once the run has queued snapshots faster than they are written
-    while (sink.waits() == 0 && seen->times.empty()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    while (sink.waits() == 0 && seen->written == 0) std::this_thread::sleep_for(std::chrono::milliseconds(1));
     stop = true;
   });
   // The 201 snapshots are queued at once: without a stop the writer would need 20 s.

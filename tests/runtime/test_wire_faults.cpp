@@ -148,3 +148,48 @@ TEST_CASE("stray and forged frames at the data and results inboxes neither stop 
   CHECK(identical);
   for (const std::string& e : pool.errors) CHECK(e.empty());
 }
+
+TEST_CASE("a keyed run (CURVE with the ZAP handler) equals the one-process run and an unlisted coordinator gets no answer",
+          "[runtime][cluster][wire]") {
+  const Model m = chain_run(12, 60);
+  const RunOptions o = options_from_model(m);
+  const test::MemorySink reference = one_process(m);
+  const CurveKeyPair coordinator = make_curve_keys(), intruder = make_curve_keys();
+  const std::vector<CurveKeyPair> keys{make_curve_keys(), make_curve_keys()};
+  const ClusterKeys admit{coordinator.public_key, {keys[0].public_key, keys[1].public_key}};
+  for (const bool listed : {true, false}) {
+    INFO((listed ? "listed" : "unlisted") << " coordinator");
+    std::vector<std::string> refusals(2);
+    {  // the workers are joined at the end of the block: then they have logged what they refused
+    ThreadWorkers pool({"tcp://127.0.0.1:*", "tcp://127.0.0.1:*"}, [&](std::size_t i, WorkerOptions& w) {
+      w.keys = keys[i];
+      w.admit = admit;
+      w.idle_timeout_s = listed ? 30.0 : 3.0;
+      w.log = [&refusals, i](const std::string& line) {
+        if (line.find("refused") != std::string::npos) refusals[i] = line;
+      };
+    });
+    ClusterConfig c = cluster_of(pool.endpoints, "", "tcp://127.0.0.1:*");
+    c.insecure = Insecure::no;
+    c.keys = listed ? coordinator : intruder;
+    c.coordinator_key = c.keys->public_key;
+    c.timeouts.connect_s = 1.0;
+    for (std::size_t i = 0; i < c.workers.size(); ++i) {
+      c.workers[i].data_bind = "tcp://127.0.0.1:*";
+      c.workers[i].public_key = keys[i].public_key;
+    }
+    const Decomposition d = decompose(m, cluster_submodels(c));
+    test::MemorySink sink;
+    if (listed) {
+      run_cluster(m, model_to_json(m), d, c, o, &sink, nullptr);
+      REQUIRE(sink.states.size() == reference.states.size());
+      CHECK(sink.states.back() == reference.states.back());
+      for (const std::string& e : pool.errors) CHECK(e.empty());
+    } else {
+      CHECK_THROWS_WITH(run_cluster(m, model_to_json(m), d, c, o, &sink, nullptr), Catch::Contains("did not answer within 1 s"));
+      CHECK(sink.states.empty());
+    }
+    }
+    if (!listed) CHECK_THAT(refusals[0], Catch::Contains("key " + intruder.public_key + " is not in the cluster file"));
+  }
+}

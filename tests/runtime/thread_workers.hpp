@@ -2,6 +2,7 @@
 // Workers of a cluster run on threads of a test process (real ZeroMQ sockets, tcp on
 // 127.0.0.1 or ipc), a cluster configuration over them, and a short run of a model.
 #include <cmath>
+#include <functional>
 #include <future>
 #include <string>
 #include <thread>
@@ -29,9 +30,11 @@ struct ThreadWorkers {
   std::vector<std::string> errors;
   std::vector<std::promise<std::string>> bound;
 
-  ThreadWorkers(const std::vector<std::string>& listen) : errors(listen.size()), bound(listen.size()) {
+  // adjust(i, options): what worker i differs in (keys, say).
+  ThreadWorkers(const std::vector<std::string>& listen, std::function<void(std::size_t, WorkerOptions&)> adjust = {})
+      : errors(listen.size()), bound(listen.size()) {
     for (std::size_t i = 0; i < listen.size(); ++i) {
-      threads.emplace_back([this, i, l = listen[i]] {
+      threads.emplace_back([this, i, l = listen[i], adjust] {
         WorkerOptions o;
         o.listen = l;
         o.threads = 1;
@@ -39,6 +42,7 @@ struct ThreadWorkers {
         o.idle_timeout_s = 30.0;
         o.read_model = [](const std::string& text) { return read_model_text(text, "model from the coordinator"); };
         o.listening = [this, i](const std::string& e) { bound[i].set_value(e); };
+        if (adjust) adjust(i, o);
         try {
           serve_worker(o);
         } catch (const std::exception& e) {
