@@ -126,7 +126,8 @@ void Hdf5Sink::begin(const MultibodySystem& system) {
   // another run is writing (locked) is neither truncated nor replaced.
   WriterLock::check_free(path_);
   const std::string making = path_ + ".part";
-  f->lock = WriterLock(making);  // before H5Fcreate, which truncates  // Dense attribute storage (file format 1.8+) so that large model texts fit as attributes.
+  f->lock = WriterLock(making);  // before H5Fcreate, which truncates
+  // Dense attribute storage (file format 1.8+) so that large model texts fit as attributes.
   const h5::Handle fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose, "create a file access list");
   h5::check(H5Pset_libver_bounds(fapl.get(), H5F_LIBVER_V18, H5F_LIBVER_LATEST), "set the file format");
   f->file = h5::Handle(H5Fcreate(making.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get()), H5Fclose,

@@ -51,7 +51,8 @@ void curve_client(zmq::socket_t& s, const Security* security, const std::string&
 bool loopback(const std::string& e) {
   if (e.rfind("ipc://", 0) == 0 || e.rfind("inproc://", 0) == 0) return true;
   if (e.rfind("tcp://", 0) != 0) return false;
-  const std::string host = e.substr(6, e.rfind(':') == std::string::npos || e.rfind(':') < 6 ? std::string::npos : e.rfind(':') - 6);
+  const std::size_t port = e.rfind(':');  // the one of "tcp:" when no port follows
+  const std::string host = e.substr(6, port > 6 ? port - 6 : std::string::npos);
   return host.rfind("127.", 0) == 0 || host == "localhost" || host == "[::1]";
 }
 

@@ -65,6 +65,10 @@ constexpr std::size_t done_counts = 5;
 
 using Clock = std::chrono::steady_clock;
 inline double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+// Now in ns of the steady clock: a time one thread stores in an atomic for another.
+inline std::int64_t now_ns() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch()).count();
+}
 
 // A socket that never holds the process at close (linger 0) and takes no message larger
 // than max_bytes.

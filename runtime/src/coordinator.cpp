@@ -70,9 +70,7 @@ class Coordinator {
     j["run"] = wire::run_text(run_);
     (void)wire::send_json(peers_[w].control, j);
   }
-  std::uint64_t run() const { return run_; }
   const wire::Security* security() const { return security_ ? &*security_ : nullptr; }
-  long dropped() const { return dropped_; }
   void send_all(const json& j) {
     for (std::size_t w = 0; w < peers_.size(); ++w) send(w, j);
   }
@@ -120,10 +118,7 @@ class Coordinator {
       while (wire::recv(peers_[w].control, m, zmq::recv_flags::dontwait)) {
         // A worker's error before it knew the run (a refused hello) carries no run id.
         auto j = wire::parse_control(m);
-        if (!j || (wire::text(*j, "run") != wire::run_text(run_) && wire::text(*j, "type") != "error")) {
-          ++dropped_;
-          continue;
-        }
+        if (!j || (wire::text(*j, "run") != wire::run_text(run_) && wire::text(*j, "type") != "error")) continue;
         peers_[w].heard = Clock::now();
         if (wire::text(*j, "type") == "heartbeat")
           peers_[w].stalled_s = wire::number(*j, "stalled_s", 0.0, 1e12).value_or(0.0);
@@ -140,10 +135,7 @@ class Coordinator {
         // Anything but a result of this run from one of its workers is dropped: a stray or
         // forged frame can neither end nor stop the run.
         const auto h = wire::read_header<wire::ResultHeader>(header, run_);
-        if (!h || h->worker < 0 || h->worker >= static_cast<int>(peers_.size()) || !known_kind(h->kind)) {
-          ++dropped_;
-          continue;
-        }
+        if (!h || h->worker < 0 || h->worker >= static_cast<int>(peers_.size()) || !known_kind(h->kind)) continue;
         peers_[static_cast<std::size_t>(h->worker)].heard = Clock::now();
         if (on_result) on_result(*h, payload);
       }
@@ -203,7 +195,6 @@ class Coordinator {
   std::vector<Peer> peers_;
   Clock::time_point beat_ = Clock::now();
   std::uint64_t run_ = wire::new_run_id();
-  long dropped_ = 0;  // messages dropped as malformed or of another run
 };
 
 json setup_message(const std::string& model_json, const Decomposition& d, const std::vector<int>& worker_of, std::size_t w,

@@ -108,19 +108,15 @@ bool RemoteExchange::read_inbox(int ms) {
   if (wire::poll(&item, 1, ms / 1000.0) <= 0) return true;
   zmq::message_t header, payload;
   // A message that is not two frames of this run with the sizes the model gives is
-  // dropped and counted: whoever could send it, it cannot stop or corrupt the run.
+  // dropped: whoever could send it, it cannot stop or corrupt the run.
   while (wire::recv(inbox_socket_, header, zmq::recv_flags::dontwait)) {
-    if (!header.more()) {
-      ++dropped_;
-      continue;
-    }
+    if (!header.more()) continue;
     if (!wire::recv(inbox_socket_, payload)) return false;
     if (payload.more()) {
       wire::skip_rest(inbox_socket_, payload);
-      ++dropped_;
       continue;
     }
-    if (!store(header, payload)) ++dropped_;
+    (void)store(header, payload);
   }
   return true;
 }
@@ -134,8 +130,7 @@ void RemoteExchange::wait(long n, int s, int q, int p) {
     return it != newest_.end() && it->second >= n;
   };
   while (!aborted_ && !here()) {
-    if (progress_clock_)
-      progress_clock_->store(std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch()).count());
+    if (progress_clock_) progress_clock_->store(wire::now_ns());
     if (reading_) {  // another proxy reads the inbox and tells when it has stored something
       arrived_.wait_for(lock, std::chrono::milliseconds(50));
       continue;

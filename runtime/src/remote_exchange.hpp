@@ -148,7 +148,6 @@ class RemoteExchange final : public BoundaryExchange {
   std::atomic<std::int64_t>* progress_clock_ = nullptr;
   std::uint64_t run_;  // the run id of every message sent and taken
   const wire::Security* security_;  // CURVE client keys for the other workers' inboxes, or null
-  long dropped_ = 0;   // inbox messages dropped as malformed or of another run
   double delay_s_ = 0.0;
   std::mutex delay_mutex_;
   std::condition_variable delay_changed_;

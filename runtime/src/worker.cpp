@@ -77,7 +77,7 @@ void check_endpoint(const std::string& e, const std::string& listen, const char*
 
 // The start message: a name and a data address (checked like the set-up's) per worker.
 void check_start(const json& start, const Session& s, const std::string& listen) {
-  const std::size_t workers = static_cast<std::size_t>(*std::max_element(s.worker_of.begin(), s.worker_of.end())) + 1;
+  const std::size_t workers = s.workers();
   for (const char* key : {"names", "data_addresses"}) {
     const auto it = start.find(key);
     if (it == start.end() || !it->is_array() || it->size() != workers)
@@ -162,7 +162,7 @@ void serve_worker(const WorkerOptions& wo) {
     if (security) {
       s.security = security;
       const auto keys = setup.find("worker_keys");
-      if (keys == setup.end() || !keys->is_array() || keys->size() != static_cast<std::size_t>(*std::max_element(s.worker_of.begin(), s.worker_of.end())) + 1)
+      if (keys == setup.end() || !keys->is_array() || keys->size() != s.workers())
         throw RunError("the set-up gives no public key per worker");
       for (const json& k : *keys) {
         if (!k.is_string() || std::find(wo.admit.workers.begin(), wo.admit.workers.end(), k.get<std::string>()) == wo.admit.workers.end())

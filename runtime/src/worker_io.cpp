@@ -77,15 +77,12 @@ void WorkerIo::attach(RemoteExchange* exchange) {
   if (exchange_ && lost_) exchange_->abort("the coordinator was lost");
 }
 
-std::int64_t WorkerIo::now_ns() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
-
 ClusterTimeouts WorkerIo::timeouts() const {
   std::lock_guard lock(mutex_);
   return timeouts_;
 }
 
+namespace {
 // The timeouts of a hello, nullopt unless each is in its range and lost_s is more than
 // twice heartbeat_s (a cluster file's rule): a coordinator cannot hold a worker forever.
 std::optional<ClusterTimeouts> hello_timeouts(const nlohmann::json& hello) {
@@ -97,6 +94,7 @@ std::optional<ClusterTimeouts> hello_timeouts(const nlohmann::json& hello) {
   if (!connect || !beat || !lost || !(*lost > 2.0 * *beat)) return std::nullopt;
   return ClusterTimeouts{*connect, *beat, *lost};
 }
+}  // namespace
 
 // Called with mutex_ not held, on the I/O thread; j is a valid control message.
 void WorkerIo::command(nlohmann::json j) {
@@ -185,7 +183,7 @@ void WorkerIo::loop() {
         try {
           wire::send(control_, zmq::buffer(coordinator_), zmq::send_flags::sndmore);
           nlohmann::json beat = {{"type", "heartbeat"}, {"run", wire::run_text(run_)}};
-          if (const std::int64_t p = progress_ns_.load(); p > 0) beat["stalled_s"] = 1e-9 * static_cast<double>(now_ns() - p);
+          if (const std::int64_t p = progress_ns_.load(); p > 0) beat["stalled_s"] = 1e-9 * static_cast<double>(wire::now_ns() - p);
           wire::send_json(control_, beat);
         } catch (const zmq::error_t& e) {
           lose(std::string("the coordinator was lost: its connection is gone (") + e.what() + ")");

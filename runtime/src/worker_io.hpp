@@ -42,8 +42,7 @@ class WorkerIo {
   ClusterTimeouts timeouts() const;
   // The computation's clock for the watchdog: marked when a step completes and while it
   // waits for peers; heartbeats carry how long ago that was (stalled_s).
-  std::atomic<std::int64_t>* progress_clock() { return &progress_ns_; }
-  static std::int64_t now_ns();
+  std::atomic<std::int64_t>* progress_clock() { return &progress_ns_; }  // wire::now_ns()
 
  private:
   void loop();

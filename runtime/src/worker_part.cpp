@@ -23,7 +23,7 @@ WorkerPart::WorkerPart(Session& session, WorkerIo& io, zmq::context_t& ctx, zmq:
     }
   io.attach(&exchange);
   exchange.set_progress_clock(io.progress_clock());
-  io.progress_clock()->store(WorkerIo::now_ns());
+  io.progress_clock()->store(wire::now_ns());
   results_.set(zmq::sockopt::sndtimeo, static_cast<int>(io.timeouts().lost_s * 1000.0));
   if (s.security) wire::curve_client(results_, &*s.security, s.security->coordinator);
   wire::connect(results_, s.results_address, "the coordinator's results inbox");
@@ -50,7 +50,7 @@ void WorkerPart::report(wire::ResultKind kind, long steps, double t, long index,
 std::string WorkerPart::check(double t) const {
   if (s.hang_after_s >= 0.0 && wire::seconds_since(started_) > s.hang_after_s)
     while (!exchange.aborted()) std::this_thread::yield();  // tests: a step that never ends
-  io_.progress_clock()->store(WorkerIo::now_ns());
+  io_.progress_clock()->store(wire::now_ns());
   if (exchange.aborted()) return exchange.why();
   for (int q : mine)
     if (auto dv = partitioned::check(*parts[static_cast<std::size_t>(q)]))

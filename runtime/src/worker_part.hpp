@@ -2,6 +2,7 @@
 // What a worker's part of a run needs whatever the coupling: the run's settings as the
 // coordinator sent them, its local submodels, the boundary exchange with the other
 // workers, and the results channel to the coordinator.
+#include <algorithm>
 #include <atomic>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -30,6 +31,9 @@ struct Session {
   int threads = 0;                    // > 0: the cluster file's threads for this worker
   std::optional<wire::Security> security;  // CURVE: the peers' public keys
   double hang_after_s = -1.0;              // tests (WorkerOptions::hang_after_s)
+  std::size_t workers() const {            // of the run: worker_of names each
+    return static_cast<std::size_t>(*std::max_element(worker_of.begin(), worker_of.end())) + 1;
+  }
 };
 
 struct Outcome {
