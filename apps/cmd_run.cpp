@@ -1,5 +1,8 @@
 // mbsflow run MODEL.json: one simulation on this process.
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <filesystem>
 #include <csignal>
 #include <cstdio>
 #include <memory>
@@ -11,6 +14,7 @@
 #include "mbsflow/methods/stepper.hpp"
 #include "mbsflow/graph/stable_step.hpp"
 #include "local_workers.hpp"
+#include "mbsflow/io/checkpoint_file.hpp"
 #include "mbsflow/io/cluster_file.hpp"
 #include "mbsflow/io/hdf5_sink.hpp"
 #include "mbsflow/io/model_reader.hpp"
@@ -57,6 +61,9 @@ struct RunArgs {
   std::optional<double> overlap;
   bool exact_lag = false;
   std::string submodel_methods;  // comma-separated, one per submodel
+  double checkpoint_every = 0.0;  // wall-clock s; 0: no checkpoints
+  std::string checkpoint;         // the checkpoint file; default OUTPUT.ckpt
+  std::string resume;             // a checkpoint file to go on from
 };
 
 std::vector<Method> parse_methods(const std::string& list) {
@@ -182,8 +189,25 @@ void print_summary(const Model& m, MultibodySystem& sys, const RunOptions& o, co
   }
 }
 
-int run(const RunArgs& a) {
-  Model m = read_model_file(a.model);
+// The arguments after "run" of this process's command line, for a checkpoint.
+std::vector<std::string> run_arguments() {
+  const std::vector<std::string>& all = invocation_arguments();
+  const auto at = std::find(all.begin(), all.end(), std::string("run"));
+  return at == all.end() ? std::vector<std::string>{} : std::vector<std::string>(at + 1, all.end());
+}
+
+std::string checkpoint_path(const RunArgs& a) {
+  if (!a.checkpoint.empty()) return a.checkpoint;
+  if (a.output.empty()) throw InputError("--checkpoint-every: give -o FILE (the checkpoint is FILE.ckpt) or --checkpoint FILE");
+  return a.output + ".ckpt";
+}
+
+// resumed: the checkpoint to go on from (its path in resumed_path), whose model text
+// replaces the model file's.
+int run(const RunArgs& a, const CheckpointFile* resumed = nullptr, const std::string& resumed_path = "") {
+  if (a.model.empty()) throw InputError("run: give a MODEL file, or --resume CHECKPOINT to go on with a run");
+  const std::string model_text = resumed ? resumed->model_text : read_model_file_text(a.model);
+  Model m = read_model_text(model_text, a.model);
   if (a.t_end) {
     if (!(*a.t_end > m.simulation.t_start)) throw InputError("--t-end: must be > t_start of the model");
     m.simulation.t_end = *a.t_end;
@@ -273,6 +297,29 @@ int run(const RunArgs& a) {
   o.progress = [&](double t, long steps) { progress.update(t, steps); };
   o.stop = install_stop_handlers();
   if (sink) sink->set_stop(o.stop);
+  // Checkpoints: the file holds the arguments, folder and model text with the run's state.
+  Checkpointing checkpointing;
+  CheckpointFile checkpoint_file;
+  long checkpoints = 0;
+  std::string checkpoint_at;
+  if (a.checkpoint_every > 0.0) {
+    checkpoint_at = checkpoint_path(a);
+    checkpoint_file.arguments = resumed ? resumed->arguments : run_arguments();
+    checkpoint_file.directory = resumed ? resumed->directory : std::filesystem::current_path().string();
+    checkpoint_file.model_text = model_text;
+    checkpointing.every_s = a.checkpoint_every;
+    checkpointing.write = [&](std::vector<std::uint8_t>&& state) {
+      checkpoint_file.state = std::move(state);
+      write_checkpoint_file(checkpoint_at, checkpoint_file);
+      ++checkpoints;
+    };
+  }
+  if (resumed) {
+    checkpointing.resume = resumed->state;
+    checkpointing.resume_from = "checkpoint " + resumed_path;
+    if (!a.quiet) std::fprintf(stderr, "mbsflow: going on from checkpoint %s\n", resumed_path.c_str());
+  }
+  if (checkpointing.write || resumed) o.checkpoint = &checkpointing;
   RunPlan plan;
   plan.options = o;
   plan.partition = d;
@@ -315,10 +362,51 @@ int run(const RunArgs& a) {
   const std::string newton = r.jacobians > 0 ? " (" + std::to_string(r.jacobians) + " Jacobians, " +
                                                    std::to_string(r.factorizations) + " factorisations)"
                                              : "";
+  if (r.resumed_at) {
+    char from[96];
+    std::snprintf(from, sizeof from, "; went on from the checkpoint at t = %.6g s", *r.resumed_at);
+    output += from;
+  }
+  if (checkpoints > 0) output += "; " + std::to_string(checkpoints) + " checkpoints, the last in " + checkpoint_at;
   std::fprintf(stderr, "mbsflow: done: %ld steps (%ld rejected), %ld evaluations%s, %.3f s wall, %.3g body-steps/s%s\n",
                r.steps, r.rejected, r.evaluations, newton.c_str(), r.wall_seconds,
                body_steps / std::max(r.wall_seconds, 1e-9), output.c_str());
   return 0;
+}
+
+void add_run_options(CLI::App* sub, RunArgs& a);
+
+// The arguments a checkpoint keeps, read as the run read them.
+RunArgs parse_run_arguments(const std::vector<std::string>& arguments) {
+  CLI::App app;
+  RunArgs a;
+  add_run_options(app.add_subcommand("run"), a);
+  std::vector<std::string> args{"run"};
+  args.insert(args.end(), arguments.begin(), arguments.end());
+  std::reverse(args.begin(), args.end());  // CLI11 takes them last first
+  try {
+    app.parse(args);
+  } catch (const CLI::ParseError& e) {
+    throw InputError(std::string("the checkpoint's arguments do not parse: ") + e.what());
+  }
+  return a;
+}
+
+// mbsflow run --resume CHECKPOINT: the run again with the arguments, folder and model
+// text the checkpoint keeps, from its state.
+int resume(const RunArgs& given, const CLI::App& sub) {
+  for (const CLI::Option* opt : sub.get_options())
+    if (opt->count() > 0 && !opt->check_name("--resume") && !opt->check_name("--quiet"))
+      throw InputError("--resume: the run goes on with the options it was started with; give no " + opt->get_name() +
+                       " (only -q)");
+  const std::string path = std::filesystem::absolute(given.resume).string();
+  const CheckpointFile c = read_checkpoint_file(path);
+  RunArgs a = parse_run_arguments(c.arguments);
+  a.quiet = a.quiet || given.quiet;
+  std::error_code ec;
+  std::filesystem::current_path(c.directory, ec);
+  if (ec) throw InputError("--resume: cannot go to the folder the run was started in, " + c.directory + ": " + ec.message());
+  return run(a, &c, path);
 }
 
 }  // namespace
@@ -326,7 +414,18 @@ int run(const RunArgs& a) {
 Action add_run(CLI::App& app) {
   auto a = std::make_shared<RunArgs>();
   CLI::App* sub = app.add_subcommand("run", "Simulate a model file and write its results");
-  sub->add_option("model", a->model, "Model file (JSON, see docs/model-format.md)")->required();
+  add_run_options(sub, *a);
+  sub->add_option("--resume", a->resume,
+                  "Go on with the run a checkpoint was taken from (--checkpoint-every), with its options and model, "
+                  "from its state: the results file ends bit for bit as the uninterrupted run's");
+  return [a, sub] { return a->resume.empty() ? run(*a) : resume(*a, *sub); };
+}
+
+namespace {
+
+void add_run_options(CLI::App* sub, RunArgs& args) {
+  RunArgs* a = &args;
+  sub->add_option("model", a->model, "Model file (JSON, see docs/model-format.md)");
   sub->add_option("--t-end", a->t_end, "End time in s (overrides simulation.t_end)");
   sub->add_option("--step", a->step, "Step in s; RK4 default: the stability estimate from the stiffest joint")
       ->check(CLI::PositiveNumber);
@@ -420,7 +519,13 @@ Action add_run(CLI::App& app) {
   sub->add_option("--extrapolation", a->extrapolation, "Loose coupling: order of the neighbours' extrapolation, 0, 1 or 2")
       ->check(CLI::Range(0, 2))
       ->capture_default_str();
-  return [a] { return run(*a); };
+  sub->add_option("--checkpoint-every", a->checkpoint_every,
+                  "Write a checkpoint every S s of wall-clock time (between steps; RK4 and DOPRI5 runs on threads), to "
+                  "resume with --resume after a crash or kill")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--checkpoint", a->checkpoint, "The checkpoint file (default: the results file's name + .ckpt)");
 }
+
+}  // namespace
 
 }  // namespace mbsflow::cli

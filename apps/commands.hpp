@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 #include <functional>
 #include <string>
+#include <vector>
 
 namespace mbsflow::cli {
 
@@ -24,6 +25,7 @@ std::string flag_for(const std::string& setting, const std::string* value);
 
 // The command line as typed, for the results file.
 const std::string& invocation();
+const std::vector<std::string>& invocation_arguments();  // argv as given
 void set_invocation(int argc, char** argv);
 
 }  // namespace mbsflow::cli

@@ -51,8 +51,10 @@ int main(int argc, char** argv) {
 namespace mbsflow::cli {
 namespace {
 std::string command_line;
-}
+std::vector<std::string> arguments;
+}  // namespace
 const std::string& invocation() { return command_line; }
+const std::vector<std::string>& invocation_arguments() { return arguments; }
 std::string flag_for(const std::string& setting, const std::string* value) {
   std::string flag = setting == "methods" ? "submodel-methods" : setting;
   std::replace(flag.begin(), flag.end(), '_', '-');
@@ -60,6 +62,7 @@ std::string flag_for(const std::string& setting, const std::string* value) {
 }
 void set_invocation(int argc, char** argv) {
   command_line.clear();
+  arguments.assign(argv, argv + argc);
   for (int i = 0; i < argc; ++i) command_line += (i ? " " : "") + std::string(argv[i]);
 }
 }  // namespace mbsflow::cli

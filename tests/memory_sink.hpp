@@ -1,5 +1,6 @@
 #pragma once
 // A sink that keeps every snapshot in memory, for tests.
+#include <string>
 #include <vector>
 
 #include "mbsflow/runtime/result_sink.hpp"
@@ -20,6 +21,14 @@ struct MemorySink : ResultSink {
     snapshots.push_back(std::move(s));
   }
   void end() override { ended = true; }
+  // Checkpoints: the snapshots after the first n are dropped, as a results file's rows are.
+  std::string identity() const override { return "memory"; }
+  void resume(const MultibodySystem&, long n, const std::string& id) override {
+    if (id != "memory" || n > static_cast<long>(times.size())) throw InputError("not these results");
+    times.resize(static_cast<std::size_t>(n));
+    states.resize(static_cast<std::size_t>(n));
+    snapshots.resize(static_cast<std::size_t>(n));
+  }
 };
 
 // The same times and bit for bit the same states.

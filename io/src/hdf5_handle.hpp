@@ -2,6 +2,7 @@
 // Owning handles for HDF5 identifiers and an error check, for io/ only.
 #include <hdf5.h>
 
+#include <optional>
 #include <string>
 #include <utility>
 
@@ -57,6 +58,18 @@ inline void write_string_attribute(hid_t obj, const char* name, const std::strin
                     std::string("create attribute ") + name);
   const char* p = value.c_str();
   check(H5Awrite(attr.get(), type.get(), &p), std::string("write attribute ") + name);
+}
+
+// The string attribute `name` of obj; nullopt when it has none.
+inline std::optional<std::string> read_string_attribute(hid_t obj, const std::string& name) {
+  if (H5Aexists(obj, name.c_str()) <= 0) return std::nullopt;
+  const Handle attr(H5Aopen(obj, name.c_str(), H5P_DEFAULT), H5Aclose, "open attribute " + name);
+  const Handle type = string_type();
+  char* value = nullptr;
+  check(H5Aread(attr.get(), type.get(), &value), "read attribute " + name);
+  std::string s = value ? value : "";
+  H5free_memory(value);
+  return s;
 }
 
 inline void write_number_attribute(hid_t obj, const char* name, double value) {

@@ -9,6 +9,8 @@
 #include <type_traits>
 #include <array>
 #include <vector>
+#include <filesystem>
+#include <random>
 
 #include "hdf5_handle.hpp"
 #include "writer_lock.hpp"
@@ -69,6 +71,53 @@ Series make_series(hid_t file, const std::string& path, std::vector<hsize_t> ite
   return s;
 }
 
+// An existing series of a file being resumed, checked against the shape it must have.
+Series open_series(hid_t file, const std::string& path, std::vector<hsize_t> item) {
+  Series s{path, std::move(item), {}, {}};
+  s.set = h5::Handle(H5Dopen2(file, path.c_str(), H5P_DEFAULT), H5Dclose, "open " + path);
+  const h5::Handle space(H5Dget_space(s.set.get()), H5Sclose, "get the space of " + path);
+  std::vector<hsize_t> dims(s.item.size() + 1);
+  if (H5Sget_simple_extent_ndims(space.get()) != static_cast<int>(dims.size()) ||
+      H5Sget_simple_extent_dims(space.get(), dims.data(), nullptr) < 0 ||
+      !std::equal(s.item.begin(), s.item.end(), dims.begin() + 1))
+    throw InputError(path + " in the results file has another shape than this model's");
+  return s;
+}
+
+hsize_t rows_of(const Series& s) {
+  const h5::Handle space(H5Dget_space(s.set.get()), H5Sclose, "get the space of " + s.path);
+  std::vector<hsize_t> dims(s.item.size() + 1);
+  h5::check(H5Sget_simple_extent_dims(space.get(), dims.data(), nullptr), "read the shape of " + s.path);
+  return dims[0];
+}
+
+void truncate(Series& s, hsize_t rows) {
+  std::vector<hsize_t> dims{rows};
+  dims.insert(dims.end(), s.item.begin(), s.item.end());
+  h5::check(H5Dset_extent(s.set.get(), dims.data()), "shorten " + s.path);
+}
+
+// The first `rows` values of a series of one value per row (the times).
+std::vector<double> read_rows(const Series& s, hsize_t rows) {
+  std::vector<double> v(rows);
+  if (rows == 0) return v;
+  const h5::Handle file_space(H5Dget_space(s.set.get()), H5Sclose, "get the space of " + s.path);
+  const hsize_t start = 0;
+  h5::check(H5Sselect_hyperslab(file_space.get(), H5S_SELECT_SET, &start, nullptr, &rows, nullptr), "select " + s.path);
+  const h5::Handle mem(H5Screate_simple(1, &rows, nullptr), H5Sclose, "create a memory space");
+  h5::check(H5Dread(s.set.get(), H5T_NATIVE_DOUBLE, mem.get(), file_space.get(), H5P_DEFAULT, v.data()), "read " + s.path);
+  return v;
+}
+
+// A random id for the results of one run (checkpoints name the file they go on with).
+std::string random_run_id() {
+  std::random_device rd;
+  const std::uint64_t id = (static_cast<std::uint64_t>(rd()) << 32) ^ rd();
+  char buf[17];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(id));
+  return buf;
+}
+
 // Appends the buffered rows to the dataset.
 void append(Series& s, hsize_t first_row) {
   const std::size_t row = s.row_size();
@@ -115,11 +164,33 @@ Hdf5Sink::Hdf5Sink(std::string path, FieldSet fields, RunInfo info)
 
 Hdf5Sink::~Hdf5Sink() = default;
 
+// The file's series: made in a new file, or opened in a file being resumed.
+void Hdf5Sink::lay_out(File& f, const MultibodySystem& system, bool make) {
+  const Model& m = system.model();
+  const auto n = static_cast<hsize_t>(m.bodies.size()), joints = static_cast<hsize_t>(m.joints.size());
+  // Time rows per chunk: up to 16, fewer for very large models so the buffer stays bounded;
+  // few rows also keep short what is left to write when a run ends.
+  const std::size_t row_bytes = static_cast<std::size_t>(system.dimension() + 6 * static_cast<Eigen::Index>(joints) + 4) * 8;
+  f.rows_per_chunk = std::clamp<hsize_t>(buffer_bytes / std::max<std::size_t>(row_bytes, 1), 1, 16);
+  const hsize_t rows = f.rows_per_chunk;
+  const hid_t file = f.file.get();
+  auto series = [&](const std::string& path, std::vector<hsize_t> item, hsize_t chunk_rows) {
+    return make ? make_series(file, path, std::move(item), chunk_rows) : open_series(file, path, std::move(item));
+  };
+  f.time = series("/time", {}, 1024);
+  for (std::size_t i = 0; i < body_fields.size(); ++i)
+    if (fields_.body[i])
+      f.bodies.emplace_back(i, series(body_fields[i].dataset, {n, static_cast<hsize_t>(body_fields[i].components)}, rows));
+  if (fields_.energy) f.energy = series(energy_dataset, {3}, 1024);
+  if (fields_.joint_force && joints > 0) f.joint_force = series(joint_force_dataset, {joints, 6}, rows);
+  const bool motors = std::any_of(m.joints.begin(), m.joints.end(), [](const Joint& j) { return j.motor.kind != JointMotor::Kind::none; });
+  if (f.joint_force && motors) f.motor_effort = series(motor_effort_dataset, {joints, 1}, rows);
+}
+
 void Hdf5Sink::begin(const MultibodySystem& system) {
   system_ = &system;
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // errors become exceptions, not stack dumps
   const Model& m = system.model();
-  const auto n = static_cast<hsize_t>(m.bodies.size()), joints = static_cast<hsize_t>(m.joints.size());
   auto f = std::make_unique<File>();
   // The file is made under another name and renamed when its layout is on disk: the path
   // holds either what was there or a readable file, never a half-made one. A file that
@@ -132,20 +203,7 @@ void Hdf5Sink::begin(const MultibodySystem& system) {
   h5::check(H5Pset_libver_bounds(fapl.get(), H5F_LIBVER_V18, H5F_LIBVER_LATEST), "set the file format");
   f->file = h5::Handle(H5Fcreate(making.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get()), H5Fclose,
                        "create the results file " + making);
-  // Time rows per chunk: up to 16, fewer for very large models so the buffer stays bounded;
-  // few rows also keep short what is left to write when a run ends.
-  const std::size_t row_bytes = static_cast<std::size_t>(system.dimension() + 6 * static_cast<Eigen::Index>(joints) + 4) * 8;
-  f->rows_per_chunk = std::clamp<hsize_t>(buffer_bytes / std::max<std::size_t>(row_bytes, 1), 1, 16);
-  const hsize_t rows = f->rows_per_chunk;
-  f->time = make_series(f->file.get(), "/time", {}, 1024);
-  for (std::size_t i = 0; i < body_fields.size(); ++i)
-    if (fields_.body[i])
-      f->bodies.emplace_back(i, make_series(f->file.get(), body_fields[i].dataset,
-                                            {n, static_cast<hsize_t>(body_fields[i].components)}, rows));
-  if (fields_.energy) f->energy = make_series(f->file.get(), energy_dataset, {3}, 1024);
-  if (fields_.joint_force && joints > 0) f->joint_force = make_series(f->file.get(), joint_force_dataset, {joints, 6}, rows);
-  const bool motors = std::any_of(m.joints.begin(), m.joints.end(), [](const Joint& j) { return j.motor.kind != JointMotor::Kind::none; });
-  if (f->joint_force && motors) f->motor_effort = make_series(f->file.get(), motor_effort_dataset, {joints, 1}, rows);
+  lay_out(*f, system, true);
   std::vector<std::string> names;
   for (const Body& b : m.bodies) names.push_back(b.name);
   const h5::Handle bodies(H5Gopen2(f->file.get(), "/bodies", H5P_DEFAULT), H5Gclose, "open /bodies");
@@ -157,7 +215,9 @@ void Hdf5Sink::begin(const MultibodySystem& system) {
     write_names(group.get(), "names", names);
   }
   const hid_t root = f->file.get();
+  identity_ = random_run_id();
   h5::write_string_attribute(root, "mbsflow_version", MBSFLOW_VERSION);
+  h5::write_string_attribute(root, "run_id", identity_);
   h5::write_string_attribute(root, "model_name", m.name);
   h5::write_string_attribute(root, "model", info_.model_json);
   h5::write_string_attribute(root, "method", info_.method);
@@ -174,6 +234,45 @@ void Hdf5Sink::begin(const MultibodySystem& system) {
     throw InputError("cannot rename " + making + " to " + path_ + ": " + std::strerror(errno));
   last_flush_ = now_seconds();
   file_ = std::move(f);
+}
+
+void Hdf5Sink::resume(const MultibodySystem& system, long snapshots, const std::string& identity) {
+  system_ = &system;
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  if (!std::filesystem::exists(path_))
+    throw InputError("the results file " + path_ + " is gone: the checkpoint goes on from the snapshots it holds");
+  auto f = std::make_unique<File>();
+  f->lock = WriterLock(path_);  // refused while another run writes it
+  f->file = h5::Handle(H5Fopen(path_.c_str(), H5F_ACC_RDWR, H5P_DEFAULT), H5Fclose, "open the results file " + path_);
+  const std::optional<std::string> id = h5::read_string_attribute(f->file.get(), "run_id");
+  if (id != identity)
+    throw InputError(path_ + " is not the results file of the run this checkpoint was taken from (another run wrote it since)");
+  const std::optional<std::string> fields = h5::read_string_attribute(f->file.get(), "fields");
+  if (fields != fields_text(fields_))
+    throw InputError(path_ + " holds the fields '" + fields.value_or("") + "', the run writes '" + fields_text(fields_) + "'");
+  lay_out(*f, system, false);
+  // The rows after the checkpoint's are dropped: the resumed run writes them again. The
+  // time series goes last in every flush, so its length bounds the others'.
+  const hsize_t kept = static_cast<hsize_t>(snapshots);
+  if (rows_of(f->time) < kept)
+    throw InputError(path_ + " holds " + std::to_string(rows_of(f->time)) + " snapshots, fewer than the " +
+                     std::to_string(snapshots) + " that the checkpoint was taken after");
+  auto cut = [&](Series& s) { truncate(s, kept); };
+  cut(f->time);
+  for (auto& [i, series] : f->bodies) cut(series);
+  if (f->energy) cut(*f->energy);
+  if (f->joint_force) cut(*f->joint_force);
+  if (f->motor_effort) cut(*f->motor_effort);
+  f->times = read_rows(f->time, kept);
+  h5::check(H5Fflush(f->file.get(), H5F_SCOPE_GLOBAL), "flush " + path_);
+  identity_ = identity;
+  rows_written_ = snapshots;
+  last_flush_ = now_seconds();
+  file_ = std::move(f);
+}
+
+void Hdf5Sink::sync() {
+  if (file_) flush();
 }
 
 void Hdf5Sink::write(Snapshot&& s) {

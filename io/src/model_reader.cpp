@@ -323,8 +323,8 @@ Model read_model_text(const std::string& text, const std::string& name) {
   return Reader(root).read();
 }
 
-Model read_model_file(const std::string& path) {
-  return read_model_text(read_input_file(path, "model file", max_model_bytes), path);
-}
+std::string read_model_file_text(const std::string& path) { return read_input_file(path, "model file", max_model_bytes); }
+
+Model read_model_file(const std::string& path) { return read_model_text(read_model_file_text(path), path); }
 
 }  // namespace mbsflow

@@ -63,14 +63,7 @@ std::vector<std::uint64_t> ResultsFile::shape(const std::string& dataset) const 
 }
 
 std::optional<std::string> ResultsFile::string_attribute(const std::string& name) const {
-  if (H5Aexists(file_, name.c_str()) <= 0) return std::nullopt;
-  const h5::Handle attr(H5Aopen(file_, name.c_str(), H5P_DEFAULT), H5Aclose, "open attribute " + name);
-  const h5::Handle type = h5::string_type();
-  char* value = nullptr;
-  h5::check(H5Aread(attr.get(), type.get(), &value), "read attribute " + name);
-  std::string s = value ? value : "";
-  H5free_memory(value);
-  return s;
+  return h5::read_string_attribute(file_, name);
 }
 
 std::optional<double> ResultsFile::number_attribute(const std::string& name) const {

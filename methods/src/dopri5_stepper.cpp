@@ -61,6 +61,18 @@ class Dopri5Stepper final : public Stepper {
   double next_step() const override { return h_; }
   void set_next_step(double h) override { h_ = h; }
 
+ protected:
+  void save_method(StateWriter& out) const override {
+    out.text("dopri5");
+    out.real(h_);
+    dp_.save(out);
+  }
+  void restore_method(StateReader& in) override {
+    in.expect("dopri5");
+    h_ = in.real();
+    dp_.restore(in);
+  }
+
  private:
   const StepperSystem& sys_;
   double rtol_;

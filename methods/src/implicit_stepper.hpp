@@ -32,6 +32,16 @@ class ImplicitStepper : public Stepper {
     count();
   }
   double next_step() const override { return integrator_->next_step(); }
+
+ protected:
+  void save_method(StateWriter&) const override {
+    throw InputError("checkpoints are not yet written for the implicit methods (colloc, tirk)");
+  }
+  void restore_method(StateReader&) override {
+    throw InputError("checkpoints are not yet written for the implicit methods (colloc, tirk)");
+  }
+
+ public:
   void set_next_step(double h) override { settings_.initial_step = h; }
 
  protected:

@@ -1,6 +1,9 @@
 // The "rk4" stepper: classic Runge-Kutta with fixed steps on the grid t_start + k h (the
 // last step shortened to land on t_end), the arithmetic of mbsflow::Rk4.
 #include "mbsflow/methods/rk4.hpp"
+
+#include <cstdint>
+
 #include "mbsflow/methods/step_grid.hpp"
 #include "cubic_hermite.hpp"
 #include "stepper_registry.hpp"
@@ -49,6 +52,28 @@ class Rk4Stepper final : public Stepper {
       slopes_for_ = k_;
     }
     cubic_hermite(t_previous_, y_previous_, f_previous_, t_, y_, f_, t, out);
+  }
+
+ protected:
+  void save_method(StateWriter& out) const override {
+    out.text("rk4");
+    out.real(grid_.t_start);
+    out.real(grid_.t_end);
+    out.real(grid_.h);
+    out.integer(grid_.steps);
+    out.integer(k_);
+    out.vector(y_previous_);
+  }
+  void restore_method(StateReader& in) override {
+    in.expect("rk4");
+    grid_.t_start = in.real();
+    grid_.t_end = in.real();
+    grid_.h = in.real();
+    grid_.steps = in.integer(0, INT64_MAX);
+    k_ = in.integer(0, grid_.steps);
+    y_previous_ = in.vector();
+    if (y_previous_.size() != 0 && y_previous_.size() != y_.size()) in.fail("rk4: the previous state has the wrong size");
+    slopes_for_ = -1;  // dense output recomputes the end slopes: rhs is a function of (t, y)
   }
 
  private:

@@ -17,6 +17,15 @@ AsyncSink::~AsyncSink() {
 
 void AsyncSink::begin(const MultibodySystem& system) {
   inner_->begin(system);
+  start_writer(system);
+}
+
+void AsyncSink::resume(const MultibodySystem& system, long snapshots, const std::string& identity) {
+  inner_->resume(system, snapshots, identity);
+  start_writer(system);
+}
+
+void AsyncSink::start_writer(const MultibodySystem& system) {
   const SnapshotContent want = inner_->content();
   if (want.energy || want.joint_wrench) system_ = std::make_unique<MultibodySystem>(system);
   const std::size_t bytes = static_cast<std::size_t>(system.dimension()) * sizeof(double) + 64;
@@ -51,6 +60,16 @@ void AsyncSink::write(Snapshot&& snapshot) {
 long AsyncSink::waits() const {
   std::lock_guard lock(mutex_);
   return stats_.waits;
+}
+
+void AsyncSink::sync() {
+  {
+    std::unique_lock lock(mutex_);
+    not_full_.wait(lock, [&] { return (queue_.empty() && !writing_) || error_; });
+    // The writer waits for the next snapshot, which only this thread hands over.
+    if (!error_) inner_->sync();
+  }
+  rethrow_writer_error();
 }
 
 void AsyncSink::write_coupling(const std::vector<CouplingRecord>& records) { coupling_ = records; }
@@ -111,6 +130,7 @@ void AsyncSink::run() {
       queue_.pop_front();
       t_taken_ = s.t;
       took_any_ = true;
+      writing_ = true;
     }
     not_full_.notify_one();
     try {
@@ -123,10 +143,15 @@ void AsyncSink::run() {
       }
       inner_->write(std::move(s));
       const double spent = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-      std::lock_guard lock(mutex_);
-      stats_.writer_seconds += spent;
+      {
+        std::lock_guard lock(mutex_);
+        stats_.writer_seconds += spent;
+        writing_ = false;
+      }
+      not_full_.notify_all();
     } catch (...) {
       std::lock_guard lock(mutex_);
+      writing_ = false;
       error_ = std::current_exception();
       queue_.clear();
       not_full_.notify_all();

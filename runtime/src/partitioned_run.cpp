@@ -4,6 +4,8 @@
 #include <oneapi/tbb/task_arena.h>
 
 #include <chrono>
+#include <cstdint>
+#include <optional>
 
 #include "mbsflow/error.hpp"
 #include "partitioned_state.hpp"
@@ -37,6 +39,27 @@ class SinkOutput final : public TightOutput {
     emit(whole_, sink_, t, y, out_);
   }
   bool wants_dense() const override { return sink_ != nullptr; }
+  bool checkpoint_due() override { return timer_.due(); }
+  // The state whatever the partition: the global state and where the loop is.
+  void checkpoint(const TightPoint& p) override {
+    if (sink_) sink_->sync();
+    partitioned::gather(parts_, whole_.layout(), y_);
+    StateWriter w;
+    w.text("tight");
+    w.text(o_.method.name());
+    w.integer(p.steps);
+    w.integer(p.rejected);
+    w.integer(p.evaluations);
+    w.real(p.t);
+    w.real(p.h);
+    w.integer(p.next_out);
+    w.bytes(p.controller);
+    w.integer(out_.snapshots);
+    w.real(out_.t_last_snapshot);
+    w.text(sink_ ? sink_->identity() : "");
+    w.vector(y_);
+    o_.checkpoint->write(w.take());
+  }
 
  private:
   const Model& model_;
@@ -46,7 +69,35 @@ class SinkOutput final : public TightOutput {
   ResultSink* sink_;
   RunSummary& out_;
   Eigen::VectorXd& y_;
+  CheckpointTimer timer_{o_.checkpoint};
 };
+
+// A state SinkOutput::checkpoint wrote: where the loop is, and the parts' x[0] set.
+TightPoint restore_tight(const Checkpointing& c, const RunOptions& o, std::vector<Part>& parts, const MultibodySystem& whole,
+                         ResultSink* sink, RunSummary& out) {
+  StateReader in(c.resume, c.resume_from);
+  in.expect("tight");
+  const std::string m = in.text();
+  if (m != o.method.name()) in.fail("it is the state of a " + m + " run, not of " + o.method.name());
+  TightPoint p;
+  p.steps = in.integer(0, INT64_MAX);
+  p.rejected = in.integer(0, INT64_MAX);
+  p.evaluations = in.integer(0, INT64_MAX);
+  p.t = in.real();
+  p.h = in.real();
+  p.next_out = in.integer(1, INT64_MAX);
+  p.controller = in.bytes();
+  out.snapshots = in.integer(0, INT64_MAX);
+  out.t_last_snapshot = in.real();
+  const std::string results = in.text();
+  const Eigen::VectorXd y = in.vector(whole.dimension());
+  if (!in.at_end()) in.fail("it holds more than the state of a tightly coupled run");
+  out.resumed_at = p.t;
+  for (Part& part : parts) partitioned::scatter(y, whole.layout(), part);
+  if (sink && results.empty()) throw InputError(c.resume_from + ": the run it was taken from wrote no results");
+  if (sink) sink->resume(whole, out.snapshots, results);
+  return p;
+}
 
 }  // namespace
 
@@ -70,16 +121,20 @@ RunSummary run_partitioned(const Model& model, const Decomposition& d, const Run
   // Like run_simulation, which gets its system built: the clock starts with the run.
   const auto start = Clock::now();
   Eigen::VectorXd y = whole.initial_state();
-  if (sink) sink->begin(whole);
+  std::optional<TightPoint> resumed;
+  if (o.checkpoint && !o.checkpoint->resume.empty())
+    resumed = restore_tight(*o.checkpoint, o, parts, whole, sink, out);
+  else if (sink)
+    sink->begin(whole);
   std::vector<Part*> local;
   for (Part& p : parts) local.push_back(&p);
   LocalExchange exchange(local);
   SinkOutput output(model, o, parts, whole, sink, out, y);
   run_with_sink(sink, out, [&] {
-    if (sink) emit(whole, sink, o.t_start, y, out);
+    if (sink && !resumed) emit(whole, sink, o.t_start, y, out);
     arena.execute([&] {
-      const TightCounts counts =
-          run_tight_coupling({d, local, o, exchange, output, par.executor == Executor::barrier, &clock});
+      const TightCounts counts = run_tight_coupling(
+          {d, local, o, exchange, output, par.executor == Executor::barrier, &clock, resumed ? &*resumed : nullptr});
       out.steps = counts.steps;
       out.rejected = counts.rejected;
       out.evaluations = counts.evaluations;

@@ -23,7 +23,24 @@ void check_plan(const Model& model, const RunPlan& plan) {
   } else if (plan.partition && !plan.loose) {
     tight_stages(o.method);  // a method whose stages the submodels exchange
   }
+  if (const Checkpointing* c = o.checkpoint; c && (c->every_s > 0.0 || !c->resume.empty())) {
+    if (plan.cluster)
+      throw InputError("checkpoints are not yet written for runs on worker processes (--cluster, --processes): run on threads");
+    if (plan.loose) throw InputError("checkpoints are not yet written for loosely coupled runs (--coupling loose)");
+    if (o.method != Method::rk4 && o.method != Method::dopri5)
+      throw InputError(std::string("checkpoints are not yet written for ") + o.method.name() + " runs: rk4 and dopri5 runs have them");
+  }
 }
+
+namespace {
+
+// The kind of run a checkpoint's state is of: "simulation" (one stepper) or "tight".
+std::string checkpoint_kind(const Checkpointing& c) {
+  StateReader in(c.resume, c.resume_from);
+  return in.text();
+}
+
+}  // namespace
 
 RunSummary run(const Model& model, const RunPlan& plan, ResultSink* sink, RunStats* stats) {
   check_plan(model, plan);
@@ -36,7 +53,13 @@ RunSummary run(const Model& model, const RunPlan& plan, ResultSink* sink, RunSta
   // Loose coupling of one submodel is a plain run (no macro steps to restart the method at).
   const bool one = plan.partition && plan.partition->submodels.size() == 1;
   if (loose && !one) return run_loose(model, *plan.partition, plan.options, *loose, sink, &st.loose);
-  if (plan.partition && !loose) return run_partitioned(model, *plan.partition, plan.options, plan.parallel, sink, &st.parallel);
+  // A tight run's numbers do not depend on the partition, so a checkpoint goes on in
+  // whichever loop wrote it, whatever partition (or none) the resumed run was given.
+  const Checkpointing* c = plan.options.checkpoint;
+  const std::string kind = c && !c->resume.empty() ? checkpoint_kind(*c) : "";
+  if (kind == "tight" && !plan.partition) return run_partitioned(model, decompose(model, 1), plan.options, plan.parallel, sink, &st.parallel);
+  if (plan.partition && !loose && kind != "simulation")
+    return run_partitioned(model, *plan.partition, plan.options, plan.parallel, sink, &st.parallel);
   MultibodySystem system(model);
   RunOptions whole = plan.options;
   if (whole.threads == 0) whole.threads = plan.parallel.threads;

@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 
 #include "mbsflow/error.hpp"
@@ -21,23 +22,64 @@ void check(const MultibodySystem& sys, const Eigen::VectorXd& y, double t, const
   check_stop(o, t);
 }
 
-// Fixed-step methods: a snapshot every output_steps(o) steps and at the end.
-void run_fixed(MultibodySystem& sys, Stepper& stepper, const RunOptions& o, ResultSink* sink, RunSummary& out) {
+// Checkpoints of the loop: between two steps, `next` is the index of the next fixed step
+// or of the next output on the grid; the sink is synced first, so the results file holds
+// every snapshot counted in `out`.
+void save_point(const Checkpointing& c, ResultSink* sink, const Stepper& stepper, Method method, long next,
+                const RunSummary& out) {
+  if (sink) sink->sync();
+  StateWriter w;
+  w.text("simulation");
+  w.text(method.name());
+  w.integer(next);
+  w.integer(out.snapshots);
+  w.real(out.t_last_snapshot);
+  w.text(sink ? sink->identity() : "");
+  stepper.save(w);
+  c.write(w.take());
+}
+
+// Restores the stepper and `out` from a state save_point wrote; returns `next`.
+long restore_point(const Checkpointing& c, ResultSink* sink, const MultibodySystem& sys, Stepper& stepper, Method method,
+                   RunSummary& out) {
+  StateReader in(c.resume, c.resume_from);
+  in.expect("simulation");
+  const std::string m = in.text();
+  if (m != method.name()) in.fail("it is the state of a " + m + " run, not of " + method.name());
+  const long next = in.integer(1, INT64_MAX);
+  out.snapshots = in.integer(0, INT64_MAX);
+  out.t_last_snapshot = in.real();
+  const std::string results = in.text();
+  stepper.restore(in);
+  if (!in.at_end()) in.fail("it holds more than the state of a run in one process");
+  out.resumed_at = stepper.t();
+  if (sink && results.empty()) throw InputError(c.resume_from + ": the run it was taken from wrote no results");
+  if (sink) sink->resume(sys, out.snapshots, results);
+  return next;
+}
+
+// Fixed-step methods: a snapshot every output_steps(o) steps and at the end; `first` is
+// the index of the first step to take.
+void run_fixed(MultibodySystem& sys, Stepper& stepper, const RunOptions& o, ResultSink* sink, RunSummary& out, long first) {
   const int every = output_steps(o);
-  for (long k = 1; !stepper.done(); ++k) {
+  CheckpointTimer checkpoint(o.checkpoint);
+  for (long k = first; !stepper.done(); ++k) {
     stepper.step();
     const double t = stepper.t();
     check(sys, stepper.y(), t, o);
     if (sink && (k % every == 0 || stepper.done())) emit(sys, sink, t, stepper.y(), out);
     if (o.progress && (k & 15) == 0) o.progress(t, k);
+    if (!stepper.done() && checkpoint.due()) save_point(*o.checkpoint, sink, stepper, o.method, k + 1, out);
   }
 }
 
-// Adaptive methods: snapshots on the uniform output grid from the dense output, and at the end.
-void run_adaptive(MultibodySystem& sys, Stepper& stepper, const RunOptions& o, ResultSink* sink, RunSummary& out) {
+// Adaptive methods: snapshots on the uniform output grid from the dense output, and at
+// the end; `next_out` is the index of the next output time.
+void run_adaptive(MultibodySystem& sys, Stepper& stepper, const RunOptions& o, ResultSink* sink, RunSummary& out,
+                  long next_out) {
   const double dt_out = output_dt(o);
-  long next_out = 1;
   Eigen::VectorXd dense(sys.dimension());
+  CheckpointTimer checkpoint(o.checkpoint);
   while (!stepper.done()) {
     stepper.step();
     const double t_new = stepper.t();
@@ -51,6 +93,7 @@ void run_adaptive(MultibodySystem& sys, Stepper& stepper, const RunOptions& o, R
     }
     check(sys, stepper.y(), t_new, o);
     if (o.progress && (stepper.stats().accepted & 15) == 0) o.progress(t_new, stepper.stats().accepted);
+    if (!stepper.done() && checkpoint.due()) save_point(*o.checkpoint, sink, stepper, o.method, next_out, out);
   }
   if (sink) emit(sys, sink, stepper.t(), stepper.y(), out);
 }
@@ -96,13 +139,15 @@ RunSummary run_simulation(MultibodySystem& sys, const RunOptions& o, ResultSink*
   const StepperSystem system = stepper_system(sys, o.jacobian);
   std::unique_ptr<Stepper> stepper = entry.make(system, stepper_settings(o));
   stepper->start(o.t_start, y, o.t_end);
-  if (sink) sink->begin(sys);
+  const bool resume = o.checkpoint && !o.checkpoint->resume.empty();
+  const long next = resume ? restore_point(*o.checkpoint, sink, sys, *stepper, o.method, out) : 1;
+  if (sink && !resume) sink->begin(sys);
   run_with_sink(sink, out, [&] {
-    if (sink) emit(sys, sink, o.t_start, y, out);
+    if (sink && !resume) emit(sys, sink, o.t_start, y, out);
     if (entry.adaptive)
-      run_adaptive(sys, *stepper, o, sink, out);
+      run_adaptive(sys, *stepper, o, sink, out, next);
     else
-      run_fixed(sys, *stepper, o, sink, out);
+      run_fixed(sys, *stepper, o, sink, out, next);
   });
   out.steps = stepper->stats().accepted;
   out.rejected = stepper->stats().rejected;

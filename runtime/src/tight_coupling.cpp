@@ -70,13 +70,21 @@ TightCounts run_rk4(const TightRun& r) {
       },
       r.barriers, remote ? &*remote : nullptr);
   step_in_chunks(
-      grid, chunk, 0,
+      grid, chunk, r.start ? r.start->steps : 0,
       [&](long from, int steps) {
         first = from;
         schedule.run(steps);
         r.exchange.check();
       },
-      [&](long done) { r.output.step_done(done, grid.time(done), done % every == 0 || done == grid.steps ? done : -1); });
+      [&](long done) {
+        r.output.step_done(done, grid.time(done), done % every == 0 || done == grid.steps ? done : -1);
+        if (done < grid.steps && r.output.checkpoint_due()) {
+          TightPoint point;
+          point.steps = done;
+          point.t = grid.time(done);
+          r.output.checkpoint(point);
+        }
+      });
   return {grid.steps, 0, grid.steps * 4};
 }
 
@@ -94,6 +102,15 @@ TightCounts run_dopri5(const TightRun& r) {
   bool need_k0 = true;
   long attempt = 0;  // the exchange's step: attempts are numbered alike everywhere
   TightCounts counts;
+  long next_out = 1;
+  if (const TightPoint* p = r.start) {
+    t = p->t;
+    h = p->h;
+    counts = {p->steps, p->rejected, p->evaluations};
+    next_out = p->next_out;
+    StateReader in(p->controller, "the DOPRI5 controller's state");
+    control.restore(in);
+  }
   const auto remote = proxies(r, [&](int, int s) {
     return s > 0 || need_k0 ? std::optional<long>(attempt) : std::nullopt;
   });
@@ -109,7 +126,6 @@ TightCounts run_dopri5(const TightRun& r) {
       },
       r.barriers, remote ? &*remote : nullptr);
   const double dt_out = output_dt(o);
-  long next_out = 1;
   while (t < o.t_end) {
     h = std::min(h, o.t_end - t);
     while (true) {  // attempts until one is accepted
@@ -148,6 +164,11 @@ TightCounts run_dopri5(const TightRun& r) {
       break;
     }
     r.output.step_done(counts.steps, t, t < o.t_end ? -1 : next_out);
+    if (t < o.t_end && r.output.checkpoint_due()) {
+      StateWriter w;
+      control.save(w);
+      r.output.checkpoint({counts.steps, counts.rejected, counts.evaluations, t, h, next_out, w.take()});
+    }
   }
   return counts;
 }

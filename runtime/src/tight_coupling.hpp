@@ -7,6 +7,7 @@
 #include <oneapi/tbb/enumerable_thread_specific.h>
 
 #include <chrono>
+#include <cstdint>
 #include <numeric>
 #include <vector>
 
@@ -31,6 +32,17 @@ class BusyClock {
   tbb::enumerable_thread_specific<double> busy_{0.0};
 };
 
+// Where the loop of a tightly coupled run is between two steps, whatever the partition:
+// the steps taken (RK4: the next step's index), and for DOPRI5 the time, the step to try,
+// the controller's memory (StateWriter bytes of dopri5::Controller::save), the next
+// output's index and the counts. A checkpoint keeps it with the global state.
+struct TightPoint {
+  long steps = 0, rejected = 0, evaluations = 0;
+  double t = 0.0, h = 0.0;
+  long next_out = 1;
+  std::vector<std::uint8_t> controller;
+};
+
 // Where a tightly coupled run's results go: a sink in this process, or the coordinator.
 class TightOutput {
  public:
@@ -44,6 +56,10 @@ class TightOutput {
   virtual void dense(long index, double t, Eigen::VectorXd& y) = 0;
   // False: the run writes no snapshots between steps (no dense output to compute).
   virtual bool wants_dense() const { return true; }
+  // Checkpoints: whether one is due now (asked between steps), and taking it; the local
+  // submodels' x[0] hold the state at point.t.
+  virtual bool checkpoint_due() { return false; }
+  virtual void checkpoint(const TightPoint& point) { (void)point; }
 };
 
 struct TightRun {
@@ -54,6 +70,7 @@ struct TightRun {
   TightOutput& output;
   bool barriers = false;       // a barrier after every stage (the seed's scheme)
   BusyClock* clock = nullptr;  // times the stage work
+  const TightPoint* start = nullptr;  // go on from here (the parts' x[0] set); null: from t_start
 };
 
 struct TightCounts {

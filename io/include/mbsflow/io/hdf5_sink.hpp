@@ -4,7 +4,8 @@
 //   (T x N x k), /energy (T x 3), /joints/names (J), /joints/force (T x J x 6), and for
 //   loosely coupled runs /coupling/{index,t_start,t_end,position_error,velocity_error,lag}
 //   (one row per macro step);
-// chunked and extendible along time, run settings as attributes of the root group.
+// chunked and extendible along time, run settings and a random run_id as attributes of
+// the root group.
 // Snapshots are buffered into whole chunk rows, so HDF5 writes full chunks.
 #include <cstdint>
 #include <memory>
@@ -38,18 +39,24 @@ class Hdf5Sink : public ResultSink {
   void write(Snapshot&& snapshot) override;
   void write_coupling(const std::vector<CouplingRecord>& records) override;
   void end() override;  // writes what is buffered and the XDMF sidecar, closes the file
+  void sync() override;  // writes what is buffered and flushes the file
+  std::string identity() const override { return identity_; }  // the file's run_id attribute
+  // Opens the file again, keeps its first `snapshots` rows and goes on after them.
+  void resume(const MultibodySystem& system, long snapshots, const std::string& identity) override;
   const std::string& path() const { return path_; }
   long snapshots_written() const { return rows_written_; }
 
  private:
   struct File;  // HDF5 handles and the writer lock, in the .cpp
   void flush();
+  void lay_out(File& f, const MultibodySystem& system, bool make);
 
   std::string path_;
   FieldSet fields_;
   RunInfo info_;
   std::unique_ptr<File> file_;
   const MultibodySystem* system_ = nullptr;
+  std::string identity_;
   long rows_written_ = 0;
   double last_flush_ = 0.0;  // steady-clock seconds: buffered rows are written at least every flush_interval_s
 };

@@ -13,6 +13,8 @@ namespace mbsflow {
 inline constexpr std::size_t max_model_bytes = std::size_t{1} << 30;
 
 Model read_model_file(const std::string& path);
+// The text of a model file, checked for size as read_model_file does.
+std::string read_model_file_text(const std::string& path);
 // `name` is used in messages in place of a file name.
 Model read_model_text(const std::string& text, const std::string& name);
 

@@ -3,10 +3,12 @@
 // fourth-order dense output, after Hairer, Norsett & Wanner, Solving ODE I, II.4-5.
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <string>
 
 #include "mbsflow/methods/ode_system.hpp"
+#include "mbsflow/methods/state_archive.hpp"
 
 namespace mbsflow {
 
@@ -120,6 +122,16 @@ class Controller {
     return s_.h_min > 0.0 ? s_.h_min : 16.0 * std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(t));
   }
 
+  // What the controller carries from step to step (checkpoints).
+  void save(StateWriter& out) const {
+    out.real(err_old_);
+    out.flag(rejected_before_);
+  }
+  void restore(StateReader& in) {
+    err_old_ = in.real();
+    rejected_before_ = in.flag();
+  }
+
  private:
   Dopri5Settings s_;
   double err_old_ = 1e-4;
@@ -206,6 +218,21 @@ class Dopri5 {
   }
 
   static constexpr int order = 5;
+
+  // Checkpoints: the controller's memory, the counters and the kept f(t, y); not the dense
+  // output of the last step (five states' worth), which the next step makes anew.
+  void save(StateWriter& out) const {
+    control_.save(out);
+    for (long v : {stats_.accepted, stats_.rejected, stats_.evaluations}) out.integer(v);
+    out.flag(fsal_);
+    if (fsal_) out.vector(k_[0]);
+  }
+  void restore(StateReader& in) {
+    control_.restore(in);
+    for (long* v : {&stats_.accepted, &stats_.rejected, &stats_.evaluations}) *v = in.integer(0, INT64_MAX);
+    fsal_ = in.flag();
+    if (fsal_) k_[0] = in.vector(tmp_.size());
+  }
 
  private:
   static double rms(const Eigen::VectorXd& v, const Eigen::VectorXd& sc) {

@@ -20,6 +20,7 @@
 
 #include "mbsflow/error.hpp"
 #include "mbsflow/method.hpp"
+#include "mbsflow/methods/state_archive.hpp"
 
 namespace mbsflow {
 
@@ -84,7 +85,18 @@ class Stepper {
   void set_state(const Eigen::VectorXd& y) { start(t_, y, t_end_); }
   const StepperStats& stats() const { return stats_; }
 
+  // Checkpoints, between steps: everything the next steps depend on (the state, the step
+  // size controller, kept f values, the Newton matrices' history), so that a stepper made
+  // with the same system and settings and restored goes on bit for bit as this one would
+  // have. restore() follows a start() (which sizes the
+  // state) and throws InputError for a state of another method or size.
+  void save(StateWriter& out) const;
+  void restore(StateReader& in);
+
  protected:
+  virtual void save_method(StateWriter& out) const = 0;
+  virtual void restore_method(StateReader& in) = 0;
+
   double t_ = 0.0, t_previous_ = 0.0, t_end_ = 0.0;
   Eigen::VectorXd y_;
   mutable StepperStats stats_;  // mutable: dense output may evaluate f (rk4 does, for its slopes)

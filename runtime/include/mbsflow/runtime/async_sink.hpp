@@ -34,6 +34,9 @@ class AsyncSink : public ResultSink {
   void write(Snapshot&& snapshot) override;
   void write_coupling(const std::vector<CouplingRecord>& records) override;  // handed on at end()
   void end() override;
+  void sync() override;  // waits until the queue is written, then syncs the inner sink
+  std::string identity() const override { return inner_->identity(); }
+  void resume(const MultibodySystem& system, long snapshots, const std::string& identity) override;
   const AsyncSinkStats& stats() const { return stats_; }  // after end()
   // Once *stop is set, end() drops the queued snapshots instead of writing them (and a full
   // queue takes no more), so that a stopped run ends within a second or so whatever the
@@ -44,6 +47,7 @@ class AsyncSink : public ResultSink {
 
  private:
   void run();
+  void start_writer(const MultibodySystem& system);
   void rethrow_writer_error();
   bool stopping() const;
 
@@ -63,6 +67,7 @@ class AsyncSink : public ResultSink {
   long dropped_ = 0;
   double t_taken_ = 0.0;  // of the last snapshot the writer took
   bool took_any_ = false;
+  bool writing_ = false;  // the writer holds a snapshot it took from the queue
 };
 
 }  // namespace mbsflow

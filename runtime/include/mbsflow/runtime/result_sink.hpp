@@ -2,8 +2,10 @@
 // Where snapshots go. runtime/ knows no file format; io/ implements sinks.
 #include <Eigen/Core>
 #include <optional>
+#include <string>
 #include <vector>
 
+#include "mbsflow/error.hpp"
 #include "mbsflow/graph/multibody_system.hpp"
 
 namespace mbsflow {
@@ -51,6 +53,20 @@ class ResultSink {
   // Flushes and closes; called on every way out of a run, failed runs included.
   virtual void end() = 0;
   virtual SinkLoss loss() const { return {}; }  // after end()
+
+  // Checkpoints. sync(): returns once every snapshot written so far is stored (a file
+  // flushed to disk). identity(): after begin(), what tells these results from any other
+  // run's (a results file's random id); a checkpoint keeps it.
+  virtual void sync() {}
+  virtual std::string identity() const { return {}; }
+  // Instead of begin(): goes on with the results of an earlier run of this system that
+  // a checkpoint was taken from (identity() was `identity` then), keeping its first
+  // `snapshots` snapshots and dropping any later ones. InputError when the results are
+  // not there or not those.
+  virtual void resume(const MultibodySystem& system, long snapshots, const std::string& identity) {
+    (void)system, (void)snapshots, (void)identity;
+    throw InputError("this output cannot go on from a checkpoint");
+  }
 };
 
 }  // namespace mbsflow

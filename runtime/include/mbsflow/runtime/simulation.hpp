@@ -12,6 +12,7 @@
 
 #include "mbsflow/graph/multibody_system.hpp"
 #include "mbsflow/methods/stepper.hpp"
+#include "mbsflow/runtime/checkpoint.hpp"
 #include "mbsflow/runtime/result_sink.hpp"
 
 namespace mbsflow {
@@ -45,6 +46,8 @@ struct RunOptions {
   // When set and it becomes true (a signal handler may set it), the run stops after the
   // current step with a RunError; what was written stays written.
   const std::atomic<bool>* stop = nullptr;
+  // Checkpoints to write, or one to go on from (mbsflow/runtime/checkpoint.hpp); may be null.
+  Checkpointing* checkpoint = nullptr;
 };
 
 struct RunSummary {
@@ -54,6 +57,7 @@ struct RunSummary {
   long jacobians = 0, factorizations = 0;  // implicit methods on a whole model
   long snapshots = 0;
   double t_last_snapshot = 0.0;
+  std::optional<double> resumed_at;  // a run that went on from a checkpoint: the checkpoint's time
   double wall_seconds = 0.0;
   Eigen::VectorXd final_state;
 };

@@ -1,0 +1,123 @@
+// Checkpoints: a run resumed from any of its checkpoints ends bit for bit as the run that
+// was never interrupted, whichever loop wrote the checkpoint (one stepper, or submodels on
+// threads) and whatever partition the resumed run has; a damaged state is refused.
+#include <catch2/catch.hpp>
+
+#include "mbsflow/error.hpp"
+#include "mbsflow/graph/generators.hpp"
+#include "mbsflow/graph/stable_step.hpp"
+#include "mbsflow/runtime/run.hpp"
+#include "memory_sink.hpp"
+
+using namespace mbsflow;
+
+namespace {
+
+Model chain_model(Method method) {
+  ChainParams chain;
+  chain.bodies = 150;
+  Model m = make_chain(chain);
+  m.simulation.method = method;
+  m.simulation.step = 0.5 * estimate_stable_step(m).step;
+  m.simulation.t_end = m.simulation.t_start + 64 * *m.simulation.step;
+  m.simulation.output_every = 4;
+  m.simulation.rtol = m.simulation.atol = 1e-7;
+  return m;
+}
+
+// Whole (no partition) or k submodels on `threads` threads.
+RunPlan plan_for(const Model& m, int k, int threads) {
+  RunPlan plan;
+  plan.options = options_from_model(m);
+  if (k > 0) plan.partition = decompose(m, k);
+  plan.parallel.threads = threads;
+  return plan;
+}
+
+struct Placement {
+  int k, threads;
+};
+
+}  // namespace
+
+TEST_CASE("a run resumed from any of its checkpoints ends bit for bit as the uninterrupted one", "[runtime][checkpoint]") {
+  const std::vector<Placement> placements{{0, 1}, {1, 1}, {3, 2}, {4, 1}};
+  for (Method method : {Method::rk4, Method::dopri5}) {
+    const Model m = chain_model(method);
+    test::MemorySink reference;
+    const RunSummary ref = run(m, plan_for(m, 0, 1), &reference);
+    REQUIRE(reference.states.size() > 8);
+    REQUIRE(reference.states.back() != reference.states.front());
+    for (const Placement& writer : placements) {
+      INFO(method_name(method) << ", checkpoints written with " << writer.k << " submodels on " << writer.threads << " threads");
+      std::vector<std::vector<std::uint8_t>> states;
+      Checkpointing write;
+      write.every_s = 1e-12;  // at every step (RK4 on submodels: every chunk)
+      write.write = [&](std::vector<std::uint8_t>&& s) { states.push_back(std::move(s)); };
+      RunPlan plan = plan_for(m, writer.k, writer.threads);
+      plan.options.checkpoint = &write;
+      test::MemorySink full;
+      run(m, plan, &full);
+      CHECK(test::same_snapshots(full, reference));  // taking checkpoints changes nothing
+      REQUIRE(states.size() >= 10);
+      for (std::size_t i : {std::size_t{0}, states.size() / 3, states.size() / 2, states.size() - 1})
+        for (const Placement& reader : placements) {
+          INFO("resumed from checkpoint " << i << " of " << states.size() << " with " << reader.k << " submodels on "
+                                          << reader.threads << " threads");
+          Checkpointing resume;
+          resume.resume = states[i];
+          resume.resume_from = "checkpoint " + std::to_string(i);
+          RunPlan again = plan_for(m, reader.k, reader.threads);
+          again.options.checkpoint = &resume;
+          test::MemorySink sink = full;  // holds more snapshots than the checkpoint: the later ones are dropped
+          const RunSummary r = run(m, again, &sink);
+          CHECK(test::same_snapshots(sink, reference));
+          CHECK(r.final_state == ref.final_state);
+          CHECK(r.steps == ref.steps);
+          CHECK(r.snapshots == ref.snapshots);
+        }
+    }
+  }
+}
+
+TEST_CASE("a damaged or foreign checkpoint state is refused before the run starts", "[runtime][checkpoint]") {
+  const Model m = chain_model(Method::dopri5);
+  std::vector<std::vector<std::uint8_t>> states;
+  Checkpointing write;
+  write.every_s = 1e-12;
+  write.write = [&](std::vector<std::uint8_t>&& s) { states.push_back(std::move(s)); };
+  RunPlan plan = plan_for(m, 0, 1);
+  plan.options.checkpoint = &write;
+  run(m, plan, nullptr);
+  REQUIRE(!states.empty());
+  auto resume_with = [&](std::vector<std::uint8_t> state, Method method) {
+    Model other = chain_model(method);
+    Checkpointing c;
+    c.resume = std::move(state);
+    c.resume_from = "checkpoint x";
+    RunPlan p = plan_for(other, 0, 1);
+    p.options.checkpoint = &c;
+    run(other, p, nullptr);
+  };
+  std::vector<std::uint8_t> cut = states.back();
+  cut.resize(cut.size() - 9);
+  CHECK_THROWS_WITH(resume_with(cut, Method::dopri5), Catch::Contains("checkpoint x: ends early"));
+  CHECK_THROWS_WITH(resume_with(states.back(), Method::rk4), Catch::Contains("the state of a dopri5 run, not of rk4"));
+  // A model of another size: its state vector does not fit.
+  ChainParams small;
+  small.bodies = 10;
+  Model other = make_chain(small);
+  other.simulation.method = Method::dopri5;
+  Checkpointing c;
+  c.resume = states.back();
+  c.resume_from = "checkpoint y";
+  RunPlan p = plan_for(other, 0, 1);
+  p.options.checkpoint = &c;
+  CHECK_THROWS_WITH(run(other, p, nullptr), Catch::Contains("checkpoint y: a vector of"));
+  // Checkpoints are refused where they are not written yet, before anything runs.
+  RunPlan loose = plan_for(m, 2, 1);
+  loose.loose = LooseOptions{};
+  loose.loose->macro_step = 4 * *m.simulation.step;
+  loose.options.checkpoint = &write;
+  CHECK_THROWS_WITH(run(m, loose, nullptr), Catch::Contains("not yet written for loosely coupled runs"));
+}
