@@ -6,6 +6,7 @@
 #include <oneapi/tbb/task_arena.h>
 
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <memory>
 #include <sstream>
@@ -97,8 +98,15 @@ class BlockIntegrator::Driver {
   double t() const { return t_; }
   double tau() const { return tau_; }
   const Eigen::VectorXd& y() const { return past_u_.back(); }
+  void save(StateWriter& out) const;
+  void restore(StateReader& in);
 
  private:
+  int block_id(const BlockSolve* b) const { return b == &small_ ? 1 : b == &large_ ? 2 : b && b == starter_.get() ? 3 : 0; }
+  BlockSolve* block_of(int id) { return id == 1 ? &small_ : id == 2 ? &large_ : id == 3 ? starter_.get() : nullptr; }
+  void reset_controller() {
+    controller_ = {s_.safety, s_.facmin, s_.facmax, s_.max_iterations > 0 ? s_.max_iterations : 7, s_.predictive};
+  }
   int m() const { return s_.method.m; }
   bool newton() const { return s_.iteration == BlockIteration::newton; }
   void rebuild_window(double tau);
@@ -277,7 +285,7 @@ void BlockIntegrator::Driver::begin() {
   jacobian_at_point_ = false;
   factorized_for_ = nullptr;
   after_rejection_ = false;
-  controller_ = {s_.safety, s_.facmin, s_.facmax, s_.max_iterations > 0 ? s_.max_iterations : 7, s_.predictive};
+  reset_controller();
   tau_ = s_.fixed_step;
   if (!fixed_) {
     scale_ = tolerance_weights(s_, p_.y0.array().abs());
@@ -380,6 +388,58 @@ bool BlockIntegrator::Driver::advance() {
   return false;
 }
 
+// Checkpoints: the window, the last block (multistep methods rebuild the window from it),
+// the step control, the Jacobian and which blocks' factors are current, and each block's
+// iteration memory and factors.
+void BlockIntegrator::Driver::save(StateWriter& out) const {
+  out.text("colloc");
+  for (double v : {t_, tau_, window_tau_, controller_.h_accepted, controller_.err_accepted, factorized_tau_}) out.real(v);
+  for (bool v : {after_rejection_, jacobian_at_point_, jacobian_stale_}) out.flag(v);
+  out.integer(block_id(factorized_for_));
+  out.vectors(past_u_);
+  out.vectors(past_f_);
+  out.integer(block_id(last_.method == nullptr ? nullptr : last_.method == &small_.method() ? &small_
+                                                          : last_.method == &large_.method() ? &large_ : starter_.get()));
+  out.real(last_.t0);
+  out.real(last_.tau);
+  for (const auto* v : {&last_.past_u, &last_.past_f, &last_.u, &last_.f}) out.vectors(*v);
+  out.sparse(jac_);
+  const BlockStats& st = result_.stats;
+  for (long v : {st.steps, st.accepted, st.rejected, st.taken_s1, st.taken_s, st.iteration_failures, st.rhs_evaluations,
+                 st.jacobians, st.factorizations, st.iterations})
+    out.integer(v);
+  out.integer(static_cast<int>(st.linear_solver));
+  small_.save(out);
+  large_.save(out);
+  if (starter_) starter_->save(out);
+}
+
+void BlockIntegrator::Driver::restore(StateReader& in) {
+  in.expect("colloc");
+  reset_controller();
+  for (double* v : {&t_, &tau_, &window_tau_, &controller_.h_accepted, &controller_.err_accepted, &factorized_tau_}) *v = in.real();
+  for (bool* v : {&after_rejection_, &jacobian_at_point_, &jacobian_stale_}) *v = in.flag();
+  factorized_for_ = block_of(static_cast<int>(in.integer(0, 3)));
+  past_u_ = in.vectors(p_.size);
+  past_f_ = in.vectors(p_.size);
+  if (past_u_.empty() || past_u_.size() != past_f_.size() || past_u_.size() > static_cast<std::size_t>(m()))
+    in.fail("colloc: the window of past points does not fit the method");
+  const BlockSolve* last = block_of(static_cast<int>(in.integer(0, 3)));
+  last_.method = last ? &last->method() : nullptr;
+  last_.t0 = in.real();
+  last_.tau = in.real();
+  for (auto* v : {&last_.past_u, &last_.past_f, &last_.u, &last_.f}) *v = in.vectors(p_.size);
+  jac_ = in.sparse();
+  BlockStats& st = result_.stats;
+  for (long* v : {&st.steps, &st.accepted, &st.rejected, &st.taken_s1, &st.taken_s, &st.iteration_failures,
+                  &st.rhs_evaluations, &st.jacobians, &st.factorizations, &st.iterations})
+    *v = in.integer(0, INT64_MAX);
+  st.linear_solver = static_cast<LinearSolverKind>(in.integer(0, static_cast<int>(LinearSolverKind::sparselu)));
+  small_.restore(in, jac_);
+  large_.restore(in, jac_);
+  if (starter_) starter_->restore(in, jac_);
+}
+
 BlockIntegrator::BlockIntegrator(const OdeProblem& problem, const BlockSettings& settings,
                                  std::function<void(const AcceptedBlock&)> on_block,
                                  std::function<void(double, Eigen::VectorXd&)> project) {
@@ -393,6 +453,8 @@ double BlockIntegrator::t() const { return d_->t(); }
 double BlockIntegrator::next_step() const { return d_->tau(); }
 const Eigen::VectorXd& BlockIntegrator::y() const { return d_->y(); }
 const BlockStats& BlockIntegrator::stats() const { return d_->result().stats; }
+void BlockIntegrator::save(StateWriter& out) const { d_->save(out); }
+void BlockIntegrator::restore(StateReader& in) { d_->restore(in); }
 
 BlockResult integrate_block(const OdeProblem& problem, const BlockSettings& settings,
                             const std::function<void(const AcceptedBlock&)>& on_block) {

@@ -57,6 +57,16 @@ void BlockSolve::factorize(int system) {
   }
 }
 
+void BlockSolve::save(StateWriter& out) const {
+  monitor_.save(out);
+  if (split_) split_->save(out);
+}
+
+void BlockSolve::restore(StateReader& in, const Eigen::SparseMatrix<double>& pattern) {
+  monitor_.restore(in);
+  if (split_) split_->restore(in, pattern);
+}
+
 void BlockSolve::setup(double t0, double tau, const std::vector<Eigen::VectorXd>& past_u,
                        const std::vector<Eigen::VectorXd>& past_f, const Eigen::VectorXd& scale) {
   t0_ = t0;

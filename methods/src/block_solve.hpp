@@ -48,6 +48,11 @@ class BlockSolve {
   void start();     // call before g.wait_for_all()
   void finished();  // call after it
 
+  // Checkpoints: what carries over from one block to the next (the iteration's eta and
+  // the Newton matrices' factors; `pattern`: a Jacobian of the run's pattern).
+  void save(StateWriter& out) const;
+  void restore(StateReader& in, const Eigen::SparseMatrix<double>& pattern);
+
   // After the run.
   std::vector<Eigen::VectorXd> u, f;  // at t0 + i tau, i = 1..k
   int iterations = 0;

@@ -8,6 +8,8 @@
 // remaining iterations cannot reach the tolerance: theta^(left) / (1 - theta) |dU| > tol.
 #include <algorithm>
 #include <cmath>
+
+#include "mbsflow/methods/state_archive.hpp"
 #include <limits>
 
 namespace mbsflow {
@@ -26,6 +28,14 @@ struct ConvergenceMonitor {
   int max_iterations = 7;
   bool predict_failure = false;
   double eta = 1.0, last_norm = 0, theta = 0;
+
+  // Checkpoints: eta carries over from step to step.
+  void save(StateWriter& out) const {
+    for (double v : {eta, last_norm, theta}) out.real(v);
+  }
+  void restore(StateReader& in) {
+    for (double* v : {&eta, &last_norm, &theta}) *v = in.real();
+  }
 
   // After correction number `iteration` (1, 2, ...) of scaled size `norm`; `at_roundoff`:
   // every correction was within rounding of its iterate, so it cannot get smaller.

@@ -69,6 +69,24 @@ void EigenSplit::factorize(int e, const Eigen::SparseMatrix<double>& jac, double
     sys.real_solver.factorize(jac, tau * sys.mu.real(), kind);
 }
 
+void EigenSplit::save(StateWriter& out) const {
+  for (const System& sys : systems_) {
+    if (sys.complex)
+      sys.complex_solver.save(out);
+    else
+      sys.real_solver.save(out);
+  }
+}
+
+void EigenSplit::restore(StateReader& in, const Eigen::SparseMatrix<double>& pattern) {
+  for (System& sys : systems_) {
+    if (sys.complex)
+      sys.complex_solver.restore(in, pattern);
+    else
+      sys.real_solver.restore(in, pattern);
+  }
+}
+
 void EigenSplit::load_residuals(const std::vector<Eigen::VectorXd>& r, Eigen::Index lo, Eigen::Index len) {
   const int k = points();
   for (System& sys : systems_) {

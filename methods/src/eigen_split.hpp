@@ -39,6 +39,10 @@ class EigenSplit {
   // of its columns).
   void correction(int i, Eigen::Index lo, Eigen::Index len, Eigen::VectorXd& du) const;
 
+  // Checkpoints: every system's factors (ShiftedSolver::save).
+  void save(StateWriter& out) const;
+  void restore(StateReader& in, const Eigen::SparseMatrix<double>& pattern);
+
  private:
   struct System {
     std::complex<double> mu;

@@ -34,11 +34,23 @@ class ImplicitStepper : public Stepper {
   double next_step() const override { return integrator_->next_step(); }
 
  protected:
-  void save_method(StateWriter&) const override {
-    throw InputError("checkpoints are not yet written for the implicit methods (colloc, tirk)");
+  // The problem's current stretch, the step a restart begins with, then the integrator's
+  // state. Dense output comes back with the next step.
+  void save_method(StateWriter& out) const override {
+    out.real(problem_.t0);
+    out.real(problem_.t_end);
+    out.vector(problem_.y0);
+    out.real(settings_.initial_step);
+    out.flag(started_);
+    integrator_->save(out);
   }
-  void restore_method(StateReader&) override {
-    throw InputError("checkpoints are not yet written for the implicit methods (colloc, tirk)");
+  void restore_method(StateReader& in) override {
+    problem_.t0 = in.real();
+    problem_.t_end = in.real();
+    problem_.y0 = in.vector(problem_.size);
+    settings_.initial_step = in.real();
+    started_ = in.flag();
+    integrator_->restore(in);
   }
 
  public:

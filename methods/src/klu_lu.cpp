@@ -61,6 +61,7 @@ void KluLu<Scalar>::factorize(const Eigen::SparseMatrix<Scalar>& m) {
       ok = klu_refactor(ap, ai, values, h_->symbolic, h_->numeric, &c) && klu_rcond(h_->symbolic, h_->numeric, &c);
     if (ok && c.status == KLU_OK && c.rcond > 1e-3 * h_->full_rcond) {
       ++refactorizations_;
+      refactored_ = true;
       return;
     }
     h_->free_numeric();
@@ -78,6 +79,24 @@ void KluLu<Scalar>::factorize(const Eigen::SparseMatrix<Scalar>& m) {
   else
     klu_rcond(h_->symbolic, h_->numeric, &c);
   h_->full_rcond = c.rcond;
+  full_values_.assign(m.valuePtr(), m.valuePtr() + m.nonZeros());
+  refactored_ = false;
+}
+
+template <class Scalar>
+bool KluLu<Scalar>::factorized() const {
+  return h_->numeric != nullptr;
+}
+
+template <class Scalar>
+void KluLu<Scalar>::restore(const Eigen::SparseMatrix<Scalar>& m, const std::vector<Scalar>& full_values, bool refactored) {
+  if (static_cast<Eigen::Index>(full_values.size()) != m.nonZeros())
+    throw InputError("checkpoint: the sparse LU's values do not fit the Newton matrix");
+  Eigen::SparseMatrix<Scalar> full = m;
+  std::copy(full_values.begin(), full_values.end(), full.valuePtr());
+  h_->free_numeric();
+  factorize(full);  // no factors: a full factorisation, the same pivots as then
+  if (refactored) factorize(m);
 }
 
 template <class Scalar>

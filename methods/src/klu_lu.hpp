@@ -7,6 +7,7 @@
 #include <complex>
 #include <memory>
 #include <mutex>
+#include <vector>
 
 namespace mbsflow {
 
@@ -25,9 +26,20 @@ class KluLu {
   void solve(Eigen::Matrix<Scalar, Eigen::Dynamic, 1>& b) const;
   long refactorizations() const { return refactorizations_; }
 
+  // Checkpoints. The factors depend on the history: a refactorisation reuses the pivots
+  // of the last full factorisation, whose values are kept (full_values) for restore(),
+  // which rebuilds the factors of m (analysed) bit for bit: the full factorisation of
+  // those values, then m's own values when the factors came from a refactorisation.
+  bool factorized() const;
+  const std::vector<Scalar>& full_values() const { return full_values_; }
+  bool refactored() const { return refactored_; }
+  void restore(const Eigen::SparseMatrix<Scalar>& m, const std::vector<Scalar>& full_values, bool refactored);
+
  private:
   struct Handles;
   std::unique_ptr<Handles> h_;
+  std::vector<Scalar> full_values_;
+  bool refactored_ = false;
   mutable std::mutex solving_;
   long refactorizations_ = 0;
 };

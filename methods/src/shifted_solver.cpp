@@ -1,5 +1,7 @@
 #include "mbsflow/methods/shifted_solver.hpp"
 
+#include <cstring>
+
 #include "klu_lu.hpp"
 #include "mbsflow/error.hpp"
 
@@ -128,6 +130,11 @@ template <class Scalar>
 void ShiftedSolver<Scalar>::factorize(const Eigen::SparseMatrix<double>& j, Scalar gamma, LinearSolverKind kind) {
   kind_ = kind == LinearSolverKind::automatic ? choose_linear_solver(j, kind) : kind;
   const Eigen::Index n = j.rows();
+  factorized_ = false;
+  if (kind_ == LinearSolverKind::dense || kind_ == LinearSolverKind::banded) {
+    dense_j_ = j;
+    dense_gamma_ = gamma;
+  }
   switch (kind_) {
     case LinearSolverKind::dense: {
       Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic> m =
@@ -169,6 +176,81 @@ void ShiftedSolver<Scalar>::factorize(const Eigen::SparseMatrix<double>& j, Scal
       break;
     }
   }
+  factorized_ = true;
+}
+
+namespace {
+
+// Scalars as doubles (a complex one as two), for checkpoints.
+template <class Scalar>
+Eigen::VectorXd as_reals(const Scalar* v, Eigen::Index n) {
+  constexpr int k = sizeof(Scalar) / sizeof(double);
+  Eigen::VectorXd out(n * k);
+  std::memcpy(out.data(), v, static_cast<std::size_t>(n) * sizeof(Scalar));
+  return out;
+}
+
+template <class Scalar>
+std::vector<Scalar> from_reals(const Eigen::VectorXd& r, StateReader& in) {
+  constexpr int k = sizeof(Scalar) / sizeof(double);
+  if (r.size() % k != 0) in.fail("a complex vector of odd length");
+  std::vector<Scalar> out(static_cast<std::size_t>(r.size() / k));
+  if (!out.empty()) std::memcpy(static_cast<void*>(out.data()), r.data(), out.size() * sizeof(Scalar));
+  return out;
+}
+
+}  // namespace
+
+template <class Scalar>
+void ShiftedSolver<Scalar>::save(StateWriter& out) const {
+  out.flag(factorized_);
+  if (!factorized_) return;
+  out.integer(static_cast<int>(kind_));
+  if (kind_ == LinearSolverKind::dense || kind_ == LinearSolverKind::banded) {
+    out.sparse(dense_j_);
+    out.vector(as_reals(&dense_gamma_, 1));
+    return;
+  }
+  out.vector(as_reals(matrix_.valuePtr(), matrix_.nonZeros()));
+  if (kind_ == LinearSolverKind::klu) {
+    out.vector(as_reals(klu_->full_values().data(), static_cast<Eigen::Index>(klu_->full_values().size())));
+    out.flag(klu_->refactored());
+  }
+}
+
+template <class Scalar>
+void ShiftedSolver<Scalar>::restore(StateReader& in, const Eigen::SparseMatrix<double>& pattern) {
+  factorized_ = false;
+  if (!in.flag()) return;
+  const auto kind = static_cast<LinearSolverKind>(in.integer(1, static_cast<int>(LinearSolverKind::sparselu)));
+  if (kind == LinearSolverKind::dense || kind == LinearSolverKind::banded) {
+    const Eigen::SparseMatrix<double> j = in.sparse();
+    const std::vector<Scalar> gamma = from_reals<Scalar>(in.vector(), in);
+    if (gamma.size() != 1) in.fail("a Newton matrix's shift is not one number");
+    factorize(j, gamma[0], kind);
+    return;
+  }
+  kind_ = kind;
+  fill_sparse(pattern, Scalar(0));  // the layout of I - gamma J, and where J's entries go
+  const std::vector<Scalar> values = from_reals<Scalar>(in.vector(), in);
+  if (static_cast<Eigen::Index>(values.size()) != matrix_.nonZeros()) in.fail("a Newton matrix does not fit the Jacobian's pattern");
+  std::copy(values.begin(), values.end(), matrix_.valuePtr());
+  ++analyses_;
+  if (kind_ == LinearSolverKind::klu) {
+    const std::vector<Scalar> full = from_reals<Scalar>(in.vector(), in);
+    const bool refactored = in.flag();
+    sparse_.reset();
+    klu_ = std::make_shared<KluLu<Scalar>>();
+    klu_->analyze(matrix_);
+    klu_->restore(matrix_, full, refactored);
+  } else {
+    klu_.reset();
+    sparse_ = std::make_shared<Eigen::SparseLU<Eigen::SparseMatrix<Scalar>, Eigen::COLAMDOrdering<int>>>();
+    sparse_->analyzePattern(matrix_);
+    sparse_->factorize(matrix_);
+    if (sparse_->info() != Eigen::Success) in.fail("a Newton matrix that was factorised is singular now");
+  }
+  factorized_ = true;
 }
 
 template <class Scalar>

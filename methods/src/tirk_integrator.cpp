@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <memory>
 #include <sstream>
@@ -124,6 +125,8 @@ class TirkIntegrator::Driver {
   const Eigen::VectorXd& f() const { return fx_; }
   // The last accepted step: its start, start value and derivative there.
   double t_old() const { return t_old_; }
+  void save(StateWriter& out) const;
+  void restore(StateReader& in);
   const Eigen::VectorXd& x_old() const { return x_old_; }
   const Eigen::VectorXd& f_old() const { return f_old_; }
   // One step from (t, x) iterated at most `count` times from the trivial predictor;
@@ -135,6 +138,7 @@ class TirkIntegrator::Driver {
   const RkTableau& tableau() const { return tableau_; }
 
  private:
+  void reset_controller() { controller_ = {s_.safety, s_.facmin, s_.facmax, monitor_.max_iterations, s_.predictive}; }
   bool newton() const { return is_newton(s_.iteration); }
   bool full_newton() const { return s_.iteration == TirkIteration::newton; }
   // Whether steps start from the extrapolated collocation polynomial (see extrapolate()).
@@ -392,9 +396,61 @@ void TirkIntegrator::Driver::begin() {
   t_now_ = t_old_ = t;
   have_last_ = false;
   slow_growth_ = 0;
-  controller_ = {s_.safety, s_.facmin, s_.facmax, monitor_.max_iterations, s_.predictive};
+  reset_controller();
   renew_every_step_ = 0;
   after_rejection_ = false;  // the step after a rejected one does not grow (Hairer & Wanner, IV.8)
+}
+
+// Checkpoints: the stepping state, the predictor's last step, the Jacobian and its
+// bookkeeping, the step control, the counters, and the stages' factors.
+void TirkIntegrator::Driver::save(StateWriter& out) const {
+  out.text("tirk");
+  for (double v : {t_, factorized_tau_, theta_fresh_, last_t_, last_h_, t_now_, tau_, t_old_, controller_.h_accepted,
+                   controller_.err_accepted})
+    out.real(v);
+  for (bool v : {jacobian_at_point_, jacobian_stale_, have_last_, extrapolation_ok_, fixed_, after_rejection_}) out.flag(v);
+  for (long v : {static_cast<long>(culprit_), static_cast<long>(iterations_), static_cast<long>(slow_growth_),
+                 static_cast<long>(renew_every_step_)})
+    out.integer(v);
+  for (const Eigen::VectorXd* v : {&scale_, &last_x_, &x_, &fx_, &x_old_, &f_old_}) out.vector(*v);
+  out.vectors(last_y_);
+  out.sparse(jac_);
+  monitor_.save(out);
+  const TirkStats& st = result_.stats;
+  for (long v : {st.steps, st.accepted, st.rejected, st.iteration_failures, st.rhs_evaluations, st.jacobians,
+                 st.factorizations, st.iterations})
+    out.integer(v);
+  out.integer(static_cast<int>(st.linear_solver));
+  for (double v : {st.contraction_m, st.lipschitz_start, st.lipschitz_observed, st.largest_step}) out.real(v);
+  stages_.save(out);
+}
+
+void TirkIntegrator::Driver::restore(StateReader& in) {
+  in.expect("tirk");
+  reset_controller();
+  for (double* v : {&t_, &factorized_tau_, &theta_fresh_, &last_t_, &last_h_, &t_now_, &tau_, &t_old_,
+                    &controller_.h_accepted, &controller_.err_accepted})
+    *v = in.real();
+  for (bool* v : {&jacobian_at_point_, &jacobian_stale_, &have_last_, &extrapolation_ok_, &fixed_, &after_rejection_})
+    *v = in.flag();
+  culprit_ = in.integer(-1, p_.size);
+  iterations_ = static_cast<int>(in.integer(0, 1 << 30));
+  slow_growth_ = static_cast<int>(in.integer(0, 1 << 30));
+  renew_every_step_ = static_cast<int>(in.integer(0, 1 << 30));
+  for (Eigen::VectorXd* v : {&scale_, &last_x_, &x_, &fx_, &x_old_, &f_old_}) {
+    *v = in.vector();
+    if (v->size() != 0 && v->size() != p_.size) in.fail("tirk: a state vector of the wrong size");
+  }
+  last_y_ = in.vectors(p_.size);
+  jac_ = in.sparse();
+  monitor_.restore(in);
+  TirkStats& st = result_.stats;
+  for (long* v : {&st.steps, &st.accepted, &st.rejected, &st.iteration_failures, &st.rhs_evaluations, &st.jacobians,
+                  &st.factorizations, &st.iterations})
+    *v = in.integer(0, INT64_MAX);
+  st.linear_solver = static_cast<LinearSolverKind>(in.integer(0, static_cast<int>(LinearSolverKind::sparselu)));
+  for (double* v : {&st.contraction_m, &st.lipschitz_start, &st.lipschitz_observed, &st.largest_step}) *v = in.real();
+  stages_.restore(in, jac_);
 }
 
 bool TirkIntegrator::Driver::advance() {
@@ -526,6 +582,8 @@ double TirkIntegrator::t() const { return d_->t(); }
 double TirkIntegrator::next_step() const { return d_->tau(); }
 const Eigen::VectorXd& TirkIntegrator::y() const { return d_->y(); }
 const TirkStats& TirkIntegrator::stats() const { return d_->result().stats; }
+void TirkIntegrator::save(StateWriter& out) const { d_->save(out); }
+void TirkIntegrator::restore(StateReader& in) { d_->restore(in); }
 
 void TirkIntegrator::dense(double t, Eigen::VectorXd& out) const {
   cubic_hermite(d_->t_old(), d_->x_old(), d_->f_old(), d_->t(), d_->y(), d_->f(), t, out);

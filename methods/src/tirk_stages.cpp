@@ -51,6 +51,18 @@ TirkStages::TirkStages(const RkTableau& tableau, const Eigen::MatrixXd& t, TirkI
   solvers_.resize(diagonal_values_.size());
 }
 
+void TirkStages::save(StateWriter& out) const {
+  for (const ShiftedSolver<double>& s : solvers_) s.save(out);
+  if (split_) split_->save(out);
+  filter_.save(out);
+}
+
+void TirkStages::restore(StateReader& in, const Eigen::SparseMatrix<double>& pattern) {
+  for (ShiftedSolver<double>& s : solvers_) s.restore(in, pattern);
+  if (split_) split_->restore(in, pattern);
+  filter_.restore(in, pattern);
+}
+
 void TirkStages::request_factorization(const Eigen::SparseMatrix<double>& jac, double tau, LinearSolverKind kind) {
   factor_jac_ = &jac;
   factor_tau_ = tau;

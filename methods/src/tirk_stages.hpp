@@ -41,6 +41,11 @@ class TirkStages {
 
   void build(tbb::flow::graph& g);
 
+  // Checkpoints: the factors of every linear system (the stage values are set anew by
+  // every setup()); `pattern`: a Jacobian of the run's pattern.
+  void save(StateWriter& out) const;
+  void restore(StateReader& in, const Eigen::SparseMatrix<double>& pattern);
+
   // Factorising I - tau t_ii J for every distinct t_ii (Newton-type iterations), one node
   // each: request, start (then wait_for_all and finished()), check.
   void request_factorization(const Eigen::SparseMatrix<double>& jac, double tau, LinearSolverKind kind);

@@ -27,8 +27,6 @@ void check_plan(const Model& model, const RunPlan& plan) {
     if (plan.cluster)
       throw InputError("checkpoints are not yet written for runs on worker processes (--cluster, --processes): run on threads");
     if (plan.loose) throw InputError("checkpoints are not yet written for loosely coupled runs (--coupling loose)");
-    if (o.method != Method::rk4 && o.method != Method::dopri5)
-      throw InputError(std::string("checkpoints are not yet written for ") + o.method.name() + " runs: rk4 and dopri5 runs have them");
   }
 }
 

@@ -33,35 +33,45 @@ bool wait_for_file(const fs::path& p, double seconds) {
 TEST_CASE("kill -9 at random moments, resume: the results file is bit for bit the uninterrupted run's", "[apps][checkpoint]") {
   const fs::path d = scratch("checkpoint_kill9");
   REQUIRE(run("generate chain --bodies 1000 -o chain.json", d.string()).code == 0);
+  REQUIRE(run("generate chain --bodies 60 -o short.json", d.string()).code == 0);
   const unsigned seed = std::random_device{}();
   INFO("seed " << seed);
   std::mt19937 rng(seed);
   int killed = 0, tries = 0;
-  // RK4 and DOPRI5, the whole model in one stepper (1 thread) and cut into submodels (2).
-  for (const std::string method : {"rk4", "dopri5"})
-    for (const std::string threads : {"1", "2"}) {
-      const std::string common = "chain.json --t-end 2 --output-interval 0.02 --method " + method + " --threads " + threads;
-      REQUIRE(run("run " + common + " -q -o ref.h5", d.string()).code == 0);
-      for (int k = 0; k < 2; ++k, ++tries) {
-        INFO(method << " on " << threads << " threads, try " << k);
-        fs::remove(d / "a.h5");
-        fs::remove(d / "a.h5.ckpt");
-        std::vector<std::string> args{"run", "chain.json", "--t-end", "2", "--output-interval", "0.02", "--method", method,
-                                      "--threads", threads, "-q", "-o", "a.h5", "--checkpoint-every", "0.05"};
-        Child child(args, d, "child");
-        REQUIRE(wait_for_file(d / "a.h5.ckpt", 60.0));
-        std::this_thread::sleep_for(std::chrono::milliseconds(std::uniform_int_distribution<int>(0, 500)(rng)));
-        child.kill(SIGKILL);
-        const std::optional<int> code = child.wait(30.0);
-        REQUIRE(code);
-        if (*code == -SIGKILL) ++killed;
-        const Result resumed = run("run --resume a.h5.ckpt", d.string());
-        INFO(resumed.err);
-        REQUIRE(resumed.code == 0);
-        CHECK_THAT(resumed.err, Catch::Contains("went on from the checkpoint at t = "));
-        CHECK(h5diff(d / "ref.h5", d / "a.h5") == 0);
-      }
+  struct Case {
+    std::string model, t_end, method, threads;
+  };
+  // RK4 and DOPRI5 with the whole model in one stepper (1 thread) and cut into submodels
+  // (2); the implicit methods (whole) on a shorter chain, each run a second or two.
+  const std::vector<Case> cases{{"chain.json", "2", "rk4", "1"},    {"chain.json", "2", "rk4", "2"},
+                                {"chain.json", "2", "dopri5", "1"}, {"chain.json", "2", "dopri5", "2"},
+                                {"short.json", "1", "colloc", "1"}, {"short.json", "2", "tirk", "2"}};
+  for (const Case& c : cases) {
+    const std::vector<std::string> args{"run", c.model, "--t-end", c.t_end, "--output-interval", "0.02", "--method",
+                                        c.method, "--threads", c.threads, "-q"};
+    std::string line;
+    for (std::size_t i = 1; i < args.size(); ++i) line += args[i] + " ";
+    REQUIRE(run("run " + line + "-o ref.h5", d.string()).code == 0);
+    for (int k = 0; k < 2; ++k, ++tries) {
+      INFO(line << "try " << k);
+      fs::remove(d / "a.h5");
+      fs::remove(d / "a.h5.ckpt");
+      std::vector<std::string> with = args;
+      with.insert(with.end(), {"-o", "a.h5", "--checkpoint-every", "0.05"});
+      Child child(with, d, "child");
+      REQUIRE(wait_for_file(d / "a.h5.ckpt", 60.0));
+      std::this_thread::sleep_for(std::chrono::milliseconds(std::uniform_int_distribution<int>(0, 500)(rng)));
+      child.kill(SIGKILL);
+      const std::optional<int> code = child.wait(30.0);
+      REQUIRE(code);
+      if (*code == -SIGKILL) ++killed;
+      const Result resumed = run("run --resume a.h5.ckpt", d.string());
+      INFO(resumed.err);
+      REQUIRE(resumed.code == 0);
+      CHECK_THAT(resumed.err, Catch::Contains("went on from the checkpoint at t = "));
+      CHECK(h5diff(d / "ref.h5", d / "a.h5") == 0);
     }
+  }
   CHECK(killed >= tries / 2);  // most runs were really killed half-way, not already done
   fs::remove_all(d.parent_path());
 }
@@ -98,8 +108,8 @@ TEST_CASE("damaged checkpoints, replaced results files and misuse are refused wi
   CHECK_THAT(run("run --resume a.h5.ckpt --t-end 5", d.string()).err, Catch::Contains("give no --t-end"));
   CHECK_THAT(run("run", d.string()).err, Catch::Contains("give a MODEL file, or --resume CHECKPOINT"));
   CHECK_THAT(run("run chain.json --checkpoint-every 1", d.string()).err, Catch::Contains("give -o FILE"));
-  CHECK_THAT(run("run chain.json -o c.h5 --checkpoint-every 1 --method colloc", d.string()).err,
-             Catch::Contains("not yet written for colloc runs"));
+  CHECK_THAT(run("run chain.json -o c.h5 --checkpoint-every 1 --coupling loose --partitions 2", d.string()).err,
+             Catch::Contains("not yet written for loosely coupled runs"));
   CHECK_THAT(run("run chain.json -o c.h5 --checkpoint-every 1 --processes 2", d.string()).err,
              Catch::Contains("not yet written for runs on worker processes"));
   CHECK(!fs::exists(d / "c.h5"));  // refused before anything was written

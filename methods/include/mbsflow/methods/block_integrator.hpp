@@ -15,6 +15,7 @@
 #include "mbsflow/methods/block_method.hpp"
 #include "mbsflow/methods/ode_problem.hpp"
 #include "mbsflow/methods/shifted_solver.hpp"
+#include "mbsflow/methods/state_archive.hpp"
 
 namespace mbsflow {
 
@@ -113,6 +114,9 @@ class BlockIntegrator {
   const Eigen::VectorXd& y() const;
   double next_step() const;  // the point spacing the next block tries
   const BlockStats& stats() const;
+  // Checkpoints, between blocks (mbsflow/methods/stepper.hpp).
+  void save(StateWriter& out) const;
+  void restore(StateReader& in);
 
  private:
   class Driver;

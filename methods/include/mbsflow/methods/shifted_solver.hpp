@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "mbsflow/methods/banded_lu.hpp"
+#include "mbsflow/methods/state_archive.hpp"
 
 namespace mbsflow {
 
@@ -45,6 +46,12 @@ class ShiftedSolver {
   long symbolic_analyses() const { return analyses_; }  // sparse kinds: pattern analyses so far
   long refactorizations() const;  // klu: factorisations that reused the pivot sequence
 
+  // Checkpoints: the factors as they are, rebuilt by restore() bit for bit (for KLU with
+  // the pivot history it reuses). `pattern`: a Jacobian of the pattern it factorised
+  // (the sparse kinds lay their matrix out from it).
+  void save(StateWriter& out) const;
+  void restore(StateReader& in, const Eigen::SparseMatrix<double>& pattern);
+
  private:
   LinearSolverKind kind_ = LinearSolverKind::dense;
   Eigen::PartialPivLU<Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>> dense_;
@@ -55,6 +62,9 @@ class ShiftedSolver {
   std::shared_ptr<Eigen::SparseLU<Eigen::SparseMatrix<Scalar>, Eigen::COLAMDOrdering<int>>> sparse_;
   std::shared_ptr<KluLu<Scalar>> klu_;
   long analyses_ = 0;
+  bool factorized_ = false;
+  Eigen::SparseMatrix<double> dense_j_;  // dense and banded kinds: the J and gamma last factorised, for checkpoints
+  Scalar dense_gamma_ = Scalar(0);
   bool fill_sparse(const Eigen::SparseMatrix<double>& j, Scalar gamma);
 };
 

@@ -133,6 +133,9 @@ class TirkIntegrator {
   const TirkStats& stats() const;
   // Cubic Hermite dense output in the last accepted step (third order).
   void dense(double t, Eigen::VectorXd& out) const;
+  // Checkpoints, between steps (mbsflow/methods/stepper.hpp).
+  void save(StateWriter& out) const;
+  void restore(StateReader& in);
 
   class Driver;
 
