@@ -30,7 +30,7 @@ bool wait_for_file(const fs::path& p, double seconds) {
 
 }  // namespace
 
-TEST_CASE("kill -9 at random moments, resume: the results file is bit for bit the uninterrupted run's", "[apps][checkpoint]") {
+TEST_CASE("kill -9 at random moments then resume: the results file is bit for bit the uninterrupted run's", "[apps][checkpoint]") {
   const fs::path d = scratch("checkpoint_kill9");
   REQUIRE(run("generate chain --bodies 1000 -o chain.json", d.string()).code == 0);
   REQUIRE(run("generate chain --bodies 60 -o short.json", d.string()).code == 0);

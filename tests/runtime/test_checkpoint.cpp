@@ -122,7 +122,7 @@ TEST_CASE("a damaged or foreign checkpoint state is refused before the run start
   CHECK_THROWS_WITH(run(m, loose, nullptr), Catch::Contains("not yet written for loosely coupled runs"));
 }
 
-TEST_CASE("colloc and tirk resumed from any step end bit for bit as the uninterrupted run, with every linear solver",
+TEST_CASE("colloc and tirk resumed from any step end bit for bit as the uninterrupted run with every linear solver",
           "[runtime][checkpoint][implicit]") {
   // A stiff chain (translational modes near 2e4 rad/s): Newton matrices kept over several
   // steps, KLU refactorisations on its old pivots, rejected steps.
