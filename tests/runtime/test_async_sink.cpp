@@ -114,3 +114,38 @@ TEST_CASE("a stopped run with output outrunning the disk drops what is queued an
   CHECK(loss.t_last_kept == seen->times.back());
   CHECK(seconds < 10.0);  // 20 s if it had written them all
 }
+
+TEST_CASE("a checkpoint through an asynchronous sink finds every snapshot before it written and synced", "[runtime][checkpoint]") {
+  // A slow inner sink that records, at each sync, how many snapshots it had: sync() must
+  // wait for the queue to be written first.
+  struct CountingSink : test::MemorySink {
+    std::vector<std::size_t> at_sync;
+    void write(Snapshot&& s) override {
+      std::this_thread::sleep_for(std::chrono::microseconds(200));
+      test::MemorySink::write(std::move(s));
+    }
+    void sync() override { at_sync.push_back(times.size()); }
+  };
+  auto inner = std::make_unique<CountingSink>();
+  CountingSink* seen = inner.get();
+  AsyncSink sink(std::move(inner));
+  std::vector<long> counted;  // snapshots the run had handed over at each checkpoint
+  Checkpointing c;
+  c.every_s = 1e-12;
+  MultibodySystem sys(falling_body());
+  RunOptions o;
+  o.t_end = 1.0;
+  o.step = 0.005;
+  o.checkpoint = &c;
+  c.write = [&](std::vector<std::uint8_t>&& state) {
+    StateReader in(state, "state");
+    in.expect("simulation");
+    in.text();
+    in.integer();
+    counted.push_back(static_cast<long>(in.integer()));
+  };
+  run_simulation(sys, o, &sink);
+  REQUIRE(counted.size() == 199);  // after every step but the last
+  REQUIRE(seen->at_sync.size() == counted.size());
+  for (std::size_t i = 0; i < counted.size(); ++i) CHECK(static_cast<long>(seen->at_sync[i]) == counted[i]);
+}
