@@ -10,9 +10,9 @@
 #include <array>
 #include <vector>
 #include <filesystem>
-#include <random>
 
 #include "hdf5_handle.hpp"
+#include "random_id.hpp"
 #include "writer_lock.hpp"
 #include "mbsflow/version.hpp"
 #include "xdmf_writer.hpp"
@@ -107,15 +107,6 @@ std::vector<double> read_rows(const Series& s, hsize_t rows) {
   const h5::Handle mem(H5Screate_simple(1, &rows, nullptr), H5Sclose, "create a memory space");
   h5::check(H5Dread(s.set.get(), H5T_NATIVE_DOUBLE, mem.get(), file_space.get(), H5P_DEFAULT, v.data()), "read " + s.path);
   return v;
-}
-
-// A random id for the results of one run (checkpoints name the file they go on with).
-std::string random_run_id() {
-  std::random_device rd;
-  const std::uint64_t id = (static_cast<std::uint64_t>(rd()) << 32) ^ rd();
-  char buf[17];
-  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(id));
-  return buf;
 }
 
 // Appends the buffered rows to the dataset.
@@ -215,7 +206,7 @@ void Hdf5Sink::begin(const MultibodySystem& system) {
     write_names(group.get(), "names", names);
   }
   const hid_t root = f->file.get();
-  identity_ = random_run_id();
+  identity_ = id_text(random_id());
   h5::write_string_attribute(root, "mbsflow_version", MBSFLOW_VERSION);
   h5::write_string_attribute(root, "run_id", identity_);
   h5::write_string_attribute(root, "model_name", m.name);
@@ -253,16 +244,15 @@ void Hdf5Sink::resume(const MultibodySystem& system, long snapshots, const std::
   lay_out(*f, system, false);
   // The rows after the checkpoint's are dropped: the resumed run writes them again. The
   // time series goes last in every flush, so its length bounds the others'.
-  const hsize_t kept = static_cast<hsize_t>(snapshots);
-  if (rows_of(f->time) < kept)
-    throw InputError(path_ + " holds " + std::to_string(rows_of(f->time)) + " snapshots, fewer than the " +
-                     std::to_string(snapshots) + " that the checkpoint was taken after");
-  auto cut = [&](Series& s) { truncate(s, kept); };
-  cut(f->time);
-  for (auto& [i, series] : f->bodies) cut(series);
-  if (f->energy) cut(*f->energy);
-  if (f->joint_force) cut(*f->joint_force);
-  if (f->motor_effort) cut(*f->motor_effort);
+  const hsize_t kept = static_cast<hsize_t>(snapshots), there = rows_of(f->time);
+  if (there < kept)
+    throw InputError(path_ + " holds " + std::to_string(there) + " snapshots, fewer than the " + std::to_string(snapshots) +
+                     " that the checkpoint was taken after");
+  truncate(f->time, kept);
+  for (auto& [i, series] : f->bodies) truncate(series, kept);
+  if (f->energy) truncate(*f->energy, kept);
+  if (f->joint_force) truncate(*f->joint_force, kept);
+  if (f->motor_effort) truncate(*f->motor_effort, kept);
   f->times = read_rows(f->time, kept);
   h5::check(H5Fflush(f->file.get(), H5F_SCOPE_GLOBAL), "flush " + path_);
   identity_ = identity;

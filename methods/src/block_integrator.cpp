@@ -104,6 +104,12 @@ class BlockIntegrator::Driver {
  private:
   int block_id(const BlockSolve* b) const { return b == &small_ ? 1 : b == &large_ ? 2 : b && b == starter_.get() ? 3 : 0; }
   BlockSolve* block_of(int id) { return id == 1 ? &small_ : id == 2 ? &large_ : id == 3 ? starter_.get() : nullptr; }
+  // The block whose method the last block used (none before the first).
+  const BlockSolve* block_with(const BlockCoefficients* method) const {
+    for (const BlockSolve* b : {&small_, &large_, static_cast<const BlockSolve*>(starter_.get())})
+      if (b && method == &b->method()) return b;
+    return nullptr;
+  }
   void reset_controller() {
     controller_ = {s_.safety, s_.facmin, s_.facmax, s_.max_iterations > 0 ? s_.max_iterations : 7, s_.predictive};
   }
@@ -398,8 +404,7 @@ void BlockIntegrator::Driver::save(StateWriter& out) const {
   out.integer(block_id(factorized_for_));
   out.vectors(past_u_);
   out.vectors(past_f_);
-  out.integer(block_id(last_.method == nullptr ? nullptr : last_.method == &small_.method() ? &small_
-                                                          : last_.method == &large_.method() ? &large_ : starter_.get()));
+  out.integer(block_id(block_with(last_.method)));
   out.real(last_.t0);
   out.real(last_.tau);
   for (const auto* v : {&last_.past_u, &last_.past_f, &last_.u, &last_.f}) out.vectors(*v);

@@ -84,11 +84,6 @@ void KluLu<Scalar>::factorize(const Eigen::SparseMatrix<Scalar>& m) {
 }
 
 template <class Scalar>
-bool KluLu<Scalar>::factorized() const {
-  return h_->numeric != nullptr;
-}
-
-template <class Scalar>
 void KluLu<Scalar>::restore(const Eigen::SparseMatrix<Scalar>& m, const std::vector<Scalar>& full_values, bool refactored) {
   if (static_cast<Eigen::Index>(full_values.size()) != m.nonZeros())
     throw InputError("checkpoint: the sparse LU's values do not fit the Newton matrix");

@@ -30,7 +30,6 @@ class KluLu {
   // of the last full factorisation, whose values are kept (full_values) for restore(),
   // which rebuilds the factors of m (analysed) bit for bit: the full factorisation of
   // those values, then m's own values when the factors came from a refactorisation.
-  bool factorized() const;
   const std::vector<Scalar>& full_values() const { return full_values_; }
   bool refactored() const { return refactored_; }
   void restore(const Eigen::SparseMatrix<Scalar>& m, const std::vector<Scalar>& full_values, bool refactored);

@@ -4,23 +4,11 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
-#include <random>
 
 #include "json_depth.hpp"
 #include "mbsflow/error.hpp"
 
 namespace mbsflow::wire {
-
-std::uint64_t new_run_id() {
-  std::random_device rd;
-  return (static_cast<std::uint64_t>(rd()) << 32) ^ rd();
-}
-
-std::string run_text(std::uint64_t run) {
-  char buf[20];
-  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(run));
-  return buf;
-}
 
 std::int64_t max_data_bytes(std::size_t bodies) {
   // 13 numbers a body, twice for headroom, and 64 MiB for the coupling records of a run.
@@ -125,7 +113,7 @@ std::optional<nlohmann::json> parse_control(const zmq::message_t& m, std::option
   if (json_too_deep({text, m.size()}, 16) != std::string_view::npos) return std::nullopt;
   nlohmann::json j = nlohmann::json::parse(text, text + m.size(), nullptr, false);
   if (!j.is_object() || !j.contains("type") || !j["type"].is_string()) return std::nullopt;
-  if (run && wire::text(j, "run") != run_text(*run)) return std::nullopt;
+  if (run && wire::text(j, "run") != id_text(*run)) return std::nullopt;
   return j;
 }
 

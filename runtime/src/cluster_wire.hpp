@@ -13,17 +13,16 @@
 #include <zmq.hpp>
 
 #include "mbsflow/runtime/curve_keys.hpp"
+#include "random_id.hpp"
 
 namespace mbsflow::wire {
 
 constexpr std::uint32_t magic = 0x4d42'5346;  // "MBSF"
 constexpr std::uint32_t frame_version = 2;     // of the binary headers below; 2: run ids
 
-// Every message of a run carries its run id, which the coordinator draws at random and
-// sends in its hello: a message of another run (replayed, or a late one of a run that
-// ended) is dropped.
-std::uint64_t new_run_id();
-std::string run_text(std::uint64_t run);  // 16 hex digits, as control messages carry it
+// Every message of a run carries its run id, which the coordinator draws at random
+// (random_id.hpp) and sends in its hello, as id_text: a message of another run
+// (replayed, or a late one of a run that ended) is dropped.
 
 // The size caps of messages: ZeroMQ drops a peer whose message is larger before it is
 // received (ZMQ_MAXMSGSIZE). Control messages carry the model in the set-up.

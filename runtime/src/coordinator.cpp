@@ -67,7 +67,7 @@ class Coordinator {
   void send(std::size_t w, json j) {
     // A full queue means the worker has not taken anything for a long time; the heartbeat
     // check reports it.
-    j["run"] = wire::run_text(run_);
+    j["run"] = id_text(run_);
     (void)wire::send_json(peers_[w].control, j);
   }
   const wire::Security* security() const { return security_ ? &*security_ : nullptr; }
@@ -118,7 +118,7 @@ class Coordinator {
       while (wire::recv(peers_[w].control, m, zmq::recv_flags::dontwait)) {
         // A worker's error before it knew the run (a refused hello) carries no run id.
         auto j = wire::parse_control(m);
-        if (!j || (wire::text(*j, "run") != wire::run_text(run_) && wire::text(*j, "type") != "error")) continue;
+        if (!j || (wire::text(*j, "run") != id_text(run_) && wire::text(*j, "type") != "error")) continue;
         peers_[w].heard = Clock::now();
         if (wire::text(*j, "type") == "heartbeat")
           peers_[w].stalled_s = wire::number(*j, "stalled_s", 0.0, 1e12).value_or(0.0);
@@ -194,7 +194,7 @@ class Coordinator {
   std::string results_address_;
   std::vector<Peer> peers_;
   Clock::time_point beat_ = Clock::now();
-  std::uint64_t run_ = wire::new_run_id();
+  std::uint64_t run_ = random_id();
 };
 
 json setup_message(const std::string& model_json, const Decomposition& d, const std::vector<int>& worker_of, std::size_t w,

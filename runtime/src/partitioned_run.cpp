@@ -42,11 +42,8 @@ class SinkOutput final : public TightOutput {
   bool checkpoint_due() override { return timer_.due(); }
   // The state whatever the partition: the global state and where the loop is.
   void checkpoint(const TightPoint& p) override {
-    if (sink_) sink_->sync();
+    StateWriter w = checkpoint_head("tight", o_.method, sink_, out_);
     partitioned::gather(parts_, whole_.layout(), y_);
-    StateWriter w;
-    w.text("tight");
-    w.text(o_.method.name());
     w.integer(p.steps);
     w.integer(p.rejected);
     w.integer(p.evaluations);
@@ -54,9 +51,6 @@ class SinkOutput final : public TightOutput {
     w.real(p.h);
     w.integer(p.next_out);
     w.bytes(p.controller);
-    w.integer(out_.snapshots);
-    w.real(out_.t_last_snapshot);
-    w.text(sink_ ? sink_->identity() : "");
     w.vector(y_);
     o_.checkpoint->write(w.take());
   }
@@ -76,9 +70,7 @@ class SinkOutput final : public TightOutput {
 TightPoint restore_tight(const Checkpointing& c, const RunOptions& o, std::vector<Part>& parts, const MultibodySystem& whole,
                          ResultSink* sink, RunSummary& out) {
   StateReader in(c.resume, c.resume_from);
-  in.expect("tight");
-  const std::string m = in.text();
-  if (m != o.method.name()) in.fail("it is the state of a " + m + " run, not of " + o.method.name());
+  const std::string results = read_checkpoint_head(in, "tight", o.method, out);
   TightPoint p;
   p.steps = in.integer(0, INT64_MAX);
   p.rejected = in.integer(0, INT64_MAX);
@@ -87,15 +79,10 @@ TightPoint restore_tight(const Checkpointing& c, const RunOptions& o, std::vecto
   p.h = in.real();
   p.next_out = in.integer(1, INT64_MAX);
   p.controller = in.bytes();
-  out.snapshots = in.integer(0, INT64_MAX);
-  out.t_last_snapshot = in.real();
-  const std::string results = in.text();
   const Eigen::VectorXd y = in.vector(whole.dimension());
-  if (!in.at_end()) in.fail("it holds more than the state of a tightly coupled run");
   out.resumed_at = p.t;
   for (Part& part : parts) partitioned::scatter(y, whole.layout(), part);
-  if (sink && results.empty()) throw InputError(c.resume_from + ": the run it was taken from wrote no results");
-  if (sink) sink->resume(whole, out.snapshots, results);
+  resume_results(in, c, sink, whole, results, out);
   return p;
 }
 

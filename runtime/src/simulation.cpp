@@ -23,18 +23,11 @@ void check(const MultibodySystem& sys, const Eigen::VectorXd& y, double t, const
 }
 
 // Checkpoints of the loop: between two steps, `next` is the index of the next fixed step
-// or of the next output on the grid; the sink is synced first, so the results file holds
-// every snapshot counted in `out`.
+// or of the next output on the grid, then the stepper's state.
 void save_point(const Checkpointing& c, ResultSink* sink, const Stepper& stepper, Method method, long next,
                 const RunSummary& out) {
-  if (sink) sink->sync();
-  StateWriter w;
-  w.text("simulation");
-  w.text(method.name());
+  StateWriter w = checkpoint_head("simulation", method, sink, out);
   w.integer(next);
-  w.integer(out.snapshots);
-  w.real(out.t_last_snapshot);
-  w.text(sink ? sink->identity() : "");
   stepper.save(w);
   c.write(w.take());
 }
@@ -43,18 +36,11 @@ void save_point(const Checkpointing& c, ResultSink* sink, const Stepper& stepper
 long restore_point(const Checkpointing& c, ResultSink* sink, const MultibodySystem& sys, Stepper& stepper, Method method,
                    RunSummary& out) {
   StateReader in(c.resume, c.resume_from);
-  in.expect("simulation");
-  const std::string m = in.text();
-  if (m != method.name()) in.fail("it is the state of a " + m + " run, not of " + method.name());
+  const std::string results = read_checkpoint_head(in, "simulation", method, out);
   const long next = in.integer(1, INT64_MAX);
-  out.snapshots = in.integer(0, INT64_MAX);
-  out.t_last_snapshot = in.real();
-  const std::string results = in.text();
   stepper.restore(in);
-  if (!in.at_end()) in.fail("it holds more than the state of a run in one process");
   out.resumed_at = stepper.t();
-  if (sink && results.empty()) throw InputError(c.resume_from + ": the run it was taken from wrote no results");
-  if (sink) sink->resume(sys, out.snapshots, results);
+  resume_results(in, c, sink, sys, results, out);
   return next;
 }
 

@@ -2,6 +2,7 @@
 // What every run loop does with its sink: snapshots with what the sink asked for, and
 // closing the sink on every way out so that what was written stays readable.
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <string>
 
@@ -71,6 +72,41 @@ void run_with_sink(ResultSink* sink, RunSummary& out, F body, G before_end = [] 
   sink->end();
   // Stopped while the last snapshots were being written: the run is not complete.
   if (sink->loss().dropped > 0) throw RunError("interrupted while writing the results" + results_kept(*sink, out));
+}
+
+// Checkpoints of a run loop (mbsflow/runtime/checkpoint.hpp). A state begins with the
+// loop's kind, the method, how far the results go and which results file holds them;
+// the loop adds where it is. The sink syncs first, so the file holds every snapshot
+// counted.
+inline StateWriter checkpoint_head(const char* kind, Method method, ResultSink* sink, const RunSummary& out) {
+  if (sink) sink->sync();
+  StateWriter w;
+  w.text(kind);
+  w.text(method.name());
+  w.integer(out.snapshots);
+  w.real(out.t_last_snapshot);
+  w.text(sink ? sink->identity() : "");
+  return w;
+}
+
+// The reading side: checks the kind and the method, sets out's snapshot count and time,
+// and returns the results file's id; `in` is then at the loop's part.
+inline std::string read_checkpoint_head(StateReader& in, const char* kind, Method method, RunSummary& out) {
+  in.expect(kind);
+  const std::string m = in.text();
+  if (m != method.name()) in.fail("it is the state of a " + m + " run, not of " + method.name());
+  out.snapshots = in.integer(0, INT64_MAX);
+  out.t_last_snapshot = in.real();
+  return in.text();
+}
+
+// After the loop's part: nothing may be left, and the sink goes on with its results.
+inline void resume_results(const StateReader& in, const Checkpointing& c, ResultSink* sink, const MultibodySystem& sys,
+                           const std::string& results, const RunSummary& out) {
+  if (!in.at_end()) in.fail("it holds more than the state of such a run");
+  if (!sink) return;
+  if (results.empty()) throw InputError(c.resume_from + ": the run it was taken from wrote no results");
+  sink->resume(sys, out.snapshots, results);
 }
 
 // The registry entry of the run's method (InputError naming the methods there are).

@@ -57,7 +57,7 @@ void WorkerIo::send(nlohmann::json message) {
     try {
       wire::send(control_, zmq::buffer(coordinator_), zmq::send_flags::sndmore);
       nlohmann::json with_run = m;
-      with_run["run"] = wire::run_text(run_);
+      with_run["run"] = id_text(run_);
       wire::send_json(control_, with_run);
     } catch (const zmq::error_t& e) {
       lose(std::string("the coordinator was lost: its connection is gone (") + e.what() + ")");
@@ -182,7 +182,7 @@ void WorkerIo::loop() {
         beat_ = Clock::now();
         try {
           wire::send(control_, zmq::buffer(coordinator_), zmq::send_flags::sndmore);
-          nlohmann::json beat = {{"type", "heartbeat"}, {"run", wire::run_text(run_)}};
+          nlohmann::json beat = {{"type", "heartbeat"}, {"run", id_text(run_)}};
           if (const std::int64_t p = progress_ns_.load(); p > 0) beat["stalled_s"] = 1e-9 * static_cast<double>(wire::now_ns() - p);
           wire::send_json(control_, beat);
         } catch (const zmq::error_t& e) {

@@ -88,8 +88,8 @@ class Stepper {
   // Checkpoints, between steps: everything the next steps depend on (the state, the step
   // size controller, kept f values, the Newton matrices' history), so that a stepper made
   // with the same system and settings and restored goes on bit for bit as this one would
-  // have. restore() follows a start() (which sizes the
-  // state) and throws InputError for a state of another method or size.
+  // have. restore() follows a start() (which sizes the state) and throws InputError for a
+  // state of another method or size.
   void save(StateWriter& out) const;
   void restore(StateReader& in);
 
