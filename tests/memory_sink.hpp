@@ -12,6 +12,7 @@ struct MemorySink : ResultSink {
   std::vector<double> times;
   std::vector<Snapshot> snapshots;
   std::vector<Eigen::VectorXd> states;
+  std::vector<CouplingRecord> coupling;
   bool ended = false;
   SnapshotContent content() const override { return wanted; }
   void begin(const MultibodySystem&) override {}
@@ -20,6 +21,7 @@ struct MemorySink : ResultSink {
     states.push_back(s.state);
     snapshots.push_back(std::move(s));
   }
+  void write_coupling(const std::vector<CouplingRecord>& records) override { coupling = records; }
   void end() override { ended = true; }
   // Checkpoints: the snapshots after the first n are dropped, as a results file's rows are.
   std::string identity() const override { return "memory"; }

@@ -41,7 +41,9 @@ struct ExchangeHeader {
 
 // A dense snapshot (DOPRI5's dense output between steps) still needs the drivers imposed
 // and the orientations renormalised, which the coordinator does on the whole state.
-enum class ResultKind : std::uint32_t { snapshot = 1, progress = 2, done = 3, failed = 4, coupling = 5, dense = 6 };
+// A checkpoint (cluster.hpp) carries the worker's state at checkpoint opportunity `index`
+// for the request in `step`, or nothing when the worker was past it (`index`: where it is).
+enum class ResultKind : std::uint32_t { snapshot = 1, progress = 2, done = 3, failed = 4, coupling = 5, dense = 6, checkpoint = 7 };
 // A coupling message carries rows of (index, t_start, t_end, position error, velocity
 // error, lag) of CouplingRecord.
 constexpr std::size_t coupling_row = 6;
@@ -130,6 +132,11 @@ std::optional<Header> read_header(const zmq::message_t& m, std::uint64_t run) {
   if (h.magic != magic || h.version != frame_version || h.run != run) return std::nullopt;
   return h;
 }
+
+// Bytes as lowercase hex (a resumed run's state in the set-up's JSON) and back; nullopt
+// for anything but an even number of hex digits.
+std::string hex(const std::vector<std::uint8_t>& bytes);
+std::optional<std::vector<std::uint8_t>> unhex(const std::string& text);
 
 // Receives the rest of a multipart message that is being dropped.
 void skip_rest(zmq::socket_t& s, const zmq::message_t& last);

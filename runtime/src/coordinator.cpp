@@ -1,6 +1,7 @@
 // mbsflow run --cluster / --processes: the coordinator (see cluster.hpp, docs/cluster.md).
 #include <cstdio>
 #include <map>
+#include <optional>
 
 #include "cluster_wire.hpp"
 #include "mbsflow/error.hpp"
@@ -22,7 +23,7 @@ using wire::Clock;
 
 bool known_kind(wire::ResultKind k) {
   const auto v = static_cast<std::uint32_t>(k);
-  return v >= static_cast<std::uint32_t>(wire::ResultKind::snapshot) && v <= static_cast<std::uint32_t>(wire::ResultKind::dense);
+  return v >= static_cast<std::uint32_t>(wire::ResultKind::snapshot) && v <= static_cast<std::uint32_t>(wire::ResultKind::checkpoint);
 }
 
 struct Peer {
@@ -199,7 +200,7 @@ class Coordinator {
 
 json setup_message(const std::string& model_json, const Decomposition& d, const std::vector<int>& worker_of, std::size_t w,
                    const ClusterWorker& cw, const RunOptions& o, const std::string& results_address,
-                   const ClusterCoupling& coupling, const wire::Security* security) {
+                   const ClusterCoupling& coupling, const wire::Security* security, const std::string& resume) {
   json j = {{"type", "setup"},
           {"model", model_json},
           {"part_of_body", d.part_of_body},
@@ -214,8 +215,65 @@ json setup_message(const std::string& model_json, const Decomposition& d, const 
           {"exchange_delay_s", coupling.exchange_delay_s}};
   if (coupling.loose) j["loose"] = loose_to_json(*coupling.loose);
   if (security) j["worker_keys"] = security->workers;  // the peers' inboxes' server keys
+  if (!resume.empty()) j["resume"] = resume;             // hex: the state to go on from
   return j;
 }
+
+// Checkpoints of a tightly coupled run on workers (docs/cluster.md). Every worker's loop
+// has the same checkpoint opportunities, numbered alike; the coordinator asks for one a
+// little ahead of where they are, each worker sends its state when it gets there (or says
+// that it is past it: then a later one is asked for), and once every worker's state of
+// that opportunity is in, so are the snapshots before it, and none after: the results
+// file is synced and the checkpoint written, in the format of a run on threads (the
+// point and the global state), so that it goes on with workers or threads.
+class ClusterCheckpoints {
+ public:
+  ClusterCheckpoints(const RunOptions& o, std::size_t workers) : o_(o), timer_(o.checkpoint), states_(workers) {}
+
+  // Asks for a checkpoint when one is due and none is under way.
+  void poll(Coordinator& co) {
+    if (at_ < 0 && timer_.due()) ask(co, seen_ + 2);
+  }
+  // A checkpoint result of worker w; writes the checkpoint when it completes one.
+  void take(Coordinator& co, std::size_t w, const wire::ResultHeader& h, const zmq::message_t& payload,
+            ResultSink* sink, const RunSummary& out, const MultibodySystem& whole) {
+    seen_ = std::max(seen_, static_cast<long>(h.index));
+    if (h.step != at_) return;  // an answer to an earlier request
+    if (payload.size() == 0) return ask(co, seen_ + 2);  // the worker was past it
+    if (states_[w].empty()) ++got_;
+    const auto* bytes = static_cast<const std::uint8_t*>(payload.data());
+    states_[w].assign(bytes, bytes + payload.size());
+    if (got_ < states_.size()) return;
+    StateWriter out_state = checkpoint_head("tight", o_.method, sink, out);
+    Eigen::VectorXd y = whole.initial_state(), own;
+    std::optional<TightPoint> point;
+    for (std::size_t v = 0; v < states_.size(); ++v) {
+      StateReader in(states_[v], co.who(v) + "'s checkpoint");
+      const std::vector<int>& bodies = co.peers()[v].bodies;
+      TightPoint p = read_tight_point(in, static_cast<Eigen::Index>(bodies.size()) * partitioned::body_numbers, own);
+      if (point && (p.steps != point->steps || p.t != point->t))
+        throw RunError(co.who(v) + " sent the state of another step for a checkpoint");
+      partitioned::unpack_bodies(whole.layout(), y, bodies, own.data());
+      if (!point) point = std::move(p);
+    }
+    save_tight_point(out_state, *point, y);
+    o_.checkpoint->write(out_state.take());
+    at_ = -1;
+  }
+
+ private:
+  void ask(Coordinator& co, long at) {
+    at_ = at;
+    got_ = 0;
+    for (auto& s : states_) s.clear();
+    co.send_all({{"type", "checkpoint"}, {"at", at}});
+  }
+  const RunOptions& o_;
+  CheckpointTimer timer_;
+  long at_ = -1, seen_ = 0;  // the opportunity asked for (-1: none); the latest a worker said it was at
+  std::size_t got_ = 0;
+  std::vector<std::vector<std::uint8_t>> states_;
+};
 
 }  // namespace
 
@@ -249,6 +307,21 @@ RunSummary run_cluster(const Model& model, const std::string& model_json, const 
   Eigen::VectorXd y = whole.initial_state();
   long evaluations = 0, steps = 0, rejected = 0;  // as the workers count them
   loose::CouplingLog coupling_log;  // loose coupling: the workers' records, merged
+  // Going on from a checkpoint: the workers get its point and global state; the results
+  // file is reopened once they are in.
+  const Checkpointing* c = o.checkpoint;
+  std::optional<StateReader> resumed;
+  std::string resume_hex, results_id;
+  if (c && !c->resume.empty()) {
+    resumed.emplace(c->resume, c->resume_from);
+    results_id = read_checkpoint_head(*resumed, "tight", o.method, out);
+    const TightPoint point = read_tight_point(*resumed, whole.dimension(), y);
+    out.resumed_at = point.t;
+    StateWriter w;
+    save_tight_point(w, point, y);
+    resume_hex = wire::hex(w.take());
+  }
+  ClusterCheckpoints checkpoints(o, peers.size());
   run_with_sink(sink, out, [&] {
     try {
       for (std::size_t w = 0; w < peers.size(); ++w)
@@ -264,7 +337,7 @@ RunSummary run_cluster(const Model& model, const std::string& model_json, const 
       co.gather("hello_ok", cluster.timeouts.connect_s, [](std::size_t, const json&) {});
       for (std::size_t w = 0; w < peers.size(); ++w)
         co.send(w, setup_message(model_json, d, worker_of, w, cluster.workers[w], o, co.results_address(), coupling,
-                                 co.security()));
+                                 co.security(), resume_hex));
       co.gather("ready", 0.0, [&](std::size_t w, const json& j) { peers[w].data_address = wire::text(j, "data_address"); });
       json names = json::array(), addresses = json::array();
       for (const Peer& p : peers) {
@@ -276,7 +349,9 @@ RunSummary run_cluster(const Model& model, const std::string& model_json, const 
       if (stats) stats->setup_seconds = std::chrono::duration<double>(Clock::now() - start_clock).count();
       start_clock = Clock::now();
       // The results file only once every worker is in: a refused run writes nothing.
-      if (sink) {
+      if (resumed) {
+        resume_results(*resumed, *c, sink, whole, results_id, out);
+      } else if (sink) {
         sink->begin(whole);
         emit(whole, sink, o.t_start, y, out);
       }
@@ -328,6 +403,9 @@ RunSummary run_cluster(const Model& model, const std::string& model_json, const 
           }
           case wire::ResultKind::progress:
             break;
+          case wire::ResultKind::checkpoint:
+            checkpoints.take(co, w, h, payload, sink, out, whole);
+            break;
           case wire::ResultKind::coupling: {
             constexpr std::size_t row = wire::coupling_row * sizeof(double);
             if (payload.size() % row != 0) throw RunError(co.who(w) + " sent coupling records of the wrong size");
@@ -361,6 +439,7 @@ RunSummary run_cluster(const Model& model, const std::string& model_json, const 
         }
         co.check_alive(where);
         check_stop(o, reached);
+        checkpoints.poll(co);
       }
       if (!pending.empty())
         throw RunError("every worker reported done, but snapshot " + std::to_string(pending.begin()->first) +

@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <string>
 #include <limits>
 #include <memory>
 
@@ -72,6 +74,64 @@ void summarise_records(LooseStats& st) {
   }
 }
 
+namespace {
+
+// Checkpoints of a loosely coupled run, at a macro-step end that every submodel has
+// reached and whose snapshots were written (between flow-graph runs): where the walk is,
+// the macro-step ends, the coupling records so far, then every submodel's part. The
+// numbers depend on the partition, so a resumed run must have the same one (its
+// submodels' states are checked against it).
+struct LooseCheckpoint {
+  std::vector<std::unique_ptr<LoosePart>>& parts;
+  loose::MacroGrid& grid;
+  loose::LooseRounds& rounds;
+  loose::CouplingLog& log;
+  LooseStats& st;
+  long done = 0, next_output = 1;  // macro steps; the snapshot to come
+  loose::AdaptiveWalk walk;
+
+  void save(const RunOptions& o, ResultSink* sink, const RunSummary& out) {
+    StateWriter w = checkpoint_head("loose", o.method, sink, out);
+    rounds.drain(log);  // records merge by their macro-step end: when does not matter
+    w.integer(static_cast<std::int64_t>(parts.size()));
+    w.integer(done);
+    w.integer(next_output);
+    w.integer(walk.m);
+    w.integer(walk.attempt);
+    w.real(walk.t);
+    w.real(walk.H);
+    w.integer(st.rejected);
+    w.integer(st.over_tolerance);
+    grid.save(w);
+    log.save(w);
+    for (const auto& p : parts) p->save(w);
+    o.checkpoint->write(w.take());
+  }
+
+  void restore(const Checkpointing& c, const RunOptions& o, ResultSink* sink, const MultibodySystem& whole, RunSummary& out) {
+    StateReader in(c.resume, c.resume_from);
+    const std::string results = read_checkpoint_head(in, "loose", o.method, out);
+    const auto submodels = in.integer(1, INT32_MAX);
+    if (submodels != static_cast<std::int64_t>(parts.size()))
+      in.fail("it is of a run cut into " + std::to_string(submodels) + " submodels, not " + std::to_string(parts.size()));
+    done = in.integer(0, INT64_MAX / 2);
+    next_output = in.integer(1, INT64_MAX / 2);
+    walk.m = in.integer(0, INT64_MAX / 2);
+    walk.attempt = in.integer(0, INT64_MAX / 2);
+    walk.t = in.real();
+    walk.H = in.real();
+    st.rejected = in.integer(0, INT64_MAX);
+    st.over_tolerance = in.integer(0, INT64_MAX);
+    grid.restore(in);
+    log.restore(in);
+    for (auto& p : parts) p->restore(in);
+    out.resumed_at = grid.end(done);
+    resume_results(in, c, sink, whole, results, out);
+  }
+};
+
+}  // namespace
+
 RunSummary run_loose(const Model& model, const Decomposition& cut, const RunOptions& o, const LooseOptions& lo,
                      ResultSink* sink, LooseStats* stats) {
   check_options(o);
@@ -87,43 +147,54 @@ RunSummary run_loose(const Model& model, const Decomposition& cut, const RunOpti
   LooseStats& st = stats ? *stats : local_stats;
   const auto start = Clock::now();
   Eigen::VectorXd y = whole.initial_state();
-  if (sink) sink->begin(whole);
   const bool adaptive = lo.coupling_tol > 0.0;
   loose::MacroGrid grid(o, adaptive ? 0.0 : lo.macro_step);
   loose::LooseRounds rounds(model, d, o, lo, parts, grid, grid.steps_per_run());
   rounds.keep_snapshots = sink != nullptr;
   loose::CouplingLog log;
-  long done = 0, next_output = 1;  // macro steps; the snapshot to come
+  LooseCheckpoint point{parts, grid, rounds, log, st, 0, 1, loose::adaptive_start(o, lo)};
+  const bool resume = o.checkpoint && !o.checkpoint->resume.empty();
+  if (resume)
+    point.restore(*o.checkpoint, o, sink, whole, out);
+  else if (sink)
+    sink->begin(whole);
+  CheckpointTimer checkpoint(o.checkpoint);
   // At macro-step end m: the snapshots up to it (the submodels kept them from their dense
-  // output), the stop request, the progress.
+  // output), the stop request, the progress, a checkpoint if one is due.
   auto at_end = [&](long m) {
-    done = m;
+    point.done = m;
     const double t = grid.end(m);
-    for (; sink && next_output <= grid.outputs() && loose::at_or_before(grid.output_time(next_output), t); ++next_output) {
-      for (auto& p : parts) p->take_snapshot(next_output, global, y);
-      emit(whole, sink, grid.output_time(next_output), y, out);
+    for (long& k = point.next_output; sink && k <= grid.outputs() && loose::at_or_before(grid.output_time(k), t); ++k) {
+      for (auto& p : parts) p->take_snapshot(k, global, y);
+      emit(whole, sink, grid.output_time(k), y, out);
     }
     check_stop(o, t);
     if (o.progress) o.progress(t, m);
+    if (t < o.t_end && checkpoint.due()) point.save(o, sink, out);
   };
   run_with_sink(
       sink, out,
       [&] {
-        if (sink) emit(whole, sink, o.t_start, y, out);
-        for (auto& p : parts) p->make_past(o.t_start, lo.macro_step);
-        for (int j = 1; j <= lo.extrapolation; ++j) loose::copy_local_ghosts(parts, j);
-        for (auto& p : parts) p->start(o.t_start, lo.macro_step);
-        if (adaptive) {
-          loose::adaptive_macro_steps(o, lo, parts, rounds, grid, st, at_end);
-        } else {
-          loose::for_each_run(grid, loose::ends_kept(lo), [&](long m, int n) {
-            const std::string failure = rounds.run(m, n);
-            if (!failure.empty()) throw RunError(failure);
-            at_end(m + n);
-            return true;
-          });
+        if (!resume) {
+          if (sink) emit(whole, sink, o.t_start, y, out);
+          for (auto& p : parts) p->make_past(o.t_start, lo.macro_step);
+          for (int j = 1; j <= lo.extrapolation; ++j) loose::copy_local_ghosts(parts, j);
+          for (auto& p : parts) p->start(o.t_start, lo.macro_step);
         }
-        rounds.catch_up(done);  // the coupling errors of the last macro steps
+        if (adaptive) {
+          loose::adaptive_macro_steps(o, lo, parts, rounds, grid, st, point.walk, at_end);
+        } else {
+          loose::for_each_run(
+              grid, loose::ends_kept(lo),
+              [&](long m, int n) {
+                const std::string failure = rounds.run(m, n);
+                if (!failure.empty()) throw RunError(failure);
+                at_end(m + n);
+                return true;
+              },
+              point.done);
+        }
+        rounds.catch_up(point.done);  // the coupling errors of the last macro steps
       },
       [&] {
         rounds.drain(log);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 #include "mbsflow/error.hpp"
 #include "mbsflow/runtime/divergence.hpp"
@@ -253,6 +254,91 @@ void LoosePart::restore(long index) {
     while (!p.empty() && p.back().index >= index) p.pop_back();
   std::lock_guard lock(board_mutex_);
   while (!board_.empty() && board_.back().index >= index) board_.pop_back();
+}
+
+namespace {
+void save_samples(StateWriter& w, const auto& samples) {
+  w.integer(static_cast<std::int64_t>(samples.size()));
+  for (const auto& s : samples) {
+    w.integer(s.index);
+    w.real(s.t);
+    w.vector(Eigen::Map<const Eigen::VectorXd>(s.bodies.data(), static_cast<Eigen::Index>(s.bodies.size())));
+  }
+}
+
+// `size`: the numbers each sample has; at most `most` samples.
+template <class Sample>
+std::deque<Sample> restore_samples(StateReader& in, std::size_t size, std::size_t most) {
+  std::deque<Sample> out(static_cast<std::size_t>(in.integer(0, static_cast<std::int64_t>(most))));
+  for (Sample& s : out) {
+    s.index = in.integer(INT64_MIN / 2, INT64_MAX / 2);
+    s.t = in.real();
+    const Eigen::VectorXd v = in.vector(static_cast<Eigen::Index>(size));
+    s.bodies.assign(v.data(), v.data() + v.size());
+  }
+  return out;
+}
+}  // namespace
+
+void LoosePart::save(StateWriter& w) const {
+  if (!snapshots_.empty()) throw RunError("internal: a loose checkpoint with snapshots not yet taken");
+  w.text("loose part");
+  w.integer(steps);
+  w.integer(rejected);
+  w.integer(evaluations);
+  w.vector(part.x[0]);
+  for (std::size_t e = 0; e < history_.size(); ++e) {
+    save_samples(w, history_[e]);
+    save_samples(w, predicted_[e]);
+  }
+  std::lock_guard lock(board_mutex_);
+  w.integer(static_cast<std::int64_t>(board_.size()));
+  for (const Published& p : board_) {
+    w.integer(p.index);
+    w.real(p.t);
+    w.vector(p.x);
+  }
+  stepper_->save(w);
+}
+
+void LoosePart::restore(StateReader& in) {
+  in.expect("loose part");
+  for (long* v : {&steps, &rejected, &evaluations}) *v = in.integer(0, INT64_MAX);
+  const Eigen::Index n = part.system.dimension();
+  part.x[0] = in.vector(n);
+  const std::size_t most = 1u << 20;  // far more than any run keeps
+  for (std::size_t e = 0; e < history_.size(); ++e) {
+    const Submodel::Exchange& x = part.sub->exchanges[e];
+    history_[e] = restore_samples<Sample>(in, x.to.size() * numbers, most);
+    predicted_[e] = restore_samples<Sample>(in, x.near.size() * numbers, most);
+    if (history_[e].size() != static_cast<std::size_t>(order_) + 1) in.fail("its neighbour samples are not of this run's extrapolation");
+  }
+  std::deque<Published> board(static_cast<std::size_t>(in.integer(1, static_cast<std::int64_t>(retain_))));
+  for (Published& p : board) {
+    p.index = in.integer(0, INT64_MAX);
+    p.t = in.real();
+    p.x = in.vector(n);
+  }
+  {
+    std::lock_guard lock(board_mutex_);
+    board_ = std::move(board);
+  }
+  snapshots_.clear();
+  // The method's state goes over a started one (which sizes it), at the state's time.
+  stepper_->start(board_.back().t, part.x[0], o_.t_end);
+  stepper_->restore(in);
+}
+
+void MacroGrid::save(StateWriter& w) const {
+  w.integer(base_);
+  w.integer(static_cast<std::int64_t>(ends_.size()));
+  for (double t : ends_) w.real(t);
+}
+
+void MacroGrid::restore(StateReader& in) {
+  base_ = in.integer(0, INT64_MAX / 2);
+  ends_.resize(static_cast<std::size_t>(in.integer(1, 1 << 20)));
+  for (double& t : ends_) t = in.real();
 }
 
 MacroGrid::MacroGrid(const RunOptions& o, double H) : o_(o), H_(H), grid_(step_grid(o.t_start, o.t_end, o.step)) {

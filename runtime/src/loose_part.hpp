@@ -14,6 +14,7 @@
 #include <utility>
 #include <vector>
 
+#include "mbsflow/methods/state_archive.hpp"
 #include "mbsflow/methods/step_grid.hpp"
 #include "mbsflow/methods/stepper.hpp"
 #include "mbsflow/runtime/simulation.hpp"
@@ -71,6 +72,12 @@ class LoosePart {
   // Back to the saved state and samples; forgets the ends from `index` on and the
   // snapshots since.
   void restore(long index);
+
+  // Checkpoints, at a macro-step end that every submodel here has reached and whose
+  // snapshots were taken: the state, the method's state, the counts, the neighbour
+  // samples and predictions, and the published ends the neighbours may still take.
+  void save(StateWriter& w) const;
+  void restore(StateReader& in);
 
   long steps = 0, rejected = 0, evaluations = 0;
 
@@ -141,6 +148,9 @@ class MacroGrid {
   // are forgotten (a macro step taken again).
   void add(long m, double H);
   void forget_before(long m);
+  // The ends known, as sums of macro steps: a resumed run must go on from the same sums.
+  void save(StateWriter& w) const;
+  void restore(StateReader& in);
   // Macro steps per flow-graph run: about one output interval's worth, at most 64.
   int steps_per_run() const;
   long outputs() const { return outputs_; }
@@ -163,10 +173,11 @@ inline bool at_or_before(double t, double end) { return t <= end + 1e-12 * std::
 // Walks the run's macro steps in flow-graph runs of steps_per_run() macro steps (fewer at
 // the end): run(m, n) takes macro steps m .. m + n - 1, and stops the walk when it returns
 // false. Ends more than `keep` behind are forgotten.
+// `first`: the macro step to begin with (a resumed run's).
 template <class Run>
-void for_each_run(MacroGrid& g, long keep, Run run) {
+void for_each_run(MacroGrid& g, long keep, Run run, long first = 0) {
   const int most = g.steps_per_run();
-  for (long m = 0;;) {
+  for (long m = first;;) {
     g.extend(m + most);
     if (m >= g.last()) return;
     const int n = static_cast<int>(std::min<long>(most, g.last() - m));

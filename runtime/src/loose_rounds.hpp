@@ -96,27 +96,38 @@ class LooseRounds {
   std::unique_ptr<Scheduler> schedule_;  // built in the arena; goes before it
 };
 
-// Takes the adaptive macro steps one at a time: each is taken again from its start with a
-// shorter H while its coupling error is above the tolerance, down to
+// Where a walk of adaptive macro steps is: macro steps taken, tries so far, the time
+// reached and the next macro step. A checkpoint keeps it.
+struct AdaptiveWalk {
+  long m = 0, attempt = 0;
+  double t = 0.0, H = 0.0;
+};
+
+inline AdaptiveWalk adaptive_start(const RunOptions& o, const LooseOptions& lo) { return {0, 0, o.t_start, lo.macro_step}; }
+
+// Takes the adaptive macro steps one at a time from `walk`: each is taken again from its
+// start with a shorter H while its coupling error is above the tolerance, down to
 // smallest_macro_fraction of lo.macro_step (then it is taken and counted in over_tolerance).
 // worst(attempt, e): the largest error over all processes (every process takes the same
 // decision), attempt numbering the tries; retake(index): before a macro step to end
-// `index` is taken again, after the local parts went back.
+// `index` is taken again, after the local parts went back; at_end(m): after macro step m
+// was taken, with `walk` at end m.
 template <class AtEnd, class Worst, class Retake>
 void adaptive_macro_steps(const RunOptions& o, const LooseOptions& lo, std::vector<std::unique_ptr<LoosePart>>& parts,
-                          LooseRounds& rounds, MacroGrid& ends, LooseStats& st, AtEnd at_end, Worst worst, Retake retake) {
+                          LooseRounds& rounds, MacroGrid& ends, LooseStats& st, AdaptiveWalk& walk, AtEnd at_end,
+                          Worst worst, Retake retake) {
   const double order = lo.extrapolation + 1.0;
-  double t = o.t_start, H = lo.macro_step;
-  long m = 0, attempt = 0;
-  while (t < o.t_end) {
-    ends.add(m, H);
+  while (walk.t < o.t_end) {
+    const long m = walk.m;
+    const double t = walk.t;
+    ends.add(m, walk.H);
     const double t1 = ends.end(m + 1);
     for (auto& p : parts)
       if (p) p->save();
     const std::string failure = rounds.run(m, 1);
     if (!failure.empty()) throw RunError(failure);
     rounds.catch_up(m + 1);  // every neighbour value of the new end: the coupling errors
-    const double e = worst(++attempt, rounds.worst(m + 1).position);
+    const double e = worst(++walk.attempt, rounds.worst(m + 1).position);
     // Step-size factor from the error model e ~ H^(order).
     const double factor = std::clamp(0.9 * std::pow(lo.coupling_tol / std::max(e, 1e-300), 1.0 / order), 0.2, 2.0);
     const double smallest = lo.macro_step * smallest_macro_fraction;
@@ -125,24 +136,24 @@ void adaptive_macro_steps(const RunOptions& o, const LooseOptions& lo, std::vect
         if (p) p->restore(m + 1);
       rounds.discard(m + 1);
       retake(m + 1);
-      H = std::max(smallest, (t1 - t) * factor);
+      walk.H = std::max(smallest, (t1 - t) * factor);
       ++st.rejected;
       continue;
     }
     if (e > lo.coupling_tol) ++st.over_tolerance;  // at the smallest macro step: taken, counted
-    ++m;
-    at_end(m);
-    ends.forget_before(m - 8);
-    H = std::min(lo.macro_step, (t1 - t) * factor);  // no longer than the one the overlap was chosen for
-    t = t1;
+    ends.forget_before(m + 1 - 8);
+    walk.m = m + 1;
+    walk.H = std::min(lo.macro_step, (t1 - t) * factor);  // no longer than the one the overlap was chosen for
+    walk.t = t1;
+    at_end(walk.m);
   }
 }
 
 // One process: its own errors are all there are; nothing else to go back.
 template <class AtEnd>
 void adaptive_macro_steps(const RunOptions& o, const LooseOptions& lo, std::vector<std::unique_ptr<LoosePart>>& parts,
-                          LooseRounds& rounds, MacroGrid& ends, LooseStats& st, AtEnd at_end) {
-  adaptive_macro_steps(o, lo, parts, rounds, ends, st, at_end, [](long, double e) { return e; }, [](long) {});
+                          LooseRounds& rounds, MacroGrid& ends, LooseStats& st, AdaptiveWalk& walk, AtEnd at_end) {
+  adaptive_macro_steps(o, lo, parts, rounds, ends, st, walk, at_end, [](long, double e) { return e; }, [](long) {});
 }
 
 }  // namespace mbsflow::loose

@@ -44,14 +44,7 @@ class SinkOutput final : public TightOutput {
   void checkpoint(const TightPoint& p) override {
     StateWriter w = checkpoint_head("tight", o_.method, sink_, out_);
     partitioned::gather(parts_, whole_.layout(), y_);
-    w.integer(p.steps);
-    w.integer(p.rejected);
-    w.integer(p.evaluations);
-    w.real(p.t);
-    w.real(p.h);
-    w.integer(p.next_out);
-    w.bytes(p.controller);
-    w.vector(y_);
+    save_tight_point(w, p, y_);
     o_.checkpoint->write(w.take());
   }
 
@@ -71,15 +64,8 @@ TightPoint restore_tight(const Checkpointing& c, const RunOptions& o, std::vecto
                          ResultSink* sink, RunSummary& out) {
   StateReader in(c.resume, c.resume_from);
   const std::string results = read_checkpoint_head(in, "tight", o.method, out);
-  TightPoint p;
-  p.steps = in.integer(0, INT64_MAX);
-  p.rejected = in.integer(0, INT64_MAX);
-  p.evaluations = in.integer(0, INT64_MAX);
-  p.t = in.real();
-  p.h = in.real();
-  p.next_out = in.integer(1, INT64_MAX);
-  p.controller = in.bytes();
-  const Eigen::VectorXd y = in.vector(whole.dimension());
+  Eigen::VectorXd y;
+  const TightPoint p = read_tight_point(in, whole.dimension(), y);
   out.resumed_at = p.t;
   for (Part& part : parts) partitioned::scatter(y, whole.layout(), part);
   resume_results(in, c, sink, whole, results, out);

@@ -230,7 +230,9 @@ void gather(const Part& p, const Eigen::VectorXd& local, const StateLayout& glob
 void gather(const Part& p, const StateLayout& global, Eigen::VectorXd& y) { gather(p, p.x[0], global, y); }
 
 void scatter(const Eigen::VectorXd& y, const StateLayout& global, Part& p) {
-  for (Eigen::Index i = 0; i < p.own; ++i) copy_body(global, y, p.sub->own[static_cast<std::size_t>(i)], p.system.layout(), p.x[0], i);
+  Eigen::Index i = 0;
+  for (const std::vector<int>* bodies : {&p.sub->own, &p.sub->borrowed, &p.sub->ghosts})
+    for (int b : *bodies) copy_body(global, y, b, p.system.layout(), p.x[0], i++);
 }
 
 void gather(const std::vector<Part>& parts, const StateLayout& global, Eigen::VectorXd& y) {

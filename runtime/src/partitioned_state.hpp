@@ -78,7 +78,8 @@ void dopri5_dense(const Part& part, double theta, Eigen::VectorXd& out);
 void gather(const std::vector<Part>& parts, const StateLayout& global, Eigen::VectorXd& y);
 void gather(const Part& part, const StateLayout& global, Eigen::VectorXd& y);
 void gather(const Part& part, const Eigen::VectorXd& local, const StateLayout& global, Eigen::VectorXd& y);  // from `local`
-// The reverse: own bodies' states from the global state into x[0] (a resumed run).
+// The reverse (a resumed run): every local body's state (own, borrowed, ghosts) from the
+// global state into x[0], as at the start, where each process has the whole state.
 void scatter(const Eigen::VectorXd& y, const StateLayout& global, Part& part);
 std::optional<Divergence> check(const std::vector<Part>& parts);  // body index is global
 std::optional<Divergence> check(const Part& part);

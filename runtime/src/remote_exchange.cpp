@@ -122,7 +122,7 @@ bool RemoteExchange::read_inbox(int ms) {
 }
 
 void RemoteExchange::wait(long n, int s, int q, int p) {
-  if (n <= 0 && s == 0) return;  // the initial state: every process has it
+  if (n <= start_step_ && s == 0) return;  // the initial state: every process has it
   std::unique_lock lock(mutex_);
   // Messages of a slot arrive in step order; taken ones may be gone from the queue.
   auto here = [&] {
@@ -157,7 +157,7 @@ void RemoteExchange::read_inbox_as_reader(std::unique_lock<std::mutex>& lock, in
 }
 
 void RemoteExchange::receive(int p, long n, int s) {
-  if (n == 0 && s == 0) return;
+  if (n <= start_step_ && s == 0) return;
   partitioned::Part& me = *parts_[static_cast<std::size_t>(p)];
   for (const Submodel::Exchange& e : d_.submodels[static_cast<std::size_t>(p)].exchanges) {
     if (parts_[static_cast<std::size_t>(e.neighbour)]) continue;

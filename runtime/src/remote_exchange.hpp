@@ -37,6 +37,9 @@ class RemoteExchange final : public BoundaryExchange {
                  const std::vector<std::string>& data_addresses, int stages, double send_timeout_s, double delay_s,
                  std::uint64_t run, const wire::Security* security);
   ~RemoteExchange() override;
+  // A run resumed from a checkpoint at step n: every process has the state of step n
+  // (stage input 0), as it has the initial state otherwise.
+  void start_at(long n) { start_step_ = n; }
   // Marked (steady-clock ns) while wait() waits for peers: waiting is not a hung step.
   void set_progress_clock(std::atomic<std::int64_t>* clock) { progress_clock_ = clock; }
 
@@ -146,6 +149,7 @@ class RemoteExchange final : public BoundaryExchange {
   bool transmit(zmq::socket_t& socket, const wire::ExchangeHeader& h, zmq::message_t& payload);
   void open_sender(zmq::socket_t& s, std::size_t worker);  // timeout, CURVE, connect to its inbox
   std::atomic<std::int64_t>* progress_clock_ = nullptr;
+  long start_step_ = 0;
   std::uint64_t run_;  // the run id of every message sent and taken
   const wire::Security* security_;  // CURVE client keys for the other workers' inboxes, or null
   double delay_s_ = 0.0;

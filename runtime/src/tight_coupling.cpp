@@ -1,6 +1,7 @@
 #include "tight_coupling.hpp"
 
 #include <cmath>
+#include <cstdint>
 #include <optional>
 
 #include "mbsflow/error.hpp"
@@ -182,6 +183,30 @@ int tight_stages(Method m) {
                    method_name(m) +
                    " integrates a whole model (its stages run in parallel inside the step) or each submodel of a "
                    "loosely coupled run");
+}
+
+void save_tight_point(StateWriter& w, const TightPoint& p, const Eigen::VectorXd& y) {
+  w.integer(p.steps);
+  w.integer(p.rejected);
+  w.integer(p.evaluations);
+  w.real(p.t);
+  w.real(p.h);
+  w.integer(p.next_out);
+  w.bytes(p.controller);
+  w.vector(y);
+}
+
+TightPoint read_tight_point(StateReader& in, Eigen::Index size, Eigen::VectorXd& y) {
+  TightPoint p;
+  p.steps = in.integer(0, INT64_MAX);
+  p.rejected = in.integer(0, INT64_MAX);
+  p.evaluations = in.integer(0, INT64_MAX);
+  p.t = in.real();
+  p.h = in.real();
+  p.next_out = in.integer(1, INT64_MAX);
+  p.controller = in.bytes();
+  y = in.vector(size);
+  return p;
 }
 
 TightCounts run_tight_coupling(const TightRun& run) {

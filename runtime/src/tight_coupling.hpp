@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "boundary_exchange.hpp"
+#include "mbsflow/methods/state_archive.hpp"
 #include "mbsflow/graph/decomposition.hpp"
 #include "mbsflow/runtime/simulation.hpp"
 
@@ -42,6 +43,12 @@ struct TightPoint {
   long next_out = 1;
   std::vector<std::uint8_t> controller;
 };
+
+// A tightly coupled run's part of a checkpoint: the point and the global state y (run in
+// one process or on workers, it is the same).
+void save_tight_point(StateWriter& w, const TightPoint& p, const Eigen::VectorXd& y);
+// Reads them back; y must be of `size` numbers.
+TightPoint read_tight_point(StateReader& in, Eigen::Index size, Eigen::VectorXd& y);
 
 // Where a tightly coupled run's results go: a sink in this process, or the coordinator.
 class TightOutput {

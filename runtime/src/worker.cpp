@@ -105,6 +105,11 @@ Session read_setup(const WorkerOptions& wo, const json& setup, const std::string
   if (setup.contains("loose")) s.loose = loose_from_json(setup.at("loose"));
   s.exchange_delay_s = wire::number(setup, "exchange_delay_s", 0.0, 60.0).value_or(0.0);
   s.threads = setup.contains("threads") ? setup_integer(setup.at("threads"), "threads", 0, 65536) : 0;
+  if (setup.contains("resume")) {
+    const auto bytes = setup.at("resume").is_string() ? wire::unhex(setup.at("resume").get<std::string>()) : std::nullopt;
+    if (!bytes || bytes->empty()) throw RunError("the set-up's resume is not a state in hex digits");
+    s.resume = std::move(*bytes);
+  }
   return s;
 }
 

@@ -99,6 +99,10 @@ std::optional<ClusterTimeouts> hello_timeouts(const nlohmann::json& hello) {
 // Called with mutex_ not held, on the I/O thread; j is a valid control message.
 void WorkerIo::command(nlohmann::json j) {
   const std::string type = wire::text(j, "type");
+  if (type == "checkpoint") {  // the run loop looks at it between steps
+    if (const auto at = wire::number(j, "at", 0.0, 1e15)) checkpoint_at_ = static_cast<std::int64_t>(*at);
+    return;
+  }
   std::lock_guard lock(mutex_);
   if (type == "abort" && exchange_) exchange_->abort("stopped by the coordinator: " + wire::text(j, "reason"));
   commands_.push_back(std::move(j));

@@ -43,6 +43,9 @@ class WorkerIo {
   // The computation's clock for the watchdog: marked when a step completes and while it
   // waits for peers; heartbeats carry how long ago that was (stalled_s).
   std::atomic<std::int64_t>* progress_clock() { return &progress_ns_; }  // wire::now_ns()
+  // The checkpoint opportunity the coordinator asked for last (its "checkpoint" command,
+  // which is not queued), or -1.
+  std::int64_t checkpoint_request() const { return checkpoint_at_.load(); }
 
  private:
   void loop();
@@ -66,6 +69,7 @@ class WorkerIo {
   bool stopping_ = false;
   bool lost_ = false;
   std::atomic<std::int64_t> progress_ns_{0};  // 0: no run yet
+  std::atomic<std::int64_t> checkpoint_at_{-1};
   // I/O thread only.
   std::string coordinator_;  // its routing id
   std::uint64_t run_ = 0;    // the run id of its hello (read by send() only after the hello)

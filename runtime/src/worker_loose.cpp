@@ -87,9 +87,10 @@ Outcome run_loose_part(Session& s, WorkerIo& io, zmq::context_t& ctx, zmq::socke
   if (failure.empty() && adaptive) {
     // Every worker takes the same macro steps: the largest error over all decides.
     LooseStats st;
+    loose::AdaptiveWalk walk = loose::adaptive_start(s.o, lo);
     try {
       loose::adaptive_macro_steps(
-          s.o, lo, lp, rounds, grid, st,
+          s.o, lo, lp, rounds, grid, st, walk,
           [&](long m) {
             if (const std::string why = w.check(grid.end(m)); !why.empty()) throw RunError(why);
             at_end(m);

@@ -63,15 +63,19 @@ std::string WorkerPart::check(double t) const {
   return "";
 }
 
-void WorkerPart::report_state(long steps, double t, long snapshot) {
-  if (snapshot < 0) return report(wire::ResultKind::progress, steps, t, 0, nullptr, 0);
-  snapshot_.clear();
+void WorkerPart::pack_own(std::vector<double>& out) const {
+  out.clear();
   for (int q : mine) {
     const partitioned::Part& part = *parts[static_cast<std::size_t>(q)];
-    const std::size_t at = snapshot_.size();
-    snapshot_.resize(at + static_cast<std::size_t>(part.own) * partitioned::body_numbers);
-    partitioned::pack_bodies(part.system.layout(), part.x[0], part.own_bodies, snapshot_.data() + at);
+    const std::size_t at = out.size();
+    out.resize(at + static_cast<std::size_t>(part.own) * partitioned::body_numbers);
+    partitioned::pack_bodies(part.system.layout(), part.x[0], part.own_bodies, out.data() + at);
   }
+}
+
+void WorkerPart::report_state(long steps, double t, long snapshot) {
+  if (snapshot < 0) return report(wire::ResultKind::progress, steps, t, 0, nullptr, 0);
+  pack_own(snapshot_);
   report(wire::ResultKind::snapshot, steps, t, snapshot, snapshot_.data(), snapshot_.size() * sizeof(double));
 }
 
@@ -89,6 +93,20 @@ void WorkerPart::report_coupling(const std::vector<CouplingRecord>& records) {
     rows.insert(rows.end(), {static_cast<double>(r.index), r.t_start, r.t_end, r.position_error, r.velocity_error,
                              static_cast<double>(r.lag)});
   report(wire::ResultKind::coupling, 0, records.back().t_end, 0, rows.data(), rows.size() * sizeof(double));
+}
+
+bool WorkerPart::checkpoint_due() {
+  ++opportunity_;
+  const std::int64_t asked = io_.checkpoint_request();
+  if (asked < 0 || asked == answered_ || asked > opportunity_) return false;
+  answered_ = asked;
+  if (asked == opportunity_) return true;
+  report(wire::ResultKind::checkpoint, asked, 0.0, opportunity_, nullptr, 0);  // missed: past it
+  return false;
+}
+
+void WorkerPart::send_checkpoint(const std::vector<std::uint8_t>& state) {
+  report(wire::ResultKind::checkpoint, answered_, 0.0, opportunity_, state.data(), state.size());
 }
 
 Outcome WorkerPart::finish(std::string failure, long steps, double t, double evaluations, long rejected) {

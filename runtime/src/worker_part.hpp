@@ -27,6 +27,7 @@ struct Session {
   std::string results_address;
   std::optional<LooseOptions> loose;  // loose coupling, else tight
   double exchange_delay_s = 0.0;      // added to every boundary message (tests, benchmark)
+  std::vector<std::uint8_t> resume;   // the state to go on from (the coordinator's checkpoint); empty: none
   std::uint64_t run = 0;              // the run id every message carries
   int threads = 0;                    // > 0: the cluster file's threads for this worker
   std::optional<wire::Security> security;  // CURVE: the peers' public keys
@@ -56,6 +57,8 @@ class WorkerPart {
 
   // A failure message when the run must stop at time t (aborted, diverged, interrupted).
   std::string check(double t) const;
+  // Own bodies of the local submodels (x[0]), packed in the order the coordinator expects.
+  void pack_own(std::vector<double>& out) const;
   // Own bodies of the local submodels (x[0]) to the coordinator as snapshot number
   // `snapshot` at t, after `steps` steps; or with snapshot < 0 only the progress.
   void report_state(long steps, double t, long snapshot);
@@ -64,6 +67,14 @@ class WorkerPart {
   void report_dense(long steps, double t, long index, const Eigen::VectorXd& y, bool project = true);
   // Loose coupling: macro-step records (loose_rounds.hpp) to the coordinator.
   void report_coupling(const std::vector<CouplingRecord>& records);
+  // Checkpoints (docs/cluster.md): the run loop asks at each of its checkpoint
+  // opportunities, which every worker has alike (step chunks, macro steps), numbered from
+  // 1; true when the coordinator asked for this one. A request this worker is already
+  // past is answered at once with the opportunity it is at, so that the coordinator can
+  // ask for a later one.
+  bool checkpoint_due();
+  // The local state at the opportunity checkpoint_due() said yes to, to the coordinator.
+  void send_checkpoint(const std::vector<std::uint8_t>& state);
   // Reports done (with the counts) or the failure, then waits for the coordinator's
   // finish or abort.
   Outcome finish(std::string failure, long steps, double t, double evaluations, long rejected = 0);
@@ -75,6 +86,8 @@ class WorkerPart {
   const std::atomic<bool>* stop_;
   wire::Clock::time_point started_ = wire::Clock::now();
   std::vector<double> snapshot_;
+  long opportunity_ = 0;
+  std::int64_t answered_ = -1;  // the last request answered
   std::vector<int> bodies_;  // global indices of the local submodels' own bodies, as the coordinator expects them
 };
 

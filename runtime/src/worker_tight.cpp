@@ -5,6 +5,7 @@
 #include <oneapi/tbb/task_arena.h>
 
 #include <memory>
+#include <optional>
 
 #include "mbsflow/error.hpp"
 #include "tight_coupling.hpp"
@@ -26,6 +27,15 @@ class CoordinatorOutput final : public TightOutput {
     w_.report_state(steps, t, snapshot);
   }
   void dense(long index, double t, Eigen::VectorXd& y) override { w_.report_dense(steps_, t, index, y); }
+  bool checkpoint_due() override { return w_.checkpoint_due(); }
+  // The point and the own bodies (the coordinator puts the global state together).
+  void checkpoint(const TightPoint& point) override {
+    std::vector<double> own;
+    w_.pack_own(own);
+    StateWriter out;
+    save_tight_point(out, point, Eigen::Map<const Eigen::VectorXd>(own.data(), static_cast<Eigen::Index>(own.size())));
+    w_.send_checkpoint(out.take());
+  }
   long steps() const { return steps_; }
   double t() const { return t_; }
 
@@ -49,10 +59,20 @@ Outcome run_tight(Session& s, WorkerIo& io, zmq::context_t& ctx, zmq::socket_t& 
   CoordinatorOutput output(w);
   std::string failure;
   TightCounts counts;
+  std::optional<TightPoint> resumed;
+  if (!s.resume.empty()) {  // the coordinator's checkpoint: the point and the global state
+    StateReader in(s.resume, "the coordinator's checkpoint");
+    Eigen::VectorXd y;
+    resumed = read_tight_point(in, 13 * static_cast<Eigen::Index>(s.model.bodies.size()), y);
+    const StateLayout global{static_cast<Eigen::Index>(s.model.bodies.size())};
+    for (Part* p : parts)
+      if (p) partitioned::scatter(y, global, *p);
+    if (s.o.method == Method::rk4) w.exchange.start_at(resumed->steps);  // DOPRI5 numbers its attempts from 0 again
+  }
   // A proxy waits on its thread (see RemoteInputs): one thread per local submodel at least.
   tbb::task_arena arena(std::max(threads > 0 ? threads : tbb::info::default_concurrency(), static_cast<int>(w.mine.size())));
   try {
-    arena.execute([&] { counts = run_tight_coupling({s.d, parts, s.o, w.exchange, output}); });
+    arena.execute([&] { counts = run_tight_coupling({s.d, parts, s.o, w.exchange, output, false, nullptr, resumed ? &*resumed : nullptr}); });
   } catch (const std::exception& e) {
     failure = error_text(e);
   }

@@ -40,15 +40,26 @@ TEST_CASE("kill -9 at random moments then resume: the results file is bit for bi
   int killed = 0, tries = 0;
   struct Case {
     std::string model, t_end, method, threads;
+    std::vector<std::string> more;
   };
   // RK4 and DOPRI5 with the whole model in one stepper (1 thread) and cut into submodels
-  // (2); the implicit methods (whole) on a shorter chain, each run a second or two.
-  const std::vector<Case> cases{{"chain.json", "2", "rk4", "1"},    {"chain.json", "2", "rk4", "2"},
-                                {"chain.json", "2", "dopri5", "1"}, {"chain.json", "2", "dopri5", "2"},
-                                {"short.json", "1", "colloc", "1"}, {"short.json", "2", "tirk", "2"}};
+  // (2); the implicit methods (whole) on a shorter chain, each run a second or two;
+  // loosely coupled, with a fixed and with an adaptive macro step; on worker processes.
+  const std::vector<Case> cases{
+      {"chain.json", "2", "rk4", "1", {}},
+      {"chain.json", "2", "rk4", "2", {}},
+      {"chain.json", "2", "dopri5", "1", {}},
+      {"chain.json", "2", "dopri5", "2", {}},
+      {"short.json", "1", "colloc", "1", {}},
+      {"short.json", "2", "tirk", "2", {}},
+      {"chain.json", "2", "rk4", "2", {"--coupling", "loose", "--partitions", "3", "--submodel-methods", "rk4,dopri5,rk4"}},
+      {"chain.json", "2", "rk4", "1", {"--processes", "2"}},
+      {"chain.json", "2", "dopri5", "1", {"--processes", "2", "--partitions", "3"}},
+      {"chain.json", "2", "rk4", "2", {"--coupling", "loose", "--partitions", "2", "--coupling-tol", "1e-9"}}};
   for (const Case& c : cases) {
-    const std::vector<std::string> args{"run", c.model, "--t-end", c.t_end, "--output-interval", "0.02", "--method",
-                                        c.method, "--threads", c.threads, "-q"};
+    std::vector<std::string> args{"run", c.model, "--t-end", c.t_end, "--output-interval", "0.02", "--method",
+                                  c.method, "--threads", c.threads, "-q"};
+    args.insert(args.end(), c.more.begin(), c.more.end());
     std::string line;
     for (std::size_t i = 1; i < args.size(); ++i) line += args[i] + " ";
     REQUIRE(run("run " + line + "-o ref.h5", d.string()).code == 0);
@@ -108,10 +119,8 @@ TEST_CASE("damaged checkpoints, replaced results files and misuse are refused wi
   CHECK_THAT(run("run --resume a.h5.ckpt --t-end 5", d.string()).err, Catch::Contains("give no --t-end"));
   CHECK_THAT(run("run", d.string()).err, Catch::Contains("give a MODEL file, or --resume CHECKPOINT"));
   CHECK_THAT(run("run chain.json --checkpoint-every 1", d.string()).err, Catch::Contains("give -o FILE"));
-  CHECK_THAT(run("run chain.json -o c.h5 --checkpoint-every 1 --coupling loose --partitions 2", d.string()).err,
-             Catch::Contains("not yet written for loosely coupled runs"));
-  CHECK_THAT(run("run chain.json -o c.h5 --checkpoint-every 1 --processes 2", d.string()).err,
-             Catch::Contains("not yet written for runs on worker processes"));
+  CHECK_THAT(run("run chain.json -o c.h5 --checkpoint-every 1 --processes 2 --coupling loose", d.string()).err,
+             Catch::Contains("not yet written for loosely coupled runs on worker processes"));
   CHECK(!fs::exists(d / "c.h5"));  // refused before anything was written
   fs::remove_all(d.parent_path());
 }

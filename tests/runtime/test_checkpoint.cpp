@@ -1,11 +1,15 @@
 // Checkpoints: a run resumed from any of its checkpoints ends bit for bit as the run that
 // was never interrupted, whichever loop wrote the checkpoint (one stepper, or submodels on
-// threads) and whatever partition the resumed run has; a damaged state is refused.
+// threads) and whatever partition the resumed run has; a loosely coupled run resumed with
+// its partition ends as it would have too; a damaged state is refused.
 #include <catch2/catch.hpp>
+
+#include <algorithm>
 
 #include "mbsflow/error.hpp"
 #include "mbsflow/graph/generators.hpp"
 #include "mbsflow/graph/stable_step.hpp"
+#include "mbsflow/runtime/loose_coupling.hpp"
 #include "mbsflow/runtime/run.hpp"
 #include "memory_sink.hpp"
 
@@ -114,12 +118,101 @@ TEST_CASE("a damaged or foreign checkpoint state is refused before the run start
   RunPlan p = plan_for(other, 0, 1);
   p.options.checkpoint = &c;
   CHECK_THROWS_WITH(run(other, p, nullptr), Catch::Contains("checkpoint y: a vector of"));
-  // Checkpoints are refused where they are not written yet, before anything runs.
-  RunPlan loose = plan_for(m, 2, 1);
+  // A loosely coupled run's numbers depend on its partition: resumed with another, refused.
+  Model rk4 = chain_model(Method::rk4);
+  RunPlan loose = plan_for(rk4, 3, 1);
   loose.loose = LooseOptions{};
-  loose.loose->macro_step = 4 * *m.simulation.step;
+  loose.loose->macro_step = 4 * *rk4.simulation.step;
+  states.clear();
   loose.options.checkpoint = &write;
-  CHECK_THROWS_WITH(run(m, loose, nullptr), Catch::Contains("not yet written for loosely coupled runs"));
+  run(rk4, loose, nullptr);
+  REQUIRE(!states.empty());
+  c.resume = states.back();
+  RunPlan other_cut = plan_for(rk4, 2, 1);
+  other_cut.loose = loose.loose;
+  other_cut.options.checkpoint = &c;
+  CHECK_THROWS_WITH(run(rk4, other_cut, nullptr), Catch::Contains("cut into 3 submodels, not 2"));
+  RunPlan tight = plan_for(rk4, 3, 1);
+  tight.options.checkpoint = &c;
+  CHECK_THROWS_WITH(run(rk4, tight, nullptr), Catch::Contains("checkpoint y"));
+}
+
+namespace {
+
+bool same_records(const std::vector<CouplingRecord>& a, const std::vector<CouplingRecord>& b) {
+  return std::equal(a.begin(), a.end(), b.begin(), b.end(), [](const CouplingRecord& x, const CouplingRecord& y) {
+    return x.index == y.index && x.t_start == y.t_start && x.t_end == y.t_end && x.position_error == y.position_error &&
+           x.velocity_error == y.velocity_error && x.lag == y.lag;
+  });
+}
+
+}  // namespace
+
+TEST_CASE("a loosely coupled run resumed from any of its checkpoints ends bit for bit as the uninterrupted one",
+          "[runtime][checkpoint][loose]") {
+  Model m = chain_model(Method::rk4);
+  m.simulation.t_end = m.simulation.t_start + 96 * *m.simulation.step;
+  const double H = 4 * *m.simulation.step;
+  struct Case {
+    std::string name;
+    int submodels;
+    LooseOptions loose;
+  };
+  std::vector<Case> cases;
+  auto add = [&](std::string name, int k, auto set) {
+    LooseOptions lo;
+    lo.macro_step = H;
+    lo.threads = 2;
+    set(lo);
+    cases.push_back({std::move(name), k, lo});
+  };
+  add("rk4 with the automatic overlap", 3, [](LooseOptions&) {});
+  add("quadratic extrapolation without overlap", 4, [](LooseOptions& lo) { lo.extrapolation = 2, lo.overlap = 0.0; });
+  add("a method per submodel", 3, [](LooseOptions& lo) { lo.methods = {Method::dopri5, Method::rk4, Method::colloc}; });
+  add("an exact lag of 1 macro step", 3, [&](LooseOptions& lo) {
+    lo.max_lag = 1, lo.exact_lag = true, lo.overlap = 0.0;
+    lo.macro_step = *m.simulation.step;  // stable with old neighbour values
+  });
+  add("an adaptive macro step", 3, [](LooseOptions& lo) { lo.coupling_tol = 1e-9; });
+  for (const Case& c : cases) {
+    INFO(c.name);
+    RunPlan plan = plan_for(m, c.submodels, 2);
+    plan.loose = c.loose;
+    test::MemorySink reference;
+    LooseStats ref_stats;
+    const RunSummary ref = run_loose(m, *plan.partition, plan.options, c.loose, &reference, &ref_stats);
+    REQUIRE(reference.states.size() > 8);
+    REQUIRE(!reference.coupling.empty());
+    if (c.loose.coupling_tol > 0.0) CHECK(ref_stats.rejected > 0);  // macro steps taken again, kept across a resume
+    std::vector<std::vector<std::uint8_t>> states;
+    Checkpointing write;
+    write.every_s = 1e-12;  // after every flow-graph run (adaptive: every macro step)
+    write.write = [&](std::vector<std::uint8_t>&& s) { states.push_back(std::move(s)); };
+    plan.options.checkpoint = &write;
+    test::MemorySink full;
+    run(m, plan, &full);
+    CHECK(test::same_snapshots(full, reference));
+    CHECK(same_records(full.coupling, reference.coupling));
+    REQUIRE(states.size() >= 4);
+    for (std::size_t i : {std::size_t{0}, states.size() / 2, states.size() - 1}) {
+      INFO("resumed from checkpoint " << i << " of " << states.size());
+      Checkpointing resume;
+      resume.resume = states[i];
+      resume.resume_from = "checkpoint " + std::to_string(i);
+      RunPlan again = plan;
+      again.options.checkpoint = &resume;
+      test::MemorySink sink = full;
+      LooseStats stats;
+      const RunSummary r = run_loose(m, *again.partition, again.options, c.loose, &sink, &stats);
+      CHECK(test::same_snapshots(sink, reference));
+      CHECK(same_records(sink.coupling, reference.coupling));
+      CHECK(r.final_state == ref.final_state);
+      CHECK(r.steps == ref.steps);
+      CHECK(r.evaluations == ref.evaluations);
+      CHECK(stats.rejected == ref_stats.rejected);
+      CHECK(r.resumed_at.has_value());
+    }
+  }
 }
 
 TEST_CASE("colloc and tirk resumed from any step end bit for bit as the uninterrupted run with every linear solver",
