@@ -520,7 +520,7 @@ void add_run_options(CLI::App* sub, RunArgs& args) {
       ->check(CLI::Range(0, 2))
       ->capture_default_str();
   sub->add_option("--checkpoint-every", a->checkpoint_every,
-                  "Write a checkpoint every S s of wall-clock time (between steps or macro steps; any method; tight or loose coupling on threads, tight on worker processes), to "
+                  "Write a checkpoint every S s of wall-clock time (between steps or macro steps; any method and coupling, on threads or worker processes), to "
                   "resume with --resume after a crash or kill")
       ->check(CLI::PositiveNumber);
   sub->add_option("--checkpoint", a->checkpoint, "The checkpoint file (default: the results file's name + .ckpt)");

@@ -219,16 +219,22 @@ json setup_message(const std::string& model_json, const Decomposition& d, const 
   return j;
 }
 
-// Checkpoints of a tightly coupled run on workers (docs/cluster.md). Every worker's loop
+// Checkpoints of a run on workers (docs/cluster.md). Every worker's loop
 // has the same checkpoint opportunities, numbered alike; the coordinator asks for one a
 // little ahead of where they are, each worker sends its state when it gets there (or says
 // that it is past it: then a later one is asked for), and once every worker's state of
 // that opportunity is in, so are the snapshots before it, and none after: the results
-// file is synced and the checkpoint written, in the format of a run on threads (the
-// point and the global state), so that it goes on with workers or threads.
+// file is synced and the checkpoint written. Tight coupling: in the format of a run on
+// threads (the point and the global state), so that it goes on with workers or threads.
+// Loose coupling ("loose cluster"): the time, the submodels' workers, the coupling
+// records so far and each worker's state as it sent it (its position and submodels), to
+// go on with the same workers.
 class ClusterCheckpoints {
  public:
-  ClusterCheckpoints(const RunOptions& o, std::size_t workers) : o_(o), timer_(o.checkpoint), states_(workers) {}
+  // loose: the run's merged coupling records (null: tight coupling).
+  ClusterCheckpoints(const RunOptions& o, std::size_t workers, const std::vector<int>& worker_of,
+                     const loose::CouplingLog* loose)
+      : o_(o), timer_(o.checkpoint), states_(workers), worker_of_(worker_of), loose_(loose) {}
 
   // Asks for a checkpoint when one is due and none is under way.
   void poll(Coordinator& co) {
@@ -244,6 +250,7 @@ class ClusterCheckpoints {
     const auto* bytes = static_cast<const std::uint8_t*>(payload.data());
     states_[w].assign(bytes, bytes + payload.size());
     if (got_ < states_.size()) return;
+    if (loose_) return write_loose(co, sink, out);
     StateWriter out_state = checkpoint_head("tight", o_.method, sink, out);
     Eigen::VectorXd y = whole.initial_state(), own;
     std::optional<TightPoint> point;
@@ -262,6 +269,25 @@ class ClusterCheckpoints {
   }
 
  private:
+  void write_loose(Coordinator& co, ResultSink* sink, const RunSummary& out) {
+    StateWriter w = checkpoint_head("loose cluster", o_.method, sink, out);
+    double t = 0.0;
+    for (std::size_t v = 0; v < states_.size(); ++v) {
+      StateReader in(states_[v], co.who(v) + "'s checkpoint");
+      const double tv = in.real();
+      if (v > 0 && tv != t) throw RunError(co.who(v) + " sent the state of another macro step for a checkpoint");
+      t = tv;
+    }
+    w.real(t);
+    w.integer(static_cast<std::int64_t>(worker_of_.size()));
+    for (int v : worker_of_) w.integer(v);
+    loose_->save(w);
+    w.integer(static_cast<std::int64_t>(states_.size()));
+    for (const auto& s : states_) w.bytes(s);
+    o_.checkpoint->write(w.take());
+    at_ = -1;
+  }
+
   void ask(Coordinator& co, long at) {
     at_ = at;
     got_ = 0;
@@ -273,7 +299,35 @@ class ClusterCheckpoints {
   long at_ = -1, seen_ = 0;  // the opportunity asked for (-1: none); the latest a worker said it was at
   std::size_t got_ = 0;
   std::vector<std::vector<std::uint8_t>> states_;
+  const std::vector<int>& worker_of_;
+  const loose::CouplingLog* loose_;
 };
+
+// A checkpoint of a run on workers to go on from: out gets how far the results go, and
+// the returned states are what each worker gets in its set-up (hex); `results` the
+// results file's id.
+std::vector<std::string> resume_states(StateReader& in, const RunOptions& o, const MultibodySystem& whole,
+                                       const std::vector<int>& worker_of, std::size_t workers,
+                                       loose::CouplingLog* loose, Eigen::VectorXd& y, RunSummary& out, std::string& results) {
+  if (!loose) {
+    results = read_checkpoint_head(in, "tight", o.method, out);
+    const TightPoint point = read_tight_point(in, whole.dimension(), y);
+    out.resumed_at = point.t;
+    StateWriter w;
+    save_tight_point(w, point, y);
+    return std::vector<std::string>(workers, wire::hex(w.take()));
+  }
+  results = read_checkpoint_head(in, "loose cluster", o.method, out);
+  out.resumed_at = in.real();
+  std::vector<int> was(static_cast<std::size_t>(in.integer(0, INT32_MAX)));
+  for (int& v : was) v = static_cast<int>(in.integer(0, INT32_MAX));
+  if (was != worker_of) in.fail("it is of a loosely coupled run with other submodels or workers; resume it with the same ones");
+  loose->restore(in);
+  if (in.integer(0, INT32_MAX) != static_cast<std::int64_t>(workers)) in.fail("it is of a run on another number of workers");
+  std::vector<std::string> states;
+  for (std::size_t v = 0; v < workers; ++v) states.push_back(wire::hex(in.bytes()));
+  return states;
+}
 
 }  // namespace
 
@@ -311,17 +365,14 @@ RunSummary run_cluster(const Model& model, const std::string& model_json, const 
   // file is reopened once they are in.
   const Checkpointing* c = o.checkpoint;
   std::optional<StateReader> resumed;
-  std::string resume_hex, results_id;
+  std::vector<std::string> resume_hex(peers.size());
+  std::string results_id;
+  loose::CouplingLog* log = coupling.loose ? &coupling_log : nullptr;
   if (c && !c->resume.empty()) {
     resumed.emplace(c->resume, c->resume_from);
-    results_id = read_checkpoint_head(*resumed, "tight", o.method, out);
-    const TightPoint point = read_tight_point(*resumed, whole.dimension(), y);
-    out.resumed_at = point.t;
-    StateWriter w;
-    save_tight_point(w, point, y);
-    resume_hex = wire::hex(w.take());
+    resume_hex = resume_states(*resumed, o, whole, worker_of, peers.size(), log, y, out, results_id);
   }
-  ClusterCheckpoints checkpoints(o, peers.size());
+  ClusterCheckpoints checkpoints(o, peers.size(), worker_of, log);
   run_with_sink(sink, out, [&] {
     try {
       for (std::size_t w = 0; w < peers.size(); ++w)
@@ -337,7 +388,7 @@ RunSummary run_cluster(const Model& model, const std::string& model_json, const 
       co.gather("hello_ok", cluster.timeouts.connect_s, [](std::size_t, const json&) {});
       for (std::size_t w = 0; w < peers.size(); ++w)
         co.send(w, setup_message(model_json, d, worker_of, w, cluster.workers[w], o, co.results_address(), coupling,
-                                 co.security(), resume_hex));
+                                 co.security(), resume_hex[w]));
       co.gather("ready", 0.0, [&](std::size_t w, const json& j) { peers[w].data_address = wire::text(j, "data_address"); });
       json names = json::array(), addresses = json::array();
       for (const Peer& p : peers) {

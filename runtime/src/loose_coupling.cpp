@@ -87,22 +87,15 @@ struct LooseCheckpoint {
   loose::LooseRounds& rounds;
   loose::CouplingLog& log;
   LooseStats& st;
-  long done = 0, next_output = 1;  // macro steps; the snapshot to come
-  loose::AdaptiveWalk walk;
+  loose::LoosePosition at;
 
   void save(const RunOptions& o, ResultSink* sink, const RunSummary& out) {
     StateWriter w = checkpoint_head("loose", o.method, sink, out);
     rounds.drain(log);  // records merge by their macro-step end: when does not matter
     w.integer(static_cast<std::int64_t>(parts.size()));
-    w.integer(done);
-    w.integer(next_output);
-    w.integer(walk.m);
-    w.integer(walk.attempt);
-    w.real(walk.t);
-    w.real(walk.H);
+    loose::save_position(w, at, grid);
     w.integer(st.rejected);
     w.integer(st.over_tolerance);
-    grid.save(w);
     log.save(w);
     for (const auto& p : parts) p->save(w);
     o.checkpoint->write(w.take());
@@ -114,18 +107,12 @@ struct LooseCheckpoint {
     const auto submodels = in.integer(1, INT32_MAX);
     if (submodels != static_cast<std::int64_t>(parts.size()))
       in.fail("it is of a run cut into " + std::to_string(submodels) + " submodels, not " + std::to_string(parts.size()));
-    done = in.integer(0, INT64_MAX / 2);
-    next_output = in.integer(1, INT64_MAX / 2);
-    walk.m = in.integer(0, INT64_MAX / 2);
-    walk.attempt = in.integer(0, INT64_MAX / 2);
-    walk.t = in.real();
-    walk.H = in.real();
+    loose::restore_position(in, at, grid);
     st.rejected = in.integer(0, INT64_MAX);
     st.over_tolerance = in.integer(0, INT64_MAX);
-    grid.restore(in);
     log.restore(in);
     for (auto& p : parts) p->restore(in);
-    out.resumed_at = grid.end(done);
+    out.resumed_at = grid.end(at.done);
     resume_results(in, c, sink, whole, results, out);
   }
 };
@@ -152,7 +139,7 @@ RunSummary run_loose(const Model& model, const Decomposition& cut, const RunOpti
   loose::LooseRounds rounds(model, d, o, lo, parts, grid, grid.steps_per_run());
   rounds.keep_snapshots = sink != nullptr;
   loose::CouplingLog log;
-  LooseCheckpoint point{parts, grid, rounds, log, st, 0, 1, loose::adaptive_start(o, lo)};
+  LooseCheckpoint point{parts, grid, rounds, log, st, {0, 1, loose::adaptive_start(o, lo)}};
   const bool resume = o.checkpoint && !o.checkpoint->resume.empty();
   if (resume)
     point.restore(*o.checkpoint, o, sink, whole, out);
@@ -162,9 +149,9 @@ RunSummary run_loose(const Model& model, const Decomposition& cut, const RunOpti
   // At macro-step end m: the snapshots up to it (the submodels kept them from their dense
   // output), the stop request, the progress, a checkpoint if one is due.
   auto at_end = [&](long m) {
-    point.done = m;
+    point.at.done = m;
     const double t = grid.end(m);
-    for (long& k = point.next_output; sink && k <= grid.outputs() && loose::at_or_before(grid.output_time(k), t); ++k) {
+    for (long& k = point.at.next_output; sink && k <= grid.outputs() && loose::at_or_before(grid.output_time(k), t); ++k) {
       for (auto& p : parts) p->take_snapshot(k, global, y);
       emit(whole, sink, grid.output_time(k), y, out);
     }
@@ -182,7 +169,7 @@ RunSummary run_loose(const Model& model, const Decomposition& cut, const RunOpti
           for (auto& p : parts) p->start(o.t_start, lo.macro_step);
         }
         if (adaptive) {
-          loose::adaptive_macro_steps(o, lo, parts, rounds, grid, st, point.walk, at_end);
+          loose::adaptive_macro_steps(o, lo, parts, rounds, grid, st, point.at.walk, at_end);
         } else {
           loose::for_each_run(
               grid, loose::ends_kept(lo),
@@ -192,9 +179,9 @@ RunSummary run_loose(const Model& model, const Decomposition& cut, const RunOpti
                 at_end(m + n);
                 return true;
               },
-              point.done);
+              point.at.done);
         }
-        rounds.catch_up(point.done);  // the coupling errors of the last macro steps
+        rounds.catch_up(point.at.done);  // the coupling errors of the last macro steps
       },
       [&] {
         rounds.drain(log);

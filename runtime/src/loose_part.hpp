@@ -64,6 +64,12 @@ class LoosePart {
   // The own state at macro-step end `index`, for the neighbours in this process (any thread).
   void publish(long index, double t);
   long published() const;
+  // f(index, state) for every published end kept, oldest first.
+  template <class F>
+  void each_published(F f) const {
+    std::lock_guard lock(board_mutex_);
+    for (const Published& p : board_) f(p.index, p.x);
+  }
   // Bodies of the published end `index` packed into out, and its time.
   double pack_published(long index, const std::vector<int>& bodies, double* out) const;
 

@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cstdint>
 #include <cmath>
 #include <functional>
 #include <memory>
@@ -104,6 +105,33 @@ struct AdaptiveWalk {
 };
 
 inline AdaptiveWalk adaptive_start(const RunOptions& o, const LooseOptions& lo) { return {0, 0, o.t_start, lo.macro_step}; }
+
+// Where a loose run's loop is (in one process or a worker): macro steps done, the next
+// snapshot, the adaptive walk. A checkpoint keeps it with the macro-step ends.
+struct LoosePosition {
+  long done = 0, next_output = 1;
+  AdaptiveWalk walk;
+};
+
+inline void save_position(StateWriter& w, const LoosePosition& p, const MacroGrid& grid) {
+  w.integer(p.done);
+  w.integer(p.next_output);
+  w.integer(p.walk.m);
+  w.integer(p.walk.attempt);
+  w.real(p.walk.t);
+  w.real(p.walk.H);
+  grid.save(w);
+}
+
+inline void restore_position(StateReader& in, LoosePosition& p, MacroGrid& grid) {
+  p.done = in.integer(0, INT64_MAX / 2);
+  p.next_output = in.integer(1, INT64_MAX / 2);
+  p.walk.m = in.integer(0, INT64_MAX / 2);
+  p.walk.attempt = in.integer(0, INT64_MAX / 2);
+  p.walk.t = in.real();
+  p.walk.H = in.real();
+  grid.restore(in);
+}
 
 // Takes the adaptive macro steps one at a time from `walk`: each is taken again from its
 // start with a shorter H while its coupling error is above the tolerance, down to

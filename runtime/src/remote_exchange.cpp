@@ -270,11 +270,13 @@ void RemoteExchange::take_upto(int p, int q, int s, long cap, const std::functio
   }
 }
 
-void RemoteExchange::send(int p, long n, int s) {
+void RemoteExchange::send(int p, long n, int s) { send(p, n, s, parts_[static_cast<std::size_t>(p)]->x[static_cast<std::size_t>(s)]); }
+
+void RemoteExchange::send(int p, long n, int s, const Eigen::VectorXd& x) {
   const partitioned::Part& me = *parts_[static_cast<std::size_t>(p)];
   for (const Outgoing& o : outgoing_[static_cast<std::size_t>(p)]) {
     zmq::message_t payload(o.bodies->size() * partitioned::body_numbers * sizeof(double));
-    partitioned::pack_bodies(me.system.layout(), me.x[static_cast<std::size_t>(s)], *o.bodies, payload.data());
+    partitioned::pack_bodies(me.system.layout(), x, *o.bodies, payload.data());
     wire::ExchangeHeader h;
     h.from = p;
     h.to = o.to;

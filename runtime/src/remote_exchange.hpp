@@ -65,6 +65,8 @@ class RemoteExchange final : public BoundaryExchange {
   // From local p's stage: its bodies of stage input s of step n to the remote submodels
   // that hold them as ghosts.
   void send(int p, long n, int s);
+  // The same from a state x of local p (a resumed loose run sends its kept macro-step ends again).
+  void send(int p, long n, int s, const Eigen::VectorXd& x);
 
   // Loose coupling's error control, before a macro step to end n is taken again: the
   // messages of stage input s of step n that were taken are forgotten, so that waiting

@@ -23,9 +23,6 @@ void check_plan(const Model& model, const RunPlan& plan) {
   } else if (plan.partition && !plan.loose) {
     tight_stages(o.method);  // a method whose stages the submodels exchange
   }
-  if (const Checkpointing* c = o.checkpoint; c && (c->every_s > 0.0 || !c->resume.empty()) && plan.cluster && plan.loose)
-    throw InputError("checkpoints are not yet written for loosely coupled runs on worker processes (--cluster, --processes): "
-                     "run it on threads, or tightly coupled");
 }
 
 namespace {

@@ -64,33 +64,57 @@ Outcome run_loose_part(Session& s, WorkerIo& io, zmq::context_t& ctx, zmq::socke
   };
 
   std::string failure;
-  for (int p : w.mine) lp[static_cast<std::size_t>(p)]->make_past(s.o.t_start, lo.macro_step);
-  for (int j = 1; j <= lo.extrapolation && failure.empty(); ++j)
-    if (!exchange_past(w, lp, j)) failure = w.exchange.why();
-  for (int p : w.mine) lp[static_cast<std::size_t>(p)]->start(s.o.t_start, lo.macro_step);
-  long done = 0, next_output = 1;  // macro steps; the snapshot to come
+  loose::LoosePosition at{0, 1, loose::adaptive_start(s.o, lo)};
+  if (!s.resume.empty()) {
+    // The coordinator's checkpoint: this worker's position and submodels. The ends they
+    // published that a remote neighbour may not have taken yet go out again (a neighbour
+    // takes each end once, so those it had are dropped).
+    try {
+      StateReader in(s.resume, "the coordinator's checkpoint");
+      (void)in.real();  // its time, for the coordinator
+      loose::restore_position(in, at, grid);
+      for (int p : w.mine) lp[static_cast<std::size_t>(p)]->restore(in);
+      if (!in.at_end()) in.fail("it holds more than this worker's state");
+    } catch (const std::exception& e) {
+      failure = error_text(e);
+    }
+    if (failure.empty())
+      for (int p : w.mine)
+        lp[static_cast<std::size_t>(p)]->each_published([&](long index, const Eigen::VectorXd& x) { w.exchange.send(p, index, 0, x); });
+  } else {
+    for (int p : w.mine) lp[static_cast<std::size_t>(p)]->make_past(s.o.t_start, lo.macro_step);
+    for (int j = 1; j <= lo.extrapolation && failure.empty(); ++j)
+      if (!exchange_past(w, lp, j)) failure = w.exchange.why();
+    for (int p : w.mine) lp[static_cast<std::size_t>(p)]->start(s.o.t_start, lo.macro_step);
+  }
+  long& done = at.done;  // macro steps
   Eigen::VectorXd y = Eigen::VectorXd::Zero(13 * static_cast<Eigen::Index>(s.model.bodies.size()));
   const StateLayout global{static_cast<Eigen::Index>(s.model.bodies.size())};
   // At macro-step end m: the coupling records, the snapshots the local submodels kept
-  // (projected already), the progress.
+  // (projected already), the progress, a checkpoint the coordinator asked for.
   auto at_end = [&](long m) {
     done = m;
     report_coupling();
-    for (; next_output <= grid.outputs() && loose::at_or_before(grid.output_time(next_output), grid.end(done));
-         ++next_output) {
-      for (int p : w.mine) lp[static_cast<std::size_t>(p)]->take_snapshot(next_output, global, y);
-      w.report_dense(grid.output_step(next_output), grid.output_time(next_output), next_output, y, false);
+    for (long& k = at.next_output; k <= grid.outputs() && loose::at_or_before(grid.output_time(k), grid.end(done)); ++k) {
+      for (int p : w.mine) lp[static_cast<std::size_t>(p)]->take_snapshot(k, global, y);
+      w.report_dense(grid.output_step(k), grid.output_time(k), k, y, false);
     }
     const long step = grid.tight_step(done);
     w.report_state(step, tight.time(step), -1);
+    if (grid.end(done) < s.o.t_end && w.checkpoint_due()) {
+      StateWriter out;
+      out.real(grid.end(done));
+      loose::save_position(out, at, grid);
+      for (int p : w.mine) lp[static_cast<std::size_t>(p)]->save(out);
+      w.send_checkpoint(out.take());
+    }
   };
   if (failure.empty() && adaptive) {
     // Every worker takes the same macro steps: the largest error over all decides.
     LooseStats st;
-    loose::AdaptiveWalk walk = loose::adaptive_start(s.o, lo);
     try {
       loose::adaptive_macro_steps(
-          s.o, lo, lp, rounds, grid, st, walk,
+          s.o, lo, lp, rounds, grid, st, at.walk,
           [&](long m) {
             if (const std::string why = w.check(grid.end(m)); !why.empty()) throw RunError(why);
             at_end(m);
@@ -101,13 +125,16 @@ Outcome run_loose_part(Session& s, WorkerIo& io, zmq::context_t& ctx, zmq::socke
       failure = error_text(e);
     }
   } else if (failure.empty()) {
-    loose::for_each_run(grid, loose::ends_kept(lo), [&](long m, int n) {
-      failure = rounds.run(m, n);
-      if (failure.empty()) failure = w.check(grid.end(m + n));
-      if (!failure.empty()) return false;
-      at_end(m + n);
-      return true;
-    });
+    loose::for_each_run(
+        grid, loose::ends_kept(lo),
+        [&](long m, int n) {
+          failure = rounds.run(m, n);
+          if (failure.empty()) failure = w.check(grid.end(m + n));
+          if (!failure.empty()) return false;
+          at_end(m + n);
+          return true;
+        },
+        done);
   }
   if (failure.empty()) {
     rounds.catch_up(done);  // the coupling errors of the last macro steps

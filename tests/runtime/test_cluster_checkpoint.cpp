@@ -1,11 +1,14 @@
 // Checkpoints of tightly coupled runs on worker processes (workers on threads of the test,
 // real ZeroMQ sockets): the coordinator's checkpoints hold the global state at a point
 // every worker reached, and a run resumed from any of them, on workers or on threads,
-// ends bit for bit as the uninterrupted run.
+// ends bit for bit as the uninterrupted run; a loosely coupled run's go on with the same
+// workers.
 #include <catch2/catch.hpp>
+#include <optional>
 
 #include "mbsflow/graph/generators.hpp"
 #include "mbsflow/io/model_writer.hpp"
+#include "mbsflow/runtime/loose_coupling.hpp"
 #include "mbsflow/runtime/run.hpp"
 #include "memory_sink.hpp"
 #include "thread_workers.hpp"
@@ -15,8 +18,9 @@ using namespace mbsflow::test;
 
 namespace {
 
-// A cluster run of m on two workers (three submodels), with `checkpoint` in its options.
-RunSummary on_workers(const Model& m, Checkpointing* checkpoint, MemorySink& sink) {
+// A cluster run of m on two workers (three submodels), with `checkpoint` in its options,
+// tightly or loosely coupled.
+RunSummary on_workers(const Model& m, Checkpointing* checkpoint, MemorySink& sink, std::optional<LooseOptions> loose = {}) {
   ThreadWorkers pool({"tcp://127.0.0.1:*", "tcp://127.0.0.1:*"});
   ClusterConfig c = cluster_of(pool.endpoints, "", "tcp://127.0.0.1:*");
   for (auto& w : c.workers) w.data_bind = "tcp://127.0.0.1:*";
@@ -27,6 +31,7 @@ RunSummary on_workers(const Model& m, Checkpointing* checkpoint, MemorySink& sin
   plan.partition = decompose(m, cluster_submodels(c));
   plan.cluster = c;
   plan.model_json = model_to_json(m);
+  plan.loose = loose;
   return run(m, plan, &sink);
 }
 
@@ -77,6 +82,54 @@ TEST_CASE("a run on workers resumed from any of its checkpoints on workers or th
       CHECK(same_snapshots(here, reference));
       CHECK(h.final_state == ref.final_state);
       CHECK(*h.resumed_at == *r.resumed_at);
+    }
+  }
+}
+
+TEST_CASE("a loosely coupled run on workers resumed from any of its checkpoints ends bit for bit as the uninterrupted one",
+          "[runtime][cluster][checkpoint][loose]") {
+  ChainParams chain;
+  chain.bodies = 120;
+  Model m = short_run(make_chain(chain), 400);
+  m.simulation.output_every = 20;
+  for (const double tol : {0.0, 1e-9}) {  // a fixed macro step; error control (all workers take the same ones)
+    INFO("coupling tolerance " << tol);
+    LooseOptions lo;
+    lo.macro_step = 4 * *m.simulation.step;
+    lo.coupling_tol = tol;
+    lo.methods = {Method::rk4, Method::dopri5, Method::rk4};
+    test::MemorySink reference;
+    RunPlan threads;
+    threads.options = options_from_model(m);
+    threads.partition = decompose(m, 3);
+    threads.loose = lo;
+    run(m, threads, &reference);
+    REQUIRE(reference.states.size() > 10);
+    REQUIRE(!reference.coupling.empty());
+
+    std::vector<std::vector<std::uint8_t>> states;
+    Checkpointing write;
+    write.every_s = 1e-12;
+    write.write = [&](std::vector<std::uint8_t>&& s) { states.push_back(std::move(s)); };
+    test::MemorySink full;
+    on_workers(m, &write, full, lo);
+    CHECK(same_snapshots(full, reference));
+    REQUIRE(states.size() >= 2);
+    for (std::size_t i : {std::size_t{0}, states.size() / 2, states.size() - 1}) {
+      INFO("checkpoint " << i << " of " << states.size());
+      Checkpointing resume;
+      resume.resume = states[i];
+      resume.resume_from = "checkpoint " + std::to_string(i);
+      test::MemorySink again = full;
+      const RunSummary r = on_workers(m, &resume, again, lo);
+      CHECK(same_snapshots(again, reference));
+      CHECK(again.coupling.size() == reference.coupling.size());
+      bool same_records = again.coupling.size() == reference.coupling.size();
+      for (std::size_t k = 0; same_records && k < again.coupling.size(); ++k)
+        same_records = again.coupling[k].position_error == reference.coupling[k].position_error &&
+                       again.coupling[k].t_end == reference.coupling[k].t_end;
+      CHECK(same_records);
+      CHECK(r.resumed_at.has_value());
     }
   }
 }
