@@ -1,5 +1,6 @@
 #pragma once
 // A sink that keeps every snapshot in memory, for tests.
+#include <algorithm>
 #include <string>
 #include <vector>
 
@@ -36,6 +37,14 @@ struct MemorySink : ResultSink {
 // The same times and bit for bit the same states.
 inline bool same_snapshots(const MemorySink& a, const MemorySink& b) {
   return a.times == b.times && a.states == b.states;
+}
+
+// The same coupling records, every field bit for bit.
+inline bool same_records(const std::vector<CouplingRecord>& a, const std::vector<CouplingRecord>& b) {
+  return std::equal(a.begin(), a.end(), b.begin(), b.end(), [](const CouplingRecord& x, const CouplingRecord& y) {
+    return x.index == y.index && x.t_start == y.t_start && x.t_end == y.t_end && x.position_error == y.position_error &&
+           x.velocity_error == y.velocity_error && x.lag == y.lag;
+  });
 }
 
 }  // namespace mbsflow::test

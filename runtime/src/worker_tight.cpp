@@ -62,9 +62,9 @@ Outcome run_tight(Session& s, WorkerIo& io, zmq::context_t& ctx, zmq::socket_t& 
   std::optional<TightPoint> resumed;
   if (!s.resume.empty()) {  // the coordinator's checkpoint: the point and the global state
     StateReader in(s.resume, "the coordinator's checkpoint");
-    Eigen::VectorXd y;
-    resumed = read_tight_point(in, 13 * static_cast<Eigen::Index>(s.model.bodies.size()), y);
     const StateLayout global{static_cast<Eigen::Index>(s.model.bodies.size())};
+    Eigen::VectorXd y;
+    resumed = read_tight_point(in, global.size(), y);
     for (Part* p : parts)
       if (p) partitioned::scatter(y, global, *p);
     if (s.o.method == Method::rk4) w.exchange.start_at(resumed->steps);  // DOPRI5 numbers its attempts from 0 again

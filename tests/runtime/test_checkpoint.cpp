@@ -4,8 +4,6 @@
 // its partition ends as it would have too; a damaged state is refused.
 #include <catch2/catch.hpp>
 
-#include <algorithm>
-
 #include "mbsflow/error.hpp"
 #include "mbsflow/graph/generators.hpp"
 #include "mbsflow/graph/stable_step.hpp"
@@ -137,17 +135,6 @@ TEST_CASE("a damaged or foreign checkpoint state is refused before the run start
   CHECK_THROWS_WITH(run(rk4, tight, nullptr), Catch::Contains("checkpoint y"));
 }
 
-namespace {
-
-bool same_records(const std::vector<CouplingRecord>& a, const std::vector<CouplingRecord>& b) {
-  return std::equal(a.begin(), a.end(), b.begin(), b.end(), [](const CouplingRecord& x, const CouplingRecord& y) {
-    return x.index == y.index && x.t_start == y.t_start && x.t_end == y.t_end && x.position_error == y.position_error &&
-           x.velocity_error == y.velocity_error && x.lag == y.lag;
-  });
-}
-
-}  // namespace
-
 TEST_CASE("a loosely coupled run resumed from any of its checkpoints ends bit for bit as the uninterrupted one",
           "[runtime][checkpoint][loose]") {
   Model m = chain_model(Method::rk4);
@@ -192,7 +179,7 @@ TEST_CASE("a loosely coupled run resumed from any of its checkpoints ends bit fo
     test::MemorySink full;
     run(m, plan, &full);
     CHECK(test::same_snapshots(full, reference));
-    CHECK(same_records(full.coupling, reference.coupling));
+    CHECK(test::same_records(full.coupling, reference.coupling));
     REQUIRE(states.size() >= 4);
     for (std::size_t i : {std::size_t{0}, states.size() / 2, states.size() - 1}) {
       INFO("resumed from checkpoint " << i << " of " << states.size());
@@ -205,7 +192,7 @@ TEST_CASE("a loosely coupled run resumed from any of its checkpoints ends bit fo
       LooseStats stats;
       const RunSummary r = run_loose(m, *again.partition, again.options, c.loose, &sink, &stats);
       CHECK(test::same_snapshots(sink, reference));
-      CHECK(same_records(sink.coupling, reference.coupling));
+      CHECK(test::same_records(sink.coupling, reference.coupling));
       CHECK(r.final_state == ref.final_state);
       CHECK(r.steps == ref.steps);
       CHECK(r.evaluations == ref.evaluations);

@@ -124,11 +124,7 @@ TEST_CASE("a loosely coupled run on workers resumed from any of its checkpoints 
       const RunSummary r = on_workers(m, &resume, again, lo);
       CHECK(same_snapshots(again, reference));
       CHECK(again.coupling.size() == reference.coupling.size());
-      bool same_records = again.coupling.size() == reference.coupling.size();
-      for (std::size_t k = 0; same_records && k < again.coupling.size(); ++k)
-        same_records = again.coupling[k].position_error == reference.coupling[k].position_error &&
-                       again.coupling[k].t_end == reference.coupling[k].t_end;
-      CHECK(same_records);
+      CHECK(same_records(again.coupling, reference.coupling));
       CHECK(r.resumed_at.has_value());
     }
   }
