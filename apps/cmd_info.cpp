@@ -1,4 +1,6 @@
 // mbsflow info FILE.h5: what a results file holds.
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <memory>
 
@@ -15,13 +17,45 @@ std::string shape_text(const std::vector<std::uint64_t>& s) {
   return out;
 }
 
+// The results of mbsflow ode: problem, method, solution points and the steps tried.
+std::string unit_of(const ResultsFile& r, const char* dataset) {
+  return r.dataset_string_attribute(dataset, "units").value_or("?");
+}
+
+int info_ode(const ResultsFile& r) {
+  const std::vector<double> t = r.time();
+  auto text = [&](const char* name) { return r.string_attribute(name).value_or("?"); };
+  auto number = [&](const char* name) { return r.number_attribute(name).value_or(std::nan("")); };
+  std::printf("file          %s (%ju bytes)\n", r.path().c_str(), r.size_bytes());
+  std::printf("problem       %s: %.0f equations (mbsflow ode)\n", text("problem").c_str(), number("n"));
+  const std::string tableau = r.string_attribute("tableau").value_or("");
+  std::printf("method        %s%s%s, %s iteration, order %.0f, tol %g\n", text("method").c_str(), tableau.empty() ? "" : " ",
+              tableau.c_str(), text("iteration").c_str(), number("order"), number("tol"));
+  if (t.empty())
+    std::printf("solution      no points\n");
+  else
+    std::printf("solution      %zu points, t = %.6g .. %.6g, components kept %ju\n", t.size(), t.front(), t.back(),
+                r.shape("/solution/values").back());
+  if (r.has("/solution/error")) std::printf("max error     %.3e (against the exact solution)\n", number("max_error"));
+  const std::vector<double> taken = r.read("/steps/taken");
+  const auto rejected = std::count(taken.begin(), taken.end(), 0.0);
+  std::printf("steps         %zu tried, %td rejected, %.0f rhs evaluations, %.3f s wall\n", taken.size(), rejected,
+              number("rhs_evaluations"), number("wall_seconds"));
+  std::printf("datasets      /solution/{time,components,values%s}, /steps/{t,tau,taken,error,...}\n",
+              r.has("/solution/error") ? ",error" : "");
+  std::printf("written by    mbsflow %s\n", text("mbsflow_version").c_str());
+  std::printf("command line  %s\n", text("command").c_str());
+  return 0;
+}
+
 int info(const std::string& path) {
   const ResultsFile r(path);
+  if (r.ode()) return info_ode(r);
   const std::vector<double> t = r.time();
   auto text = [&](const char* name) { return r.string_attribute(name).value_or("?"); };
   auto number = [&](const char* name) { return r.number_attribute(name).value_or(std::nan("")); };
   std::printf("file          %s (%ju bytes)\n", path.c_str(), r.size_bytes());
-  const std::size_t joints = r.joint_names().size();
+  const std::size_t joints = r.has(joint_force_dataset) ? r.joint_names().size() : 0;
   std::printf("model         %s: %zu bodies%s\n", text("model_name").c_str(), r.body_names().size(),
               joints ? (", " + std::to_string(joints) + " joints with forces").c_str() : "");
   std::printf("method        %s, step %.6g s, output every %g\n", text("method").c_str(), number("step"),
@@ -33,10 +67,11 @@ int info(const std::string& path) {
     std::printf("snapshots     %zu, t = %.6g .. %.6g s%s\n", t.size(), t.front(), t.back(),
                 t.back() < number("t_end") ? " (run ended early)" : "");
   std::printf("fields        %s\n", text("fields").c_str());
-  for (const BodyField& f : body_fields)
-    if (r.has(f.dataset)) std::printf("  %-24s %s\n", f.dataset, shape_text(r.shape(f.dataset)).c_str());
-  for (const char* d : {energy_dataset, joint_force_dataset, motor_effort_dataset})
-    if (r.has(d)) std::printf("  %-24s %s\n", d, shape_text(r.shape(d)).c_str());
+  auto dataset = [&](const char* d) {
+    if (r.has(d)) std::printf("  %-24s %-16s [%s]\n", d, shape_text(r.shape(d)).c_str(), unit_of(r, d).c_str());
+  };
+  for (const BodyField& f : body_fields) dataset(f.dataset);
+  for (const char* d : {energy_dataset, joint_force_dataset, motor_effort_dataset, joint_attachment_dataset}) dataset(d);
   std::printf("written by    mbsflow %s\n", text("mbsflow_version").c_str());
   std::printf("command line  %s\n", text("command_line").c_str());
   return 0;

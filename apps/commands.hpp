@@ -18,6 +18,8 @@ Action add_export(CLI::App& app);
 Action add_worker(CLI::App& app);
 Action add_ode(CLI::App& app);
 Action add_keygen(CLI::App& app);
+Action add_view(CLI::App& app);
+Action add_plot(CLI::App& app);
 
 // How the CLI names a setting that a library message mentions (mbsflow/error.hpp): its
 // flag, "--step 1e-05"; the per-submodel methods are --submodel-methods.

@@ -22,6 +22,8 @@ int main(int argc, char** argv) {
   add(mbsflow::cli::add_partition);
   add(mbsflow::cli::add_info);
   add(mbsflow::cli::add_export);
+  add(mbsflow::cli::add_plot);
+  add(mbsflow::cli::add_view);
   add(mbsflow::cli::add_bench);
   add(mbsflow::cli::add_worker);
   add(mbsflow::cli::add_ode);

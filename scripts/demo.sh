@@ -13,8 +13,10 @@ mkdir -p "$out"
 "$exe" generate chain --bodies 200 -o "$out/chain.json"
 "$exe" run "$out/chain.json" --t-end 2 --output "$out/chain.h5"
 "$exe" info "$out/chain.h5"
-/usr/bin/python3 scripts/plot.py "$out/chain.h5" -o "$out/chain.png" >/dev/null
+"$exe" plot "$out/chain.h5" -o "$out/chain.png" >/dev/null
+"$exe" view "$out/chain.h5" -o "$out/chain.html" 2>/dev/null
 echo
 echo "demo: model    $out/chain.json"
 echo "demo: results  $out/chain.h5 (open $out/chain.xdmf in ParaView; mbsflow export $out/chain.h5 --csv DIR for CSV)"
 echo "demo: plot     $out/chain.png"
+echo "demo: motion   $out/chain.html (open it in a browser: play, seek, orbit)"

@@ -2,12 +2,17 @@
 """Plot an mbsflow results file: body trajectories and energies, or (for a file from
 mbsflow ode) the solution, its error and the step-size diagram (seed 001, figs. 5-7).
 
-usage: scripts/plot.py FILE.h5 [--bodies a,b,...] [-o plot.png]
+usage: scripts/plot.py FILE.h5 [--bodies a,b,...] [-o plot.png] [--follow [--interval S]]
+
+A file that a run is still writing is read in HDF5's SWMR mode; --follow redraws the
+picture every S seconds while the run goes, and once more when it has ended.
 
 Uses Debian's python3-h5py and python3-matplotlib (run it with /usr/bin/python3).
 """
 import argparse
+import os
 import sys
+import time
 
 import h5py
 import matplotlib
@@ -70,18 +75,90 @@ def plot_ode(f, path, out):
     fig.savefig(out, dpi=110)
 
 
-def plot_joints(f, t, ax):
+def plot_joints(f, t, rows, ax):
     """Reaction force magnitude of up to 5 joints (written with --fields joint_force),
     and the effort of the motors among them."""
     force = f["joints/force"]
     joint_names = [text(n) for n in f["joints/names"][:]]
-    effort = f["joints/motor_effort"][:, :, 0] if "joints/motor_effort" in f else None
+    effort = f["joints/motor_effort"][:rows, :, 0] if "joints/motor_effort" in f else None
     for j in pick_bodies(joint_names, []):
-        (line,) = ax.plot(t, (force[:, j, :3] ** 2).sum(axis=1) ** 0.5, label=f"{joint_names[j]} |F|")
+        (line,) = ax.plot(t, (force[:rows, j, :3] ** 2).sum(axis=1) ** 0.5, label=f"{joint_names[j]} |F|")
         if effort is not None and (effort[:, j] != 0).any():
             ax.plot(t, effort[:, j], "--", color=line.get_color(), label=f"{joint_names[j]} motor")
     ax.set(xlabel="t [s]", ylabel="N (motor: N or N m)", title="joint reactions")
     ax.legend(fontsize="small")
+
+
+def open_results(path, patience=30.0):
+    """The file, and whether a run is still writing it: then it is in SWMR mode, and HDF5
+    lets in only readers that ask for SWMR. A run that is ending holds the file alone for
+    a moment (it adds what SWMR readers must not see made): wait for it."""
+    waited = 0.0
+    while True:
+        try:
+            return h5py.File(path, "r"), False
+        except OSError:
+            pass
+        try:
+            return h5py.File(path, "r", swmr=True), True
+        except OSError:
+            if waited >= patience:
+                raise
+        time.sleep(0.2)
+        waited += 0.2
+
+
+def plot_run(f, path, out, wanted):
+    """Trajectories, heights, energies and joint reactions of an mbsflow run."""
+    t = f["time"][:]
+    rows = len(t)  # the series are at least as long: the time is written last
+    names = [n.decode() if isinstance(n, bytes) else n for n in f["bodies/names"][:]]
+    chosen = pick_bodies(names, wanted)
+    has_pos = "bodies/position" in f
+    has_energy = "energy" in f
+    has_joints = "joints/force" in f
+    if not has_pos and not has_energy:
+        sys.exit("plot.py: the file holds neither positions nor energies")
+    panels = int(has_pos) * 2 + int(has_energy) + int(has_joints)
+    fig, axes = plt.subplots(1, panels, figsize=(5.5 * panels, 4.5), squeeze=False)
+    axes = list(axes[0])
+    title = f.attrs.get("model_name", "")
+    if has_pos:
+        pos = f["bodies/position"]
+        ax_xy, ax_t = axes.pop(0), axes.pop(0)
+        for i in chosen:
+            p = pos[:rows, i, :]
+            ax_xy.plot(p[:, 0], p[:, 1], label=names[i])
+            ax_t.plot(t, p[:, 1], label=names[i])
+        ax_xy.set(xlabel="x [m]", ylabel="y [m]", title="trajectories")
+        ax_xy.axis("equal")
+        ax_t.set(xlabel="t [s]", ylabel="y [m]", title="height over time")
+        ax_xy.legend(fontsize="small")
+    if has_energy:
+        e = f["energy"][:rows]
+        ax = axes.pop(0)
+        for k, label in enumerate(["kinetic", "gravity", "elastic"]):
+            ax.plot(t, e[:, k], label=label)
+        ax.plot(t, e.sum(axis=1), "k--", label="total")
+        ax.set(xlabel="t [s]", ylabel="energy [J]", title="energy")
+        ax.legend(fontsize="small")
+    if has_joints:
+        plot_joints(f, t, rows, axes.pop(0))
+    fig.suptitle(f"{title}  ({path})")
+    fig.tight_layout()
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+    return f"{rows} snapshots" + (f", t = {t[-1]:g} s" if rows else "")
+
+
+def draw(path, out, wanted):
+    """One picture of the file as it is now; returns what it showed and whether the run goes on."""
+    f, live = open_results(path)
+    with f:
+        if "solution" in f:
+            plot_ode(f, path, out)
+            return "ODE solution", live
+        return plot_run(f, path, out, wanted), live
 
 
 def main():
@@ -89,50 +166,22 @@ def main():
     parser.add_argument("file")
     parser.add_argument("--bodies", default="", help="comma-separated body names (default: up to 5 spread over the model)")
     parser.add_argument("-o", "--output", default="", help="PNG to write (default: FILE.png)")
+    parser.add_argument("--follow", action="store_true", help="redraw while a run writes the file, until it ends")
+    parser.add_argument("--interval", type=float, default=2.0, help="--follow: seconds between pictures (default 2)")
     args = parser.parse_args()
     out = args.output or (args.file.rsplit(".", 1)[0] + ".png")
-    with h5py.File(args.file, "r") as f:
-        if "solution" in f:
-            plot_ode(f, args.file, out)
+    wanted = [b for b in args.bodies.split(",") if b]
+    while True:
+        partial = out + ".part.png"  # renamed into place: a viewer never sees half a picture
+        shown, live = draw(args.file, partial, wanted)
+        os.replace(partial, out)
+        if not args.follow:
             print(out)
             return
-        t = f["time"][:]
-        names = [n.decode() if isinstance(n, bytes) else n for n in f["bodies/names"][:]]
-        chosen = pick_bodies(names, [b for b in args.bodies.split(",") if b])
-        has_pos = "bodies/position" in f
-        has_energy = "energy" in f
-        has_joints = "joints/force" in f
-        if not has_pos and not has_energy:
-            sys.exit("plot.py: the file holds neither positions nor energies")
-        panels = int(has_pos) * 2 + int(has_energy) + int(has_joints)
-        fig, axes = plt.subplots(1, panels, figsize=(5.5 * panels, 4.5), squeeze=False)
-        axes = list(axes[0])
-        title = f.attrs.get("model_name", "")
-        if has_pos:
-            pos = f["bodies/position"]
-            ax_xy, ax_t = axes.pop(0), axes.pop(0)
-            for i in chosen:
-                p = pos[:, i, :]
-                ax_xy.plot(p[:, 0], p[:, 1], label=names[i])
-                ax_t.plot(t, p[:, 1], label=names[i])
-            ax_xy.set(xlabel="x [m]", ylabel="y [m]", title="trajectories")
-            ax_xy.axis("equal")
-            ax_t.set(xlabel="t [s]", ylabel="y [m]", title="height over time")
-            ax_xy.legend(fontsize="small")
-        if has_energy:
-            e = f["energy"][:]
-            ax = axes.pop(0)
-            for k, label in enumerate(["kinetic", "gravity", "elastic"]):
-                ax.plot(t, e[:, k], label=label)
-            ax.plot(t, e.sum(axis=1), "k--", label="total")
-            ax.set(xlabel="t [s]", ylabel="energy [J]", title="energy")
-            ax.legend(fontsize="small")
-        if has_joints:
-            plot_joints(f, t, axes.pop(0))
-        fig.suptitle(f"{title}  ({args.file})")
-        fig.tight_layout()
-        fig.savefig(out, dpi=110)
-    print(out)
+        print(f"{out}: {shown}" + (" (run going)" if live else " (run ended)"), flush=True)
+        if not live:
+            return
+        time.sleep(args.interval)
 
 
 if __name__ == "__main__":

@@ -11,6 +11,8 @@
 #include <vector>
 #include <filesystem>
 
+#include <Eigen/Geometry>
+
 #include "hdf5_handle.hpp"
 #include "random_id.hpp"
 #include "writer_lock.hpp"
@@ -51,7 +53,7 @@ struct Series {
   }
 };
 
-Series make_series(hid_t file, const std::string& path, std::vector<hsize_t> item, hsize_t rows) {
+Series make_series(hid_t file, const std::string& path, std::vector<hsize_t> item, hsize_t rows, const char* unit) {
   Series s{path, std::move(item), {}, {}};
   std::vector<hsize_t> dims{0}, max{H5S_UNLIMITED}, chunk{rows};
   for (std::size_t i = 0; i < s.item.size(); ++i) {
@@ -68,6 +70,7 @@ Series make_series(hid_t file, const std::string& path, std::vector<hsize_t> ite
   h5::check(H5Pset_create_intermediate_group(lcpl.get(), 1), "allow intermediate groups");
   s.set = h5::Handle(H5Dcreate2(file, path.c_str(), H5T_IEEE_F64LE, space.get(), lcpl.get(), plist.get(), H5P_DEFAULT),
                      H5Dclose, "create " + path);
+  h5::write_string_attribute(s.set.get(), "units", unit);
   return s;
 }
 
@@ -131,6 +134,53 @@ void append(Series& s, hsize_t first_row) {
   s.buffer.clear();
 }
 
+// Each joint's attachment points in the world at state y: body position + R(q) point, or the
+// point itself on the ground.
+void append_attachment_points(const Model& m, const StateLayout& l, const Eigen::VectorXd& y, std::vector<double>& out) {
+  auto world = [&](int body, const Vec3& p) {
+    const Eigen::Vector3d local(p[0], p[1], p[2]);
+    if (body == ground) return local;
+    const double* q = y.data() + l.orientation(body);
+    const Eigen::Quaterniond r(q[0], q[1], q[2], q[3]);
+    return Eigen::Vector3d(y.segment<3>(l.position(body)) + r.normalized() * local);
+  };
+  for (const Joint& j : m.joints) {
+    const Eigen::Vector3d a = world(j.body1, j.point1), b = world(j.body2, j.point2);
+    out.insert(out.end(), {a.x(), a.y(), a.z(), b.x(), b.y(), b.z()});
+  }
+}
+
+// The coupling records as columns of /coupling (in a file not in SWMR mode).
+void write_coupling_records(hid_t file, const std::vector<CouplingRecord>& records) {
+  if (records.empty()) return;
+  const hsize_t n = records.size();
+  const h5::Handle lcpl(H5Pcreate(H5P_LINK_CREATE), H5Pclose, "create a link property list");
+  h5::check(H5Pset_create_intermediate_group(lcpl.get(), 1), "allow intermediate groups");
+  auto column = [&](const char* name, hid_t file_type, auto value) {
+    using T = decltype(value(records[0]));
+    std::vector<T> v;
+    for (const CouplingRecord& r : records) v.push_back(value(r));
+    const h5::Handle space(H5Screate_simple(1, &n, nullptr), H5Sclose, "create a coupling space");
+    const std::string path = std::string("/coupling/") + name;
+    const h5::Handle set(H5Dcreate2(file, path.c_str(), file_type, space.get(), lcpl.get(), H5P_DEFAULT, H5P_DEFAULT),
+                         H5Dclose, "create " + path);
+    const hid_t memory = std::is_same_v<T, double> ? H5T_NATIVE_DOUBLE : H5T_NATIVE_INT64;
+    h5::check(H5Dwrite(set.get(), memory, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()), "write " + path);
+  };
+  column("index", H5T_STD_I64LE, [](const CouplingRecord& r) { return static_cast<std::int64_t>(r.index); });
+  column("t_start", H5T_IEEE_F64LE, [](const CouplingRecord& r) { return r.t_start; });
+  column("t_end", H5T_IEEE_F64LE, [](const CouplingRecord& r) { return r.t_end; });
+  column("position_error", H5T_IEEE_F64LE, [](const CouplingRecord& r) { return r.position_error; });
+  column("velocity_error", H5T_IEEE_F64LE, [](const CouplingRecord& r) { return r.velocity_error; });
+  column("lag", H5T_STD_I64LE, [](const CouplingRecord& r) { return static_cast<std::int64_t>(r.lag); });
+}
+
+h5::Handle file_access() {
+  h5::Handle fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose, "create a file access list");
+  h5::check(H5Pset_libver_bounds(fapl.get(), H5F_LIBVER_V110, H5F_LIBVER_LATEST), "set the file format");
+  return fapl;
+}
+
 }  // namespace
 
 struct Hdf5Sink::File {
@@ -138,7 +188,7 @@ struct Hdf5Sink::File {
   h5::Handle file;
   Series time;
   std::vector<std::pair<std::size_t, Series>> bodies;  // (index into body_fields, series)
-  std::optional<Series> energy, joint_force, motor_effort;
+  std::optional<Series> energy, joint_force, motor_effort, attachment;
   hsize_t rows_per_chunk = 1;
   std::vector<double> times;  // every time written, for the XDMF sidecar
 };
@@ -165,17 +215,19 @@ void Hdf5Sink::lay_out(File& f, const MultibodySystem& system, bool make) {
   f.rows_per_chunk = std::clamp<hsize_t>(buffer_bytes / std::max<std::size_t>(row_bytes, 1), 1, 16);
   const hsize_t rows = f.rows_per_chunk;
   const hid_t file = f.file.get();
-  auto series = [&](const std::string& path, std::vector<hsize_t> item, hsize_t chunk_rows) {
-    return make ? make_series(file, path, std::move(item), chunk_rows) : open_series(file, path, std::move(item));
+  auto series = [&](const std::string& path, std::vector<hsize_t> item, hsize_t chunk_rows, const char* unit) {
+    return make ? make_series(file, path, std::move(item), chunk_rows, unit) : open_series(file, path, std::move(item));
   };
-  f.time = series("/time", {}, 1024);
+  f.time = series("/time", {}, 1024, time_unit);
   for (std::size_t i = 0; i < body_fields.size(); ++i)
     if (fields_.body[i])
-      f.bodies.emplace_back(i, series(body_fields[i].dataset, {n, static_cast<hsize_t>(body_fields[i].components)}, rows));
-  if (fields_.energy) f.energy = series(energy_dataset, {3}, 1024);
-  if (fields_.joint_force && joints > 0) f.joint_force = series(joint_force_dataset, {joints, 6}, rows);
+      f.bodies.emplace_back(i, series(body_fields[i].dataset, {n, static_cast<hsize_t>(body_fields[i].components)}, rows,
+                                      body_fields[i].unit));
+  if (fields_.energy) f.energy = series(energy_dataset, {3}, 1024, energy_unit);
+  if (fields_.joint_force && joints > 0) f.joint_force = series(joint_force_dataset, {joints, 6}, rows, joint_force_unit);
   const bool motors = std::any_of(m.joints.begin(), m.joints.end(), [](const Joint& j) { return j.motor.kind != JointMotor::Kind::none; });
-  if (f.joint_force && motors) f.motor_effort = series(motor_effort_dataset, {joints, 1}, rows);
+  if (f.joint_force && motors) f.motor_effort = series(motor_effort_dataset, {joints, 1}, rows, motor_effort_unit);
+  if (fields_.body[0] && joints > 0) f.attachment = series(joint_attachment_dataset, {joints, 6}, rows, joint_attachment_unit);
 }
 
 void Hdf5Sink::begin(const MultibodySystem& system) {
@@ -189,9 +241,9 @@ void Hdf5Sink::begin(const MultibodySystem& system) {
   WriterLock::check_free(path_);
   const std::string making = path_ + ".part";
   f->lock = WriterLock(making);  // before H5Fcreate, which truncates
-  // Dense attribute storage (file format 1.8+) so that large model texts fit as attributes.
-  const h5::Handle fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose, "create a file access list");
-  h5::check(H5Pset_libver_bounds(fapl.get(), H5F_LIBVER_V18, H5F_LIBVER_LATEST), "set the file format");
+  // File format 1.10: dense attribute storage, so that large model texts fit as
+  // attributes, and single-writer/multiple-reader access (SWMR).
+  const h5::Handle fapl = file_access();
   f->file = h5::Handle(H5Fcreate(making.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get()), H5Fclose,
                        "create the results file " + making);
   lay_out(*f, system, true);
@@ -199,7 +251,7 @@ void Hdf5Sink::begin(const MultibodySystem& system) {
   for (const Body& b : m.bodies) names.push_back(b.name);
   const h5::Handle bodies(H5Gopen2(f->file.get(), "/bodies", H5P_DEFAULT), H5Gclose, "open /bodies");
   write_names(bodies.get(), "names", names);
-  if (f->joint_force) {
+  if (f->joint_force || f->attachment) {
     names.clear();
     for (const Joint& j : m.joints) names.push_back(j.name);
     const h5::Handle group(H5Gopen2(f->file.get(), "/joints", H5P_DEFAULT), H5Gclose, "open /joints");
@@ -221,6 +273,11 @@ void Hdf5Sink::begin(const MultibodySystem& system) {
   h5::write_string_attribute(root, "fields", fields_text(fields_));
   // The layout on disk now: a run killed before its first rows leaves a readable file.
   h5::check(H5Fflush(root, H5F_SCOPE_GLOBAL), "flush " + path_);
+  // From here on readers may open the file while it grows (HDF5 SWMR); nothing is created
+  // in it until end() has closed and opened it again. In SWMR mode before it is renamed
+  // into place: a file killed in another mode is marked open for writing, which only
+  // h5clear undoes, and the path would hold a file that no reader opens.
+  h5::check(H5Fstart_swmr_write(root), "let readers in while the run writes " + path_);
   if (std::rename(making.c_str(), path_.c_str()) != 0)
     throw InputError("cannot rename " + making + " to " + path_ + ": " + std::strerror(errno));
   last_flush_ = now_seconds();
@@ -234,7 +291,14 @@ void Hdf5Sink::resume(const MultibodySystem& system, long snapshots, const std::
     throw InputError("the results file " + path_ + " is gone: the checkpoint goes on from the snapshots it holds");
   auto f = std::make_unique<File>();
   f->lock = WriterLock(path_);  // refused while another run writes it
-  f->file = h5::Handle(H5Fopen(path_.c_str(), H5F_ACC_RDWR, H5P_DEFAULT), H5Fclose, "open the results file " + path_);
+  // A run killed while in SWMR mode leaves the file marked as open for writing, which
+  // HDF5 refuses to open again for writing; the marks are cleared as `h5clear -s` does
+  // (the library's own file access property for it).
+  const h5::Handle fapl = file_access();
+  hbool_t clear = 1;
+  if (H5Pexist(fapl.get(), "clear_status_flags") > 0) H5Pset(fapl.get(), "clear_status_flags", &clear);
+  f->file = h5::Handle(H5Fopen(path_.c_str(), H5F_ACC_RDWR, fapl.get()), H5Fclose,
+                       "open the results file " + path_ + " (if a killed run left it marked open, h5clear -s clears the mark)");
   const std::optional<std::string> id = h5::read_string_attribute(f->file.get(), "run_id");
   if (id != identity)
     throw InputError(path_ + " is not the results file of the run this checkpoint was taken from (another run wrote it since)");
@@ -253,8 +317,10 @@ void Hdf5Sink::resume(const MultibodySystem& system, long snapshots, const std::
   if (f->energy) truncate(*f->energy, kept);
   if (f->joint_force) truncate(*f->joint_force, kept);
   if (f->motor_effort) truncate(*f->motor_effort, kept);
+  if (f->attachment) truncate(*f->attachment, kept);
   f->times = read_rows(f->time, kept);
   h5::check(H5Fflush(f->file.get(), H5F_SCOPE_GLOBAL), "flush " + path_);
+  h5::check(H5Fstart_swmr_write(f->file.get()), "let readers in while the run writes " + path_);
   identity_ = identity;
   rows_written_ = snapshots;
   last_flush_ = now_seconds();
@@ -283,6 +349,7 @@ void Hdf5Sink::write(Snapshot&& s) {
   }
   if (f.joint_force) f.joint_force->buffer.insert(f.joint_force->buffer.end(), s.joint_wrench.data(), s.joint_wrench.data() + s.joint_wrench.size());
   if (f.motor_effort) f.motor_effort->buffer.insert(f.motor_effort->buffer.end(), s.motor_effort.data(), s.motor_effort.data() + s.motor_effort.size());
+  if (f.attachment) append_attachment_points(system_->model(), l, s.state, f.attachment->buffer);
   if (static_cast<hsize_t>(f.time.buffer.size()) >= f.rows_per_chunk || now_seconds() - last_flush_ >= flush_interval_s)
     flush();
 }
@@ -296,6 +363,7 @@ void Hdf5Sink::flush() {
   if (f.energy) append(*f.energy, first);
   if (f.joint_force) append(*f.joint_force, first);
   if (f.motor_effort) append(*f.motor_effort, first);
+  if (f.attachment) append(*f.attachment, first);
   append(f.time, first);  // last: a reader never sees a time without its data
   rows_written_ += rows;
   h5::check(H5Fflush(f.file.get(), H5F_SCOPE_GLOBAL), "flush " + path_);
@@ -303,27 +371,7 @@ void Hdf5Sink::flush() {
 }
 
 void Hdf5Sink::write_coupling(const std::vector<CouplingRecord>& records) {
-  if (!file_ || records.empty()) return;
-  const hsize_t n = records.size();
-  const h5::Handle lcpl(H5Pcreate(H5P_LINK_CREATE), H5Pclose, "create a link property list");
-  h5::check(H5Pset_create_intermediate_group(lcpl.get(), 1), "allow intermediate groups");
-  auto column = [&](const char* name, hid_t file_type, auto value) {
-    using T = decltype(value(records[0]));
-    std::vector<T> v;
-    for (const CouplingRecord& r : records) v.push_back(value(r));
-    const h5::Handle space(H5Screate_simple(1, &n, nullptr), H5Sclose, "create a coupling space");
-    const std::string path = std::string("/coupling/") + name;
-    const h5::Handle set(H5Dcreate2(file_->file.get(), path.c_str(), file_type, space.get(), lcpl.get(), H5P_DEFAULT, H5P_DEFAULT),
-                         H5Dclose, "create " + path);
-    const hid_t memory = std::is_same_v<T, double> ? H5T_NATIVE_DOUBLE : H5T_NATIVE_INT64;
-    h5::check(H5Dwrite(set.get(), memory, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()), "write " + path);
-  };
-  column("index", H5T_STD_I64LE, [](const CouplingRecord& r) { return static_cast<std::int64_t>(r.index); });
-  column("t_start", H5T_IEEE_F64LE, [](const CouplingRecord& r) { return r.t_start; });
-  column("t_end", H5T_IEEE_F64LE, [](const CouplingRecord& r) { return r.t_end; });
-  column("position_error", H5T_IEEE_F64LE, [](const CouplingRecord& r) { return r.position_error; });
-  column("velocity_error", H5T_IEEE_F64LE, [](const CouplingRecord& r) { return r.velocity_error; });
-  column("lag", H5T_STD_I64LE, [](const CouplingRecord& r) { return static_cast<std::int64_t>(r.lag); });
+  coupling_ = records;  // written by end(): a file being read live gets no new datasets
 }
 
 void Hdf5Sink::end() {
@@ -336,13 +384,22 @@ void Hdf5Sink::end() {
     throw;
   }
   std::swap(f, file_);
-  const bool position = fields_.body[0];
-  std::vector<std::string> attributes;
-  for (std::size_t i = 1; i < body_fields.size(); ++i)
-    if (fields_.body[i]) attributes.push_back(body_fields[i].name);
+  // Out of SWMR mode, by closing the file, to add what a live reader must not see made:
+  // the coupling records and the XDMF sidecar's views. The lock is held until then.
+  const WriterLock lock = std::move(f->lock);
+  XdmfContent c;
+  c.bodies = system_->model().bodies.size();
+  c.joints = system_->model().joints.size();
+  for (std::size_t i = 0; i < body_fields.size(); ++i)
+    if (fields_.body[i]) c.body_fields.push_back(body_fields[i].name);
+  c.joint_attachment = f->attachment.has_value();
+  c.joint_force = f->joint_force.has_value();
+  c.energy = f->energy.has_value();
   const std::vector<double> times = std::move(f->times);
-  f.reset();  // closes the file before the sidecar points at it
-  if (position) write_xdmf(xdmf_path(path_), path_, times, system_->model().bodies.size(), attributes);
+  f.reset();
+  const h5::Handle file(H5Fopen(path_.c_str(), H5F_ACC_RDWR, file_access().get()), H5Fclose, "open " + path_ + " again");
+  write_coupling_records(file.get(), coupling_);
+  if (fields_.body[0]) write_xdmf(file.get(), xdmf_path(path_), path_, times, c);  // the sidecar needs the positions
 }
 
 }  // namespace mbsflow

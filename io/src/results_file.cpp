@@ -18,12 +18,16 @@ ResultsFile::ResultsFile(const std::string& path) : path_(path) {
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
   if (!std::filesystem::exists(path)) throw InputError(path + ": no such results file");
   if (H5Fis_hdf5(path.c_str()) <= 0) throw InputError(path + ": not an HDF5 file");
-  file_ = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  // A file that a run is writing is open in SWMR mode and takes only SWMR readers; a
+  // finished one (or one of an older format) opens either way.
+  file_ = H5Fopen(path.c_str(), H5F_ACC_RDONLY | H5F_ACC_SWMR_READ, H5P_DEFAULT);
+  if (file_ < 0) file_ = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
   if (file_ < 0) throw InputError(path + ": cannot open the results file");
-  if (!has("/time")) {
+  ode_ = !has("/time") && has("/solution/time");
+  if (!has("/time") && !ode_) {
     H5Fclose(file_);
     file_ = -1;
-    throw InputError(path + ": not an mbsflow results file (no /time)");
+    throw InputError(path + ": not an mbsflow results file (neither /time nor /solution/time)");
   }
 }
 
@@ -31,10 +35,12 @@ ResultsFile::~ResultsFile() {
   if (file_ >= 0) H5Fclose(file_);
 }
 
-ResultsFile::ResultsFile(ResultsFile&& o) noexcept : path_(std::move(o.path_)), file_(std::exchange(o.file_, -1)) {}
+ResultsFile::ResultsFile(ResultsFile&& o) noexcept
+    : path_(std::move(o.path_)), file_(std::exchange(o.file_, -1)), ode_(o.ode_) {}
 ResultsFile& ResultsFile::operator=(ResultsFile&& o) noexcept {
   std::swap(path_, o.path_);
   std::swap(file_, o.file_);
+  std::swap(ode_, o.ode_);
   return *this;
 }
 
@@ -64,6 +70,12 @@ std::vector<std::uint64_t> ResultsFile::shape(const std::string& dataset) const 
 
 std::optional<std::string> ResultsFile::string_attribute(const std::string& name) const {
   return h5::read_string_attribute(file_, name);
+}
+
+std::optional<std::string> ResultsFile::dataset_string_attribute(const std::string& dataset, const std::string& name) const {
+  if (!has(dataset)) return std::nullopt;
+  const h5::Handle set(H5Dopen2(file_, dataset.c_str(), H5P_DEFAULT), H5Dclose, "open " + dataset);
+  return h5::read_string_attribute(set.get(), name);
 }
 
 std::optional<double> ResultsFile::number_attribute(const std::string& name) const {
@@ -99,7 +111,24 @@ std::vector<double> ResultsFile::read_item(const std::string& dataset, std::size
   return out;
 }
 
-std::vector<double> ResultsFile::time() const { return read("/time"); }
+std::vector<double> ResultsFile::read_row(const std::string& dataset, std::size_t row) const {
+  const std::vector<std::uint64_t> dims = shape(dataset);
+  if (dims.empty() || row >= dims[0]) throw InputError(path_ + ": no row " + std::to_string(row) + " in " + dataset);
+  std::vector<hsize_t> start(dims.size(), 0), count(dims.begin(), dims.end());
+  start[0] = row;
+  count[0] = 1;
+  std::size_t n = 1;
+  for (std::size_t d = 1; d < dims.size(); ++d) n *= dims[d];
+  std::vector<double> out(n);
+  const h5::Handle set(H5Dopen2(file_, dataset.c_str(), H5P_DEFAULT), H5Dclose, "open " + dataset);
+  const h5::Handle space(H5Dget_space(set.get()), H5Sclose, "get the space of " + dataset);
+  h5::check(H5Sselect_hyperslab(space.get(), H5S_SELECT_SET, start.data(), nullptr, count.data(), nullptr), "select in " + dataset);
+  const h5::Handle mem(H5Screate_simple(static_cast<int>(count.size()), count.data(), nullptr), H5Sclose, "create a memory space");
+  if (n > 0) h5::check(H5Dread(set.get(), H5T_NATIVE_DOUBLE, mem.get(), space.get(), H5P_DEFAULT, out.data()), "read " + dataset);
+  return out;
+}
+
+std::vector<double> ResultsFile::time() const { return read(ode_ ? "/solution/time" : "/time"); }
 
 std::vector<std::string> ResultsFile::names(const char* dataset) const {
   if (!has(dataset)) return {};
@@ -152,7 +181,46 @@ std::string write_csv_table(const std::string& file, const std::string& header, 
 
 }  // namespace
 
+namespace {
+
+std::string in_dir(const std::string& dir, const std::string& file) { return (std::filesystem::path(dir) / file).string(); }
+
+// solution.csv and steps.csv of an ODE run.
+std::vector<std::string> export_ode_csv(const ResultsFile& r, const std::string& dir) {
+  std::vector<std::string> written;
+  const std::vector<double> t = r.time();
+  const std::vector<std::uint64_t> shape = r.shape("/solution/values");
+  const std::vector<double> components = r.read("/solution/components");
+  std::string header = "t";
+  for (double c : components) header += ",y" + std::to_string(static_cast<long>(c) + 1);
+  std::vector<CsvBlock> blocks{{r.read("/solution/values"), static_cast<int>(shape.size() == 2 ? shape[1] : 0)}};
+  if (r.has("/solution/error")) {
+    header += ",error";
+    blocks.push_back({r.read("/solution/error"), 1});
+  }
+  written.push_back(write_csv_table(in_dir(dir, "solution.csv"), header, t, blocks));
+  header = "t";
+  blocks.clear();
+  for (const char* column : {"tau", "taken", "error", "iterations_s", "iterations_s1", "iteration_failed"}) {
+    const std::string path = std::string("/steps/") + column;
+    if (!r.has(path)) continue;
+    header += std::string(",") + column;
+    blocks.push_back({r.read(path), 1});
+  }
+  written.push_back(write_csv_table(in_dir(dir, "steps.csv"), header, r.read("/steps/t"), blocks));
+  return written;
+}
+
+std::string with_unit(const std::string& column, const char* unit) { return column + " [" + unit + "]"; }
+
+}  // namespace
+
 std::vector<std::string> export_csv(const ResultsFile& r, const std::string& dir, const std::vector<std::string>& wanted) {
+  if (r.ode()) {
+    if (!wanted.empty()) throw InputError("{bodies}: " + r.path() + " holds the solution of an ODE, not bodies");
+    std::filesystem::create_directories(dir);
+    return export_ode_csv(r, dir);
+  }
   const std::vector<std::string> names = r.body_names();
   std::vector<std::size_t> bodies;
   if (wanted.empty()) {
@@ -166,28 +234,43 @@ std::vector<std::string> export_csv(const ResultsFile& r, const std::string& dir
   }
   std::filesystem::create_directories(dir);
   const std::vector<double> t = r.time();
+  const std::string time_column = with_unit("t", time_unit);
   std::vector<const BodyField*> fields;
   for (const BodyField& f : body_fields)
     if (r.has(f.dataset)) fields.push_back(&f);
   std::vector<std::string> written;
   for (std::size_t b : bodies) {
-    std::string header = "t";
+    std::string header = time_column;
     std::vector<CsvBlock> blocks;
     for (const BodyField* f : fields) {
-      for (int c = 0; c < f->components; ++c) header += std::string(",") + f->columns[static_cast<std::size_t>(c)];
+      for (int c = 0; c < f->components; ++c) header += "," + with_unit(f->columns[static_cast<std::size_t>(c)], f->unit);
       blocks.push_back({r.read_item(f->dataset, b), f->components});
     }
-    written.push_back(write_csv_table((std::filesystem::path(dir) / (names[b] + ".csv")).string(), header, t, blocks));
+    written.push_back(write_csv_table(in_dir(dir, names[b] + ".csv"), header, t, blocks));
   }
-  if (wanted.empty() && r.has(joint_force_dataset)) {  // joints too: joint_NAME.csv
-    const std::vector<std::string> joints = r.joint_names();
-    const bool effort = r.has(motor_effort_dataset);
-    for (std::size_t j = 0; j < joints.size(); ++j) {
-      std::vector<CsvBlock> blocks{{r.read_item(joint_force_dataset, j), 6}};
-      if (effort) blocks.push_back({r.read_item(motor_effort_dataset, j), 1});
-      written.push_back(write_csv_table((std::filesystem::path(dir) / ("joint_" + joints[j] + ".csv")).string(),
-                                        effort ? "t,fx,fy,fz,mx,my,mz,motor_effort" : "t,fx,fy,fz,mx,my,mz", t, blocks));
+  if (!wanted.empty()) return written;
+  if (r.has(energy_dataset))
+    written.push_back(write_csv_table(in_dir(dir, "energy.csv"),
+                                      time_column + ",kinetic [J],gravity [J],elastic [J]", t, {{r.read(energy_dataset), 3}}));
+  const std::vector<std::string> joints = r.joint_names();
+  const bool force = r.has(joint_force_dataset), effort = r.has(motor_effort_dataset), ends = r.has(joint_attachment_dataset);
+  if (!force && !ends) return written;
+  for (std::size_t j = 0; j < joints.size(); ++j) {  // joint_NAME.csv
+    std::string header = time_column;
+    std::vector<CsvBlock> blocks;
+    if (force) {
+      header += ",fx [N],fy [N],fz [N],mx [N m],my [N m],mz [N m]";
+      blocks.push_back({r.read_item(joint_force_dataset, j), 6});
     }
+    if (effort) {
+      header += ",motor_effort [N m or N]";
+      blocks.push_back({r.read_item(motor_effort_dataset, j), 1});
+    }
+    if (ends) {
+      header += ",x1 [m],y1 [m],z1 [m],x2 [m],y2 [m],z2 [m]";
+      blocks.push_back({r.read_item(joint_attachment_dataset, j), 6});
+    }
+    written.push_back(write_csv_table(in_dir(dir, "joint_" + joints[j] + ".csv"), header, t, blocks));
   }
   return written;
 }

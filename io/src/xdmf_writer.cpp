@@ -3,50 +3,170 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 
+#include "hdf5_handle.hpp"
 #include "mbsflow/error.hpp"
 #include "mbsflow/io/result_fields.hpp"
 
 namespace mbsflow {
 namespace {
 
-// Row t of the T x N x k dataset `path`, as an XDMF hyperslab.
-void slab(std::ostream& o, const std::string& file, const char* path, std::size_t t, std::size_t rows, std::size_t n,
-          int k, const char* indent) {
-  o << indent << "<DataItem ItemType=\"HyperSlab\" Dimensions=\"" << n << ' ' << k << "\" Type=\"HyperSlab\">\n"
-    << indent << "  <DataItem Dimensions=\"3 3\" Format=\"XML\">" << t << " 0 0 1 1 1 1 " << n << ' ' << k
-    << "</DataItem>\n"
-    << indent << "  <DataItem Dimensions=\"" << rows << ' ' << n << ' ' << k
-    << "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << file << ':' << path << "</DataItem>\n"
-    << indent << "</DataItem>\n";
+constexpr const char* views_group = "/xdmf";
+
+const BodyField* body_field(const std::string& name) {
+  for (const BodyField& f : body_fields)
+    if (name == f.name) return &f;
+  return nullptr;
 }
+
+const BodyField* body_field_at(const char* dataset) {
+  for (const BodyField& f : body_fields)
+    if (std::string(dataset) == f.dataset) return &f;
+  return nullptr;
+}
+
+// A series that views show rows of: its name and space, read once.
+struct Source {
+  const char* path;
+  h5::Handle space;
+  std::vector<hsize_t> extent;
+  Source(hid_t file, const char* p) : path(p) {
+    const h5::Handle set(H5Dopen2(file, p, H5P_DEFAULT), H5Dclose, std::string("open ") + p);
+    space = h5::Handle(H5Dget_space(set.get()), H5Sclose, std::string("get the space of ") + p);
+    extent.resize(static_cast<std::size_t>(H5Sget_simple_extent_ndims(space.get())));
+    H5Sget_simple_extent_dims(space.get(), extent.data(), nullptr);
+  }
+};
+
+// A virtual dataset `name` in `group`, of shape `dims`, showing row `row` of `source`
+// (T x item), columns [column, column + columns) of its last dimension.
+void make_view(hid_t group, const char* name, const std::vector<hsize_t>& dims, const Source& source, hsize_t row,
+               hsize_t column, hsize_t columns) {
+  std::vector<hsize_t> start(source.extent.size(), 0), count = source.extent;
+  start[0] = row;
+  count[0] = 1;
+  start.back() = column;
+  count.back() = columns;
+  h5::check(H5Sselect_hyperslab(source.space.get(), H5S_SELECT_SET, start.data(), nullptr, count.data(), nullptr),
+            std::string("select a row of ") + source.path);
+  const h5::Handle view_space(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr), H5Sclose,
+                              "create a view's space");
+  const h5::Handle dcpl(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, "create a dataset property list");
+  h5::check(H5Pset_virtual(dcpl.get(), view_space.get(), ".", source.path, source.space.get()),
+            std::string("map the view ") + name);
+  h5::Handle(H5Dcreate2(group, name, H5T_IEEE_F64LE, view_space.get(), H5P_DEFAULT, dcpl.get(), H5P_DEFAULT), H5Dclose,
+             std::string("create the view ") + name);
+}
+
+void write_ints(hid_t file, const std::string& path, const std::vector<hsize_t>& dims, const std::vector<int>& values) {
+  const h5::Handle space(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr), H5Sclose, "create a space");
+  const h5::Handle lcpl(H5Pcreate(H5P_LINK_CREATE), H5Pclose, "create a link property list");
+  h5::check(H5Pset_create_intermediate_group(lcpl.get(), 1), "allow intermediate groups");
+  const h5::Handle set(H5Dcreate2(file, path.c_str(), H5T_STD_I32LE, space.get(), lcpl.get(), H5P_DEFAULT, H5P_DEFAULT),
+                       H5Dclose, "create " + path);
+  if (!values.empty())
+    h5::check(H5Dwrite(set.get(), H5T_NATIVE_INT, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()), "write " + path);
+}
+
+// One DataItem reading the dataset `path` of the results file.
+void item(std::ostream& o, const std::string& file, const std::string& path, const std::string& dims, bool integer,
+          const char* indent) {
+  o << indent << "<DataItem Dimensions=\"" << dims << "\" NumberType=\"" << (integer ? "Int\" Precision=\"4" : "Float\" Precision=\"8")
+    << "\" Format=\"HDF\">" << file << ':' << path << "</DataItem>\n";
+}
+
+void attribute(std::ostream& o, const std::string& file, const char* name, const char* type, const char* center,
+               const std::string& path, const std::string& dims, bool integer = false) {
+  o << "     <Attribute Name=\"" << name << "\" AttributeType=\"" << type << "\" Center=\"" << center << "\">\n";
+  item(o, file, path, dims, integer, "      ");
+  o << "     </Attribute>\n";
+}
+
+std::string dims_text(std::size_t a, std::size_t b) { return std::to_string(a) + ' ' + std::to_string(b); }
 
 }  // namespace
 
-void write_xdmf(const std::string& xdmf_path, const std::string& h5_path, const std::vector<double>& times,
-                std::size_t bodies, const std::vector<std::string>& attributes) {
+std::vector<std::size_t> xdmf_rows(std::size_t rows) {
+  std::vector<std::size_t> out;
+  if (rows == 0) return out;
+  const std::size_t stride = rows <= xdmf_max_steps ? 1 : (rows - 1 + xdmf_max_steps - 2) / (xdmf_max_steps - 1);
+  for (std::size_t r = 0; r < rows; r += stride) out.push_back(r);
+  if (out.back() != rows - 1) out.push_back(rows - 1);
+  return out;
+}
+
+void write_xdmf(hid_t file, const std::string& xdmf_path, const std::string& h5_path, const std::vector<double>& times,
+                const XdmfContent& c) {
+  if (H5Lexists(file, views_group, H5P_DEFAULT) > 0)  // a resumed run that had ended before: made again
+    h5::check(H5Ldelete(file, views_group, H5P_DEFAULT), "remove the old views");
+  const std::string file_name = std::filesystem::path(h5_path).filename().string();  // side by side
+  const std::string group = views_group;
+  std::vector<int> index(std::max(c.bodies, c.joints));
+  for (std::size_t i = 0; i < index.size(); ++i) index[i] = static_cast<int>(i);
+  write_ints(file, group + "/body_index", {c.bodies}, {index.begin(), index.begin() + static_cast<long>(c.bodies)});
+  const bool lines = c.joint_attachment && c.joints > 0;
+  if (lines) {
+    std::vector<int> ends(2 * c.joints);
+    for (std::size_t i = 0; i < ends.size(); ++i) ends[i] = static_cast<int>(i);
+    write_ints(file, group + "/joint_lines", {c.joints, 2}, ends);
+    write_ints(file, group + "/joint_index", {c.joints}, {index.begin(), index.begin() + static_cast<long>(c.joints)});
+  }
+
+  std::vector<Source> body_sources;
+  for (const std::string& name : c.body_fields) body_sources.emplace_back(file, body_field(name)->dataset);
+  std::optional<Source> energy, ends, wrench;
+  if (c.energy) energy.emplace(file, energy_dataset);
+  if (lines) ends.emplace(file, joint_attachment_dataset);
+  if (lines && c.joint_force) wrench.emplace(file, joint_force_dataset);
+
   std::ofstream o(xdmf_path);
   if (!o) throw Error(xdmf_path + ": cannot write the XDMF sidecar");
-  const std::string file = std::filesystem::path(h5_path).filename().string();  // side by side
-  const std::size_t rows = times.size();
   o << "<?xml version=\"1.0\" ?>\n<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n<Xdmf Version=\"3.0\">\n <Domain>\n"
-    << "  <Grid Name=\"bodies\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
+    << "  <Grid Name=\"run\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
   char time[32];
-  for (std::size_t t = 0; t < rows; ++t) {
+  const std::string n3 = dims_text(c.bodies, 3), j3 = dims_text(c.joints, 3);
+  for (const std::size_t t : xdmf_rows(times.size())) {
+    const std::string step = group + '/' + std::to_string(t) + '/';
+    const h5::Handle views(H5Gcreate2(file, step.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose, "create " + step);
+    for (const Source& s : body_sources) {
+      const BodyField* f = body_field_at(s.path);
+      make_view(views.get(), f->name, {c.bodies, static_cast<hsize_t>(f->components)}, s, t, 0, f->components);
+    }
+    if (energy) make_view(views.get(), "energy", {3}, *energy, t, 0, 3);
     std::snprintf(time, sizeof time, "%.17g", times[t]);
-    o << "   <Grid Name=\"t" << t << "\" GridType=\"Uniform\">\n    <Time Value=\"" << time << "\"/>\n"
-      << "    <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << bodies << "\" NodesPerElement=\"1\"/>\n"
-      << "    <Geometry GeometryType=\"XYZ\">\n";
-    slab(o, file, body_fields[0].dataset, t, rows, bodies, 3, "     ");
-    o << "    </Geometry>\n";
-    for (const BodyField& f : body_fields) {
-      bool wanted = false;
-      for (const auto& a : attributes) wanted = wanted || a == f.name;
-      if (!wanted) continue;
-      o << "    <Attribute Name=\"" << f.name << "\" AttributeType=\"" << (f.components == 3 ? "Vector" : "Matrix")
-        << "\" Center=\"Node\">\n";
-      slab(o, file, f.dataset, t, rows, bodies, f.components, "     ");
-      o << "    </Attribute>\n";
+    o << "   <Grid Name=\"t" << t << "\" GridType=\"Collection\" CollectionType=\"Spatial\">\n    <Time Value=\"" << time
+      << "\"/>\n    <Grid Name=\"bodies\" GridType=\"Uniform\">\n"
+      << "     <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << c.bodies << "\" NodesPerElement=\"1\">\n";
+    item(o, file_name, group + "/body_index", dims_text(c.bodies, 1), true, "      ");  // Xdmf3 makes no cells without it
+    o << "     </Topology>\n     <Geometry GeometryType=\"XYZ\">\n";
+    item(o, file_name, step + "position", n3, false, "      ");
+    o << "     </Geometry>\n";
+    for (const std::string& name : c.body_fields) {
+      const BodyField* f = body_field(name);
+      if (f == &body_fields[0]) continue;
+      attribute(o, file_name, f->name, f->components == 3 ? "Vector" : "Matrix", "Node", step + f->name,
+                dims_text(c.bodies, static_cast<std::size_t>(f->components)));
+    }
+    attribute(o, file_name, "body_index", "Scalar", "Node", group + "/body_index", std::to_string(c.bodies), true);
+    if (c.energy) attribute(o, file_name, "energy_kinetic_gravity_elastic", "Vector", "Grid", step + "energy", "1 3");
+    o << "    </Grid>\n";
+    if (lines) {
+      make_view(views.get(), "attachment", {2 * c.joints, 3}, *ends, t, 0, 6);
+      o << "    <Grid Name=\"joints\" GridType=\"Uniform\">\n"
+        << "     <Topology TopologyType=\"Polyline\" NumberOfElements=\"" << c.joints << "\" NodesPerElement=\"2\">\n";
+      item(o, file_name, group + "/joint_lines", dims_text(c.joints, 2), true, "      ");
+      o << "     </Topology>\n     <Geometry GeometryType=\"XYZ\">\n";
+      item(o, file_name, step + "attachment", dims_text(2 * c.joints, 3), false, "      ");
+      o << "     </Geometry>\n";
+      if (c.joint_force) {
+        make_view(views.get(), "force", {c.joints, 3}, *wrench, t, 0, 3);
+        make_view(views.get(), "torque", {c.joints, 3}, *wrench, t, 3, 3);
+        attribute(o, file_name, "force", "Vector", "Cell", step + "force", j3);
+        attribute(o, file_name, "torque", "Vector", "Cell", step + "torque", j3);
+      }
+      attribute(o, file_name, "joint_index", "Scalar", "Cell", group + "/joint_index", std::to_string(c.joints), true);
+      o << "    </Grid>\n";
     }
     o << "   </Grid>\n";
   }

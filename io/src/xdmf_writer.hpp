@@ -1,12 +1,37 @@
 #pragma once
-// XDMF sidecar of a results file: the bodies as points over time, so ParaView opens a run.
+// XDMF sidecar of a results file, so that ParaView opens a run with either of its XDMF
+// readers: per snapshot, the bodies as points (velocity, angular velocity, orientation,
+// body index; the energies as values of the whole grid) and the joints as lines between
+// their attachment points (force, torque and joint index per line).
+//
+// ParaView's default reader (Xdmf3) does not read XDMF hyperslabs (it skips their arrays
+// and shows 0 points), so the sidecar does not select rows of the T x N x k series itself:
+// the results file gets a group /xdmf of HDF5 virtual datasets, one per snapshot and
+// quantity (/xdmf/<row>/<name>), each a view of one row of a series. They hold no data of
+// their own, and every HDF5 reader sees them as plain N x k arrays.
+#include <hdf5.h>
+
 #include <string>
 #include <vector>
 
 namespace mbsflow {
 
-// attributes: names of body fields besides position to attach (velocity, ...).
-void write_xdmf(const std::string& xdmf_path, const std::string& h5_path, const std::vector<double>& times,
-                std::size_t bodies, const std::vector<std::string>& attributes);
+// The sidecar shows at most this many snapshots, evenly spread with the first and last:
+// each view costs about 70 us to make (HDF5 1.10), so a run of 12 000 snapshots would
+// spend 4 s on them. The results file keeps every snapshot.
+inline constexpr std::size_t xdmf_max_steps = 1000;
+std::vector<std::size_t> xdmf_rows(std::size_t rows);  // which rows the sidecar shows
+
+struct XdmfContent {
+  std::size_t bodies = 0, joints = 0;
+  std::vector<std::string> body_fields;  // names of the body fields written (position first)
+  bool joint_attachment = false;         // /joints/attachment: the joints as lines
+  bool joint_force = false;
+  bool energy = false;
+};
+
+// Makes the views in `file` (open for writing, its series flushed) and writes the sidecar.
+void write_xdmf(hid_t file, const std::string& xdmf_path, const std::string& h5_path, const std::vector<double>& times,
+                const XdmfContent& content);
 
 }  // namespace mbsflow

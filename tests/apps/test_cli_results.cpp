@@ -11,6 +11,8 @@
 #include <thread>
 
 #include "cli_support.hpp"
+#include "mbsflow/error.hpp"
+#include "process_support.hpp"
 #include "mbsflow/io/results_file.hpp"
 
 using namespace mbsflow::test;
@@ -144,5 +146,77 @@ TEST_CASE("joint reactions and motor efforts: info lists them, export writes a C
   const std::string python = MBSFLOW_PYTHON;
   CHECK(std::system((python + " '" + MBSFLOW_SOURCE + "/scripts/plot.py' '" + dir + "/crank.h5' -o '" + dir + "/crank.png' >/dev/null").c_str()) == 0);
   CHECK(fs::exists(d / "crank.png"));
+  fs::remove_all(d.parent_path());
+}
+
+TEST_CASE("the results of mbsflow ode: info describes them and export and plot read them", "[apps]") {
+  const fs::path d = scratch("ode_results");
+  const std::string dir = d.string();
+  REQUIRE(run("ode --problem hnw --tol 1e-5 -o hnw.h5", dir).code == 0);
+  const Result info = run("info hnw.h5", dir, true);
+  CHECK(info.code == 0);
+  INFO(info.out);
+  CHECK(info.out.find("problem       hnw: 4 equations (mbsflow ode)") != std::string::npos);
+  CHECK(info.out.find("max error") != std::string::npos);
+  const mbsflow::ResultsFile r((d / "hnw.h5").string());
+  REQUIRE(r.ode());
+  REQUIRE(run("export hnw.h5 --csv csv", dir).code == 0);
+  const std::string solution = read_text(d / "csv" / "solution.csv");
+  CHECK(solution.rfind("t,y1,y2,y3,y4,error\n", 0) == 0);
+  CHECK(static_cast<std::size_t>(std::count(solution.begin(), solution.end(), '\n')) == r.time().size() + 1);
+  const std::string steps = read_text(d / "csv" / "steps.csv");
+  CHECK(static_cast<std::size_t>(std::count(steps.begin(), steps.end(), '\n')) == r.shape("/steps/t").at(0) + 1);
+  CHECK(run("export hnw.h5 --csv csv --bodies b", dir).code == 2);
+  CHECK(run("plot hnw.h5 -o hnw.png", dir).code == 0);
+  CHECK(fs::exists(d / "hnw.png"));
+  const Result view = run("view hnw.h5", dir);
+  CHECK(view.code == 2);
+  CHECK(view.err.find("hold no bodies to show") != std::string::npos);
+  fs::remove_all(d.parent_path());
+}
+
+TEST_CASE("a run's results are read while it goes by info and h5py and plot --follow and view writes its motion", "[apps]") {
+  const fs::path d = scratch("live");
+  const std::string dir = d.string();
+  REQUIRE(run("generate chain --bodies 300 -o chain.json", dir).code == 0);
+  Child writer({"run", "chain.json", "--t-end", "1000", "--every", "5", "-o", "live.h5"}, d, "writer");
+  // Until two flushes are on disk, however slow this build is.
+  const auto start = std::chrono::steady_clock::now();
+  long rows = 0;
+  while (rows < 32 && std::chrono::steady_clock::now() - start < std::chrono::seconds(300) && !writer.wait(0.0)) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    if (fs::exists(d / "live.h5")) {
+      try {
+        rows = static_cast<long>(mbsflow::ResultsFile((d / "live.h5").string()).time().size());
+      } catch (const mbsflow::InputError&) {  // a file not yet renamed into place
+      }
+    }
+  }
+  REQUIRE(rows >= 32);
+  REQUIRE_FALSE(writer.wait(0.0));
+  const Result info = run("info live.h5", dir, true);
+  CHECK(info.code == 0);
+  CHECK(info.out.find("(run ended early)") != std::string::npos);  // not at t_end yet: still going
+  const std::string python = MBSFLOW_PYTHON;
+  const std::string read = python + " -c \"import h5py,sys,time; f = h5py.File(sys.argv[1], 'r', swmr=True); t = f['time'];"
+                           " n = t.shape[0]; time.sleep(1.5); t.refresh(); sys.exit(0 if t.shape[0] > n else 1)\" '" +
+                           dir + "/live.h5'";
+  CHECK(std::system(read.c_str()) == 0);  // h5py sees it grow
+  Child follower({"plot", "live.h5", "--follow", "--interval", "0.3", "-o", "live.png"}, d, "follower");
+  std::this_thread::sleep_for(std::chrono::seconds(2));
+  writer.kill(SIGTERM);
+  CHECK(writer.wait(60.0) == 1);
+  CHECK(follower.wait(60.0) == 0);
+  const std::string lines = follower.out();
+  INFO(lines);
+  CHECK(lines.find("(run going)") != std::string::npos);
+  CHECK(lines.find("(run ended)") != std::string::npos);
+  CHECK(fs::exists(d / "live.png"));
+  const Result view = run("view live.h5 --max-frames 50", dir);
+  CHECK(view.code == 0);
+  CHECK(view.err.find("50 frames") != std::string::npos);
+  const std::string page = read_text(d / "live.html");
+  CHECK(page.find("THREE.InstancedMesh") != std::string::npos);  // three.js inlined: no network
+  CHECK(page.find("<script src") == std::string::npos);
   fs::remove_all(d.parent_path());
 }

@@ -1,4 +1,5 @@
 #include <catch2/catch.hpp>
+#include <Eigen/Geometry>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -6,6 +7,7 @@
 #include "mbsflow/error.hpp"
 #include "mbsflow/graph/generators.hpp"
 #include "mbsflow/io/hdf5_sink.hpp"
+#include "mbsflow/io/result_fields.hpp"
 #include "mbsflow/io/results_file.hpp"
 #include "mbsflow/runtime/async_sink.hpp"
 #include "mbsflow/runtime/simulation.hpp"
@@ -100,7 +102,7 @@ TEST_CASE("CSV export matches the HDF5 file exactly", "[io]") {
   std::ifstream in(dir / "bogie0f.csv");
   std::string header;
   std::getline(in, header);
-  CHECK(header == "t,x,y,z,vx,vy,vz");
+  CHECK(header == "t [s],x [m],y [m],z [m],vx [m/s],vy [m/s],vz [m/s]");
   const std::vector<double> pos = r.read_item("/bodies/position", 1), vel = r.read_item("/bodies/velocity", 1);
   const std::vector<double> t = r.time();
   std::string line;
@@ -134,4 +136,40 @@ TEST_CASE("field lists parse and reject unknown names", "[io]") {
   CHECK(fields_text(parse_fields("velocity,position")) == "position,velocity");
   CHECK(fields_text(parse_fields("all")) == "position,orientation,velocity,angular_velocity,energy,joint_force");
   CHECK_THROWS_WITH(parse_fields("position,acceleration"), Catch::Contains("unknown field 'acceleration'"));
+}
+
+TEST_CASE("every series carries its unit and the joints' attachment points follow their bodies", "[io]") {
+  const Model m = small_train();
+  auto [memory, file] = run_both(m, parse_fields("all"));
+  const ResultsFile r(file.string());
+  CHECK(r.dataset_string_attribute("/time", "units") == "s");
+  for (const BodyField& f : body_fields) CHECK(r.dataset_string_attribute(f.dataset, "units") == std::string(f.unit));
+  CHECK(r.dataset_string_attribute(energy_dataset, "units") == "J");
+  CHECK(r.dataset_string_attribute(joint_force_dataset, "units") == "N, N m");
+  CHECK(r.dataset_string_attribute(joint_attachment_dataset, "units") == "m");
+  // Each end at its body's position plus the rotated attachment point (the ground's fixed).
+  const std::vector<double> t = r.time();
+  const std::vector<std::uint64_t> shape = r.shape(joint_attachment_dataset);
+  REQUIRE(shape == std::vector<std::uint64_t>{t.size(), m.joints.size(), 6});
+  double worst = 0;
+  for (std::size_t row : {std::size_t{0}, t.size() / 2, t.size() - 1}) {
+    const std::vector<double> ends = r.read_row(joint_attachment_dataset, row);
+    const std::vector<double> pos = r.read_row("/bodies/position", row), quat = r.read_row("/bodies/orientation", row);
+    for (std::size_t j = 0; j < m.joints.size(); ++j) {
+      const Joint& joint = m.joints[j];
+      for (int end = 0; end < 2; ++end) {
+        const int body = end == 0 ? joint.body1 : joint.body2;
+        const Vec3& p = end == 0 ? joint.point1 : joint.point2;
+        Eigen::Vector3d expected(p[0], p[1], p[2]);
+        if (body != ground) {
+          const auto b = static_cast<std::size_t>(body);
+          const Eigen::Quaterniond q(quat[4 * b], quat[4 * b + 1], quat[4 * b + 2], quat[4 * b + 3]);
+          expected = Eigen::Vector3d(pos[3 * b], pos[3 * b + 1], pos[3 * b + 2]) + q * expected;
+        }
+        const Eigen::Vector3d written(ends.data() + 6 * j + 3 * end);
+        worst = std::max(worst, (written - expected).norm());
+      }
+    }
+  }
+  CHECK(worst < 1e-12);
 }

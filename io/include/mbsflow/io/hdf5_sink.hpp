@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "mbsflow/io/result_fields.hpp"
 #include "mbsflow/runtime/result_sink.hpp"
@@ -28,7 +29,9 @@ struct RunInfo {
 
 // Writes a run's results. The file is locked against a second run (which is refused, not
 // allowed to truncate it), its layout is flushed at creation and its rows at least every
-// second, so a killed run leaves a file that reads up to its last flush.
+// second, so a killed run leaves a file that reads up to its last flush. While the run
+// goes, the file is in HDF5's single-writer/multiple-reader mode (SWMR): readers open it
+// with H5F_ACC_SWMR_READ (h5py: swmr=True; ResultsFile does) and see it grow.
 class Hdf5Sink : public ResultSink {
  public:
   static constexpr double flush_interval_s = 1.0;
@@ -57,6 +60,7 @@ class Hdf5Sink : public ResultSink {
   std::unique_ptr<File> file_;
   const MultibodySystem* system_ = nullptr;
   std::string identity_;
+  std::vector<CouplingRecord> coupling_;  // written by end()
   long rows_written_ = 0;
   double last_flush_ = 0.0;  // steady-clock seconds: buffered rows are written at least every flush_interval_s
 };

@@ -14,14 +14,15 @@ struct BodyField {
   const char* dataset;  // HDF5 path, T x N x components
   int components;
   std::array<const char*, 4> columns;  // CSV column names
+  const char* unit;                     // SI, stored as the dataset's "units" attribute
   Eigen::Index (StateLayout::*offset)(Eigen::Index) const;  // where body i's values start in the state
 };
 
 inline constexpr std::array<BodyField, 4> body_fields{{
-    {"position", "/bodies/position", 3, {"x", "y", "z", ""}, &StateLayout::position},
-    {"orientation", "/bodies/orientation", 4, {"qw", "qx", "qy", "qz"}, &StateLayout::orientation},
-    {"velocity", "/bodies/velocity", 3, {"vx", "vy", "vz", ""}, &StateLayout::velocity},
-    {"angular_velocity", "/bodies/angular_velocity", 3, {"wx", "wy", "wz", ""}, &StateLayout::angular_velocity},
+    {"position", "/bodies/position", 3, {"x", "y", "z", ""}, "m", &StateLayout::position},
+    {"orientation", "/bodies/orientation", 4, {"qw", "qx", "qy", "qz"}, "1", &StateLayout::orientation},
+    {"velocity", "/bodies/velocity", 3, {"vx", "vy", "vz", ""}, "m/s", &StateLayout::velocity},
+    {"angular_velocity", "/bodies/angular_velocity", 3, {"wx", "wy", "wz", ""}, "rad/s", &StateLayout::angular_velocity},
 }};
 
 inline constexpr const char* energy_dataset = "/energy";        // T x 3: kinetic, gravity, elastic
@@ -29,6 +30,16 @@ inline constexpr const char* joint_force_dataset = "/joints/force";  // T x J x 
 // T x J x 1: torque or force of each joint's motor along its axis (0 without a motor);
 // written with joint_force when the model has a motor.
 inline constexpr const char* motor_effort_dataset = "/joints/motor_effort";
+// T x J x 6: each joint's two attachment points in the world (x1 y1 z1 x2 y2 z2), written
+// with the positions when the model has joints: the joints as lines in ParaView and the viewer.
+inline constexpr const char* joint_attachment_dataset = "/joints/attachment";
+
+// Units of the other series ("units" attribute of each dataset; body fields carry theirs).
+inline constexpr const char* time_unit = "s";
+inline constexpr const char* energy_unit = "J";                 // kinetic, gravity, elastic
+inline constexpr const char* joint_force_unit = "N, N m";       // force xyz, torque xyz on body2, world
+inline constexpr const char* motor_effort_unit = "N m or N";    // revolute: torque; prismatic: force
+inline constexpr const char* joint_attachment_unit = "m";
 
 struct FieldSet {
   std::array<bool, 4> body{true, true, true, true};  // in the order of body_fields

@@ -1,5 +1,6 @@
 #pragma once
-// Reads a results file written by Hdf5Sink.
+// Reads a results file: of a multibody run (written by Hdf5Sink) or of an ODE run
+// (mbsflow ode, write_ode_results).
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -18,26 +19,34 @@ class ResultsFile {
   const std::string& path() const { return path_; }
   std::optional<std::string> string_attribute(const std::string& name) const;
   std::optional<double> number_attribute(const std::string& name) const;
+  std::optional<std::string> dataset_string_attribute(const std::string& dataset, const std::string& name) const;
   bool has(const std::string& dataset) const;
   std::vector<std::uint64_t> shape(const std::string& dataset) const;  // empty if absent
 
-  std::vector<double> time() const;
+  bool ode() const { return ode_; }  // the results of mbsflow ode: /solution and /steps
+  std::vector<double> time() const;  // snapshot times, or the ODE solution's points
   std::vector<std::string> body_names() const;
   std::vector<std::string> joint_names() const;
   // A whole float64 dataset, row-major.
   std::vector<double> read(const std::string& dataset) const;
   // T x k values of one body (or joint) from a T x N x k dataset, row-major.
   std::vector<double> read_item(const std::string& dataset, std::size_t index) const;
+  // Row `row` of a T x ... dataset: its values at one time, row-major.
+  std::vector<double> read_row(const std::string& dataset, std::size_t row) const;
   std::uintmax_t size_bytes() const;
 
  private:
   std::vector<std::string> names(const char* dataset) const;
   std::string path_;
   std::int64_t file_ = -1;  // hid_t
+  bool ode_ = false;
 };
 
-// One CSV file per body in dir (BODY.csv: t and every body field present), for the named
-// bodies or all. Returns the files written.
+// CSV files in dir, headers with units in brackets ("x [m]"). A run: one file per body
+// (BODY.csv: t and every body field present), for the named bodies or all; for all, also
+// energy.csv and one file per joint (joint_NAME.csv: force, torque, motor effort and
+// attachment points, those present). An ODE run: solution.csv (t and each kept component)
+// and steps.csv (every step tried); `bodies` must be empty. Returns the files written.
 std::vector<std::string> export_csv(const ResultsFile& results, const std::string& dir,
                                     const std::vector<std::string>& bodies);
 

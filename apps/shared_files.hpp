@@ -1,0 +1,12 @@
+#pragma once
+// Files the program reads at run time: its own (the viewer page, the plot script), found
+// installed beside the program (PREFIX/share/mbsflow) or in the source tree it was built
+// from, and three.js from Debian's libjs-three.
+#include <string>
+
+namespace mbsflow::cli {
+
+std::string shared_file(const std::string& name);    // Error when found nowhere
+std::string three_js_file(const std::string& name);  // Error naming the package when missing
+
+}  // namespace mbsflow::cli

@@ -1,0 +1,22 @@
+#pragma once
+// The page of mbsflow view: a results file's motion as one self-contained HTML file.
+#include <string>
+
+#include "mbsflow/io/results_file.hpp"
+
+namespace mbsflow::cli {
+
+struct ViewerSettings {
+  long max_frames = 1000;   // snapshots shown at most (evenly spread, the last included)
+  double max_megabytes = 200;  // bound on the motion data in the page
+};
+
+struct ViewerPage {
+  std::string html;
+  long frames = 0, stride = 1;  // snapshots shown, and every how many of the file's
+};
+
+// Throws InputError when the file holds no body positions.
+ViewerPage viewer_page(const ResultsFile& results, const ViewerSettings& settings);
+
+}  // namespace mbsflow::cli

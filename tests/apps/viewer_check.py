@@ -1,0 +1,109 @@
+#!/usr/bin/python3
+"""mbsflow view in a real browser (Debian's chromium and chromedriver, headless, WebGL on
+SwiftShader, driven by python3-selenium): the page of a run loads without console errors,
+shows as many frames as the file has snapshots, and after seeking draws every body where
+the file says it is (its pixel, projected from the file's position through the page's
+camera, is not background, and the background stays background). Also prints the time
+per frame for a 10 000-body model (a measurement, not a pass condition).
+
+usage: viewer_check.py MBSFLOW WORK_DIR
+"""
+import math
+import os
+import subprocess
+import sys
+
+import h5py
+from PIL import Image
+from selenium import webdriver
+from selenium.webdriver.chrome.options import Options
+from selenium.webdriver.chrome.service import Service
+
+
+def fail(msg):
+    print("viewer_check: " + msg)
+    sys.exit(1)
+
+
+def browser():
+    o = Options()
+    for a in ("--headless=new", "--no-sandbox", "--disable-gpu", "--use-gl=angle", "--use-angle=swiftshader",
+              "--enable-unsafe-swiftshader", "--window-size=1000,800"):
+        o.add_argument(a)
+    o.set_capability("goog:loggingPrefs", {"browser": "ALL"})
+    return webdriver.Chrome(service=Service("/usr/bin/chromedriver"), options=o)
+
+
+def open_page(driver, page):
+    driver.get("file://" + os.path.abspath(page))
+    driver.set_script_timeout(60)
+    ready = driver.execute_async_script(
+        "const done = arguments[0]; const t0 = Date.now();"
+        "(function wait() { if (window.viewer && window.viewer.ready) done(true);"
+        " else if (Date.now() - t0 > 30000) done(false); else setTimeout(wait, 50); })();")
+    if not ready:
+        fail(f"{page}: the viewer did not start")
+    errors = [e for e in driver.get_log("browser") if e["level"] == "SEVERE"]
+    if errors:
+        fail(f"{page}: console errors: {errors}")
+
+
+def check_positions(driver, h5, work):
+    frames = driver.execute_script("return window.viewer.frames")
+    if frames != h5["time"].shape[0]:
+        fail(f"the page shows {frames} frames, the file has {h5['time'].shape[0]} snapshots")
+    for k in (frames - 1, 0):
+        if driver.execute_script(f"return window.viewer.seek({k})") != k:
+            fail(f"seeking to frame {k} failed")
+        p = h5["bodies/position"][k]
+        centre = (p.min(axis=0) + p.max(axis=0)) / 2
+        extent = max(float((p.max(axis=0) - p.min(axis=0)).max()), 1e-3)
+        fov, distance = 40.0, 2.5 * extent
+        driver.execute_script(f"window.viewer.setView({{target: {list(map(float, centre))}, distance: {distance}, fov: {fov}}})")
+        width, height = driver.execute_script("return [window.innerWidth, window.innerHeight]")
+        shot = os.path.join(work, f"viewer_frame{k}.png")
+        driver.save_screenshot(shot)
+        image = Image.open(shot).convert("RGB")
+        scale = image.size[0] / width  # device pixels per CSS pixel
+        tan = math.tan(math.radians(fov) / 2)
+        for i, (x, y, z) in enumerate(p):
+            depth = centre[2] + distance - z
+            u = ((x - centre[0]) / depth / (tan * width / height) + 1) / 2 * width
+            v = (1 - (y - centre[1]) / depth / tan) / 2 * height
+            r, g, b = image.getpixel((int(u * scale), int(v * scale)))
+            if min(r, g, b) > 240:
+                fail(f"frame {k}: body {i} at {list(p[i])} should be drawn at pixel ({u:.0f}, {v:.0f}); it is background")
+        r, g, b = image.getpixel((int(0.95 * width * scale), int(0.15 * height * scale)))
+        if min(r, g, b) < 240:
+            fail(f"frame {k}: the background far from every body is drawn on")
+    print(f"viewer_check: {frames} frames; after seeking, every body drawn where the file puts it")
+
+
+def run(mbsflow, work, *args):
+    subprocess.run([mbsflow, *args], cwd=work, check=True, stderr=subprocess.DEVNULL)
+
+
+def main():
+    mbsflow, work = os.path.abspath(sys.argv[1]), sys.argv[2]
+    os.makedirs(work, exist_ok=True)
+    run(mbsflow, work, "generate", "chain", "--bodies", "5", "-o", "chain.json")
+    run(mbsflow, work, "run", "chain.json", "--t-end", "0.3", "--output-interval", "0.05", "--fields", "all", "-o", "chain.h5")
+    run(mbsflow, work, "view", "chain.h5", "-o", "chain.html")
+    run(mbsflow, work, "generate", "grid", "--rows", "100", "--cols", "100", "-o", "grid.json")
+    run(mbsflow, work, "run", "grid.json", "--t-end", "0.02", "--output-interval", "0.002", "-o", "grid.h5")
+    run(mbsflow, work, "view", "grid.h5", "-o", "grid.html")
+    driver = browser()
+    try:
+        open_page(driver, os.path.join(work, "chain.html"))
+        with h5py.File(os.path.join(work, "chain.h5"), "r") as h5:
+            check_positions(driver, h5, work)
+        open_page(driver, os.path.join(work, "grid.html"))
+        bodies = driver.execute_script("return window.viewer.bodies")
+        ms = driver.execute_async_script("window.viewer.timeFrames(5, arguments[0])")
+        print(f"viewer_check: {bodies} bodies: {ms:.1f} ms per frame in headless chromium on SwiftShader (CPU rendering)")
+    finally:
+        driver.quit()
+
+
+if __name__ == "__main__":
+    main()
