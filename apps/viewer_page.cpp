@@ -121,6 +121,7 @@ ViewerPage viewer_page(const ResultsFile& r, const ViewerSettings& s) {
 
   nlohmann::json data;
   data["name"] = model.name;
+  data["refresh"] = s.refresh_seconds;
   data["t"] = times;
   data["bodies"] = n;
   data["names"] = names;

@@ -18,11 +18,15 @@ ResultsFile::ResultsFile(const std::string& path) : path_(path) {
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
   if (!std::filesystem::exists(path)) throw InputError(path + ": no such results file");
   if (H5Fis_hdf5(path.c_str()) <= 0) throw InputError(path + ": not an HDF5 file");
-  // A file that a run is writing is open in SWMR mode and takes only SWMR readers; a
-  // finished one (or one of an older format) opens either way.
-  file_ = H5Fopen(path.c_str(), H5F_ACC_RDONLY | H5F_ACC_SWMR_READ, H5P_DEFAULT);
-  if (file_ < 0) file_ = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
-  if (file_ < 0) throw InputError(path + ": cannot open the results file");
+  // A file that a run is writing is in SWMR mode and takes only SWMR readers (as does one
+  // whose writer was killed in that mode).
+  file_ = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  if (file_ < 0) {
+    file_ = H5Fopen(path.c_str(), H5F_ACC_RDONLY | H5F_ACC_SWMR_READ, H5P_DEFAULT);
+    live_ = file_ >= 0;
+  }
+  if (file_ < 0)
+    throw InputError(path + ": cannot open the results file (a run that is ending holds it alone for a moment: try again)");
   ode_ = !has("/time") && has("/solution/time");
   if (!has("/time") && !ode_) {
     H5Fclose(file_);
@@ -36,11 +40,12 @@ ResultsFile::~ResultsFile() {
 }
 
 ResultsFile::ResultsFile(ResultsFile&& o) noexcept
-    : path_(std::move(o.path_)), file_(std::exchange(o.file_, -1)), ode_(o.ode_) {}
+    : path_(std::move(o.path_)), file_(std::exchange(o.file_, -1)), ode_(o.ode_), live_(o.live_) {}
 ResultsFile& ResultsFile::operator=(ResultsFile&& o) noexcept {
   std::swap(path_, o.path_);
   std::swap(file_, o.file_);
   std::swap(ode_, o.ode_);
+  std::swap(live_, o.live_);
   return *this;
 }
 

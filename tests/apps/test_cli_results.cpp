@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <regex>
+#include <sstream>
 #include <thread>
 
 #include "cli_support.hpp"
@@ -175,7 +176,7 @@ TEST_CASE("the results of mbsflow ode: info describes them and export and plot r
   fs::remove_all(d.parent_path());
 }
 
-TEST_CASE("a run's results are read while it goes by info and h5py and plot --follow and view writes its motion", "[apps]") {
+TEST_CASE("a run's results are read while it goes by info and h5py and plot --follow and view --serve and view writes its motion", "[apps]") {
   const fs::path d = scratch("live");
   const std::string dir = d.string();
   REQUIRE(run("generate chain --bodies 300 -o chain.json", dir).code == 0);
@@ -202,6 +203,31 @@ TEST_CASE("a run's results are read while it goes by info and h5py and plot --fo
                            " n = t.shape[0]; time.sleep(1.5); t.refresh(); sys.exit(0 if t.shape[0] > n else 1)\" '" +
                            dir + "/live.h5'";
   CHECK(std::system(read.c_str()) == 0);  // h5py sees it grow
+  // view --serve: each load is made afresh from the file; a live run's page reloads itself.
+  Child server({"view", "live.h5", "--serve", "--port", "0", "--interval", "1"}, d, "server");
+  std::string address;
+  for (int i = 0; i < 600 && address.empty() && !server.wait(0.0); ++i) {
+    std::smatch m;
+    const std::string first = server.out();
+    if (std::regex_search(first, m, std::regex(R"(at (http://127\.0\.0\.1:\d+/))"))) address = m[1];
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  REQUIRE_FALSE(address.empty());
+  // Frames and refresh period of the served page, twice 1.5 s apart.
+  const std::string fetch = python + " -c \"import json,re,sys,time,urllib.request\n"
+                            "def data():\n"
+                            "    page = urllib.request.urlopen(sys.argv[1]).read().decode()\n"
+                            "    return json.loads(re.search(r'const DATA = (\\{.*?\\});\\n', page, re.S).group(1))\n"
+                            "a = data(); time.sleep(1.5); b = data()\n"
+                            "print(len(a['t']), a['refresh'], len(b['t']), b['refresh'])\" " +
+                            address + " > '" + dir + "/served.txt'";
+  REQUIRE(std::system(fetch.c_str()) == 0);
+  std::istringstream served(read_text(d / "served.txt"));
+  long frames_before = 0, frames_after = 0;
+  double refresh_before = 0, refresh_after = 0;
+  served >> frames_before >> refresh_before >> frames_after >> refresh_after;
+  CHECK(frames_after > frames_before);  // new snapshots in the page
+  CHECK(refresh_before == 1.0);         // and it reloads itself
   Child follower({"plot", "live.h5", "--follow", "--interval", "0.3", "-o", "live.png"}, d, "follower");
   std::this_thread::sleep_for(std::chrono::seconds(2));
   writer.kill(SIGTERM);
@@ -212,6 +238,13 @@ TEST_CASE("a run's results are read while it goes by info and h5py and plot --fo
   CHECK(lines.find("(run going)") != std::string::npos);
   CHECK(lines.find("(run ended)") != std::string::npos);
   CHECK(fs::exists(d / "live.png"));
+  const std::string ended = python + " -c \"import json,re,sys,urllib.request\n"
+                            "page = urllib.request.urlopen(sys.argv[1]).read().decode()\n"
+                            "sys.exit(0 if json.loads(re.search(r'const DATA = (\\{.*?\\});\\n', page, re.S).group(1))['refresh'] == 0 else 1)\" " +
+                            address;
+  CHECK(std::system(ended.c_str()) == 0);  // the finished run's page stays put
+  server.kill(SIGINT);
+  CHECK(server.wait(10.0) == 0);
   const Result view = run("view live.h5 --max-frames 50", dir);
   CHECK(view.code == 0);
   CHECK(view.err.find("50 frames") != std::string::npos);

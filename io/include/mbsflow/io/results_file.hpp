@@ -24,6 +24,8 @@ class ResultsFile {
   std::vector<std::uint64_t> shape(const std::string& dataset) const;  // empty if absent
 
   bool ode() const { return ode_; }  // the results of mbsflow ode: /solution and /steps
+  // Opened as SWMR reader: a run is writing the file (or was killed while it did).
+  bool live() const { return live_; }
   std::vector<double> time() const;  // snapshot times, or the ODE solution's points
   std::vector<std::string> body_names() const;
   std::vector<std::string> joint_names() const;
@@ -40,6 +42,7 @@ class ResultsFile {
   std::string path_;
   std::int64_t file_ = -1;  // hid_t
   bool ode_ = false;
+  bool live_ = false;
 };
 
 // CSV files in dir, headers with units in brackets ("x [m]"). A run: one file per body
