@@ -71,7 +71,8 @@ int info(const std::string& path) {
     if (r.has(d)) std::printf("  %-24s %-16s [%s]\n", d, shape_text(r.shape(d)).c_str(), unit_of(r, d).c_str());
   };
   for (const BodyField& f : body_fields) dataset(f.dataset);
-  for (const char* d : {energy_dataset, joint_force_dataset, motor_effort_dataset, joint_attachment_dataset}) dataset(d);
+  for (const char* d : {body_energy_dataset, energy_dataset, joint_force_dataset, motor_effort_dataset, joint_attachment_dataset})
+    dataset(d);
   std::printf("written by    mbsflow %s\n", text("mbsflow_version").c_str());
   std::printf("command line  %s\n", text("command_line").c_str());
   return 0;

@@ -66,6 +66,7 @@ ViewerPage viewer_page(const ResultsFile& r, const ViewerSettings& s) {
   const std::size_t n = names.size();
   const bool orientation = r.has("/bodies/orientation"), velocity = r.has("/bodies/velocity");
   const bool spin = r.has("/bodies/angular_velocity"), ends = r.has(joint_attachment_dataset);
+  const bool energies = r.has(body_energy_dataset);
   const std::size_t joints = ends ? r.shape(joint_attachment_dataset)[1] : 0;
   const Model model = read_model_text(r.string_attribute("model").value_or(""), r.path() + " (its model)");
   if (model.bodies.size() != n) throw InputError(r.path() + ": its model has another number of bodies than its results");
@@ -91,23 +92,11 @@ ViewerPage viewer_page(const ResultsFile& r, const ViewerSettings& s) {
     if (ends) append(attachment, r.read_row(joint_attachment_dataset, k));
     const std::vector<double> v = velocity ? r.read_row("/bodies/velocity", k) : std::vector<double>{};
     const std::vector<double> w = spin ? r.read_row("/bodies/angular_velocity", k) : std::vector<double>{};
+    const std::vector<double> e = energies ? r.read_row(body_energy_dataset, k) : std::vector<double>{};
     for (std::size_t i = 0; i < n; ++i) {
-      const Body& b = model.bodies[i];
-      double energy = 0;
-      if (velocity) {
-        const Eigen::Vector3d vi(v[3 * i], v[3 * i + 1], v[3 * i + 2]);
-        speed.push_back(static_cast<float>(vi.norm()));
-        energy += 0.5 * b.mass * vi.squaredNorm();
-      }
-      if (spin) {
-        const Eigen::Vector3d wi(w[3 * i], w[3 * i + 1], w[3 * i + 2]);  // body frame
-        Eigen::Matrix3d inertia;
-        inertia << b.inertia[0], b.inertia[3], b.inertia[4], b.inertia[3], b.inertia[1], b.inertia[5], b.inertia[4],
-            b.inertia[5], b.inertia[2];
-        angular_speed.push_back(static_cast<float>(wi.norm()));
-        energy += 0.5 * wi.dot(inertia * wi);
-      }
-      if (velocity && spin) kinetic.push_back(static_cast<float>(energy));
+      if (velocity) speed.push_back(static_cast<float>(Eigen::Vector3d(v[3 * i], v[3 * i + 1], v[3 * i + 2]).norm()));
+      if (spin) angular_speed.push_back(static_cast<float>(Eigen::Vector3d(w[3 * i], w[3 * i + 1], w[3 * i + 2]).norm()));
+      if (energies) kinetic.push_back(static_cast<float>(e[2 * i]));
     }
   }
   // Bodies without a usable inertia are drawn as spheres of 2 % of the model's extent at the start.

@@ -12,7 +12,7 @@ packages=(
   libsundials-dev libboost-dev
   libsuitesparse-dev  # KLU, the sparse LU of the implicit methods
   clang libclang-rt-14-dev  # libFuzzer targets (tests/fuzz); Debian 12's clang is 14
-  paraview python3-paraview xvfb xauth  # the results opened in the real ParaView (tests/io/paraview_check.sh)
+  paraview python3-paraview xvfb  # the results opened in the real ParaView (tests/io/paraview_check.sh)
   libjs-three  # three.js, inlined by mbsflow view
   chromium chromium-driver python3-selenium python3-pil  # the viewer tested in a real browser
 )

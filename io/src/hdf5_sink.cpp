@@ -181,6 +181,21 @@ h5::Handle file_access() {
   return fapl;
 }
 
+// Each body's kinetic energy (translation and rotation, the angular velocity and inertia
+// in the body frame) and potential of gravity, -m g . r, as MultibodySystem::energy sums them.
+void append_body_energies(const Model& m, const StateLayout& l, const Eigen::VectorXd& y, std::vector<double>& out) {
+  const Eigen::Vector3d g(m.gravity[0], m.gravity[1], m.gravity[2]);
+  for (Eigen::Index i = 0; i < l.bodies; ++i) {
+    const Body& b = m.bodies[static_cast<std::size_t>(i)];
+    Eigen::Matrix3d inertia;
+    inertia << b.inertia[0], b.inertia[3], b.inertia[4], b.inertia[3], b.inertia[1], b.inertia[5], b.inertia[4], b.inertia[5],
+        b.inertia[2];
+    const Eigen::Vector3d w = y.segment<3>(l.angular_velocity(i));
+    const double kinetic = 0.5 * b.mass * y.segment<3>(l.velocity(i)).squaredNorm() + 0.5 * w.dot(inertia * w);
+    out.insert(out.end(), {kinetic, -b.mass * g.dot(y.segment<3>(l.position(i)))});
+  }
+}
+
 }  // namespace
 
 struct Hdf5Sink::File {
@@ -188,7 +203,7 @@ struct Hdf5Sink::File {
   h5::Handle file;
   Series time;
   std::vector<std::pair<std::size_t, Series>> bodies;  // (index into body_fields, series)
-  std::optional<Series> energy, joint_force, motor_effort, attachment;
+  std::optional<Series> energy, body_energy, joint_force, motor_effort, attachment;
   hsize_t rows_per_chunk = 1;
   std::vector<double> times;  // every time written, for the XDMF sidecar
 };
@@ -224,6 +239,7 @@ void Hdf5Sink::lay_out(File& f, const MultibodySystem& system, bool make) {
       f.bodies.emplace_back(i, series(body_fields[i].dataset, {n, static_cast<hsize_t>(body_fields[i].components)}, rows,
                                       body_fields[i].unit));
   if (fields_.energy) f.energy = series(energy_dataset, {3}, 1024, energy_unit);
+  if (fields_.energy) f.body_energy = series(body_energy_dataset, {n, 2}, rows, energy_unit);
   if (fields_.joint_force && joints > 0) f.joint_force = series(joint_force_dataset, {joints, 6}, rows, joint_force_unit);
   const bool motors = std::any_of(m.joints.begin(), m.joints.end(), [](const Joint& j) { return j.motor.kind != JointMotor::Kind::none; });
   if (f.joint_force && motors) f.motor_effort = series(motor_effort_dataset, {joints, 1}, rows, motor_effort_unit);
@@ -318,6 +334,7 @@ void Hdf5Sink::resume(const MultibodySystem& system, long snapshots, const std::
   if (f->joint_force) truncate(*f->joint_force, kept);
   if (f->motor_effort) truncate(*f->motor_effort, kept);
   if (f->attachment) truncate(*f->attachment, kept);
+  if (f->body_energy) truncate(*f->body_energy, kept);
   f->times = read_rows(f->time, kept);
   h5::check(H5Fflush(f->file.get(), H5F_SCOPE_GLOBAL), "flush " + path_);
   h5::check(H5Fstart_swmr_write(f->file.get()), "let readers in while the run writes " + path_);
@@ -347,6 +364,7 @@ void Hdf5Sink::write(Snapshot&& s) {
     const Energy e = s.energy.value_or(Energy{});
     f.energy->buffer.insert(f.energy->buffer.end(), {e.kinetic, e.gravity, e.elastic});
   }
+  if (f.body_energy) append_body_energies(system_->model(), l, s.state, f.body_energy->buffer);
   if (f.joint_force) f.joint_force->buffer.insert(f.joint_force->buffer.end(), s.joint_wrench.data(), s.joint_wrench.data() + s.joint_wrench.size());
   if (f.motor_effort) f.motor_effort->buffer.insert(f.motor_effort->buffer.end(), s.motor_effort.data(), s.motor_effort.data() + s.motor_effort.size());
   if (f.attachment) append_attachment_points(system_->model(), l, s.state, f.attachment->buffer);
@@ -361,6 +379,7 @@ void Hdf5Sink::flush() {
   if (rows == 0) return;
   for (auto& [i, series] : f.bodies) append(series, first);
   if (f.energy) append(*f.energy, first);
+  if (f.body_energy) append(*f.body_energy, first);
   if (f.joint_force) append(*f.joint_force, first);
   if (f.motor_effort) append(*f.motor_effort, first);
   if (f.attachment) append(*f.attachment, first);
@@ -395,6 +414,7 @@ void Hdf5Sink::end() {
   c.joint_attachment = f->attachment.has_value();
   c.joint_force = f->joint_force.has_value();
   c.energy = f->energy.has_value();
+  c.body_energy = f->body_energy.has_value();
   const std::vector<double> times = std::move(f->times);
   f.reset();
   const h5::Handle file(H5Fopen(path_.c_str(), H5F_ACC_RDWR, file_access().get()), H5Fclose, "open " + path_ + " again");

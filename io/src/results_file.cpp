@@ -243,6 +243,7 @@ std::vector<std::string> export_csv(const ResultsFile& r, const std::string& dir
   std::vector<const BodyField*> fields;
   for (const BodyField& f : body_fields)
     if (r.has(f.dataset)) fields.push_back(&f);
+  const bool body_energies = r.has(body_energy_dataset);
   std::vector<std::string> written;
   for (std::size_t b : bodies) {
     std::string header = time_column;
@@ -250,6 +251,10 @@ std::vector<std::string> export_csv(const ResultsFile& r, const std::string& dir
     for (const BodyField* f : fields) {
       for (int c = 0; c < f->components; ++c) header += "," + with_unit(f->columns[static_cast<std::size_t>(c)], f->unit);
       blocks.push_back({r.read_item(f->dataset, b), f->components});
+    }
+    if (body_energies) {
+      header += ",kinetic_energy [J],gravity_energy [J]";
+      blocks.push_back({r.read_item(body_energy_dataset, b), 2});
     }
     written.push_back(write_csv_table(in_dir(dir, names[b] + ".csv"), header, t, blocks));
   }

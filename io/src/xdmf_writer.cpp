@@ -115,8 +115,9 @@ void write_xdmf(hid_t file, const std::string& xdmf_path, const std::string& h5_
 
   std::vector<Source> body_sources;
   for (const std::string& name : c.body_fields) body_sources.emplace_back(file, body_field(name)->dataset);
-  std::optional<Source> energy, ends, wrench;
+  std::optional<Source> energy, body_energy, ends, wrench;
   if (c.energy) energy.emplace(file, energy_dataset);
+  if (c.body_energy) body_energy.emplace(file, body_energy_dataset);
   if (lines) ends.emplace(file, joint_attachment_dataset);
   if (lines && c.joint_force) wrench.emplace(file, joint_force_dataset);
 
@@ -134,6 +135,10 @@ void write_xdmf(hid_t file, const std::string& xdmf_path, const std::string& h5_
       make_view(views.get(), f->name, {c.bodies, static_cast<hsize_t>(f->components)}, s, t, 0, f->components);
     }
     if (energy) make_view(views.get(), "energy", {3}, *energy, t, 0, 3);
+    if (body_energy) {
+      make_view(views.get(), "kinetic_energy", {c.bodies}, *body_energy, t, 0, 1);
+      make_view(views.get(), "gravity_energy", {c.bodies}, *body_energy, t, 1, 1);
+    }
     std::snprintf(time, sizeof time, "%.17g", times[t]);
     o << "   <Grid Name=\"t" << t << "\" GridType=\"Collection\" CollectionType=\"Spatial\">\n    <Time Value=\"" << time
       << "\"/>\n    <Grid Name=\"bodies\" GridType=\"Uniform\">\n"
@@ -149,6 +154,10 @@ void write_xdmf(hid_t file, const std::string& xdmf_path, const std::string& h5_
                 dims_text(c.bodies, static_cast<std::size_t>(f->components)));
     }
     attribute(o, file_name, "body_index", "Scalar", "Node", group + "/body_index", std::to_string(c.bodies), true);
+    if (body_energy) {
+      attribute(o, file_name, "kinetic_energy", "Scalar", "Node", step + "kinetic_energy", std::to_string(c.bodies));
+      attribute(o, file_name, "gravity_energy", "Scalar", "Node", step + "gravity_energy", std::to_string(c.bodies));
+    }
     if (c.energy) attribute(o, file_name, "energy_kinetic_gravity_elastic", "Vector", "Grid", step + "energy", "1 3");
     o << "    </Grid>\n";
     if (lines) {

@@ -28,6 +28,7 @@ struct XdmfContent {
   bool joint_attachment = false;         // /joints/attachment: the joints as lines
   bool joint_force = false;
   bool energy = false;
+  bool body_energy = false;  // /bodies/energy: per body kinetic and gravity energy
 };
 
 // Makes the views in `file` (open for writing, its series flushed) and writes the sidecar.

@@ -18,6 +18,7 @@ from PIL import Image
 from selenium import webdriver
 from selenium.webdriver.chrome.options import Options
 from selenium.webdriver.chrome.service import Service
+from selenium.webdriver.remote.remote_connection import RemoteConnection
 
 
 def fail(msg):
@@ -31,16 +32,17 @@ def browser():
               "--enable-unsafe-swiftshader", "--window-size=1000,800"):
         o.add_argument(a)
     o.set_capability("goog:loggingPrefs", {"browser": "ALL"})
+    RemoteConnection.set_timeout(600)  # a loaded 2-core machine takes long over the 14 MB page
     return webdriver.Chrome(service=Service("/usr/bin/chromedriver"), options=o)
 
 
 def open_page(driver, page):
     driver.get("file://" + os.path.abspath(page))
-    driver.set_script_timeout(60)
+    driver.set_script_timeout(600)
     ready = driver.execute_async_script(
         "const done = arguments[0]; const t0 = Date.now();"
         "(function wait() { if (window.viewer && window.viewer.ready) done(true);"
-        " else if (Date.now() - t0 > 30000) done(false); else setTimeout(wait, 50); })();")
+        " else if (Date.now() - t0 > 300000) done(false); else setTimeout(wait, 50); })();")
     if not ready:
         fail(f"{page}: the viewer did not start")
     errors = [e for e in driver.get_log("browser") if e["level"] == "SEVERE"]

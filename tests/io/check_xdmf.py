@@ -23,6 +23,8 @@ def source_row(h5, name, t):
     """What the view /xdmf/<t>/<name> must hold: a row of a series."""
     if name == "energy":
         return h5["energy"][t]
+    if name in ("kinetic_energy", "gravity_energy"):
+        return h5["bodies/energy"][t][:, 0 if name == "kinetic_energy" else 1]
     if name == "attachment":
         return h5["joints/attachment"][t].reshape(-1, 3)
     if name in ("force", "torque"):

@@ -1,4 +1,4 @@
-"""Opens a results file's XDMF sidecar in the real ParaView (pvpython, run under xvfb-run)
+"""Opens a results file's XDMF sidecar in the real ParaView (pvpython, on an Xvfb X server)
 with its default reader (Xdmf3) and with the legacy XDMF reader, reads every time step,
 checks the bodies, joints and energies against the HDF5 file, and renders a picture.
 
@@ -61,6 +61,10 @@ def check_reader(label, reader, h5):
             energy = array(bodies.GetFieldData(), "energy_kinetic_gravity_elastic").reshape(-1)
             if not np.array_equal(energy, h5["energy"][t]):
                 fail(f"{label}: energies at t = {time} differ from the file")
+            per_body = h5["bodies/energy"][t]
+            if not (np.array_equal(array(bodies.GetPointData(), "kinetic_energy"), per_body[:, 0])
+                    and np.array_equal(array(bodies.GetPointData(), "gravity_energy"), per_body[:, 1])):
+                fail(f"{label}: body energies at t = {time} differ from the file")
         if joints:
             lines = parts[1]
             if lines.GetNumberOfCells() != joints or lines.GetNumberOfPoints() != 2 * joints:

@@ -173,3 +173,28 @@ TEST_CASE("every series carries its unit and the joints' attachment points follo
   }
   CHECK(worst < 1e-12);
 }
+
+TEST_CASE("the bodies' energies sum to the run's kinetic and gravity energies", "[io]") {
+  Model m = small_train();
+  Vec6& inertia = m.bodies[1].inertia;  // products of inertia too
+  const double small = 0.01 * std::min({inertia[0], inertia[1], inertia[2]});
+  inertia[3] = small;
+  inertia[4] = -small;
+  inertia[5] = 0.5 * small;
+  auto [memory, file] = run_both(m, parse_fields("all"));
+  const ResultsFile r(file.string());
+  REQUIRE(r.shape(body_energy_dataset) == std::vector<std::uint64_t>{r.time().size(), m.bodies.size(), 2});
+  CHECK(r.dataset_string_attribute(body_energy_dataset, "units") == "J");
+  double worst = 0;
+  for (std::size_t row = 0; row < r.time().size(); ++row) {
+    const std::vector<double> per_body = r.read_row(body_energy_dataset, row), total = r.read_row(energy_dataset, row);
+    double kinetic = 0, gravity = 0, scale = 1;
+    for (std::size_t i = 0; i < m.bodies.size(); ++i) {
+      kinetic += per_body[2 * i];
+      gravity += per_body[2 * i + 1];
+      scale += std::abs(per_body[2 * i]) + std::abs(per_body[2 * i + 1]);
+    }
+    worst = std::max({worst, std::abs(kinetic - total[0]) / scale, std::abs(gravity - total[1]) / scale});
+  }
+  CHECK(worst < 1e-13);
+}

@@ -26,6 +26,9 @@ inline constexpr std::array<BodyField, 4> body_fields{{
 }};
 
 inline constexpr const char* energy_dataset = "/energy";        // T x 3: kinetic, gravity, elastic
+// T x N x 2: each body's kinetic energy and potential of gravity (their sums are the first
+// two columns of /energy), written with the energies.
+inline constexpr const char* body_energy_dataset = "/bodies/energy";
 inline constexpr const char* joint_force_dataset = "/joints/force";  // T x J x 6
 // T x J x 1: torque or force of each joint's motor along its axis (0 without a motor);
 // written with joint_force when the model has a motor.
