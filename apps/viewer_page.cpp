@@ -62,8 +62,7 @@ ViewerPage viewer_page(const ResultsFile& r, const ViewerSettings& s) {
   const std::vector<double> t = r.time();
   const std::size_t rows = std::min<std::size_t>(t.size(), r.shape("/bodies/position")[0]);
   if (rows == 0) throw InputError(r.path() + ": no snapshots yet");
-  const std::vector<std::string> names = r.body_names();
-  const std::size_t n = names.size();
+  const std::size_t n = r.body_names().size();
   const bool orientation = r.has("/bodies/orientation"), velocity = r.has("/bodies/velocity");
   const bool spin = r.has("/bodies/angular_velocity"), ends = r.has(joint_attachment_dataset);
   const bool energies = r.has(body_energy_dataset);
@@ -76,11 +75,9 @@ ViewerPage viewer_page(const ResultsFile& r, const ViewerSettings& s) {
   const auto budget = static_cast<std::size_t>(std::max(1.0, s.max_megabytes * 1e6 / frame_bytes));
   const std::size_t most = std::max<std::size_t>(1, std::min<std::size_t>(static_cast<std::size_t>(s.max_frames), budget));
   ViewerPage page;
-  page.stride = rows <= most ? 1 : most == 1 ? static_cast<long>(rows) : static_cast<long>((rows - 1 + most - 2) / (most - 1));
-  std::vector<std::size_t> picked;
-  for (std::size_t k = 0; k < rows; k += static_cast<std::size_t>(page.stride)) picked.push_back(k);
-  if (picked.back() != rows - 1) picked.push_back(rows - 1);
+  const std::vector<std::size_t> picked = evenly_spread_rows(rows, most);
   page.frames = static_cast<long>(picked.size());
+  page.stride = picked.size() > 1 ? static_cast<long>(picked[1] - picked[0]) : 1;
 
   std::vector<float> position, quaternion, attachment, speed, angular_speed, kinetic;
   std::vector<double> times;
@@ -113,7 +110,6 @@ ViewerPage viewer_page(const ResultsFile& r, const ViewerSettings& s) {
   data["refresh"] = s.refresh_seconds;
   data["t"] = times;
   data["bodies"] = n;
-  data["names"] = names;
   data["joints"] = joints;
   data["position"] = base64(position);
   data["orientation"] = orientation ? nlohmann::json(base64(quaternion)) : nlohmann::json();

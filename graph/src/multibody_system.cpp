@@ -16,12 +16,6 @@ namespace {
 Eigen::Vector3d vec(const Vec3& a) { return {a[0], a[1], a[2]}; }
 Eigen::Vector4d quat(const Quat& a) { return {a[0], a[1], a[2], a[3]}; }
 
-Eigen::Matrix3d inertia_matrix(const Vec6& i) {
-  Eigen::Matrix3d m;
-  m << i[0], i[3], i[4], i[3], i[1], i[5], i[4], i[5], i[2];
-  return m;
-}
-
 // CSR lists of items per body, kept in item order.
 template <class BodyOf>
 void build_csr(int bodies, int items, BodyOf body_of, std::vector<int>& start, std::vector<int>& list) {
@@ -38,6 +32,12 @@ void build_csr(int bodies, int items, BodyOf body_of, std::vector<int>& start, s
 }
 
 }  // namespace
+
+Eigen::Matrix3d inertia_matrix(const Vec6& i) {
+  Eigen::Matrix3d m;
+  m << i[0], i[3], i[4], i[3], i[1], i[5], i[4], i[5], i[2];
+  return m;
+}
 
 MultibodySystem::MultibodySystem(const Model& model) : MultibodySystem(model, static_cast<int>(model.bodies.size())) {}
 

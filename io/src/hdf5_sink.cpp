@@ -187,11 +187,8 @@ void append_body_energies(const Model& m, const StateLayout& l, const Eigen::Vec
   const Eigen::Vector3d g(m.gravity[0], m.gravity[1], m.gravity[2]);
   for (Eigen::Index i = 0; i < l.bodies; ++i) {
     const Body& b = m.bodies[static_cast<std::size_t>(i)];
-    Eigen::Matrix3d inertia;
-    inertia << b.inertia[0], b.inertia[3], b.inertia[4], b.inertia[3], b.inertia[1], b.inertia[5], b.inertia[4], b.inertia[5],
-        b.inertia[2];
     const Eigen::Vector3d w = y.segment<3>(l.angular_velocity(i));
-    const double kinetic = 0.5 * b.mass * y.segment<3>(l.velocity(i)).squaredNorm() + 0.5 * w.dot(inertia * w);
+    const double kinetic = 0.5 * b.mass * y.segment<3>(l.velocity(i)).squaredNorm() + 0.5 * w.dot(inertia_matrix(b.inertia) * w);
     out.insert(out.end(), {kinetic, -b.mass * g.dot(y.segment<3>(l.position(i)))});
   }
 }
@@ -410,7 +407,7 @@ void Hdf5Sink::end() {
   c.bodies = system_->model().bodies.size();
   c.joints = system_->model().joints.size();
   for (std::size_t i = 0; i < body_fields.size(); ++i)
-    if (fields_.body[i]) c.body_fields.push_back(body_fields[i].name);
+    if (fields_.body[i]) c.body_fields.push_back(&body_fields[i]);
   c.joint_attachment = f->attachment.has_value();
   c.joint_force = f->joint_force.has_value();
   c.energy = f->energy.has_value();

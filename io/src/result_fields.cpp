@@ -39,4 +39,14 @@ std::string fields_text(const FieldSet& f) {
   return s;
 }
 
+std::vector<std::size_t> evenly_spread_rows(std::size_t rows, std::size_t most) {
+  if (rows == 0) return {};
+  if (most <= 1) return {rows - 1};
+  const std::size_t stride = rows <= most ? 1 : (rows - 1 + most - 2) / (most - 1);
+  std::vector<std::size_t> out;
+  for (std::size_t r = 0; r < rows; r += stride) out.push_back(r);
+  if (out.back() != rows - 1) out.push_back(rows - 1);
+  return out;
+}
+
 }  // namespace mbsflow

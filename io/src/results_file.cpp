@@ -102,18 +102,29 @@ std::vector<double> ResultsFile::read(const std::string& dataset) const {
   return out;
 }
 
+namespace {
+
+// The values of `dataset` in the block start .. start + count, row-major.
+std::vector<double> read_block(hid_t file, const std::string& dataset, const std::vector<hsize_t>& start,
+                               const std::vector<hsize_t>& count) {
+  std::size_t n = 1;
+  for (hsize_t c : count) n *= c;
+  std::vector<double> out(n);
+  const h5::Handle set(H5Dopen2(file, dataset.c_str(), H5P_DEFAULT), H5Dclose, "open " + dataset);
+  const h5::Handle space(H5Dget_space(set.get()), H5Sclose, "get the space of " + dataset);
+  h5::check(H5Sselect_hyperslab(space.get(), H5S_SELECT_SET, start.data(), nullptr, count.data(), nullptr), "select in " + dataset);
+  const h5::Handle mem(H5Screate_simple(static_cast<int>(count.size()), count.data(), nullptr), H5Sclose, "create a memory space");
+  if (n > 0) h5::check(H5Dread(set.get(), H5T_NATIVE_DOUBLE, mem.get(), space.get(), H5P_DEFAULT, out.data()), "read " + dataset);
+  return out;
+}
+
+}  // namespace
+
 std::vector<double> ResultsFile::read_item(const std::string& dataset, std::size_t index) const {
   const std::vector<std::uint64_t> dims = shape(dataset);
   if (dims.size() != 3) throw InputError(path_ + ": " + dataset + " is not a T x N x k dataset");
   if (index >= dims[1]) throw InputError(path_ + ": index " + std::to_string(index) + " out of range in " + dataset);
-  const hsize_t start[3] = {0, index, 0}, count[3] = {dims[0], 1, dims[2]};
-  std::vector<double> out(dims[0] * dims[2]);
-  const h5::Handle set(H5Dopen2(file_, dataset.c_str(), H5P_DEFAULT), H5Dclose, "open " + dataset);
-  const h5::Handle space(H5Dget_space(set.get()), H5Sclose, "get the space of " + dataset);
-  h5::check(H5Sselect_hyperslab(space.get(), H5S_SELECT_SET, start, nullptr, count, nullptr), "select in " + dataset);
-  const h5::Handle mem(H5Screate_simple(3, count, nullptr), H5Sclose, "create a memory space");
-  if (!out.empty()) h5::check(H5Dread(set.get(), H5T_NATIVE_DOUBLE, mem.get(), space.get(), H5P_DEFAULT, out.data()), "read " + dataset);
-  return out;
+  return read_block(file_, dataset, {0, index, 0}, {dims[0], 1, dims[2]});
 }
 
 std::vector<double> ResultsFile::read_row(const std::string& dataset, std::size_t row) const {
@@ -122,15 +133,7 @@ std::vector<double> ResultsFile::read_row(const std::string& dataset, std::size_
   std::vector<hsize_t> start(dims.size(), 0), count(dims.begin(), dims.end());
   start[0] = row;
   count[0] = 1;
-  std::size_t n = 1;
-  for (std::size_t d = 1; d < dims.size(); ++d) n *= dims[d];
-  std::vector<double> out(n);
-  const h5::Handle set(H5Dopen2(file_, dataset.c_str(), H5P_DEFAULT), H5Dclose, "open " + dataset);
-  const h5::Handle space(H5Dget_space(set.get()), H5Sclose, "get the space of " + dataset);
-  h5::check(H5Sselect_hyperslab(space.get(), H5S_SELECT_SET, start.data(), nullptr, count.data(), nullptr), "select in " + dataset);
-  const h5::Handle mem(H5Screate_simple(static_cast<int>(count.size()), count.data(), nullptr), H5Sclose, "create a memory space");
-  if (n > 0) h5::check(H5Dread(set.get(), H5T_NATIVE_DOUBLE, mem.get(), space.get(), H5P_DEFAULT, out.data()), "read " + dataset);
-  return out;
+  return read_block(file_, dataset, start, count);
 }
 
 std::vector<double> ResultsFile::time() const { return read(ode_ ? "/solution/time" : "/time"); }

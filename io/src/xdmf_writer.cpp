@@ -14,18 +14,6 @@ namespace {
 
 constexpr const char* views_group = "/xdmf";
 
-const BodyField* body_field(const std::string& name) {
-  for (const BodyField& f : body_fields)
-    if (name == f.name) return &f;
-  return nullptr;
-}
-
-const BodyField* body_field_at(const char* dataset) {
-  for (const BodyField& f : body_fields)
-    if (std::string(dataset) == f.dataset) return &f;
-  return nullptr;
-}
-
 // A series that views show rows of: its name and space, read once.
 struct Source {
   const char* path;
@@ -87,15 +75,6 @@ std::string dims_text(std::size_t a, std::size_t b) { return std::to_string(a) +
 
 }  // namespace
 
-std::vector<std::size_t> xdmf_rows(std::size_t rows) {
-  std::vector<std::size_t> out;
-  if (rows == 0) return out;
-  const std::size_t stride = rows <= xdmf_max_steps ? 1 : (rows - 1 + xdmf_max_steps - 2) / (xdmf_max_steps - 1);
-  for (std::size_t r = 0; r < rows; r += stride) out.push_back(r);
-  if (out.back() != rows - 1) out.push_back(rows - 1);
-  return out;
-}
-
 void write_xdmf(hid_t file, const std::string& xdmf_path, const std::string& h5_path, const std::vector<double>& times,
                 const XdmfContent& c) {
   if (H5Lexists(file, views_group, H5P_DEFAULT) > 0)  // a resumed run that had ended before: made again
@@ -113,8 +92,8 @@ void write_xdmf(hid_t file, const std::string& xdmf_path, const std::string& h5_
     write_ints(file, group + "/joint_index", {c.joints}, {index.begin(), index.begin() + static_cast<long>(c.joints)});
   }
 
-  std::vector<Source> body_sources;
-  for (const std::string& name : c.body_fields) body_sources.emplace_back(file, body_field(name)->dataset);
+  std::vector<Source> body_sources;  // in the order of c.body_fields
+  for (const BodyField* f : c.body_fields) body_sources.emplace_back(file, f->dataset);
   std::optional<Source> energy, body_energy, ends, wrench;
   if (c.energy) energy.emplace(file, energy_dataset);
   if (c.body_energy) body_energy.emplace(file, body_energy_dataset);
@@ -127,12 +106,12 @@ void write_xdmf(hid_t file, const std::string& xdmf_path, const std::string& h5_
     << "  <Grid Name=\"run\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
   char time[32];
   const std::string n3 = dims_text(c.bodies, 3), j3 = dims_text(c.joints, 3);
-  for (const std::size_t t : xdmf_rows(times.size())) {
+  for (const std::size_t t : evenly_spread_rows(times.size(), xdmf_max_steps)) {
     const std::string step = group + '/' + std::to_string(t) + '/';
     const h5::Handle views(H5Gcreate2(file, step.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose, "create " + step);
-    for (const Source& s : body_sources) {
-      const BodyField* f = body_field_at(s.path);
-      make_view(views.get(), f->name, {c.bodies, static_cast<hsize_t>(f->components)}, s, t, 0, f->components);
+    for (std::size_t i = 0; i < body_sources.size(); ++i) {
+      const BodyField* f = c.body_fields[i];
+      make_view(views.get(), f->name, {c.bodies, static_cast<hsize_t>(f->components)}, body_sources[i], t, 0, f->components);
     }
     if (energy) make_view(views.get(), "energy", {3}, *energy, t, 0, 3);
     if (body_energy) {
@@ -147,9 +126,8 @@ void write_xdmf(hid_t file, const std::string& xdmf_path, const std::string& h5_
     o << "     </Topology>\n     <Geometry GeometryType=\"XYZ\">\n";
     item(o, file_name, step + "position", n3, false, "      ");
     o << "     </Geometry>\n";
-    for (const std::string& name : c.body_fields) {
-      const BodyField* f = body_field(name);
-      if (f == &body_fields[0]) continue;
+    for (const BodyField* f : c.body_fields) {
+      if (f == &body_fields[0]) continue;  // the geometry
       attribute(o, file_name, f->name, f->components == 3 ? "Vector" : "Matrix", "Node", step + f->name,
                 dims_text(c.bodies, static_cast<std::size_t>(f->components)));
     }

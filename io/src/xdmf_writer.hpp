@@ -1,7 +1,7 @@
 #pragma once
 // XDMF sidecar of a results file, so that ParaView opens a run with either of its XDMF
 // readers: per snapshot, the bodies as points (velocity, angular velocity, orientation,
-// body index; the energies as values of the whole grid) and the joints as lines between
+// kinetic and gravity energy, body index; the model's energies as values of the grid) and the joints as lines between
 // their attachment points (force, torque and joint index per line).
 //
 // ParaView's default reader (Xdmf3) does not read XDMF hyperslabs (it skips their arrays
@@ -14,17 +14,18 @@
 #include <string>
 #include <vector>
 
+#include "mbsflow/io/result_fields.hpp"
+
 namespace mbsflow {
 
 // The sidecar shows at most this many snapshots, evenly spread with the first and last:
 // each view costs about 70 us to make (HDF5 1.10), so a run of 12 000 snapshots would
 // spend 4 s on them. The results file keeps every snapshot.
 inline constexpr std::size_t xdmf_max_steps = 1000;
-std::vector<std::size_t> xdmf_rows(std::size_t rows);  // which rows the sidecar shows
 
 struct XdmfContent {
   std::size_t bodies = 0, joints = 0;
-  std::vector<std::string> body_fields;  // names of the body fields written (position first)
+  std::vector<const BodyField*> body_fields;  // the body fields written (position first)
   bool joint_attachment = false;         // /joints/attachment: the joints as lines
   bool joint_force = false;
   bool energy = false;

@@ -116,9 +116,7 @@ double spin_momentum(const MultibodySystem& sys, const Eigen::VectorXd& y) {
   double l = 0.0;
   for (int i = 0; i < sys.layout().bodies; ++i) {
     const Body& b = sys.model().bodies[static_cast<std::size_t>(i)];
-    Eigen::Matrix3d inertia;
-    inertia << b.inertia[0], b.inertia[3], b.inertia[4], b.inertia[3], b.inertia[1], b.inertia[5], b.inertia[4],
-        b.inertia[5], b.inertia[2];
+    const Eigen::Matrix3d inertia = inertia_matrix(b.inertia);
     const Eigen::Vector3d w = y.segment<3>(sys.layout().angular_velocity(i));
     const Eigen::Vector3d v = y.segment<3>(sys.layout().velocity(i));
     l += (b.mass * position(sys, y, i).cross(v) + orientation(sys, y, i) * (inertia * w))[2];

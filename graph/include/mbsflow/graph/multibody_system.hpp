@@ -64,6 +64,9 @@ struct Energy {
   double total() const { return kinetic + gravity + elastic; }
 };
 
+// A body's inertia tensor (Body::inertia: Ixx, Iyy, Izz, Ixy, Ixz, Iyz) as a matrix.
+Eigen::Matrix3d inertia_matrix(const Vec6& inertia);
+
 // Whether the whole-model system of m has an analytic Jacobian (see
 // MultibodySystem::has_analytic_jacobian), without building it.
 bool has_analytic_jacobian(const Model& m, std::string* why = nullptr);

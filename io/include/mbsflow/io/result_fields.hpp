@@ -50,6 +50,10 @@ struct FieldSet {
   bool joint_force = false;
 };
 
+// At most `most` of `rows` snapshots (indices), evenly spread, the first and the last
+// among them: what the XDMF sidecar and the viewer show of a long run.
+std::vector<std::size_t> evenly_spread_rows(std::size_t rows, std::size_t most);
+
 // "position,velocity,energy" -> FieldSet; "all" selects everything. Throws InputError.
 FieldSet parse_fields(const std::string& list);
 std::string fields_text(const FieldSet& f);
