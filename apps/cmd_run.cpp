@@ -25,9 +25,10 @@
 #include "mbsflow/runtime/loose_coupling.hpp"
 #include "mbsflow/runtime/partitioned_run.hpp"
 #include "mbsflow/runtime/run.hpp"
+#include "mbsflow/runtime/run_request.hpp"
 #include "mbsflow/runtime/simulation.hpp"
 #include "progress.hpp"
-#include "signals.hpp"
+#include "mbsflow/runtime/stop_signals.hpp"
 
 namespace mbsflow::cli {
 namespace {
@@ -139,12 +140,6 @@ std::string human_bytes(double b) {
 // The run's options from the model and the flags; says which step was chosen (a warning
 // for a given RK4 step above the stability estimate s of the model).
 RunOptions choose_options(Model& m, const RunArgs& a, const StableStep& s) {
-  if (a.step) m.simulation.step = *a.step;
-  if (a.every) {
-    m.simulation.output_every = *a.every;
-    m.simulation.output_interval.reset();
-  }
-  if (a.output_interval) m.simulation.output_interval = *a.output_interval;
   RunOptions o = options_from_model(m, s.step);
   o.linear_solver = a.linear_solver;
   o.jacobian = a.jacobian;
@@ -208,17 +203,9 @@ int run(const RunArgs& a, const CheckpointFile* resumed = nullptr, const std::st
   if (a.model.empty()) throw InputError("run: give a MODEL file, or --resume CHECKPOINT to go on with a run");
   const std::string model_text = resumed ? resumed->model_text : read_model_file_text(a.model);
   Model m = read_model_text(model_text, a.model);
-  if (a.t_end) {
-    if (!(*a.t_end > m.simulation.t_start)) throw InputError("--t-end: must be > t_start of the model");
-    m.simulation.t_end = *a.t_end;
-  }
-  if (!a.method.empty() && *find_method(a.method) != m.simulation.method) {
-    m.simulation.method = *find_method(a.method);
-    m.simulation.variant.clear();  // the model's variant belongs to its own method
-  }
-  if (a.variant) m.simulation.variant = *a.variant;
-  if (a.rtol) m.simulation.rtol = *a.rtol;
-  if (a.atol) m.simulation.atol = *a.atol;
+  ModelOverrides overrides{a.t_end, a.step, a.rtol, a.atol, a.output_interval, a.every, std::nullopt, a.variant};
+  if (!a.method.empty()) overrides.method = *find_method(a.method);
+  apply_overrides(m, overrides);
   const StableStep stable = estimate_stable_step(m);
   RunOptions o = choose_options(m, a, stable);
   std::unique_ptr<AsyncSink> sink;
@@ -232,21 +219,11 @@ int run(const RunArgs& a, const CheckpointFile* resumed = nullptr, const std::st
   const bool cluster = !a.cluster.empty() || a.processes > 0;
   const bool loose = a.coupling == "loose";
   if (a.exchange_delay > 0.0 && !cluster) throw InputError("--exchange-delay: only with --cluster or --processes");
-  if (!loose && (a.macro_step || a.coupling_tol || a.max_lag > 0 || a.exact_lag || !a.submodel_methods.empty() || a.overlap))
-    throw InputError(
-        "--macro-step, --coupling-tol, --max-lag, --exact-lag, --submodel-methods, --overlap: only with --coupling loose");
-  if (a.exact_lag && a.max_lag == 0) throw InputError("--exact-lag: needs --max-lag L > 0");
-  // Many steps per exchange: the overlap keeps even stiff cut joints stable (loose_coupling.hpp).
-  // A lag rules the overlap out: then a tenth of a step, well inside the joints' period.
-  const double step = std::isfinite(stable.step) ? stable.step : o.step;
-  const double macro_step = a.macro_step ? *a.macro_step : a.max_lag > 0 ? 0.1 * step : default_macro_steps * step;
-  if (loose && !std::isfinite(macro_step)) throw InputError("--coupling loose: no joints to estimate a macro step from; give --macro-step");
-  // Error control by default where the macro step can adapt (without a lag) and none was
-  // given (a given --macro-step alone is a fixed one).
-  const double coupling_tol = a.coupling_tol.value_or(a.max_lag > 0 || a.macro_step ? 0.0 : default_coupling_tol);
-  LooseOptions lo{macro_step, a.extrapolation, threads, coupling_tol,
-                  a.max_lag,  a.exact_lag,     parse_methods(a.submodel_methods)};
-  if (a.overlap) lo.overlap = *a.overlap;
+  LooseRequest request{a.macro_step, a.coupling_tol, a.overlap, a.extrapolation, a.max_lag, a.exact_lag,
+                       parse_methods(a.submodel_methods)};
+  check_loose_request(loose, request);
+  const LooseOptions lo = loose ? loose_options(request, stable.step, o.step, threads) : LooseOptions{};
+  const double macro_step = lo.macro_step;
   const ClusterCoupling coupling{loose ? &lo : nullptr, a.exchange_delay};
   if (cluster) check_cluster_run(m, o, coupling);  // before any worker is started
   std::optional<LocalWorkers> local;

@@ -9,7 +9,7 @@
 #include "mbsflow/error.hpp"
 #include "mbsflow/io/results_file.hpp"
 #include "page_server.hpp"
-#include "signals.hpp"
+#include "mbsflow/runtime/stop_signals.hpp"
 #include "viewer_page.hpp"
 
 namespace mbsflow::cli {

@@ -7,7 +7,7 @@
 #include "mbsflow/io/cluster_file.hpp"
 #include "mbsflow/io/model_reader.hpp"
 #include "mbsflow/runtime/cluster.hpp"
-#include "signals.hpp"
+#include "mbsflow/runtime/stop_signals.hpp"
 
 namespace mbsflow::cli {
 namespace {

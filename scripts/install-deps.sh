@@ -14,6 +14,7 @@ packages=(
   clang libclang-rt-14-dev  # libFuzzer targets (tests/fuzz); Debian 12's clang is 14
   paraview python3-paraview xvfb  # the results opened in the real ParaView (tests/io/paraview_check.sh)
   libjs-three  # three.js, inlined by mbsflow view
+  pybind11-dev python3-dev python3-numpy python3-scipy python3-pytest  # the Python package and its tests
   chromium chromium-driver python3-selenium python3-pil  # the viewer tested in a real browser
 )
 missing=()

@@ -61,6 +61,7 @@ void Simulation::ready(double t_end) {
 }
 
 void Simulation::take_step() {
+  check_stop(o_, stepper_->t());
   stepper_->step();
   check_diverged(*system_, stepper_->y(), stepper_->t(), o_);
 }

@@ -94,6 +94,9 @@ class Simulation {
   void set_load(int body, const Eigen::Vector3d& force, const Eigen::Vector3d& torque = Eigen::Vector3d::Zero());
   // The method starts anew from the current state (what it kept of f is stale).
   void inputs_changed() { restart_ = true; }
+  // When set and it becomes true (a signal handler may set it), step() and advance_to()
+  // throw RunError before their next step; the state stays that of the last step.
+  void set_stop(const std::atomic<bool>* stop) { o_.stop = stop; }
 
   // One step of the method towards the options' t_end; false (and nothing done) once there.
   bool step();

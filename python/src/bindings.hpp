@@ -1,0 +1,31 @@
+#pragma once
+// The pieces of the Python module mbsflow._core, one file each, and what they share.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <Eigen/Core>
+#include "mbsflow/error.hpp"
+#include <string>
+#include <vector>
+
+namespace mbsflow::python {
+
+namespace py = pybind11;
+
+void bind_errors(py::module_& m);
+void bind_model(py::module_& m);
+void bind_results(py::module_& m);
+void bind_run(py::module_& m);
+void bind_simulation(py::module_& m);
+void bind_ivp(py::module_& m);
+
+// A numpy array that owns the vector's storage (no copy), in the given C-order shape.
+py::array_t<double> to_numpy(std::vector<double>&& values, std::vector<py::ssize_t> shape);
+py::array_t<double> to_numpy(const Eigen::VectorXd& values);  // a copy
+// A read-only view of `rows` x `cols` doubles at `data` (C order), kept alive by `owner`.
+py::array_t<double> readonly_view(const double* data, py::ssize_t rows, py::ssize_t cols, py::handle owner);
+// A 1-d float64 vector of any array-like; InputError naming `what` for another size (when size >= 0).
+Eigen::VectorXd to_vector(const py::handle& values, Eigen::Index size, const char* what);
+
+}  // namespace mbsflow::python

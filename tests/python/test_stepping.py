@@ -1,0 +1,81 @@
+"""A model stepped from Python: the run's numbers when left alone, a controller in the loop,
+and the state as numpy views of the integrator's memory."""
+import math
+
+import numpy as np
+import pytest
+
+import mbsflow
+
+PENDULUM = {
+    "name": "pendulum",
+    "gravity": [0, -9.81, 0],
+    "bodies": [{"name": "bob", "mass": 1.0, "inertia": [0.01, 0.01, 0.01, 0, 0, 0], "position": [0, -1, 0]}],
+    "joints": [{"name": "pivot", "type": "bushing", "body1": "ground", "body2": "bob", "point2": [0, 1, 0],
+                "stiffness": [1e6, 1e6, 1e6, 0, 0, 0], "damping": [2e2, 2e2, 2e2, 0, 0, 0]}],
+    "simulation": {"t_end": 6.0, "method": "dopri5", "rtol": 1e-8, "atol": 1e-10},
+}
+
+
+def angle(p):
+    return math.atan2(p[0], -p[1])  # from hanging straight down, counterclockwise about z
+
+
+def test_a_pd_controller_brings_the_pendulum_to_its_set_point():
+    sim = mbsflow.Simulation(mbsflow.Model.from_dict(PENDULUM))
+    target, kp, kd, m, g, length = 0.6, 40.0, 12.0, 1.0, 9.81, 1.0
+    angles = []
+    while sim.t < 6.0 - 1e-12:
+        p = sim.positions[0]
+        w = sim.body(0)["angular_velocity"][2]
+        theta = angle(p)
+        # PD on the angle, plus the gravity torque about the pivot held off
+        tau = kp * (target - theta) - kd * w + m * g * length * math.sin(theta)
+        sim.set_load(0, [0, 0, 0], [0, 0, tau])
+        sim.step(0.01)
+        angles.append(theta)
+    assert max(angles) > 0.3  # it did swing up
+    assert abs(angle(sim.positions[0]) - target) < 1e-3
+    assert abs(sim.body(0)["angular_velocity"][2]) < 1e-3
+
+
+def test_stepped_to_the_end_it_is_the_run():
+    model = mbsflow.generate.chain(n=30, t_end=0.05)
+    sim = mbsflow.Simulation(model, method="dopri5")
+    steps = 0
+    while sim.step():
+        steps += 1
+    r = mbsflow.run(model, method="dopri5", threads=1)
+    assert steps == r.summary["steps"] > 10
+    assert np.array_equal(sim.state, r.summary["final_state"])
+    assert sim.stats["accepted"] == steps
+
+
+def test_the_state_views_share_the_integrators_memory():
+    sim = mbsflow.Simulation(mbsflow.generate.chain(n=5), method="rk4")
+    p, v, q, w, y = sim.positions, sim.velocities, sim.orientations, sim.angular_velocities, sim.state
+    assert p.shape == (5, 3) and q.shape == (5, 4) and y.shape == (65,)
+    assert np.shares_memory(p, y) and np.shares_memory(w, y)
+    before = p.copy()
+    sim.step(0.01)
+    assert not np.array_equal(p, before)  # the same view sees the new state
+    assert np.array_equal(p, sim.positions) and np.array_equal(v[2], sim.body(2)["velocity"])
+    with pytest.raises(ValueError):
+        p[0, 0] = 1.0  # read-only: writes go through set_state, so the method restarts
+    assert np.allclose(np.linalg.norm(q, axis=1), 1.0)
+
+
+def test_set_state_and_bad_arguments():
+    sim = mbsflow.Simulation(mbsflow.generate.chain(n=3), method="dopri5")
+    y = sim.state.copy()
+    y[0] += 0.01  # move the first body
+    sim.set_state(y)
+    assert sim.positions[0, 0] == pytest.approx(y[0])
+    with pytest.raises(mbsflow.InputError, match="set_state: 3 values where 39 are needed"):
+        sim.set_state([1, 2, 3])
+    with pytest.raises(mbsflow.InputError, match="body index 7 out of range"):
+        sim.set_load(7, [0, 0, 1])
+    with pytest.raises(mbsflow.InputError, match="advance_to"):
+        sim.advance_to(-1.0)
+    with pytest.raises(mbsflow.InputError, match="method=bdf: unknown method"):
+        mbsflow.Simulation(mbsflow.generate.chain(n=3), method="bdf")
