@@ -83,14 +83,16 @@ bool has_analytic_jacobian(const Model& m, std::string* why) {
     if (is_kinematic(j.type))
       return no_jacobian(why, std::string(j.rigid ? "rigid " : "compliant ") + joint_type_name(j.type) + " joint '" + j.name +
                                   "' (kinematic joints have no analytic Jacobian yet)");
-  if (!m.force_elements.empty()) return no_jacobian(why, "the model has user force elements");
+  for (const auto& e : m.force_elements)
+    if (!e->constant_wrench()) return no_jacobian(why, "the model has user force elements");
   return true;
 }
 
 bool MultibodySystem::has_analytic_jacobian(std::string* why) const {
   if (active_ != layout_.bodies) return no_jacobian(why, "the system is a submodel (its ghost bodies' states come from other submodels)");
   if (!mbsflow::has_analytic_jacobian(model_, why)) return false;
-  if (!elements_.empty()) return no_jacobian(why, "the model has user force elements");  // added after construction
+  for (const auto& e : elements_)  // added after construction
+    if (!e->constant_wrench()) return no_jacobian(why, "the model has user force elements");
   return true;
 }
 

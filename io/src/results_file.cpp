@@ -63,13 +63,30 @@ bool ResultsFile::has(const std::string& dataset) const {
   return true;
 }
 
-std::vector<std::uint64_t> ResultsFile::shape(const std::string& dataset) const {
-  if (!has(dataset)) return {};
-  const h5::Handle set(H5Dopen2(file_, dataset.c_str(), H5P_DEFAULT), H5Dclose, "open " + dataset);
-  const h5::Handle space(H5Dget_space(set.get()), H5Sclose, "get the space of " + dataset);
+namespace {
+
+std::vector<hsize_t> extent(const h5::Handle& space) {
   const int rank = H5Sget_simple_extent_ndims(space.get());
   std::vector<hsize_t> dims(static_cast<std::size_t>(std::max(rank, 0)));
   H5Sget_simple_extent_dims(space.get(), dims.data(), nullptr);
+  return dims;
+}
+
+// In a file a run is writing, refreshed: an SWMR reader sees the rows written since it
+// opened the file only after H5Drefresh.
+h5::Handle open_dataset(hid_t file, const std::string& dataset, bool live) {
+  h5::Handle set(H5Dopen2(file, dataset.c_str(), H5P_DEFAULT), H5Dclose, "open " + dataset);
+  if (live) h5::check(H5Drefresh(set.get()), "refresh " + dataset);
+  return set;
+}
+
+}  // namespace
+
+std::vector<std::uint64_t> ResultsFile::shape(const std::string& dataset) const {
+  if (!has(dataset)) return {};
+  const h5::Handle set = open_dataset(file_, dataset, live_);
+  const h5::Handle space(H5Dget_space(set.get()), H5Sclose, "get the space of " + dataset);
+  const std::vector<hsize_t> dims = extent(space);
   return {dims.begin(), dims.end()};
 }
 
@@ -92,13 +109,14 @@ std::optional<double> ResultsFile::number_attribute(const std::string& name) con
 }
 
 std::vector<double> ResultsFile::read(const std::string& dataset) const {
-  const std::vector<std::uint64_t> dims = shape(dataset);
-  if (dims.empty()) throw InputError(path_ + ": no dataset " + dataset);
+  if (!has(dataset)) throw InputError(path_ + ": no dataset " + dataset);
+  // One handle for the extent and the read: a live file may grow in between two opens.
+  const h5::Handle set = open_dataset(file_, dataset, live_);
+  const h5::Handle space(H5Dget_space(set.get()), H5Sclose, "get the space of " + dataset);
   std::size_t n = 1;
-  for (auto d : dims) n *= d;
+  for (hsize_t d : extent(space)) n *= d;
   std::vector<double> out(n);
-  const h5::Handle set(H5Dopen2(file_, dataset.c_str(), H5P_DEFAULT), H5Dclose, "open " + dataset);
-  if (n > 0) h5::check(H5Dread(set.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, out.data()), "read " + dataset);
+  if (n > 0) h5::check(H5Dread(set.get(), H5T_NATIVE_DOUBLE, space.get(), space.get(), H5P_DEFAULT, out.data()), "read " + dataset);
   return out;
 }
 

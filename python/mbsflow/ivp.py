@@ -1,6 +1,7 @@
 """solve_ivp in scipy's shape on mbsflow's methods: a scipy user switches by changing the
-import. Methods: "tirk" (triangularised implicit Runge-Kutta, Radau IIA by default; also
-under scipy's name "Radau"), "colloc" (collocation block methods), "dopri5" (also "RK45",
+import. Methods: "tirk" (triangularised implicit Runge-Kutta, by default the 3-stage
+Radau IIA method of order 5 that scipy's Radau is; so also under the name "Radau";
+variant="radau5" for 5 stages, order 9), "colloc" (collocation block methods), "dopri5" (also "RK45",
 scipy's default) and "rk4" (fixed steps of first_step)."""
 import ctypes
 
@@ -9,8 +10,9 @@ import numpy as np
 from . import _core
 from ._core import InputError
 
-# scipy's names for the methods mbsflow has under its own.
-_ALIASES = {"RK45": "dopri5", "Radau": "tirk"}
+# scipy's names for the methods mbsflow has under its own: RK45 is Dormand-Prince 5(4),
+# Radau the 3-stage Radau IIA method of order 5, RADAU5's (tirk's default tableau, radau3).
+_ALIASES = {"RK45": ("dopri5", ""), "Radau": ("tirk", "")}
 _NOT_HERE = ("RK23", "DOP853", "BDF", "LSODA")
 
 
@@ -98,13 +100,13 @@ def _event_tuple(event, args):
 
 def solve_ivp(fun, t_span, y0, method="RK45", t_eval=None, dense_output=False, events=None, vectorized=False,
               args=None, *, rtol=1e-3, atol=1e-6, first_step=None, max_step=None, jac=None, jac_sparsity=None,
-              variant="", linear_solver="auto", threads=0, **options):
+              variant="", linear_solver="auto", threads=1, **options):
     """Solves y' = fun(t, y) on t_span from y0, as scipy.integrate.solve_ivp does (its
     arguments and result fields), with mbsflow's methods in C++. fun may be a CompiledRhs
     for speed. jac: a callable jac(t, y) or a constant matrix, dense or scipy sparse; with
     jac_sparsity (or a sparse constant jac) the Newton matrices are sparse (KLU). variant,
-    linear_solver and threads are mbsflow's (threads only for a CompiledRhs: a Python
-    fun runs on one thread). vectorized is accepted and not used (mbsflow calls fun one
+    linear_solver and threads are mbsflow's (threads: for a CompiledRhs on a large system,
+    the stages on several threads; a Python fun always runs on one). vectorized is accepted and not used (mbsflow calls fun one
     point at a time). Ctrl-C stops the integration (KeyboardInterrupt)."""
     if options:
         raise InputError("solve_ivp: unknown option(s) " + ", ".join(sorted(options)))
@@ -113,7 +115,8 @@ def solve_ivp(fun, t_span, y0, method="RK45", t_eval=None, dense_output=False, e
                          "or 'rk4'")
     if max_step is not None and np.isfinite(max_step):
         raise InputError("max_step: not supported (the methods control their steps by the tolerances)")
-    name = _ALIASES.get(method, method)
+    name, alias_variant = _ALIASES.get(method, (method, ""))
+    variant = variant or alias_variant
     t0, t1 = (float(v) for v in t_span)
     if t1 == t0:
         raise InputError("t_span: the two ends must differ")

@@ -52,7 +52,11 @@ class Results:
         """Reads the file again (a live run's new snapshots)."""
         if self._file is None:
             return self
-        self._file = ResultsFile(self._file.path)
+        path = self._file.path
+        # Closed first: opened again while open, HDF5 would hand out the open file, still
+        # as the live file it was (a run that ended since is read as finished only anew).
+        self._file = None
+        self._file = ResultsFile(path)
         self._arrays.clear()
         return self
 

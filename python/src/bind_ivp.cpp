@@ -33,8 +33,18 @@ struct IvpInput {
   py::object jac_sparsity;       // None or a matrix whose nonzeros are the Jacobian's pattern
 };
 
-// Values of a Python call that must be n doubles.
+// Values of a Python call that must be n doubles: a list or tuple of floats read directly
+// (the common `return [..., ...]`), anything else through numpy.
 void copy_values(const py::object& r, Eigen::Index n, double* out, const char* what) {
+  if ((PyList_CheckExact(r.ptr()) || PyTuple_CheckExact(r.ptr())) && PySequence_Fast_GET_SIZE(r.ptr()) == n) {
+    PyObject** items = PySequence_Fast_ITEMS(r.ptr());
+    bool floats = true;
+    for (Eigen::Index i = 0; i < n && floats; ++i) {
+      floats = PyFloat_CheckExact(items[i]);
+      if (floats) out[i] = PyFloat_AS_DOUBLE(items[i]);
+    }
+    if (floats) return;
+  }
   const auto a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(r);
   if (!a || a.size() != n)
     throw InputError(std::string(what) + " returned " + (a ? std::to_string(a.size()) : std::string("no array of")) +
@@ -42,7 +52,12 @@ void copy_values(const py::object& r, Eigen::Index n, double* out, const char* w
   std::copy(a.data(), a.data() + n, out);
 }
 
-py::array_t<double> array_of(const Eigen::VectorXd& y) { return to_numpy(y); }
+// A fresh array for each call, as scipy passes (a function may keep it).
+py::array_t<double> array_of(const Eigen::VectorXd& y) {
+  py::array_t<double> a(y.size());
+  std::copy(y.data(), y.data() + y.size(), a.mutable_data());
+  return a;
+}
 
 // The pattern of a dense array or scipy sparse matrix (its nonzeros), n x n.
 Eigen::SparseMatrix<double> pattern_of(const py::object& m, Eigen::Index n, const char* what) {

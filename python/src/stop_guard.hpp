@@ -14,8 +14,7 @@ namespace mbsflow::python {
 class StopGuard {
  public:
   StopGuard() {
-    if (PyThreadState_Get()->interp == PyInterpreterState_Main() &&
-        py::module_::import("threading").attr("current_thread")().is(py::module_::import("threading").attr("main_thread")()))
+    if (PyThreadState_Get()->interp == PyInterpreterState_Main() && PyThread_get_thread_ident() == main_thread())
       flag_ = install_stop_handlers();
   }
   ~StopGuard() {
@@ -40,6 +39,12 @@ class StopGuard {
   }
 
  private:
+  // Python's main thread, looked up once (a StopGuard is made at every step of a loop).
+  static unsigned long main_thread() {
+    static const unsigned long ident =
+        py::module_::import("threading").attr("main_thread")().attr("ident").cast<unsigned long>();
+    return ident;
+  }
   const std::atomic<bool>* flag_ = nullptr;
 };
 

@@ -13,6 +13,7 @@ struct Simulation::HeldLoad final : ForceElement {
   Wrench wrench;
   std::vector<int> bodies() const override { return {body}; }
   void evaluate(double, const Kinematics&, std::span<Wrench> out) const override { out[0] = wrench; }
+  bool constant_wrench() const override { return true; }  // between changes, which restart the method
 };
 
 Simulation::Simulation(const Model& model) : Simulation(model, options_from_model(model)) {}
@@ -49,7 +50,7 @@ void Simulation::set_load(int body, const Eigen::Vector3d& force, const Eigen::V
   if (!load) {
     load = std::make_shared<HeldLoad>();
     load->body = body;
-    system_->add_force_element(load);
+    add_force_element(load);
   }
   load->wrench = {force, torque};
   restart_ = true;

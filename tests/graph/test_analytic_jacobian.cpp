@@ -116,9 +116,11 @@ Eigen::MatrixXd central_differences(MultibodySystem& sys, double t, const Eigen:
 
 }  // namespace
 
-TEST_CASE("the analytic multibody Jacobian matches central differences", "[graph][jacobian]") {
-  const Model m = jacobian_model();
-  MultibodySystem sys(m);
+namespace {
+
+// The analytic Jacobian against central differences at three shaken states: the largest
+// difference, entry by entry, relative to the largest entry of its row (rows mix 1 and 1e5).
+void check_against_differences(MultibodySystem& sys) {
   REQUIRE(sys.has_analytic_jacobian());
   for (unsigned seed : {1u, 2u, 3u}) {
     const double t = 0.1 * seed;
@@ -126,7 +128,6 @@ TEST_CASE("the analytic multibody Jacobian matches central differences", "[graph
     Eigen::SparseMatrix<double> jac = sys.jacobian_pattern();
     sys.jacobian(t, y, jac);
     const Eigen::MatrixXd exact = Eigen::MatrixXd(jac), fd = central_differences(sys, t, y);
-    // Entry by entry, relative to the largest entry of its row (rows mix 1 and 1e5).
     double worst = 0;
     for (Eigen::Index r = 0; r < exact.rows(); ++r) {
       const double scale = std::max(1.0, fd.row(r).cwiseAbs().maxCoeff());
@@ -136,6 +137,29 @@ TEST_CASE("the analytic multibody Jacobian matches central differences", "[graph
     CHECK(worst < 1e-7);
     CHECK(fd.cwiseAbs().maxCoeff() > 1e3);  // the stiff entries are there to be matched
   }
+}
+
+// A wrench held on a body, world frame, as Simulation::set_load holds one.
+struct HeldWrench final : ForceElement {
+  std::vector<int> bodies() const override { return {2}; }
+  void evaluate(double, const Kinematics&, std::span<Wrench> out) const override {
+    out[0] = {Eigen::Vector3d(3.0, -20.0, 5.0), Eigen::Vector3d(40.0, -7.0, 25.0)};
+  }
+  bool constant_wrench() const override { return true; }
+};
+
+}  // namespace
+
+TEST_CASE("the analytic multibody Jacobian matches central differences", "[graph][jacobian]") {
+  MultibodySystem sys(jacobian_model());
+  check_against_differences(sys);
+}
+
+TEST_CASE("the analytic Jacobian covers force elements of constant wrench", "[graph][jacobian]") {
+  // Their torque reaches the angular acceleration through the body's orientation.
+  MultibodySystem sys(jacobian_model());
+  sys.add_force_element(std::make_shared<HeldWrench>());
+  check_against_differences(sys);
 }
 
 TEST_CASE("the analytic multibody Jacobian holds at rest, where the rotation logarithm runs its series", "[graph][jacobian]") {

@@ -130,3 +130,32 @@ def test_ctrl_c_stops_a_run_and_keeps_its_file(tmp_path):
     words = lines[0].split()
     assert words[0] == "interrupted" and int(words[1]) >= 1 and 0 < float(words[2]) < 100.0
     assert lines[1] == "python handler back"
+
+
+def test_results_of_a_run_still_going(tmp_path):
+    model = tmp_path / "long.json"
+    cli("generate", "chain", "--bodies", 1500, "--t-end", 50, "-o", model)
+    out = tmp_path / "live.h5"
+    run = subprocess.Popen([os.environ.get("MBSFLOW_EXE", "mbsflow"), "run", str(model), "-o", str(out), "-q",
+                            "--threads", "1", "--output-interval", "0.001"])
+    try:
+        deadline = time.monotonic() + 120
+        r = None
+        while time.monotonic() < deadline:
+            try:
+                r = mbsflow.Results.open(out)
+                if len(r.t) >= 2:
+                    break
+            except mbsflow.InputError:
+                pass  # not created yet
+            time.sleep(0.2)
+        assert r is not None and r.live
+        first = len(r.t)
+        assert r.position.shape[0] >= first and r.position.shape[1:] == (1500, 3)
+        time.sleep(2.0)
+        assert len(r.refresh().t) > first  # the run went on, and the refreshed results show it
+    finally:
+        run.send_signal(signal.SIGINT)
+        assert run.wait(timeout=120) == 1  # stopped: exit code 1, results kept
+    done = mbsflow.Results.open(out)
+    assert not done.live and len(done.t) >= first

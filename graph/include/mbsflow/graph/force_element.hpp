@@ -59,6 +59,11 @@ class ForceElement {
   virtual void evaluate(double t, const Kinematics& k, std::span<Wrench> out) const = 0;
   // Energy the element stores, if it is conservative (for energy balances); 0 otherwise.
   virtual double energy(double /*t*/, const Kinematics& /*k*/) const { return 0.0; }
+  // True for an element whose wrenches depend on neither t nor the state, as a held load's
+  // (Simulation::set_load): the analytic Jacobian then covers it (a world-frame torque
+  // acts through the body's orientation, as a model load's does), where any other element
+  // makes the implicit methods difference their Jacobian.
+  virtual bool constant_wrench() const { return false; }
 };
 
 }  // namespace mbsflow
