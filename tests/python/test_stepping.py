@@ -79,3 +79,29 @@ def test_set_state_and_bad_arguments():
         sim.advance_to(-1.0)
     with pytest.raises(mbsflow.InputError, match="method=bdf: unknown method"):
         mbsflow.Simulation(mbsflow.generate.chain(n=3), method="bdf")
+
+
+def test_ctrl_c_stops_stepping_and_solve_ivp():
+    import os
+    import subprocess
+    import sys
+    import textwrap
+    script = textwrap.dedent("""
+        import os, signal, threading, mbsflow
+        def interrupt_soon():
+            threading.Timer(1.0, lambda: os.kill(os.getpid(), signal.SIGINT)).start()
+        sim = mbsflow.Simulation(mbsflow.generate.chain(n=2000, t_end=1000.0), method="rk4")
+        interrupt_soon()
+        try:
+            sim.advance_to(1000.0)
+        except KeyboardInterrupt:
+            print("advance_to interrupted", sim.t > 0, sim.t < 1000.0)
+        interrupt_soon()
+        try:
+            mbsflow.solve_ivp(lambda t, y: [y[1], -y[0]], (0, 1e9), [1.0, 0.0], method="dopri5", rtol=1e-10)
+        except KeyboardInterrupt:
+            print("solve_ivp interrupted")
+    """)
+    p = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=300, env=dict(os.environ))
+    assert p.returncode == 0, p.stderr
+    assert p.stdout.split("\n")[:2] == ["advance_to interrupted True True", "solve_ivp interrupted"]
