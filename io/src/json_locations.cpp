@@ -1,5 +1,7 @@
 #include "json_locations.hpp"
 
+#include <optional>
+
 namespace mbsflow {
 
 std::string member_path(const std::string& parent, const std::string& key) {
@@ -12,19 +14,37 @@ std::string item_path(const std::string& parent, std::size_t index) {
 
 namespace {
 
+// One pass over the text in search of one path: values off the way to it are skipped
+// (their lines counted) without building their paths.
 class Scanner {
  public:
-  Scanner(std::string_view text, std::unordered_map<std::string, JsonLocations::Entry>& out)
-      : s_(text), out_(out) {}
+  Scanner(std::string_view text, const std::string& target) : s_(text), target_(target) {}
+
+  std::optional<JsonLocations::Entry> run() {
+    value("", {1, 1});
+    return found_;
+  }
+
+ private:
+  // Whether path is the target or leads to it.
+  bool on_the_way(const std::string& path) const {
+    if (target_.compare(0, path.size(), path) != 0) return false;
+    if (target_.size() == path.size() || path.empty()) return true;
+    const char next = target_[path.size()];
+    return next == '.' || next == '[';
+  }
 
   void value(const std::string& path, SourceLocation key) {
     skip_space();
-    out_[path] = {key, here()};
+    if (path == target_) {
+      found_ = JsonLocations::Entry{key, here()};
+      return;
+    }
     if (pos_ >= s_.size()) return;
     const char c = s_[pos_];
     if (c == '{') {
       advance();
-      while (true) {
+      while (!found_) {
         skip_space();
         if (pos_ >= s_.size() || s_[pos_] == '}') break;
         if (s_[pos_] == ',') { advance(); continue; }
@@ -32,28 +52,61 @@ class Scanner {
         const std::string name = string();
         skip_space();
         if (pos_ < s_.size() && s_[pos_] == ':') advance();
-        value(member_path(path, name), k);
+        const std::string member = member_path(path, name);
+        if (on_the_way(member)) {
+          value(member, k);
+        } else {
+          skip_value();
+        }
       }
       advance();
     } else if (c == '[') {
       advance();
       std::size_t i = 0;
-      while (true) {
+      while (!found_) {
         skip_space();
         if (pos_ >= s_.size() || s_[pos_] == ']') break;
         if (s_[pos_] == ',') { advance(); continue; }
         const SourceLocation item = here();
-        value(item_path(path, i++), item);
+        const std::string element = item_path(path, i++);
+        if (on_the_way(element)) {
+          value(element, item);
+        } else {
+          skip_value();
+        }
       }
       advance();
-    } else if (c == '"') {
-      string();
     } else {
-      while (pos_ < s_.size() && s_[pos_] != ',' && s_[pos_] != '}' && s_[pos_] != ']' && !space(s_[pos_])) advance();
+      skip_value();
     }
   }
 
- private:
+  // Past one value, nested or not, counting lines; strings are skipped whole so that
+  // brackets inside them do not count.
+  void skip_value() {
+    skip_space();
+    int depth = 0;
+    while (pos_ < s_.size()) {
+      const char c = s_[pos_];
+      if (c == '"') {
+        skip_string();
+      } else if (c == '{' || c == '[') {
+        ++depth;
+        advance();
+      } else if (c == '}' || c == ']') {
+        if (depth == 0) return;  // the end of the enclosing container
+        --depth;
+        advance();
+        if (depth == 0) return;
+      } else if (depth == 0 && (c == ',' || space(c))) {
+        return;
+      } else {
+        advance();
+      }
+      if (depth == 0 && c == '"') return;
+    }
+  }
+
   static bool space(char c) { return c == ' ' || c == '\t' || c == '\n' || c == '\r'; }
   SourceLocation here() const { return {line_, col_}; }
   void advance() {
@@ -68,6 +121,14 @@ class Scanner {
   }
   void skip_space() {
     while (pos_ < s_.size() && space(s_[pos_])) advance();
+  }
+  void skip_string() {
+    advance();  // opening quote
+    while (pos_ < s_.size() && s_[pos_] != '"') {
+      if (s_[pos_] == '\\') advance();
+      advance();
+    }
+    advance();  // closing quote
   }
   // A string literal; simple escapes decoded, \u escapes kept as written.
   std::string string() {
@@ -88,23 +149,20 @@ class Scanner {
   }
 
   std::string_view s_;
-  std::unordered_map<std::string, JsonLocations::Entry>& out_;
+  const std::string& target_;
+  std::optional<JsonLocations::Entry> found_;
   std::size_t pos_ = 0;
   int line_ = 1, col_ = 1;
 };
 
 }  // namespace
 
-JsonLocations::JsonLocations(std::string_view text) { Scanner(text, map_).value("", {1, 1}); }
-
-SourceLocation JsonLocations::value(const std::string& path) const {
-  const auto it = map_.find(path);
-  return it == map_.end() ? SourceLocation{} : it->second.value;
+JsonLocations::Entry JsonLocations::find(const std::string& path) const {
+  return Scanner(text_, path).run().value_or(Entry{});
 }
 
-SourceLocation JsonLocations::key(const std::string& path) const {
-  const auto it = map_.find(path);
-  return it == map_.end() ? SourceLocation{} : it->second.key;
-}
+SourceLocation JsonLocations::value(const std::string& path) const { return find(path).value; }
+
+SourceLocation JsonLocations::key(const std::string& path) const { return find(path).key; }
 
 }  // namespace mbsflow

@@ -1,9 +1,10 @@
 #pragma once
-// Line and column of every value in a JSON text, by field path ("bodies[3].mass"),
-// so that input errors can point into the file. nlohmann-json keeps no positions.
+// Line and column of a value in a JSON text, by field path ("bodies[3].mass"), so that
+// input errors can point into the file. nlohmann-json keeps no positions. Nothing is
+// computed until a location is asked for (only when there is an error to report): then
+// one pass over the text finds it, building no path that does not lead to it.
 #include <string>
 #include <string_view>
-#include <unordered_map>
 
 namespace mbsflow {
 
@@ -19,13 +20,15 @@ class JsonLocations {
   };
 
   JsonLocations() = default;
-  // The text must be valid JSON (parse it with nlohmann first); nothing is validated here.
-  explicit JsonLocations(std::string_view text);
+  // The text must be valid JSON (parse it with nlohmann first; nothing is validated here)
+  // and must outlive this object: it is viewed, not copied.
+  explicit JsonLocations(std::string_view text) : text_(text) {}
   SourceLocation value(const std::string& path) const;
   SourceLocation key(const std::string& path) const;  // the member's key; the value for array items
 
  private:
-  std::unordered_map<std::string, Entry> map_;
+  Entry find(const std::string& path) const;
+  std::string_view text_;
 };
 
 // Field paths as used in messages: "bodies", "bodies[3]", "bodies[3].mass".

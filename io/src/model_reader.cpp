@@ -7,7 +7,7 @@
 #include <cstdio>
 #include <fstream>
 #include <limits>
-#include <map>
+#include <unordered_map>
 #include <sstream>
 
 #include "json_node.hpp"
@@ -143,7 +143,6 @@ class Reader {
 
   void bodies(const JsonNode& list) {
     if (list.array_size() == 0) list.fail("must list at least one body");
-    std::map<std::string, std::string> seen;
     for_items(list, [&](const JsonNode& n) {
       n.allow_only({"name", "mass", "inertia", "position", "orientation", "velocity", "angular_velocity"});
       Body b;
@@ -151,8 +150,8 @@ class Reader {
       b.name = name.string();
       if (b.name.empty()) name.fail("must not be empty");
       if (b.name == "ground") name.fail("'ground' is reserved for the fixed world frame");
-      if (auto [it, fresh] = seen.emplace(b.name, n.path()); !fresh)
-        name.fail("duplicate body name '" + b.name + "' (first at " + it->second + ")");
+      if (auto [it, fresh] = body_index_.emplace(b.name, static_cast<int>(m_.bodies.size())); !fresh)
+        name.fail("duplicate body name '" + b.name + "' (first at " + item_path(list.path(), static_cast<std::size_t>(it->second)) + ")");
       b.mass = n["mass"].positive();
       b.inertia = inertia(n["inertia"]);
       b.position = vec3(n, "position");
@@ -165,10 +164,13 @@ class Reader {
 
   int body_ref(const JsonNode& n, bool ground_ok) {
     const std::string name = n.string();
-    const auto b = find_body(m_, name);
-    if (!b) n.fail("unknown body '" + name + "'");
-    if (*b == ground && !ground_ok) n.fail("must name a body, not ground");
-    return *b;
+    if (name == "ground") {
+      if (!ground_ok) n.fail("must name a body, not ground");
+      return ground;
+    }
+    const auto it = body_index_.find(name);
+    if (it == body_index_.end()) n.fail("unknown body '" + name + "'");
+    return it->second;
   }
 
   void joint(const JsonNode& n) {
@@ -190,8 +192,8 @@ class Reader {
     }
     const std::size_t index = m_.joints.size();
     j.name = n.find("name") ? n["name"].string() : "j" + std::to_string(index);
-    if (auto [it, fresh] = joint_names_.emplace(j.name, n.path()); !fresh)
-      (n.find("name") ? n["name"] : n).fail("duplicate joint name '" + j.name + "' (first at " + it->second + ")");
+    if (auto [it, fresh] = joint_index_.emplace(j.name, index); !fresh)
+      (n.find("name") ? n["name"] : n).fail("duplicate joint name '" + j.name + "' (first at " + item_path("joints", it->second) + ")");
     j.body1 = body_ref(n["body1"], true);
     j.body2 = body_ref(n["body2"], false);
     if (j.body1 == j.body2) n["body2"].fail("joins body '" + m_.bodies[static_cast<std::size_t>(j.body2)].name + "' to itself");
@@ -311,7 +313,10 @@ class Reader {
 
   JsonNode root_;
   Model m_;
-  std::map<std::string, std::string> joint_names_;
+  // Names to indices, so that each reference is found in constant time (a model of a
+  // million bodies names as many in its joints).
+  std::unordered_map<std::string, int> body_index_;
+  std::unordered_map<std::string, std::size_t> joint_index_;
 };
 
 }  // namespace

@@ -16,3 +16,21 @@ TEST_CASE("JSON locations: line and column of values and keys by field path", "[
   CHECK(loc.value("list[1]").line == 5);
   CHECK(loc.value("missing").line == 0);
 }
+
+TEST_CASE("JSON locations: values past skipped strings with brackets and escapes and nested containers", "[io]") {
+  const std::string text =
+      "{\"s\": \"a]}[{\\\"\", \"deep\": {\"x\": [[1, {\"y\": \"]\"}], []]},\n"
+      "\"after\": [true, null,\n  -1.5e3, {\"k\": 2}]}";
+  const JsonLocations loc(text);
+  CHECK(loc.value("s").column == 7);
+  CHECK(loc.value("deep.x[0][1].y").column == 43);
+  CHECK(loc.value("after").line == 2);
+  CHECK(loc.value("after").column == 10);
+  CHECK(loc.value("after[2]").line == 3);
+  CHECK(loc.value("after[2]").column == 3);
+  CHECK(loc.value("after[3].k").column == 17);
+  CHECK(loc.key("after[3].k").column == 12);
+  CHECK(loc.value("after[4]").line == 0);       // past the end of the list
+  CHECK(loc.value("deep.x[0][1].z").line == 0);  // no such member
+  CHECK(loc.value("aft").line == 0);            // a prefix of a key is not the key
+}
