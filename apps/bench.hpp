@@ -53,6 +53,7 @@ int bench_ode(const BenchArgs& a);
 int bench_iterations(const BenchArgs& a);
 int bench_stiff(const BenchArgs& a);
 int bench_ivp(const BenchArgs& a);
+int bench_load(const BenchArgs& a);
 
 // Where the example models are: --dir, or examples/models (run from the source tree).
 inline std::string examples_dir(const BenchArgs& a) { return a.dir == "." ? "examples/models" : a.dir; }

@@ -1,4 +1,4 @@
-// mbsflow bench rhs|output: benchmarks that print a table and write CSV.
+// mbsflow bench WHAT: benchmarks that print a table and write CSV.
 #include <memory>
 
 #include "bench.hpp"
@@ -22,11 +22,11 @@ Action add_bench(CLI::App& app) {
                   "against RK4 at its stable step, DOPRI5 and CVODE with KLU; "
                   "ivp: work-precision (correct digits at the end vs CPU time, rtol 1e-3..1e-10) of the implicit methods against "
                   "CVODE on Van der Pol (mu 1e3, 1e6), Robertson and the seed's problems")
-      ->check(CLI::IsMember({"rhs", "output", "parallel", "cluster", "latency", "ode", "iterations", "iftomm", "stiff", "ivp"}));
+      ->check(CLI::IsMember({"rhs", "output", "parallel", "cluster", "latency", "ode", "iterations", "iftomm", "stiff", "ivp", "load"}));
   sub->add_option("--problems", a->problems,
                   "ode, iterations: hnw, b1, heatN (default ode: hnw,b1,heat1000,heat100000,heat1000000; iterations: hnw,b1,heat200); "
                   "ivp: also vdpMU, robertson (default vdp1e3,vdp1e6,robertson,hnw,b1,heat1000); "
-                  "stiff: chain, train, a05 (default all)")
+                  "stiff: chain, train, a05 (default all); load: chain, grid (default both)")
       ->delimiter(',');
   sub->add_option("--tableau", a->tableau, "iterations: the tirk tableau (default radau3)");
   sub->add_option("--tolerances", a->tolerances, "ode: tolerances (default 1e-4,1e-6,1e-8,1e-10); stiff: rtol = atol (default 1e-1,1e-2,1e-3,1e-4); "
@@ -45,14 +45,14 @@ Action add_bench(CLI::App& app) {
                   "cvode-klu (default all); ivp: colloc, colloc-s2, tirk-newton, tirk-newton-triangular, cvode-bdf (default all)")
       ->delimiter(',')
       ->check(CLI::IsMember({"rk4", "dopri5", "tirk-newton", "tirk-newton-triangular", "colloc", "colloc-s2", "cvode-klu", "cvode-bdf"}));
-  sub->add_option("--bodies", a->bodies, "Chain sizes (rhs: 2000,6500,100000; output: 6500; parallel, cluster: 2000,4000,6500; stiff: 2000)")
+  sub->add_option("--bodies", a->bodies, "Chain sizes (rhs: 2000,6500,100000; output: 6500; parallel, cluster: 2000,4000,6500; stiff: 2000; load: 1000,10000,100000,1000000, a grid the nearest square)")
       ->delimiter(',');
   sub->add_option("--threads", a->threads, "parallel: up to this many threads (default: all cores); ivp: the thread count "
                   "of the parallel runs beside the sequential ones, on problems of 100 or more equations (default 2)")->check(CLI::PositiveNumber);
   sub->add_option("--seconds", a->seconds, "rhs: time per measurement")->check(CLI::PositiveNumber);
   sub->add_option("--steps", a->steps, "output: steps per run")->check(CLI::PositiveNumber);
   sub->add_option("--repeats", a->repeats, "output, parallel, cluster, iftomm: runs per case; the fastest counts")->check(CLI::PositiveNumber);
-  sub->add_option("--dir", a->dir, "output: folder for the results files (the disk being measured); iftomm, stiff: the example models (default examples/models)");
+  sub->add_option("--dir", a->dir, "output, load: folder for the results and model files (the disk being measured); iftomm, stiff: the example models (default examples/models)");
   sub->add_option("--csv", a->csv, "CSV file to write (default bench_WHAT.csv)");
   return [a] {
     if (a->what == "rhs") return bench_rhs(*a);
@@ -64,6 +64,7 @@ Action add_bench(CLI::App& app) {
     if (a->what == "iftomm") return bench_iftomm(*a);
     if (a->what == "stiff") return bench_stiff(*a);
     if (a->what == "ivp") return bench_ivp(*a);
+    if (a->what == "load") return bench_load(*a);
     return bench_parallel(*a);
   };
 }

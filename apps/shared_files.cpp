@@ -3,6 +3,8 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 
 #include "mbsflow/error.hpp"
 
@@ -25,6 +27,14 @@ std::string three_js_file(const std::string& name) {
   const fs::path p = fs::path("/usr/share/javascript/three") / name;
   if (!fs::exists(p)) throw Error("mbsflow view: " + p.string() + " is missing: install Debian's libjs-three (scripts/install-deps.sh does)");
   return p.string();
+}
+
+std::string file_text(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw Error("mbsflow: cannot read " + path);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
 }
 
 }  // namespace mbsflow::cli

@@ -8,5 +8,6 @@ namespace mbsflow::cli {
 
 std::string shared_file(const std::string& name);    // Error when found nowhere
 std::string three_js_file(const std::string& name);  // Error naming the package when missing
+std::string file_text(const std::string& path);      // the whole file; Error when it cannot be read
 
 }  // namespace mbsflow::cli

@@ -3,9 +3,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <nlohmann/json.hpp>
-#include <sstream>
 
 #include "mbsflow/error.hpp"
 #include "mbsflow/io/model_reader.hpp"
@@ -29,14 +27,6 @@ std::string base64(const std::vector<float>& v) {
     out += i + 2 < n ? digits[x & 63] : '=';
   }
   return out;
-}
-
-std::string file_text(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw Error("mbsflow view: cannot read " + path);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
 }
 
 void replace(std::string& page, const std::string& mark, const std::string& text) {

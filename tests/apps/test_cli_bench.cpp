@@ -82,3 +82,34 @@ TEST_CASE("cli bench ivp: work-precision against CVODE on Robertson and eq. 11, 
   CHECK(fs::file_size(fs::path(dir) / "ivp.png") > 10000);
   fs::remove_all(fs::path(dir).parent_path());
 }
+
+TEST_CASE("cli bench load: a chain and a grid generated and started in their own processes with time and peak memory", "[cli][bench]") {
+  const std::string dir = scratch("bench_load").string();
+  const Result r = run("bench load --bodies 200,2000 --csv load.csv", dir, true);
+  INFO(r.err << r.out);
+  REQUIRE(r.code == 0);
+  CHECK(r.out.find("chain: load+start time ~ N^") != std::string::npos);
+  CHECK(r.out.find("grid: load+start time ~ N^") != std::string::npos);
+  std::istringstream csv(read_text(fs::path(dir) / "load.csv"));
+  std::string line;
+  std::getline(csv, line);
+  CHECK(line == "model,bodies,generate_s,generate_peak_MB,load_start_s,load_start_peak_MB");
+  std::vector<std::string> models;
+  std::vector<double> peaks;
+  while (std::getline(csv, line)) {
+    const std::vector<std::string> cells = csv_cells(line);
+    REQUIRE(cells.size() == 6);
+    models.push_back(cells[0] + " " + cells[1]);
+    CHECK(std::stod(cells[4]) > 0.0);
+    peaks.push_back(std::stod(cells[5]));
+  }
+  // The grid is the nearest square; the peak is each run's own, so it grows with the model.
+  CHECK(models == std::vector<std::string>{"chain 200", "chain 2000", "grid 196", "grid 2025"});
+  REQUIRE(peaks.size() == 4);
+  CHECK(peaks[1] > peaks[0]);
+  CHECK(peaks[3] > peaks[2]);
+  // Nothing of the runs is left behind.
+  for (const auto& e : fs::directory_iterator(dir)) CHECK(e.path().filename() == "load.csv");
+  CHECK(run("bench load --dir no-such-folder", dir).code == 2);
+  fs::remove_all(fs::path(dir).parent_path());
+}
