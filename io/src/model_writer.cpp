@@ -97,32 +97,48 @@ json joint_json(const Model& m, const Joint& jt) {
 
 }  // namespace
 
+// One body or joint per line: readable, and error line numbers stay meaningful. Each item
+// is made and written in turn, so that no document of the whole model is ever held: a
+// million-body model's document tree would take gigabytes.
 std::string model_to_json(const Model& m) {
-  json root = {{"name", m.name}, {"gravity", m.gravity}};
-  json& bodies = root["bodies"] = json::array();
-  for (const Body& b : m.bodies) bodies.push_back(body_json(b));
-  json& joints = root["joints"] = json::array();
-  for (const Joint& j : m.joints) joints.push_back(joint_json(m, j));
+  std::string out = "{\n";
+  auto key = [&out](const char* k) { out += (out.size() > 2 ? ",\n  " : "  ") + json(k).dump() + ": "; };
+  auto list = [&](const char* k, std::size_t n, const auto& item) {
+    key(k);
+    if (n == 0) {
+      out += "[]";
+      return;
+    }
+    out += "[\n";
+    for (std::size_t i = 0; i < n; ++i) out += "    " + item(i).dump() + (i + 1 < n ? ",\n" : "\n");
+    out += "  ]";
+  };
+  key("name");
+  out += json(m.name).dump();
+  key("gravity");
+  out += json(m.gravity).dump();
+  list("bodies", m.bodies.size(), [&](std::size_t i) { return body_json(m.bodies[i]); });
+  list("joints", m.joints.size(), [&](std::size_t i) { return joint_json(m, m.joints[i]); });
   if (!m.loads.empty()) {
-    json& loads = root["loads"] = json::array();
-    for (const Load& l : m.loads) {
+    list("loads", m.loads.size(), [&](std::size_t i) {
+      const Load& l = m.loads[i];
       json j = {{"body", m.bodies[static_cast<std::size_t>(l.body)].name}, {"force", l.force}, {"torque", l.torque}};
       if (!zero(l.point)) j["point"] = l.point;
       if (l.body_frame) j["frame"] = "body";
       j["function"] = function_json(l.function);
-      loads.push_back(j);
-    }
+      return j;
+    });
   }
   if (!m.drivers.empty()) {
-    json& drivers = root["drivers"] = json::array();
-    for (const Driver& d : m.drivers) {
+    list("drivers", m.drivers.size(), [&](std::size_t i) {
+      const Driver& d = m.drivers[i];
       json motion = json::object();
       if (!zero(d.velocity)) motion["velocity"] = d.velocity;
       static const char* axes[3] = {"x", "y", "z"};
       for (std::size_t a = 0; a < 3; ++a)
         if (!is_zero_constant(d.displacement[a])) motion[axes[a]] = function_json(d.displacement[a]);
-      drivers.push_back({{"body", m.bodies[static_cast<std::size_t>(d.body)].name}, {"motion", motion}});
-    }
+      return json{{"body", m.bodies[static_cast<std::size_t>(d.body)].name}, {"motion", motion}};
+    });
   }
   const SimulationSettings& s = m.simulation;
   json sim = {{"t_start", s.t_start}, {"t_end", s.t_end}, {"method", method_name(s.method)},
@@ -130,22 +146,8 @@ std::string model_to_json(const Model& m) {
   if (s.step) sim["step"] = *s.step;
   if (!s.variant.empty()) sim["variant"] = s.variant;
   if (s.output_interval) sim["output_interval"] = *s.output_interval;
-  root["simulation"] = sim;
-  // One body or joint per line: readable, and error line numbers stay meaningful.
-  std::string out = "{\n";
-  bool first = true;
-  for (auto it = root.begin(); it != root.end(); ++it) {
-    out += first ? "  " : ",\n  ";
-    first = false;
-    out += json(it.key()).dump() + ": ";
-    if (it->is_array() && !it->empty() && it->front().is_object()) {
-      out += "[\n";
-      for (std::size_t i = 0; i < it->size(); ++i) out += "    " + (*it)[i].dump() + (i + 1 < it->size() ? ",\n" : "\n");
-      out += "  ]";
-    } else {
-      out += it->dump();
-    }
-  }
+  key("simulation");
+  out += sim.dump();
   return out + "\n}\n";
 }
 
