@@ -16,6 +16,7 @@
 
 #include "bench.hpp"
 #include "mbsflow/error.hpp"
+#include "mbsflow/line_fit.hpp"
 #include "shared_files.hpp"
 
 extern char** environ;
@@ -54,16 +55,9 @@ Measured run_self(const std::vector<std::string>& args, const std::string& log) 
 
 // Slope of log y against log x, least squares.
 double fitted_exponent(const std::vector<double>& x, const std::vector<double>& y) {
-  double sx = 0, sy = 0, sxx = 0, sxy = 0;
-  const double n = static_cast<double>(x.size());
-  for (std::size_t i = 0; i < x.size(); ++i) {
-    const double lx = std::log(x[i]), ly = std::log(y[i]);
-    sx += lx;
-    sy += ly;
-    sxx += lx * lx;
-    sxy += lx * ly;
-  }
-  return (n * sxy - sx * sy) / (n * sxx - sx * sx);
+  std::vector<double> lx, ly;
+  for (std::size_t i = 0; i < x.size(); ++i) lx.push_back(std::log(x[i])), ly.push_back(std::log(y[i]));
+  return line_fit(lx, ly).slope;
 }
 
 struct Row {

@@ -6,6 +6,7 @@
 
 #include "cluster_wire.hpp"
 #include "mbsflow/error.hpp"
+#include "mbsflow/line_fit.hpp"
 #include "exchange_cost.hpp"
 
 namespace mbsflow {
@@ -53,14 +54,10 @@ std::vector<ExchangeSample> measure_exchange(const std::string& transport, const
 
 Hockney fit_hockney(const std::vector<ExchangeSample>& s) {
   if (s.size() < 2) throw InputError("a Hockney fit needs two message sizes at least");
-  double sx = 0, sy = 0, sxx = 0, sxy = 0;
-  for (const ExchangeSample& e : s) {
-    const auto x = static_cast<double>(e.bytes);
-    sx += x, sy += e.seconds, sxx += x * x, sxy += x * e.seconds;
-  }
-  const auto n = static_cast<double>(s.size());
-  const double slope = (n * sxy - sx * sy) / (n * sxx - sx * sx);
-  return {(sy - slope * sx) / n, 1.0 / slope};
+  std::vector<double> bytes, seconds;
+  for (const ExchangeSample& e : s) bytes.push_back(static_cast<double>(e.bytes)), seconds.push_back(e.seconds);
+  const LineFit f = line_fit(bytes, seconds);
+  return {f.intercept, 1.0 / f.slope};
 }
 
 }  // namespace mbsflow
