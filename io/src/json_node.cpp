@@ -47,6 +47,22 @@ std::string overflow_error(const nlohmann::json::out_of_range& e, const std::str
                                               ": must be a finite number");
 }
 
+// Runs parse (nlohmann's parser on text) with the depth checked first and nlohmann's
+// errors turned into InputErrors that point into the text.
+template <class Parse>
+auto parse_checked(const std::string& text, const std::string& name, Parse parse) {
+  if (const std::size_t at = json_too_deep(text, max_json_depth); at != std::string::npos) {
+    throw InputError(format_input_error(name, location_of(text, at), "", "nested deeper than " + std::to_string(max_json_depth) + " levels"));
+  }
+  try {
+    return parse();
+  } catch (const nlohmann::json::parse_error& e) {
+    throw InputError(syntax_error(e, name));
+  } catch (const nlohmann::json::out_of_range& e) {
+    throw InputError(overflow_error(e, text, name));
+  }
+}
+
 }  // namespace
 
 std::string read_input_file(const std::string& path, const std::string& what, std::size_t max_bytes) {
@@ -57,22 +73,28 @@ std::string read_input_file(const std::string& path, const std::string& what, st
     throw InputError(path + ": the " + what + " has " + std::to_string(size) + " bytes, more than the " +
                      std::to_string(max_bytes) + " a " + what + " may have");
   in.seekg(0);
+  if (size > 0) {  // a regular file: read in place (a string stream would hold the text twice)
+    std::string text(static_cast<std::size_t>(size), '\0');
+    if (!in.read(text.data(), size)) throw InputError(path + ": cannot read the " + what);
+    return text;
+  }
   std::ostringstream text;
   text << in.rdbuf();
   return text.str();
 }
 
 nlohmann::json parse_json_document(const std::string& text, const std::string& name) {
-  if (const std::size_t at = json_too_deep(text, max_json_depth); at != std::string::npos) {
-    throw InputError(format_input_error(name, location_of(text, at), "", "nested deeper than " + std::to_string(max_json_depth) + " levels"));
-  }
-  try {
-    return nlohmann::json::parse(text);
-  } catch (const nlohmann::json::parse_error& e) {
-    throw InputError(syntax_error(e, name));
-  } catch (const nlohmann::json::out_of_range& e) {
-    throw InputError(overflow_error(e, text, name));
-  }
+  return parse_checked(text, name, [&] { return nlohmann::json::parse(text); });
+}
+
+bool JsonEvents::parse_error(std::size_t, const std::string&, const nlohmann::json::exception& e) {
+  if (const auto* p = dynamic_cast<const nlohmann::json::parse_error*>(&e)) throw *p;
+  if (const auto* o = dynamic_cast<const nlohmann::json::out_of_range*>(&e)) throw *o;
+  throw InputError(e.what());
+}
+
+void parse_json_events(const std::string& text, const std::string& name, JsonEvents& events) {
+  parse_checked(text, name, [&] { return nlohmann::json::sax_parse(text, &events); });
 }
 
 std::string number_text(double v) {
@@ -118,14 +140,16 @@ void JsonNode::allow_only(std::initializer_list<const char*> keys) const {
 
 JsonNode JsonNode::operator[](const char* key) const {
   expect_object();
-  if (!j_->contains(key)) fail(std::string("missing field '") + key + "'");
-  return JsonNode(j_->at(key), member_path(path_, key), *src_);
+  const auto it = j_->find(key);
+  if (it == j_->end()) fail(std::string("missing field '") + key + "'");
+  return JsonNode(*it, member_path(path_, key), *src_);
 }
 
 std::optional<JsonNode> JsonNode::find(const char* key) const {
   expect_object();
-  if (!j_->contains(key)) return std::nullopt;
-  return JsonNode(j_->at(key), member_path(path_, key), *src_);
+  const auto it = j_->find(key);
+  if (it == j_->end()) return std::nullopt;
+  return JsonNode(*it, member_path(path_, key), *src_);
 }
 
 std::size_t JsonNode::array_size() const {
@@ -171,7 +195,11 @@ std::string JsonNode::string() const {
 std::vector<double> JsonNode::numbers() const {
   const std::size_t n = array_size();
   std::vector<double> v(n);
-  for (std::size_t i = 0; i < n; ++i) v[i] = item(i).number();
+  for (std::size_t i = 0; i < n; ++i) {
+    const nlohmann::json& x = (*j_)[i];
+    // The item's own node (and path) only to report a bad number.
+    v[i] = x.is_number() && std::isfinite(x.get<double>()) ? x.get<double>() : item(i).number();
+  }
   return v;
 }
 

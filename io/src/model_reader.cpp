@@ -3,6 +3,7 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -10,6 +11,7 @@
 #include <unordered_map>
 #include <sstream>
 
+#include "json_list_stream.hpp"
 #include "json_node.hpp"
 #include "mbsflow/error.hpp"
 #include "mbsflow/methods/stepper.hpp"
@@ -88,9 +90,14 @@ Vec6 inertia(const JsonNode& n) {
   if (v.size() != 3 && v.size() != 6) n.fail("must have 3 or 6 numbers (got " + std::to_string(v.size()) + ")");
   Vec6 i{v[0], v[1], v[2], 0, 0, 0};
   if (v.size() == 6) i = {v[0], v[1], v[2], v[3], v[4], v[5]};
-  Eigen::Matrix3d m;
-  m << i[0], i[3], i[4], i[3], i[1], i[5], i[4], i[5], i[2];
-  const Eigen::Vector3d e = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(m, Eigen::EigenvaluesOnly).eigenvalues();
+  Eigen::Vector3d e(i[0], i[1], i[2]);  // principal moments, ascending
+  if (i[3] == 0.0 && i[4] == 0.0 && i[5] == 0.0) {  // principal axes already: no solver (a million bodies)
+    std::sort(e.begin(), e.end());
+  } else {
+    Eigen::Matrix3d m;
+    m << i[0], i[3], i[4], i[3], i[1], i[5], i[4], i[5], i[2];
+    e = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(m, Eigen::EigenvaluesOnly).eigenvalues();
+  }
   if (!(e[0] > 0.0)) n.fail("must be positive definite (smallest principal moment " + number_text(e[0]) + ")");
   if (e[0] + e[1] < e[2] * (1.0 - 1e-9))
     n.fail("principal moments " + number_text(e[0]) + ", " + number_text(e[1]) + ", " + number_text(e[2]) +
@@ -117,49 +124,78 @@ std::optional<JointType> kinematic_type(const std::string& name) {
   return std::nullopt;
 }
 
+// Reads a model as its text is parsed: each body, joint, load and driver as soon as it
+// is complete (joints, loads and drivers listed before the bodies wait for them), then
+// the rest of the document.
 class Reader {
  public:
-  Reader(const JsonNode& root) : root_(root) {}
+  enum List : std::size_t { bodies_list, joints_list, loads_list, drivers_list, list_count };
+  static constexpr std::array<const char*, list_count> list_names{"bodies", "joints", "loads", "drivers"};
 
-  Model read() {
-    root_.allow_only({"name", "description", "gravity", "bodies", "joints", "loads", "drivers", "simulation"});
-    if (auto n = root_.find("name")) m_.name = n->string();
-    if (auto n = root_.find("description")) n->string();
-    m_.gravity = vec3(root_, "gravity");
-    bodies(root_["bodies"]);
-    if (auto n = root_.find("joints")) for_items(*n, [&](const JsonNode& j) { joint(j); });
-    if (auto n = root_.find("loads")) for_items(*n, [&](const JsonNode& l) { load(l); });
-    if (auto n = root_.find("drivers")) for_items(*n, [&](const JsonNode& d) { driver(d); });
-    if (auto n = root_.find("simulation")) simulation(*n);
+  explicit Reader(const JsonSource& src) : src_(src) {}
+
+  void item(std::size_t list, std::size_t index, nlohmann::json&& j) {
+    if (list == bodies_list)
+      body(JsonNode(j, item_path(list_names[list], index), src_));
+    else if (bodies_read_)
+      dependent(list, index, j);
+    else
+      waiting_[list].push_back(std::move(j));
+  }
+
+  void end(std::size_t list, std::size_t count) {
+    streamed_[list] = true;
+    if (list != bodies_list) return;
+    if (count == 0) JsonNode(nlohmann::json::array(), list_names[list], src_).fail("must list at least one body");
+    bodies_read_ = true;
+    for (std::size_t l = joints_list; l < list_count; ++l) {
+      for (std::size_t i = 0; i < waiting_[l].size(); ++i) dependent(l, i, waiting_[l][i]);
+      waiting_[l].clear();
+    }
+  }
+
+  // The document less the streamed lists.
+  Model finish(const nlohmann::json& document) {
+    const JsonNode root(document, "", src_);
+    root.allow_only({"name", "description", "gravity", "bodies", "joints", "loads", "drivers", "simulation"});
+    if (auto n = root.find("name")) m_.name = n->string();
+    if (auto n = root.find("description")) n->string();
+    m_.gravity = vec3(root, "gravity");
+    // A list that was not streamed is missing or not an array: these fail as they should.
+    if (!streamed_[bodies_list]) root[list_names[bodies_list]].array_size();
+    for (std::size_t l = joints_list; l < list_count; ++l)
+      if (auto n = streamed_[l] ? std::nullopt : root.find(list_names[l])) n->array_size();
+    if (auto n = root.find("simulation")) simulation(*n);
     return std::move(m_);
   }
 
  private:
-  template <class F>
-  static void for_items(const JsonNode& array, F f) {
-    const std::size_t n = array.array_size();
-    for (std::size_t i = 0; i < n; ++i) f(array.item(i));
+  void dependent(std::size_t list, std::size_t index, const nlohmann::json& j) {
+    const JsonNode n(j, item_path(list_names[list], index), src_);
+    if (list == joints_list)
+      joint(n);
+    else if (list == loads_list)
+      load(n);
+    else
+      driver(n);
   }
 
-  void bodies(const JsonNode& list) {
-    if (list.array_size() == 0) list.fail("must list at least one body");
-    for_items(list, [&](const JsonNode& n) {
-      n.allow_only({"name", "mass", "inertia", "position", "orientation", "velocity", "angular_velocity"});
-      Body b;
-      const JsonNode name = n["name"];
-      b.name = name.string();
-      if (b.name.empty()) name.fail("must not be empty");
-      if (b.name == "ground") name.fail("'ground' is reserved for the fixed world frame");
-      if (auto [it, fresh] = body_index_.emplace(b.name, static_cast<int>(m_.bodies.size())); !fresh)
-        name.fail("duplicate body name '" + b.name + "' (first at " + item_path(list.path(), static_cast<std::size_t>(it->second)) + ")");
-      b.mass = n["mass"].positive();
-      b.inertia = inertia(n["inertia"]);
-      b.position = vec3(n, "position");
-      if (auto q = n.find("orientation")) b.orientation = unit_quat(*q);
-      b.velocity = vec3(n, "velocity");
-      b.angular_velocity = vec3(n, "angular_velocity");
-      m_.bodies.push_back(b);
-    });
+  void body(const JsonNode& n) {
+    n.allow_only({"name", "mass", "inertia", "position", "orientation", "velocity", "angular_velocity"});
+    Body b;
+    const JsonNode name = n["name"];
+    b.name = name.string();
+    if (b.name.empty()) name.fail("must not be empty");
+    if (b.name == "ground") name.fail("'ground' is reserved for the fixed world frame");
+    if (auto [it, fresh] = body_index_.emplace(b.name, static_cast<int>(m_.bodies.size())); !fresh)
+      name.fail("duplicate body name '" + b.name + "' (first at " + item_path(list_names[bodies_list], static_cast<std::size_t>(it->second)) + ")");
+    b.mass = n["mass"].positive();
+    b.inertia = inertia(n["inertia"]);
+    b.position = vec3(n, "position");
+    if (auto q = n.find("orientation")) b.orientation = unit_quat(*q);
+    b.velocity = vec3(n, "velocity");
+    b.angular_velocity = vec3(n, "angular_velocity");
+    m_.bodies.push_back(std::move(b));
   }
 
   int body_ref(const JsonNode& n, bool ground_ok) {
@@ -205,7 +241,7 @@ class Reader {
       bushing(n, j);
     else
       read_kinematic_joint(n, m_, j);
-    m_.joints.push_back(j);
+    m_.joints.push_back(std::move(j));
   }
 
   void spring(const JsonNode& n, Joint& j) {
@@ -254,7 +290,8 @@ class Reader {
 
   static Vec6 six_non_negative(const JsonNode& n) {
     const Vec6 v = n.fixed<6>();
-    for (std::size_t i = 0; i < 6; ++i) n.item(i).non_negative();
+    for (std::size_t i = 0; i < 6; ++i)
+      if (v[i] < 0.0) n.item(i).non_negative();  // fails, naming the item
     return v;
   }
 
@@ -311,8 +348,11 @@ class Reader {
     if (auto v = n.find("atol")) s.atol = v->positive();
   }
 
-  JsonNode root_;
+  const JsonSource& src_;
   Model m_;
+  bool bodies_read_ = false;
+  std::array<bool, list_count> streamed_{};
+  std::array<std::vector<nlohmann::json>, list_count> waiting_;
   // Names to indices, so that each reference is found in constant time (a model of a
   // million bodies names as many in its joints).
   std::unordered_map<std::string, int> body_index_;
@@ -322,10 +362,13 @@ class Reader {
 }  // namespace
 
 Model read_model_text(const std::string& text, const std::string& name) {
-  const nlohmann::json j = parse_json_document(text, name);
-  JsonSource src{name, JsonLocations(text)};
-  const JsonNode root(j, "", src);
-  return Reader(root).read();
+  const JsonSource src{name, JsonLocations(text)};
+  Reader reader(src);
+  JsonListHandlers lists;
+  lists.lists.assign(Reader::list_names.begin(), Reader::list_names.end());
+  lists.item = [&](std::size_t list, std::size_t i, nlohmann::json&& item) { reader.item(list, i, std::move(item)); };
+  lists.end = [&](std::size_t list, std::size_t count) { reader.end(list, count); };
+  return reader.finish(parse_json_streaming_lists(text, name, lists));
 }
 
 std::string read_model_file_text(const std::string& path) { return read_input_file(path, "model file", max_model_bytes); }

@@ -1,5 +1,6 @@
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <nlohmann/json.hpp>
 
 #include "mbsflow/error.hpp"
 #include "mbsflow/graph/generators.hpp"
@@ -83,4 +84,35 @@ TEST_CASE("input errors carry file, line, column and field path", "[io]") {
   } catch (const InputError& e) {
     CHECK(std::string(e.what()) == "m.json:3:27: bodies[0].mass: must be > 0 (got -1)");
   }
+}
+
+TEST_CASE("a model reads the same whatever the order of its top-level fields", "[io]") {
+  // Bodies are read as the text streams by; joints, loads and drivers listed before them wait.
+  const std::string text = model_to_json(read_model_file(examples + "/features.json"));
+  const auto j = nlohmann::ordered_json::parse(text);
+  nlohmann::ordered_json reversed = nlohmann::ordered_json::object();
+  std::vector<std::string> keys;
+  for (const auto& item : j.items()) keys.push_back(item.key());
+  REQUIRE(keys.front() == "name");
+  for (auto k = keys.rbegin(); k != keys.rend(); ++k) reversed[*k] = j[*k];
+  const std::string reversed_text = reversed.dump(2);
+  REQUIRE(reversed_text.find("\"joints\"") < reversed_text.find("\"bodies\""));
+  const Model back = read_model_text(reversed_text, "reversed.json");
+  CHECK(model_to_json(back) == text);
+}
+
+TEST_CASE("a top-level list given twice is refused", "[io]") {
+  const std::string text =
+      "{\"bodies\": [{\"name\": \"a\", \"mass\": 1, \"inertia\": [1, 1, 1]}],\n"
+      " \"bodies\": [{\"name\": \"b\", \"mass\": 1, \"inertia\": [1, 1, 1]}]}";
+  CHECK_THROWS_AS(read_model_text(text, "m.json"), InputError);
+  CHECK_THROWS_WITH(read_model_text(text, "m.json"), "m.json: bodies: given twice");
+}
+
+TEST_CASE("a list that is not an array fails as a missing one does: with its path", "[io]") {
+  const std::string base = "{\"bodies\": [{\"name\": \"a\", \"mass\": 1, \"inertia\": [1, 1, 1]}]";
+  CHECK_THROWS_WITH(read_model_text(base + ", \"joints\": {}}", "m.json"), "m.json:1:72: joints: must be an array (got object)");
+  CHECK_THROWS_WITH(read_model_text("{\"bodies\": 3}", "m.json"), "m.json:1:12: bodies: must be an array (got number)");
+  CHECK_THROWS_WITH(read_model_text("{\"bodies\": []}", "m.json"), "m.json:1:12: bodies: must list at least one body");
+  CHECK_THROWS_WITH(read_model_text("{}", "m.json"), "m.json:1:1: missing field 'bodies'");
 }
