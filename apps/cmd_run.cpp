@@ -201,8 +201,9 @@ std::string checkpoint_path(const RunArgs& a) {
 // replaces the model file's.
 int run(const RunArgs& a, const CheckpointFile* resumed = nullptr, const std::string& resumed_path = "") {
   if (a.model.empty()) throw InputError("run: give a MODEL file, or --resume CHECKPOINT to go on with a run");
-  const std::string model_text = resumed ? resumed->model_text : read_model_file_text(a.model);
+  std::string model_text = resumed ? resumed->model_text : read_model_file_text(a.model);
   Model m = read_model_text(model_text, a.model);
+  if (!(a.checkpoint_every > 0.0)) std::string().swap(model_text);  // only checkpoints keep the text
   ModelOverrides overrides{a.t_end, a.step, a.rtol, a.atol, a.output_interval, a.every, std::nullopt, a.variant};
   if (!a.method.empty()) overrides.method = *find_method(a.method);
   apply_overrides(m, overrides);
@@ -283,7 +284,7 @@ int run(const RunArgs& a, const CheckpointFile* resumed = nullptr, const std::st
     checkpoint_at = checkpoint_path(a);
     checkpoint_file.arguments = resumed ? resumed->arguments : run_arguments();
     checkpoint_file.directory = resumed ? resumed->directory : std::filesystem::current_path().string();
-    checkpoint_file.model_text = model_text;
+    checkpoint_file.model_text = std::move(model_text);
     checkpointing.every_s = a.checkpoint_every;
     checkpointing.write = [&](std::vector<std::uint8_t>&& state) {
       checkpoint_file.state = std::move(state);

@@ -90,7 +90,7 @@ bool has_analytic_jacobian(const Model& m, std::string* why) {
 
 bool MultibodySystem::has_analytic_jacobian(std::string* why) const {
   if (active_ != layout_.bodies) return no_jacobian(why, "the system is a submodel (its ghost bodies' states come from other submodels)");
-  if (!mbsflow::has_analytic_jacobian(model_, why)) return false;
+  if (!mbsflow::has_analytic_jacobian(model(), why)) return false;
   for (const auto& e : elements_)  // added after construction
     if (!e->constant_wrench()) return no_jacobian(why, "the model has user force elements");
   return true;
@@ -145,7 +145,7 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
     // Loads: through the orientation only.
     Vector3T<Dual> load_force = Vector3T<Dual>::Zero(), load_torque = Vector3T<Dual>::Zero();
     for (int p = load_start_[bi]; p < load_start_[bi + 1]; ++p) {
-      const Load& l = model_.loads[static_cast<std::size_t>(load_index_[static_cast<std::size_t>(p)])];
+      const Load& l = model().loads[static_cast<std::size_t>(load_index_[static_cast<std::size_t>(p)])];
       add_load<Dual>(l, evaluate(l.function, t).value, rot, load_force, load_torque);
     }
     Block6& self = block_of(static_cast<int>(i));

@@ -57,8 +57,8 @@ void MultibodySystem::compile_constraints() {
   Constraints& k = *constraints_;
   const int n = static_cast<int>(layout_.bodies);
   std::vector<char> touched(static_cast<std::size_t>(n), 0);
-  for (std::size_t j = 0; j < model_.joints.size(); ++j) {
-    const Joint& joint = model_.joints[j];
+  for (std::size_t j = 0; j < model().joints.size(); ++j) {
+    const Joint& joint = model().joints[j];
     if (!is_kinematic(joint.type)) continue;
     CompiledJoint& c = joints_[j];
     c.kinematic = static_cast<int>(k.geometry.size());
@@ -71,7 +71,7 @@ void MultibodySystem::compile_constraints() {
   }
   // The partitioners' rigid pieces, less the bodies without a rigid joint: clusters in
   // the order of their first body, bodies ascending.
-  const std::vector<int> piece = rigid_pieces(model_);
+  const std::vector<int> piece = rigid_pieces(model());
   k.cluster_of_body.assign(static_cast<std::size_t>(n), -1);
   std::vector<int> cluster_of_piece(static_cast<std::size_t>(n), -1);
   std::vector<std::vector<int>> bodies;
@@ -87,8 +87,8 @@ void MultibodySystem::compile_constraints() {
   }
   std::vector<std::vector<ClusterJoint>> joints(bodies.size());
   std::vector<int> rows(bodies.size(), 0);
-  for (std::size_t j = 0; j < model_.joints.size(); ++j) {
-    const Joint& joint = model_.joints[j];
+  for (std::size_t j = 0; j < model().joints.size(); ++j) {
+    const Joint& joint = model().joints[j];
     if (!is_kinematic(joint.type) || !joint.rigid) continue;
     const auto c = static_cast<std::size_t>(k.cluster_of_body[static_cast<std::size_t>(joint.body2)]);
     auto slot = [&](int body) {
@@ -104,7 +104,7 @@ void MultibodySystem::compile_constraints() {
   k.clusters.reserve(bodies.size());  // no copies of clusters not yet factored
   for (std::size_t c = 0; c < bodies.size(); ++c) {
     if (bodies[c].back() >= active_)
-      throw InputError("rigid joint '" + model_.joints[static_cast<std::size_t>(joints[c].front().joint)].name +
+      throw InputError("rigid joint '" + model().joints[static_cast<std::size_t>(joints[c].front().joint)].name +
                        "' joins bodies of different submodels: a cut may only pass through compliant joints, bushings and springs");
     k.clusters.emplace_back(std::move(bodies[c]), std::move(joints[c]));
     k.lambda.emplace_back(Eigen::VectorXd::Zero(k.clusters.back().row_count()));
@@ -208,7 +208,7 @@ void MultibodySystem::solve_cluster(int c, double t, const Eigen::VectorXd& y, E
     if (const int d = driver_of_body_[bi]; d >= 0) {
       rc.inv_mass[s] = 0.0;
       rc.inv_inertia[s].setZero();
-      const Driver& drv = model_.drivers[static_cast<std::size_t>(d)];
+      const Driver& drv = model().drivers[static_cast<std::size_t>(d)];
       for (int a = 0; a < 3; ++a) accel[s][a] = evaluate(drv.displacement[static_cast<std::size_t>(a)], t).accel;
       accel[s].tail<3>().setZero();
       continue;

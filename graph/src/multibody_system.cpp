@@ -5,6 +5,7 @@
 #include <Eigen/LU>
 #include <cmath>
 #include <cstdio>
+#include <stdexcept>
 
 #include "mbsflow/error.hpp"
 #include "force_laws.hpp"
@@ -41,7 +42,16 @@ Eigen::Matrix3d inertia_matrix(const Vec6& i) {
 
 MultibodySystem::MultibodySystem(const Model& model) : MultibodySystem(model, static_cast<int>(model.bodies.size())) {}
 
-MultibodySystem::MultibodySystem(const Model& model, int active) : model_((check_model(model), model)) {
+MultibodySystem::MultibodySystem(const Model& model, int active)
+    : MultibodySystem(std::make_shared<const Model>(model), active) {}
+
+MultibodySystem::MultibodySystem(Model&& model, int active)
+    : MultibodySystem(std::make_shared<const Model>(std::move(model)), active) {}
+
+MultibodySystem::MultibodySystem(std::shared_ptr<const Model> shared, int active) : model_(std::move(shared)) {
+  if (!model_) throw std::invalid_argument("MultibodySystem: no model");
+  const Model& model = *model_;
+  check_model(model);
   const int n = static_cast<int>(model.bodies.size());
   layout_.bodies = n;
   active_ = std::clamp(active, 0, n);
@@ -109,13 +119,13 @@ MultibodySystem::MultibodySystem(const Model& model, int active) : model_((check
 Eigen::VectorXd MultibodySystem::initial_state() const {
   Eigen::VectorXd y(dimension());
   for (Eigen::Index i = 0; i < layout_.bodies; ++i) {
-    const Body& b = model_.bodies[static_cast<std::size_t>(i)];
+    const Body& b = model().bodies[static_cast<std::size_t>(i)];
     y.segment<3>(layout_.position(i)) = vec(b.position);
     y.segment<4>(layout_.orientation(i)) = quat(b.orientation).normalized();
     y.segment<3>(layout_.velocity(i)) = vec(b.velocity);
     y.segment<3>(layout_.angular_velocity(i)) = vec(b.angular_velocity);
   }
-  const double t0 = model_.simulation.t_start;
+  const double t0 = model().simulation.t_start;
   int given_joint = -1, worst_joint = -1;
   const double given = constraint_violation(t0, y, &given_joint);
   after_step(t0, y);
@@ -123,7 +133,7 @@ Eigen::VectorXd MultibodySystem::initial_state() const {
   if (const double v = constraint_violation(t0, y, &worst_joint); !(v <= 1e-6)) {
     char buf[64];
     std::snprintf(buf, sizeof buf, "%.3g", given);
-    throw InputError("rigid joint '" + model_.joints[static_cast<std::size_t>(given_joint >= 0 ? given_joint : worst_joint)].name +
+    throw InputError("rigid joint '" + model().joints[static_cast<std::size_t>(given_joint >= 0 ? given_joint : worst_joint)].name +
                      "' cannot be assembled with the others (violation " + buf +
                      " as given, and no projection removes it): the rigid joints over-constrain a loop in a way that "
                      "no position satisfies, or the initial positions are far from one that does");
@@ -148,8 +158,8 @@ Eigen::VectorXd MultibodySystem::initial_state() const {
 // A driven body's kinematics replace what its state says.
 void MultibodySystem::drive(const Driver& d, double t) {
   const Eigen::Index i = d.body;
-  const Body& b = model_.bodies[static_cast<std::size_t>(i)];
-  DriveMemo& memo = drive_memo_[static_cast<std::size_t>(&d - model_.drivers.data())];
+  const Body& b = model().bodies[static_cast<std::size_t>(i)];
+  DriveMemo& memo = drive_memo_[static_cast<std::size_t>(&d - model().drivers.data())];
   int slot = memo.find(t);
   if (slot < 0) {
     slot = memo.next;
@@ -174,7 +184,7 @@ void MultibodySystem::drive(const Driver& d, double t) {
 void MultibodySystem::update_kinematics(double t, const Eigen::VectorXd& y) {
   time_ = t;
   for (Eigen::Index i = 0; i < layout_.bodies; ++i) body_kinematics(i, y);
-  for (const Driver& d : model_.drivers) drive(d, t);
+  for (const Driver& d : model().drivers) drive(d, t);
 }
 
 void MultibodySystem::kinematics_of(double t, const Eigen::VectorXd& y, std::span<const int> bodies) {
@@ -182,7 +192,7 @@ void MultibodySystem::kinematics_of(double t, const Eigen::VectorXd& y, std::spa
   for (int i : bodies) {
     body_kinematics(i, y);
     // The last driver of a body wins, as in update_kinematics.
-    if (const int d = driver_of_body_[static_cast<std::size_t>(i)]; d >= 0) drive(model_.drivers[static_cast<std::size_t>(d)], t);
+    if (const int d = driver_of_body_[static_cast<std::size_t>(i)]; d >= 0) drive(model().drivers[static_cast<std::size_t>(d)], t);
   }
 }
 
@@ -258,7 +268,7 @@ void MultibodySystem::applied_wrench(Eigen::Index i, double t, Eigen::Vector3d& 
   force = mass_[bi] * gravity_;
   torque = Eigen::Vector3d::Zero();
   for (int p = load_start_[bi]; p < load_start_[bi + 1]; ++p) {
-    const Load& l = model_.loads[static_cast<std::size_t>(load_index_[static_cast<std::size_t>(p)])];
+    const Load& l = model().loads[static_cast<std::size_t>(load_index_[static_cast<std::size_t>(p)])];
     add_load<double>(l, evaluate(l.function, t).value, r, force, torque);
   }
   for (int p = incidence_start_[bi]; p < incidence_start_[bi + 1]; ++p) {
@@ -284,7 +294,7 @@ void MultibodySystem::write_derivative(Eigen::Index i, double t, const Eigen::Ve
   const auto bi = static_cast<std::size_t>(i);
   const int drv = driver_of_body_[bi];
   if (drv >= 0) {
-    const Driver& d = model_.drivers[static_cast<std::size_t>(drv)];
+    const Driver& d = model().drivers[static_cast<std::size_t>(drv)];
     const DriveMemo& memo = drive_memo_[static_cast<std::size_t>(drv)];
     const int slot = memo.find(t);  // kept by this evaluation's kinematics
     for (int k = 0; k < 3; ++k) {
@@ -335,7 +345,7 @@ void MultibodySystem::rhs(double t, const Eigen::VectorXd& y, Eigen::VectorXd& d
 // A driven body's state put exactly on its prescribed motion.
 void MultibodySystem::impose(const Driver& d, double t, Eigen::VectorXd& y) const {
   const Eigen::Index i = d.body;
-  const Body& b = model_.bodies[static_cast<std::size_t>(i)];
+  const Body& b = model().bodies[static_cast<std::size_t>(i)];
   for (int k = 0; k < 3; ++k) {
     const FunctionValue f = evaluate(d.displacement[static_cast<std::size_t>(k)], t);
     y[layout_.position(i) + k] = b.position[static_cast<std::size_t>(k)] + d.velocity[static_cast<std::size_t>(k)] * t + f.value;
@@ -347,14 +357,14 @@ void MultibodySystem::impose(const Driver& d, double t, Eigen::VectorXd& y) cons
 
 void MultibodySystem::after_step(double t, Eigen::VectorXd& y) const {
   for (Eigen::Index i = 0; i < layout_.bodies; ++i) y.segment<4>(layout_.orientation(i)).normalize();
-  for (const Driver& d : model_.drivers) impose(d, t, y);
+  for (const Driver& d : model().drivers) impose(d, t, y);
   for (int c = 0; c < clusters(); ++c) project_cluster(c, t, y);
 }
 
 void MultibodySystem::after_step_of(double t, Eigen::VectorXd& y, std::span<const int> bodies) const {
   for (int i : bodies) {
     y.segment<4>(layout_.orientation(i)).normalize();
-    if (const int d = driver_of_body_[static_cast<std::size_t>(i)]; d >= 0) impose(model_.drivers[static_cast<std::size_t>(d)], t, y);
+    if (const int d = driver_of_body_[static_cast<std::size_t>(i)]; d >= 0) impose(model().drivers[static_cast<std::size_t>(d)], t, y);
   }
   for (int c : clusters_of(bodies)) project_cluster(c, t, y);
 }
@@ -384,7 +394,7 @@ Energy MultibodySystem::energy(double t, const Eigen::VectorXd& y) {
   Energy e;
   for (Eigen::Index i = 0; i < layout_.bodies; ++i) {
     const auto bi = static_cast<std::size_t>(i);
-    const double m = model_.bodies[bi].mass;
+    const double m = model().bodies[bi].mass;
     const Eigen::Vector3d w = y.segment<3>(layout_.angular_velocity(i));
     e.kinetic += 0.5 * m * vel_.col(i).squaredNorm() + 0.5 * w.dot(inertia_[bi] * w);
     e.gravity -= m * gravity_.dot(pos_.col(i));

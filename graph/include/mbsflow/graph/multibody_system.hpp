@@ -77,10 +77,14 @@ class MultibodySystem {
   // Derivatives only for the first `active` bodies (a submodel's own bodies; the rest are
   // ghosts whose state comes from their owners); their values are those of the full model.
   MultibodySystem(const Model& model, int active);
+  // The same without a copy of the model: moved in, or shared with its other readers
+  // (a million-body model is about a gigabyte). Copies of the system share it too.
+  MultibodySystem(Model&& model, int active);
+  MultibodySystem(std::shared_ptr<const Model> model, int active);
 
   Eigen::Index dimension() const { return layout_.size(); }
   const StateLayout& layout() const { return layout_; }
-  const Model& model() const { return model_; }
+  const Model& model() const { return *model_; }
 
   Eigen::VectorXd initial_state() const;
   void rhs(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt);
@@ -179,7 +183,7 @@ class MultibodySystem {
   }
   double elastic_energy(const CompiledJoint& j) const;
 
-  Model model_;
+  std::shared_ptr<const Model> model_;
   StateLayout layout_;
   Eigen::Index active_ = 0;
   Eigen::Vector3d gravity_;
