@@ -144,7 +144,6 @@ class Reader {
   }
 
   void end(std::size_t list, std::size_t count) {
-    streamed_[list] = true;
     if (list != bodies_list) return;
     if (count == 0) JsonNode(nlohmann::json::array(), list_names[list], src_).fail("must list at least one body");
     bodies_read_ = true;
@@ -161,10 +160,11 @@ class Reader {
     if (auto n = root.find("name")) m_.name = n->string();
     if (auto n = root.find("description")) n->string();
     m_.gravity = vec3(root, "gravity");
-    // A list that was not streamed is missing or not an array: these fail as they should.
-    if (!streamed_[bodies_list]) root[list_names[bodies_list]].array_size();
+    // A streamed list is left as an empty array; one that was not streamed is missing or
+    // not an array, and fails here as it should.
+    root[list_names[bodies_list]].array_size();
     for (std::size_t l = joints_list; l < list_count; ++l)
-      if (auto n = streamed_[l] ? std::nullopt : root.find(list_names[l])) n->array_size();
+      if (auto n = root.find(list_names[l])) n->array_size();
     if (auto n = root.find("simulation")) simulation(*n);
     return std::move(m_);
   }
@@ -351,7 +351,6 @@ class Reader {
   const JsonSource& src_;
   Model m_;
   bool bodies_read_ = false;
-  std::array<bool, list_count> streamed_{};
   std::array<std::vector<nlohmann::json>, list_count> waiting_;
   // Names to indices, so that each reference is found in constant time (a model of a
   // million bodies names as many in its joints).
