@@ -53,13 +53,6 @@ Measured run_self(const std::vector<std::string>& args, const std::string& log) 
   return {seconds_since(start), static_cast<double>(usage.ru_maxrss) / 1024.0};
 }
 
-// Slope of log y against log x, least squares.
-double fitted_exponent(const std::vector<double>& x, const std::vector<double>& y) {
-  std::vector<double> lx, ly;
-  for (std::size_t i = 0; i < x.size(); ++i) lx.push_back(std::log(x[i])), ly.push_back(std::log(y[i]));
-  return line_fit(lx, ly).slope;
-}
-
 struct Row {
   std::string kind;
   long bodies = 0;
@@ -123,7 +116,7 @@ int bench_load(const BenchArgs& a) {
     }
     if (x.size() >= 2)
       std::printf("%s: load+start time ~ N^%.2f, peak memory ~ N^%.2f (fitted from %.0f to %.0f bodies)\n", kind.c_str(),
-                  fitted_exponent(x, t), fitted_exponent(x, m), x.front(), x.back());
+                  log_log_slope(x, t), log_log_slope(x, m), x.front(), x.back());
   }
   std::printf("written to %s\n", csv_path.c_str());
   return 0;

@@ -9,7 +9,7 @@
 #include "mbsflow/graph/model.hpp"
 #include "mbsflow/graph/multibody_system.hpp"
 #include "mbsflow/methods/rk4.hpp"
-#include "convergence.hpp"
+#include "mbsflow/line_fit.hpp"
 
 namespace mbsflow::test {
 

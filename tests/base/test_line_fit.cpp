@@ -1,4 +1,5 @@
 #include <catch2/catch.hpp>
+#include <cmath>
 
 #include "mbsflow/line_fit.hpp"
 
@@ -19,4 +20,11 @@ TEST_CASE("line fit: noise symmetric about a line leaves the line") {
   const auto f = line_fit(x, y);
   CHECK(f.slope == Approx(2.0).epsilon(1e-14));
   CHECK(f.intercept == Approx(1.0).epsilon(1e-14));
+}
+
+TEST_CASE("log-log slope: the exponent of a power law") {
+  const std::vector<double> x{1e-3, 1e-2, 0.5, 4.0};
+  std::vector<double> y;
+  for (double xi : x) y.push_back(7.0 * std::pow(xi, 3.5));
+  CHECK(mbsflow::log_log_slope(x, y) == Approx(3.5).epsilon(1e-12));
 }

@@ -140,7 +140,7 @@ TEST_CASE("undamped chain conserves energy to the order of RK4", "[graph][conser
     steps.push_back(0.5 / static_cast<double>(n));
     errors.push_back(max_e / max_kinetic);
   }
-  const double slope = convergence_slope(steps, errors);
+  const double slope = log_log_slope(steps, errors);
   INFO("relative energy errors " << errors[0] << ", " << errors[1] << ", " << errors[2] << "; slope " << slope);
   CHECK(errors[2] < 1e-6);
   CHECK(slope > 3.8);

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <vector>
 
-#include "convergence.hpp"
+#include "mbsflow/line_fit.hpp"
 #include "mbsflow/methods/block_integrator.hpp"
 #include "mbsflow/methods/dopri5.hpp"
 #include "methods/error_in_tolerances.hpp"
@@ -43,7 +43,7 @@ double fixed_step_slope(const OdeProblem& p, BlockSettings s, const std::vector<
     h.push_back(s.fixed_step);
     e.push_back(final_error(p, s));
   }
-  return mbsflow::test::convergence_slope(h, e);
+  return mbsflow::log_log_slope(h, e);
 }
 
 BlockSettings converged_iteration(BlockMethodSpec spec, BlockIteration it = BlockIteration::newton) {

@@ -2,7 +2,7 @@
 #include <cmath>
 
 #include "mbsflow/methods/dopri5.hpp"
-#include "convergence.hpp"
+#include "mbsflow/line_fit.hpp"
 
 using namespace mbsflow;
 
@@ -53,7 +53,7 @@ TEST_CASE("DOPRI5 error scales with the tolerance", "[methods]") {
     CHECK(r.error < 1e4 * tol);
   }
   for (std::size_t i = 1; i < errs.size(); ++i) CHECK(errs[i] < errs[i - 1]);
-  const double slope = test::convergence_slope(tols, errs);
+  const double slope = log_log_slope(tols, errs);
   INFO("d log(error) / d log(tol) = " << slope);
   CHECK(slope > 0.8);
   CHECK(slope < 1.2);

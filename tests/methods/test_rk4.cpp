@@ -2,7 +2,7 @@
 #include <cmath>
 
 #include "mbsflow/methods/rk4.hpp"
-#include "convergence.hpp"
+#include "mbsflow/line_fit.hpp"
 
 using namespace mbsflow;
 
@@ -24,7 +24,7 @@ TEST_CASE("RK4 converges with order 4", "[methods]") {
     hs.push_back(h);
     errs.push_back(std::abs(y[0] - std::exp(std::sin(2.0))));
   }
-  const double slope = test::convergence_slope(hs, errs);
+  const double slope = log_log_slope(hs, errs);
   INFO("slope " << slope);
   CHECK(slope > 3.8);
   CHECK(slope < 4.2);

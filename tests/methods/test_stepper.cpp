@@ -4,7 +4,7 @@
 #include <cmath>
 #include <vector>
 
-#include "convergence.hpp"
+#include "mbsflow/line_fit.hpp"
 #include "mbsflow/methods/stepper.hpp"
 
 #include "methods/oscillator_system.hpp"
@@ -53,7 +53,7 @@ TEST_CASE("rk4 stepper: order 4, fixed steps landing on t_end", "[methods][stepp
     h.push_back(step);
     err.push_back(end_error(Method::rk4, o, 2.03));  // not a whole number of steps
   }
-  CHECK(test::convergence_slope(h, err) == Approx(4.0).margin(0.3));
+  CHECK(log_log_slope(h, err) == Approx(4.0).margin(0.3));
 }
 
 TEST_CASE("adaptive steppers meet their tolerance and converge as it shrinks", "[methods][stepper]") {

@@ -7,7 +7,7 @@
 #include <map>
 #include <vector>
 
-#include "convergence.hpp"
+#include "mbsflow/line_fit.hpp"
 #include "mbsflow/methods/jacobian.hpp"
 #include "mbsflow/methods/tirk_integrator.hpp"
 
@@ -23,7 +23,7 @@ double fixed_step_slope(const OdeProblem& p, TirkSettings s, const std::vector<i
     h.push_back(s.fixed_step);
     e.push_back((r.y - p.exact(r.t)).cwiseAbs().maxCoeff());
   }
-  return mbsflow::test::convergence_slope(h, e);
+  return mbsflow::log_log_slope(h, e);
 }
 
 double infinity_norm(const OdeProblem& p) {

@@ -7,7 +7,7 @@
 
 #include <cmath>
 
-#include "convergence.hpp"
+#include "mbsflow/line_fit.hpp"
 #include "mbsflow/graph/force_element.hpp"
 #include "mbsflow/graph/generators.hpp"
 #include "mbsflow/runtime/loose_coupling.hpp"
@@ -172,7 +172,7 @@ TEST_CASE("implicit methods show their order on a multibody chain with fixed ste
       h.push_back(0.2 / n);
       e.push_back(test::position_gap(sys, fixed_step_end(m, c.method, c.variant, n), reference));
     }
-    const double slope = test::convergence_slope(h, e);
+    const double slope = log_log_slope(h, e);
     INFO(method_name(c.method) << " " << c.variant << ": errors " << e[0] << ", " << e[1] << ", " << e[2] << ", slope " << slope);
     CHECK(std::abs(slope - c.order) < 0.3);
   }
