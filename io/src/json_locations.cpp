@@ -46,7 +46,7 @@ class Scanner {
       advance();
       while (!found_) {
         skip_space();
-        if (pos_ >= s_.size() || s_[pos_] == '}') break;
+        if (pos_ >= s_.size() || closing(s_[pos_])) break;
         if (s_[pos_] == ',') { advance(); continue; }
         const SourceLocation k = here();
         const std::string name = string();
@@ -65,7 +65,7 @@ class Scanner {
       std::size_t i = 0;
       while (!found_) {
         skip_space();
-        if (pos_ >= s_.size() || s_[pos_] == ']') break;
+        if (pos_ >= s_.size() || closing(s_[pos_])) break;
         if (s_[pos_] == ',') { advance(); continue; }
         const SourceLocation item = here();
         const std::string element = item_path(path, i++);
@@ -107,6 +107,9 @@ class Scanner {
     }
   }
 
+  // Either closer ends a container: the text past the point where a reading error was
+  // thrown was never parsed and need not be valid JSON, yet each loop must end.
+  static bool closing(char c) { return c == '}' || c == ']'; }
   static bool space(char c) { return c == ' ' || c == '\t' || c == '\n' || c == '\r'; }
   SourceLocation here() const { return {line_, col_}; }
   void advance() {
@@ -130,7 +133,8 @@ class Scanner {
     }
     advance();  // closing quote
   }
-  // A string literal; simple escapes decoded, \u escapes kept as written.
+  // A string literal decoded as the parser decodes it (\u escapes to UTF-8, surrogate
+  // pairs joined), so that a key written with escapes still matches its path.
   std::string string() {
     std::string out;
     advance();  // opening quote
@@ -138,7 +142,11 @@ class Scanner {
       if (s_[pos_] == '\\' && pos_ + 1 < s_.size()) {
         advance();
         const char e = s_[pos_];
-        out += e == 'n' ? '\n' : e == 't' ? '\t' : e == 'u' ? 'u' : e;
+        if (e == 'u') {
+          append_utf8(out, code_point());
+          continue;
+        }
+        out += e == 'n' ? '\n' : e == 't' ? '\t' : e == 'r' ? '\r' : e == 'b' ? '\b' : e == 'f' ? '\f' : e;
       } else {
         out += s_[pos_];
       }
@@ -146,6 +154,44 @@ class Scanner {
     }
     advance();  // closing quote
     return out;
+  }
+  // At the 'u' of \uXXXX: the code point, with a following low surrogate joined; leaves
+  // the position after the last hex digit read.
+  unsigned code_point() {
+    unsigned c = hex4();
+    if (c >= 0xD800 && c < 0xDC00 && pos_ + 1 < s_.size() && s_[pos_] == '\\' && s_[pos_ + 1] == 'u') {
+      const std::size_t at = pos_;
+      const int line = line_, col = col_;
+      advance();
+      const unsigned low = hex4();
+      if (low >= 0xDC00 && low < 0xE000) return 0x10000 + ((c - 0xD800) << 10) + (low - 0xDC00);
+      pos_ = at, line_ = line, col_ = col;  // not a pair: the second escape is read on its own
+    }
+    return c;
+  }
+  unsigned hex4() {
+    advance();  // the 'u'
+    unsigned v = 0;
+    for (int i = 0; i < 4 && pos_ < s_.size(); ++i) {
+      const char h = s_[pos_];
+      const unsigned d = h >= '0' && h <= '9' ? unsigned(h - '0') : h >= 'a' && h <= 'f' ? unsigned(h - 'a' + 10)
+                       : h >= 'A' && h <= 'F' ? unsigned(h - 'A' + 10) : 0u;
+      v = v * 16 + d;
+      advance();
+    }
+    return v;
+  }
+  static void append_utf8(std::string& out, unsigned c) {
+    if (c < 0x80) {
+      out += char(c);
+    } else if (c < 0x800) {
+      out += char(0xC0 | (c >> 6)), out += char(0x80 | (c & 0x3F));
+    } else if (c < 0x10000) {
+      out += char(0xE0 | (c >> 12)), out += char(0x80 | ((c >> 6) & 0x3F)), out += char(0x80 | (c & 0x3F));
+    } else {
+      out += char(0xF0 | (c >> 18)), out += char(0x80 | ((c >> 12) & 0x3F)), out += char(0x80 | ((c >> 6) & 0x3F));
+      out += char(0x80 | (c & 0x3F));
+    }
   }
 
   std::string_view s_;

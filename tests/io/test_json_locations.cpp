@@ -34,3 +34,22 @@ TEST_CASE("JSON locations: values past skipped strings with brackets and escapes
   CHECK(loc.value("deep.x[0][1].z").line == 0);  // no such member
   CHECK(loc.value("aft").line == 0);            // a prefix of a key is not the key
 }
+
+TEST_CASE("JSON locations: keys written with escapes match their decoded paths", "[io]") {
+  // "m\u0061ss" is the key mass; \ud83d\ude00 a surrogate pair (U+1F600, four bytes of UTF-8).
+  const std::string text = "{\"m\\u0061ss\": 1, \"\\ud83d\\ude00\": 2, \"t\\tb\": 3}";
+  const JsonLocations loc(text);
+  CHECK(loc.value("mass").column == 15);
+  CHECK(loc.value("\xF0\x9F\x98\x80").column == 34);
+  CHECK(loc.value("t\tb").column == 45);
+}
+
+TEST_CASE("JSON locations: a search ends on text that is not JSON past the point of an error", "[io]") {
+  // A reading error stops the parser; what follows was never checked. Each of these once
+  // made the search loop for ever (a closer of the wrong kind inside a list or object).
+  for (const std::string text : {"{\"list\": [1}", "{\"list\": [{\"a\": 1}}", "{\"o\": {\"a\": 1]", "[}", "{]", "[1, }}}"}) {
+    const JsonLocations loc(text);
+    CHECK(loc.value("list[5]").line == 0);
+    CHECK(loc.value("o.b").line == 0);
+  }
+}
