@@ -14,6 +14,7 @@
 #include "mbsflow/methods/stepper.hpp"
 #include "mbsflow/graph/stable_step.hpp"
 #include "local_workers.hpp"
+#include "slurm_launch.hpp"
 #include "mbsflow/io/checkpoint_file.hpp"
 #include "mbsflow/io/cluster_file.hpp"
 #include "mbsflow/io/hdf5_sink.hpp"
@@ -53,6 +54,9 @@ struct RunArgs {
   int processes = 0;    // local worker processes
   bool insecure = false, insecure_network = false;  // a cluster run without keys
   std::string transport = "tcp";
+  bool slurm = false;      // a task of a Slurm step: task 0 coordinates, the others serve
+  int slurm_port = 0;      // 0: from the job id
+  std::string slurm_key;   // key pair stem; "": $HOME/.mbsflow/cluster
   std::string coupling = "tight";
   std::optional<double> macro_step;
   int extrapolation = 1;
@@ -201,6 +205,12 @@ std::string checkpoint_path(const RunArgs& a) {
 // replaces the model file's.
 int run(const RunArgs& a, const CheckpointFile* resumed = nullptr, const std::string& resumed_path = "") {
   if (a.model.empty()) throw InputError("run: give a MODEL file, or --resume CHECKPOINT to go on with a run");
+  std::optional<SlurmLaunch> slurm;
+  if (a.slurm) {
+    slurm = slurm_launch(a.slurm_port, a.slurm_key);
+    if (slurm->step.rank > 0) return serve_slurm_task(*slurm, a.threads, a.quiet);  // reads no model
+  }
+  const bool slurm_workers = slurm && slurm->step.tasks() > 1;
   std::string model_text = resumed ? resumed->model_text : read_model_file_text(a.model);
   Model m = read_model_text(model_text, a.model);
   if (!(a.checkpoint_every > 0.0)) std::string().swap(model_text);  // only checkpoints keep the text
@@ -217,7 +227,7 @@ int run(const RunArgs& a, const CheckpointFile* resumed = nullptr, const std::st
     sink = std::make_unique<AsyncSink>(std::make_unique<Hdf5Sink>(a.output, fields, std::move(info)));
   }
   const int threads = a.threads > 0 ? a.threads : static_cast<int>(std::thread::hardware_concurrency());
-  const bool cluster = !a.cluster.empty() || a.processes > 0;
+  const bool cluster = !a.cluster.empty() || a.processes > 0 || slurm_workers;
   const bool loose = a.coupling == "loose";
   if (a.exchange_delay > 0.0 && !cluster) throw InputError("--exchange-delay: only with --cluster or --processes");
   LooseRequest request{a.macro_step, a.coupling_tol, a.overlap, a.extrapolation, a.max_lag, a.exact_lag,
@@ -233,6 +243,12 @@ int run(const RunArgs& a, const CheckpointFile* resumed = nullptr, const std::st
     cc = read_cluster_file(a.cluster);
     cc.insecure = a.insecure_network ? Insecure::anywhere : a.insecure ? Insecure::loopback : Insecure::no;
     check_cluster_security(cc);  // before the run is set up
+  }
+  if (slurm_workers) {
+    cc = slurm_cluster(slurm->step, slurm->base_port, slurm->keys);
+    check_cluster_security(cc);
+  } else if (slurm && !a.quiet) {
+    std::fprintf(stderr, "mbsflow: --slurm with one task: a run on this process's threads\n");
   }
   if (a.processes > 0) {
     // Each worker gets its share of the cores unless --threads says how many.
@@ -456,6 +472,21 @@ void add_run_options(CLI::App* sub, RunArgs& args) {
       ->check(CLI::IsMember({"tcp", "ipc"}))
       ->capture_default_str();
   sub->get_option("--cluster")->excludes(sub->get_option("--processes"));
+  sub->add_flag("--slurm", a->slurm,
+                "Run as a task of a Slurm step (srun -N H -n N mbsflow run MODEL --slurm -o r.h5): task 0 coordinates and "
+                "writes the results, the other tasks serve as its workers; hosts from the step's node list, keys from "
+                "--slurm-key (docs/cluster.md)")
+      ->excludes(sub->get_option("--cluster"))
+      ->excludes(sub->get_option("--processes"));
+  sub->add_option("--slurm-port", a->slurm_port,
+                  "With --slurm: the first of the run's ports (task 0's results inbox; a task with local index l takes "
+                  "base + 2l and base + 2l + 1); default 20000 + 40 (job id mod 1000)")
+      ->check(CLI::Range(1, 65535))
+      ->needs(sub->get_option("--slurm"));
+  sub->add_option("--slurm-key", a->slurm_key,
+                  "With --slurm: the key pair every task uses, STEM.key as written by mbsflow keygen STEM, in a folder the "
+                  "nodes share (default $HOME/.mbsflow/cluster)")
+      ->needs(sub->get_option("--slurm"));
   sub->add_flag("--insecure", a->insecure,
                 "With --cluster: run without the cluster file's keys, on this host only (loopback endpoints): any local user "
                 "who can reach the ports could join the run")

@@ -40,27 +40,31 @@ int worker(const WorkerArgs& a) {
   }
   o.insecure = a.insecure_network ? Insecure::anywhere : a.insecure ? Insecure::loopback : Insecure::no;
   o.hang_after_s = a.hang_after;
+  return serve_worker_command(std::move(o), a.quiet);
+}
+
+}  // namespace
+
+int serve_worker_command(WorkerOptions o, bool quiet) {
   o.read_model = [](const std::string& text) { return read_model_text(text, "the coordinator's model"); };
-  std::string name = a.listen;
+  std::string name = o.listen;
   o.listening = [&](const std::string& endpoint) {
     name = endpoint;
     // The one line on stdout: scripts and `run --processes` read the endpoint from it.
     std::printf("mbsflow worker: listening on %s\n", endpoint.c_str());
     std::fflush(stdout);
   };
-  if (!a.quiet) o.log = [&](const std::string& line) { std::fprintf(stderr, "mbsflow worker %s: %s\n", name.c_str(), line.c_str()); };
+  if (!quiet) o.log = [&](const std::string& line) { std::fprintf(stderr, "mbsflow worker %s: %s\n", name.c_str(), line.c_str()); };
   o.stop = install_stop_handlers();
   try {
     serve_worker(o);
   } catch (const RunError& e) {
     // The coordinator says why it stopped the run; a quiet worker need not repeat it.
-    if (a.quiet && std::string(e.what()).rfind("stopped by the coordinator", 0) == 0) return 1;
+    if (quiet && std::string(e.what()).rfind("stopped by the coordinator", 0) == 0) return 1;
     throw RunError("worker " + name + ": " + e.what());  // its stderr may be the coordinator's
   }
   return 0;
 }
-
-}  // namespace
 
 Action add_worker(CLI::App& app) {
   auto a = std::make_shared<WorkerArgs>();

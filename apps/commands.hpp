@@ -5,6 +5,8 @@
 #include <string>
 #include <vector>
 
+#include "mbsflow/runtime/cluster.hpp"
+
 namespace mbsflow::cli {
 
 using Action = std::function<int()>;  // returns the exit code
@@ -20,6 +22,9 @@ Action add_ode(CLI::App& app);
 Action add_keygen(CLI::App& app);
 Action add_view(CLI::App& app);
 Action add_plot(CLI::App& app);
+
+// `mbsflow worker` once its options are read; also what a worker task of `run --slurm` does.
+int serve_worker_command(WorkerOptions options, bool quiet);
 
 // How the CLI names a setting that a library message mentions (mbsflow/error.hpp): its
 // flag, "--step 1e-05"; the per-submodel methods are --submodel-methods.

@@ -6,25 +6,33 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cstdlib>
 #include <optional>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "cli_support.hpp"
+#include "mbsflow/io/results_file.hpp"
 
 namespace mbsflow::test {
 
 class Child {
  public:
-  // Starts `mbsflow ARGS` in dir with stdout and stderr going to files there.
-  Child(const std::vector<std::string>& args, const fs::path& dir, const std::string& name)
+  // Starts `mbsflow ARGS` in dir with stdout and stderr going to files there, and the
+  // variables of env ("NAME=VALUE") set.
+  Child(const std::vector<std::string>& args, const fs::path& dir, const std::string& name,
+        const std::vector<std::string>& env = {})
       : out_(dir / (name + ".out")), err_(dir / (name + ".err")) {
     pid_ = ::fork();
     REQUIRE(pid_ >= 0);
     if (pid_ == 0) {
       if (::chdir(dir.c_str()) != 0 || !std::freopen(out_.c_str(), "w", stdout) || !std::freopen(err_.c_str(), "w", stderr))
         ::_exit(126);
+      for (const std::string& e : env) {
+        const std::size_t eq = e.find('=');
+        ::setenv(e.substr(0, eq).c_str(), e.substr(eq + 1).c_str(), 1);
+      }
       std::vector<char*> argv{const_cast<char*>(MBSFLOW_EXE)};
       for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
       argv.push_back(nullptr);
@@ -81,5 +89,15 @@ class Child {
   fs::path out_, err_;
   std::optional<int> code_;
 };
+
+// Whether two results files hold the same times and body states, bit for bit (and more
+// than two snapshots, so that an empty run does not pass).
+inline bool same_results(const fs::path& a, const fs::path& b) {
+  const mbsflow::ResultsFile x(a.string()), y(b.string());
+  bool same = x.time() == y.time() && x.time().size() > 2;
+  for (const char* set : {"/bodies/position", "/bodies/orientation", "/bodies/velocity", "/bodies/angular_velocity"})
+    same = same && x.read(set) == y.read(set);
+  return same;
+}
 
 }  // namespace mbsflow::test

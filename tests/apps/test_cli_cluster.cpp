@@ -5,21 +5,12 @@
 #include <fstream>
 
 #include "cli_support.hpp"
-#include "mbsflow/io/results_file.hpp"
 #include "process_support.hpp"
 
 using namespace mbsflow::test;
 using Clock = std::chrono::steady_clock;
 
 namespace {
-
-bool same_results(const fs::path& a, const fs::path& b) {
-  const mbsflow::ResultsFile x(a.string()), y(b.string());
-  bool same = x.time() == y.time() && x.time().size() > 2;
-  for (const char* set : {"/bodies/position", "/bodies/orientation", "/bodies/velocity", "/bodies/angular_velocity"})
-    same = same && x.read(set) == y.read(set);
-  return same;
-}
 
 // Workers started by the test, listening on free loopback ports.
 struct Workers {
