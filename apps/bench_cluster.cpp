@@ -17,15 +17,10 @@
 #include "mbsflow/runtime/cluster.hpp"
 #include "exchange_cost.hpp"
 #include "mbsflow/runtime/partitioned_run.hpp"
+#include "run_prediction.hpp"
 
 namespace mbsflow::cli {
 namespace {
-
-// Gigabit Ethernet as assumed for the prediction (not measured here: this host has no
-// network to measure): the payload rate of 1 Gbit/s less Ethernet/IP/TCP framing, and the
-// NIC, switch and wire latency added to the measured software cost of a message.
-constexpr double gbe_bytes_per_s = 117.0e6;
-constexpr double gbe_extra_latency_s = 25.0e-6;
 
 // The seed's measurements (7 nodes x 2 quad-core Xeon 2.5 GHz, Gigabit Ethernet).
 struct SeedRow {
@@ -110,8 +105,8 @@ int bench_cluster(const BenchArgs& a) {
   // (the inner half of a stage runs while the boundary values travel) the larger of the
   // two, when a core is free for the messages (not so on this 2-core host).
   const Hockney local = fit["tcp"];
-  const Hockney gbe{local.alpha + gbe_extra_latency_s, std::min(local.beta, gbe_bytes_per_s)};
-  const double message = 2.0 * (13 * 8 + 32);  // two neighbours: one body (13 doubles) and a header each
+  const Hockney gbe = gigabit_ethernet(local);
+  const double message = boundary_message_bytes(1);  // from each of two neighbours: one body and a header
   std::printf("\npredicted speedup on P hosts over Gigabit Ethernet (assumed: alpha = measured tcp alpha + %.0f us = %.1f us,"
               " beta = %.0f MB/s),\nfrom this host's one-thread time per step; the seed's measured speedups (16/24/32 "
               "processes on 7 nodes) in brackets\n",
@@ -129,7 +124,7 @@ int bench_cluster(const BenchArgs& a) {
       const double t1 = measured_t * s.bodies / measured_n;
       std::printf("%8d %10.1f", s.bodies, 1e6 * t1);
       for (int h : hosts) {
-        const double stage = t1 / (4.0 * h), exchange = gbe.time(message);
+        const double stage = t1 / (4.0 * h), exchange = 2.0 * gbe.time(message);
         const double tp = 4.0 * (overlap ? std::max(stage, exchange) : stage + exchange);
         const double speedup = t1 / tp;
         const double seen = h == 16 ? s.one / s.p16 : h == 24 ? s.one / s.p24 : h == 32 ? s.one / s.p32 : 0.0;

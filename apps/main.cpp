@@ -20,6 +20,7 @@ int main(int argc, char** argv) {
   add(mbsflow::cli::add_run);
   add(mbsflow::cli::add_generate);
   add(mbsflow::cli::add_partition);
+  add(mbsflow::cli::add_plan);
   add(mbsflow::cli::add_info);
   add(mbsflow::cli::add_export);
   add(mbsflow::cli::add_plot);

@@ -24,4 +24,13 @@ struct Hockney {
 };
 Hockney fit_hockney(const std::vector<ExchangeSample>& samples);
 
+// Gigabit Ethernet as predictions assume it (not measured: this host has no network to
+// measure): the payload rate of 1 Gbit/s less Ethernet/IP/TCP framing, and the NIC, switch
+// and wire latency added to the software cost of a message measured on loopback.
+constexpr double gbe_bytes_per_s = 117.0e6;
+constexpr double gbe_extra_latency_s = 25.0e-6;
+inline Hockney gigabit_ethernet(const Hockney& loopback) {
+  return {loopback.alpha + gbe_extra_latency_s, loopback.beta < gbe_bytes_per_s ? loopback.beta : gbe_bytes_per_s};
+}
+
 }  // namespace mbsflow
