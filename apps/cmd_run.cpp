@@ -212,7 +212,9 @@ int run(const RunArgs& a, const CheckpointFile* resumed = nullptr, const std::st
   }
   const bool slurm_workers = slurm && slurm->step.tasks() > 1;
   std::string model_text = resumed ? resumed->model_text : read_model_file_text(a.model);
-  Model m = read_model_text(model_text, a.model);
+  // Held shared: the run's systems share it rather than copy it.
+  const auto model = std::make_shared<Model>(read_model_text(model_text, a.model));
+  Model& m = *model;
   if (!(a.checkpoint_every > 0.0)) std::string().swap(model_text);  // only checkpoints keep the text
   ModelOverrides overrides{a.t_end, a.step, a.rtol, a.atol, a.output_interval, a.every, std::nullopt, a.variant};
   if (!a.method.empty()) overrides.method = *find_method(a.method);
@@ -327,7 +329,7 @@ int run(const RunArgs& a, const CheckpointFile* resumed = nullptr, const std::st
   RunSummary r;
   try {
     RunStats stats;
-    r = mbsflow::run(m, plan, sink.get(), &stats);
+    r = mbsflow::run(std::shared_ptr<const Model>(model), plan, sink.get(), &stats);
     if (cluster) {
       stats.loose.records = stats.cluster.coupling;
       summarise_records(stats.loose);

@@ -236,6 +236,8 @@ Model submodel_model(const Model& m, const Submodel& s) {
   local.name = m.name;
   local.gravity = m.gravity;
   local.simulation = m.simulation;
+  local.bodies.reserve(s.own.size() + s.borrowed.size() + s.ghosts.size());  // exact: no growth slack
+  local.joints.reserve(s.joints.size());
   for (int b : s.own) local.bodies.push_back(m.bodies[static_cast<std::size_t>(b)]);
   for (int b : s.borrowed) local.bodies.push_back(m.bodies[static_cast<std::size_t>(b)]);
   for (int b : s.ghosts) local.bodies.push_back(m.bodies[static_cast<std::size_t>(b)]);

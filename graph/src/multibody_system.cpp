@@ -56,6 +56,12 @@ MultibodySystem::MultibodySystem(std::shared_ptr<const Model> shared, int active
   layout_.bodies = n;
   active_ = std::clamp(active, 0, n);
   gravity_ = vec(model.gravity);
+  // Exact sizes: growth by doubling would hold up to twice these (a million bodies).
+  for (auto* v : {&mass_, &inv_mass_}) v->reserve(model.bodies.size());
+  inertia_.reserve(model.bodies.size());
+  inv_inertia_.reserve(model.bodies.size());
+  initial_position_.reserve(model.bodies.size());
+  joints_.reserve(model.joints.size());
   for (const Body& b : model.bodies) {
     mass_.push_back(b.mass);
     inv_mass_.push_back(1.0 / b.mass);

@@ -80,6 +80,12 @@ int default_partitions(const Model& model, int threads) {
 
 RunSummary run_partitioned(const Model& model, const Decomposition& d, const RunOptions& o, const ParallelOptions& par,
                            ResultSink* sink, ParallelStats* stats) {
+  return run_partitioned(std::make_shared<const Model>(model), d, o, par, sink, stats);
+}
+
+RunSummary run_partitioned(std::shared_ptr<const Model> shared, const Decomposition& d, const RunOptions& o,
+                           const ParallelOptions& par, ResultSink* sink, ParallelStats* stats) {
+  const Model& model = *shared;
   check_options(o);
   stepper_entry(o.method);  // a method that exists
   const int stages = tight_stages(o.method);
@@ -90,7 +96,8 @@ RunSummary run_partitioned(const Model& model, const Decomposition& d, const Run
   std::vector<Part> parts;
   parts.reserve(d.submodels.size());
   for (const Submodel& s : d.submodels) parts.emplace_back(model, s, stages);
-  MultibodySystem whole(model);  // for the sink: layout, names, energies
+  const int all = static_cast<int>(model.bodies.size());
+  MultibodySystem whole(std::move(shared), all);  // for the sink: layout, names, energies (shares the model)
   // Like run_simulation, which gets its system built: the clock starts with the run.
   const auto start = Clock::now();
   Eigen::VectorXd y = whole.initial_state();

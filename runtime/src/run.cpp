@@ -36,6 +36,11 @@ std::string checkpoint_kind(const Checkpointing& c) {
 }  // namespace
 
 RunSummary run(const Model& model, const RunPlan& plan, ResultSink* sink, RunStats* stats) {
+  return run(std::make_shared<const Model>(model), plan, sink, stats);
+}
+
+RunSummary run(std::shared_ptr<const Model> shared, const RunPlan& plan, ResultSink* sink, RunStats* stats) {
+  const Model& model = *shared;
   check_plan(model, plan);
   RunStats local;
   RunStats& st = stats ? *stats : local;
@@ -50,10 +55,10 @@ RunSummary run(const Model& model, const RunPlan& plan, ResultSink* sink, RunSta
   // whichever loop wrote it, whatever partition (or none) the resumed run was given.
   const Checkpointing* c = plan.options.checkpoint;
   const std::string kind = c && !c->resume.empty() ? checkpoint_kind(*c) : "";
-  if (kind == "tight" && !plan.partition) return run_partitioned(model, decompose(model, 1), plan.options, plan.parallel, sink, &st.parallel);
+  if (kind == "tight" && !plan.partition) return run_partitioned(shared, decompose(model, 1), plan.options, plan.parallel, sink, &st.parallel);
   if (plan.partition && !loose && kind != "simulation")
-    return run_partitioned(model, *plan.partition, plan.options, plan.parallel, sink, &st.parallel);
-  MultibodySystem system(model);
+    return run_partitioned(shared, *plan.partition, plan.options, plan.parallel, sink, &st.parallel);
+  MultibodySystem system(shared, static_cast<int>(model.bodies.size()));
   RunOptions whole = plan.options;
   if (whole.threads == 0) whole.threads = plan.parallel.threads;
   return run_simulation(system, whole, sink);

@@ -5,6 +5,7 @@
 // and thread count: the local models sum forces in global order, the stage arithmetic is
 // the methods' own (rk4::, dopri5::), element by element, and DOPRI5's error norm adds
 // the elements' terms in global order (the one global reduction per step attempt).
+#include <memory>
 #include "mbsflow/graph/decomposition.hpp"
 #include "mbsflow/runtime/simulation.hpp"
 
@@ -28,6 +29,10 @@ struct ParallelStats {
 
 // RK4 or DOPRI5. Snapshots in global body order go to the sink.
 RunSummary run_partitioned(const Model& model, const Decomposition& d, const RunOptions& options,
+                           const ParallelOptions& parallel, ResultSink* sink, ParallelStats* stats = nullptr);
+// The same with a model the caller holds shared: the whole system (for the sink) shares it
+// instead of copying it (a million bodies' model is a gigabyte).
+RunSummary run_partitioned(std::shared_ptr<const Model> model, const Decomposition& d, const RunOptions& options,
                            const ParallelOptions& parallel, ResultSink* sink, ParallelStats* stats = nullptr);
 
 // Partitions for a thread count: one submodel per thread, fewer for small models.

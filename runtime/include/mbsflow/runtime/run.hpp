@@ -8,6 +8,7 @@
 //   partition, tight          run_partitioned  RK4 / DOPRI5 stages spread over the submodels
 //   partition, loose          run_loose        any method per submodel, macro steps
 //   cluster (either coupling) run_cluster      the same loops in worker processes
+#include <memory>
 #include <optional>
 #include <string>
 
@@ -44,5 +45,7 @@ void check_plan(const Model& model, const RunPlan& plan);
 
 // Checks the plan, then runs it; snapshots (global body order) go to the sink.
 RunSummary run(const Model& model, const RunPlan& plan, ResultSink* sink, RunStats* stats = nullptr);
+// The same with a model the caller holds shared: the run's systems share it, not copy it.
+RunSummary run(std::shared_ptr<const Model> model, const RunPlan& plan, ResultSink* sink, RunStats* stats = nullptr);
 
 }  // namespace mbsflow
