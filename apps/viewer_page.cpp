@@ -57,7 +57,7 @@ ViewerPage viewer_page(const ResultsFile& r, const ViewerSettings& s) {
   const bool spin = r.has("/bodies/angular_velocity"), ends = r.has(joint_attachment_dataset);
   const bool energies = r.has(body_energy_dataset);
   const std::size_t joints = ends ? r.shape(joint_attachment_dataset)[1] : 0;
-  const Model model = read_model_text(r.string_attribute("model").value_or(""), r.path() + " (its model)");
+  const Model model = read_model_text(r.model_text().value_or(""), r.path() + " (its model)");
   if (model.bodies.size() != n) throw InputError(r.path() + ": its model has another number of bodies than its results");
 
   // Frames: evenly spread over the snapshots, the last included, within the data budget.

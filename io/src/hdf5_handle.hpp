@@ -2,6 +2,7 @@
 // Owning handles for HDF5 identifiers and an error check, for io/ only.
 #include <hdf5.h>
 
+#include <cstring>
 #include <optional>
 #include <string>
 #include <utility>
@@ -69,6 +70,36 @@ inline std::optional<std::string> read_string_attribute(hid_t obj, const std::st
   check(H5Aread(attr.get(), type.get(), &value), "read attribute " + name);
   std::string s = value ? value : "";
   H5free_memory(value);
+  return s;
+}
+
+// A long text as a scalar dataset of one fixed-length string (contiguous, UTF-8): HDF5
+// writes it from the caller's buffer, where an attribute held three copies of a
+// million-body model's text (variable length: global heap and conversion; fixed length:
+// dense attribute storage).
+inline void write_text_dataset(hid_t parent, const char* name, const std::string& value) {
+  const Handle type(H5Tcopy(H5T_C_S1), H5Tclose, "copy the string type");
+  check(H5Tset_size(type.get(), value.empty() ? 1 : value.size()), "size the string type");
+  check(H5Tset_strpad(type.get(), H5T_STR_NULLPAD), "pad the string type");
+  check(H5Tset_cset(type.get(), H5T_CSET_UTF8), "set UTF-8");
+  const Handle space(H5Screate(H5S_SCALAR), H5Sclose, "create a scalar space");
+  const Handle set(H5Dcreate2(parent, name, type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Dclose,
+                   std::string("create dataset ") + name);
+  const char zero = '\0';
+  check(H5Dwrite(set.get(), type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, value.empty() ? &zero : value.data()),
+        std::string("write dataset ") + name);
+}
+
+// What write_text_dataset wrote; nullopt when parent has no such dataset.
+inline std::optional<std::string> read_text_dataset(hid_t parent, const std::string& name) {
+  if (H5Lexists(parent, name.c_str(), H5P_DEFAULT) <= 0) return std::nullopt;
+  const Handle set(H5Dopen2(parent, name.c_str(), H5P_DEFAULT), H5Dclose, "open dataset " + name);
+  const Handle type(H5Dget_type(set.get()), H5Tclose, "type of dataset " + name);
+  if (H5Tget_class(type.get()) != H5T_STRING || H5Tis_variable_str(type.get()) != 0)
+    throw InputError("dataset " + name + " is not a fixed-length string");
+  std::string s(H5Tget_size(type.get()), '\0');
+  check(H5Dread(set.get(), type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, s.data()), "read dataset " + name);
+  s.resize(std::strlen(s.c_str()));  // null padded
   return s;
 }
 

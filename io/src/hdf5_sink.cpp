@@ -275,7 +275,7 @@ void Hdf5Sink::begin(const MultibodySystem& system) {
   h5::write_string_attribute(root, "mbsflow_version", MBSFLOW_VERSION);
   h5::write_string_attribute(root, "run_id", identity_);
   h5::write_string_attribute(root, "model_name", m.name);
-  h5::write_string_attribute(root, "model", info_.model_json);
+  h5::write_text_dataset(root, "model", info_.model_json);
   std::string().swap(info_.model_json);  // on disk now; a million-body model's text is half a gigabyte
   h5::write_string_attribute(root, "method", info_.method);
   h5::write_number_attribute(root, "step", info_.step);

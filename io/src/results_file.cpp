@@ -94,6 +94,11 @@ std::optional<std::string> ResultsFile::string_attribute(const std::string& name
   return h5::read_string_attribute(file_, name);
 }
 
+std::optional<std::string> ResultsFile::model_text() const {
+  if (auto text = h5::read_text_dataset(file_, "model")) return text;
+  return h5::read_string_attribute(file_, "model");
+}
+
 std::optional<std::string> ResultsFile::dataset_string_attribute(const std::string& dataset, const std::string& name) const {
   if (!has(dataset)) return std::nullopt;
   const h5::Handle set(H5Dopen2(file_, dataset.c_str(), H5P_DEFAULT), H5Dclose, "open " + dataset);

@@ -46,6 +46,7 @@ void bind_results(py::module_& m) {
       .def_property_readonly("body_names", &ResultsFile::body_names)
       .def_property_readonly("joint_names", &ResultsFile::joint_names)
       .def("string_attribute", &ResultsFile::string_attribute, py::arg("name"))
+      .def_property_readonly("model_text", &ResultsFile::model_text, "The model the run integrated (JSON text), or None.")
       .def("number_attribute", &ResultsFile::number_attribute, py::arg("name"))
       .def("dataset_string_attribute", &ResultsFile::dataset_string_attribute, py::arg("dataset"), py::arg("name"))
       .def("size_bytes", &ResultsFile::size_bytes)

@@ -6,7 +6,10 @@
 
 #include "mbsflow/error.hpp"
 #include "mbsflow/graph/generators.hpp"
+#include "hdf5_handle.hpp"
 #include "mbsflow/io/hdf5_sink.hpp"
+#include "mbsflow/io/model_reader.hpp"
+#include "mbsflow/io/model_writer.hpp"
 #include "mbsflow/io/result_fields.hpp"
 #include "mbsflow/io/results_file.hpp"
 #include "mbsflow/runtime/async_sink.hpp"
@@ -197,4 +200,35 @@ TEST_CASE("the bodies' energies sum to the run's kinetic and gravity energies", 
     worst = std::max({worst, std::abs(kinetic - total[0]) / scale, std::abs(gravity - total[1]) / scale});
   }
   CHECK(worst < 1e-13);
+}
+
+TEST_CASE("the model text is kept whole in /model and files with the old model attribute still read", "[io]") {
+  Model m = small_train();
+  m.simulation.t_end = 0.02;
+  // Long (beyond what an attribute's object header holds) and not plain ASCII.
+  m.name = "z\xC3\xBCge-" + std::string(100000, 'x');
+  const std::string json = model_to_json(m);
+  const fs::path file = temp_file("model_text.h5");
+  const RunOptions o = options_from_model(m);
+  {
+    MultibodySystem sys(m);
+    AsyncSink sink(std::make_unique<Hdf5Sink>(file.string(), FieldSet{}, RunInfo{json, "rk4", o.step, o.t_start, o.t_end, 1, "test"}));
+    run_simulation(sys, o, &sink);
+  }
+  const ResultsFile r(file.string());
+  CHECK(r.model_text() == json);
+  CHECK(read_model_text(*r.model_text(), "back").name == m.name);
+  CHECK(!r.string_attribute("model"));
+  // A file of an earlier version: the model as a root attribute of variable length.
+  const fs::path old = temp_file("model_attribute.h5");
+  {
+    const hid_t f = H5Fcreate(old.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+    REQUIRE(f >= 0);
+    mbsflow::h5::write_string_attribute(f, "model", "{\"old\": true}");
+    CHECK(mbsflow::h5::read_text_dataset(f, "model") == std::nullopt);
+    CHECK(mbsflow::h5::read_string_attribute(f, "model") == std::string("{\"old\": true}"));
+    H5Fclose(f);
+  }
+  fs::remove(file);
+  fs::remove(old);
 }

@@ -20,6 +20,9 @@ class ResultsFile {
   std::optional<std::string> string_attribute(const std::string& name) const;
   std::optional<double> number_attribute(const std::string& name) const;
   std::optional<std::string> dataset_string_attribute(const std::string& dataset, const std::string& name) const;
+  // The model the run integrated (JSON, as model_to_json writes it): the string dataset
+  // /model, or the root attribute "model" of files written before 2026-11-24.
+  std::optional<std::string> model_text() const;
   bool has(const std::string& dataset) const;
   std::vector<std::uint64_t> shape(const std::string& dataset) const;  // empty if absent
 
