@@ -1,4 +1,6 @@
 // mbsflow run MODEL.json: one simulation on this process.
+#include <sys/resource.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -364,6 +366,16 @@ int run(const RunArgs& a, const CheckpointFile* resumed = nullptr, const std::st
     output += from;
   }
   if (checkpoints > 0) output += "; " + std::to_string(checkpoints) + " checkpoints, the last in " + checkpoint_at;
+  // The process's peak resident memory: model, systems, workspace and output buffers (on
+  // worker processes, theirs are their own).
+  rusage usage{};
+  if (::getrusage(RUSAGE_SELF, &usage) == 0 && usage.ru_maxrss > 0) {
+    const double peak = 1024.0 * static_cast<double>(usage.ru_maxrss);
+    char mem[96];
+    std::snprintf(mem, sizeof mem, "; peak memory %s (%.0f B per body)", human_bytes(peak).c_str(),
+                  peak / static_cast<double>(m.bodies.size()));
+    output += mem;
+  }
   std::fprintf(stderr, "mbsflow: done: %ld steps (%ld rejected), %ld evaluations%s, %.3f s wall, %.3g body-steps/s%s\n",
                r.steps, r.rejected, r.evaluations, newton.c_str(), r.wall_seconds,
                body_steps / std::max(r.wall_seconds, 1e-9), output.c_str());

@@ -97,3 +97,27 @@ TEST_CASE("a run that diverges exits with 1 and names time, body and a step that
   CHECK(r.err.find("try --step ") != std::string::npos);
   fs::remove_all(d.parent_path());
 }
+
+TEST_CASE("run reports its peak memory per body and the fixed part of it thins out with size", "[cli]") {
+  const fs::path d = scratch("peak-memory");
+  const std::string dir = d.string();
+  const auto per_body = [&](int bodies) {
+    REQUIRE(run("generate chain --bodies " + std::to_string(bodies) + " -o c.json", dir).code == 0);
+    const Result r = run("run c.json --t-end 1e-4 --threads 1 -o c.h5", dir);
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    const std::size_t at = r.err.find("; peak memory ");
+    REQUIRE(at != std::string::npos);
+    const std::size_t open = r.err.find('(', at), close = r.err.find(" B per body)", at);
+    REQUIRE(close != std::string::npos);
+    const double b = std::stod(r.err.substr(open + 1, close - open - 1));
+    // The total printed before it, in MiB here, agrees to its 3 digits.
+    const double mib = std::stod(r.err.substr(at + 14));
+    CHECK(b * bodies / 1048576.0 == Approx(mib).epsilon(0.01));
+    return b;
+  };
+  const double small = per_body(500), large = per_body(20000);
+  CHECK(small > 0.0);
+  CHECK(large < small);
+  fs::remove_all(d.parent_path());
+}
