@@ -33,14 +33,10 @@ std::string checkpoint_kind(const Checkpointing& c) {
   return in.text();
 }
 
-}  // namespace
-
-RunSummary run(const Model& model, const RunPlan& plan, ResultSink* sink, RunStats* stats) {
-  return run(std::make_shared<const Model>(model), plan, sink, stats);
-}
-
-RunSummary run(std::shared_ptr<const Model> shared, const RunPlan& plan, ResultSink* sink, RunStats* stats) {
-  const Model& model = *shared;
+// The run of either entry point: `shared` holds `model` when the caller shares it, else
+// null, and a copy is made only where a system is built (not for cluster or loose runs).
+RunSummary run_plan(const Model& model, std::shared_ptr<const Model> shared, const RunPlan& plan, ResultSink* sink,
+                    RunStats* stats) {
   check_plan(model, plan);
   RunStats local;
   RunStats& st = stats ? *stats : local;
@@ -51,6 +47,7 @@ RunSummary run(std::shared_ptr<const Model> shared, const RunPlan& plan, ResultS
   // Loose coupling of one submodel is a plain run (no macro steps to restart the method at).
   const bool one = plan.partition && plan.partition->submodels.size() == 1;
   if (loose && !one) return run_loose(model, *plan.partition, plan.options, *loose, sink, &st.loose);
+  if (!shared) shared = std::make_shared<const Model>(model);
   // A tight run's numbers do not depend on the partition, so a checkpoint goes on in
   // whichever loop wrote it, whatever partition (or none) the resumed run was given.
   const Checkpointing* c = plan.options.checkpoint;
@@ -62,6 +59,17 @@ RunSummary run(std::shared_ptr<const Model> shared, const RunPlan& plan, ResultS
   RunOptions whole = plan.options;
   if (whole.threads == 0) whole.threads = plan.parallel.threads;
   return run_simulation(system, whole, sink);
+}
+
+}  // namespace
+
+RunSummary run(const Model& model, const RunPlan& plan, ResultSink* sink, RunStats* stats) {
+  return run_plan(model, nullptr, plan, sink, stats);
+}
+
+RunSummary run(std::shared_ptr<const Model> shared, const RunPlan& plan, ResultSink* sink, RunStats* stats) {
+  const Model& model = *shared;
+  return run_plan(model, std::move(shared), plan, sink, stats);
 }
 
 }  // namespace mbsflow
