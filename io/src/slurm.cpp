@@ -35,6 +35,17 @@ std::vector<std::string> top_level_items(const std::string& list) {
   return items;
 }
 
+// The pieces between commas ("a,,b" has an empty one; "" is one empty piece).
+std::vector<std::string_view> comma_pieces(std::string_view s) {
+  std::vector<std::string_view> out;
+  for (std::size_t start = 0;;) {
+    const std::size_t comma = std::min(s.find(',', start), s.size());
+    out.push_back(s.substr(start, comma - start));
+    if (comma == s.size()) return out;
+    start = comma + 1;
+  }
+}
+
 long parse_index(std::string_view s, const std::string& list) {
   long v = 0;
   const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
@@ -45,11 +56,7 @@ long parse_index(std::string_view s, const std::string& list) {
 // "01-03,7" -> 01 02 03 7: the width of a range is its lower bound's, as Slurm writes it.
 std::vector<std::string> expand_ranges(const std::string& body, const std::string& list, std::size_t max_hosts) {
   std::vector<std::string> out;
-  std::size_t start = 0;
-  while (start <= body.size()) {
-    std::size_t comma = body.find(',', start);
-    if (comma == std::string::npos) comma = body.size();
-    const std::string_view part(body.data() + start, comma - start);
+  for (const std::string_view part : comma_pieces(body)) {
     const std::size_t dash = part.find('-');
     const std::string_view lo_text = part.substr(0, dash);
     const long lo = parse_index(lo_text, list);
@@ -61,7 +68,6 @@ std::vector<std::string> expand_ranges(const std::string& body, const std::strin
       if (n.size() < lo_text.size()) n.insert(0, lo_text.size() - n.size(), '0');
       out.push_back(std::move(n));
     }
-    start = comma + 1;
   }
   return out;
 }
@@ -127,12 +133,8 @@ std::vector<std::string> expand_hostlist(const std::string& list, std::size_t ma
 
 std::vector<int> expand_tasks_per_node(const std::string& spec) {
   std::vector<int> out;
-  std::size_t start = 0;
   const auto bad = [&] { throw InputError("Slurm tasks per node '" + spec + "': expected counts like 2(x3),1"); };
-  while (start <= spec.size()) {
-    std::size_t comma = spec.find(',', start);
-    if (comma == std::string::npos) comma = spec.size();
-    const std::string_view part(spec.data() + start, comma - start);
+  for (const std::string_view part : comma_pieces(spec)) {
     int count = 0, repeat = 1;
     const auto [end, ec] = std::from_chars(part.data(), part.data() + part.size(), count);
     if (ec != std::errc() || count < 1) bad();
@@ -143,7 +145,6 @@ std::vector<int> expand_tasks_per_node(const std::string& spec) {
       if (ec2 != std::errc() || e2 != rest.data() + rest.size() - 1 || repeat < 1 || repeat > (1 << 20)) bad();
     }
     out.insert(out.end(), static_cast<std::size_t>(repeat), count);
-    start = comma + 1;
   }
   return out;
 }
@@ -174,7 +175,8 @@ SlurmStep slurm_step_from_env(const EnvLookup& get) {
   for (int c : per_node) total += c;
   if (total != ntasks)
     throw InputError("--slurm: the tasks per node add up to " + std::to_string(total) + ", SLURM_NTASKS is " + std::to_string(ntasks));
-  std::string distribution = get("SLURM_DISTRIBUTION") ? get("SLURM_DISTRIBUTION") : "block";
+  const char* given_distribution = get("SLURM_DISTRIBUTION");
+  std::string distribution = given_distribution ? given_distribution : "block";
   distribution = distribution.substr(0, distribution.find_first_of(":,"));
   std::vector<int> node_of;  // by rank
   if (distribution == "block") {
