@@ -7,6 +7,8 @@
 #include <fstream>
 #include <memory>
 #include <optional>
+#include <string>
+#include <vector>
 
 #include "commands.hpp"
 #include "exchange_cost.hpp"
@@ -34,7 +36,6 @@ struct PlanArgs {
 struct Measured {
   double seconds_per_stage = 0.0;  // one right-hand side with its share of the integrator's work
   double stages_per_step = 0.0;
-  long steps = 0;
 };
 
 // Short runs on one thread: longer until one takes a fifth of a second, then the fastest
@@ -56,25 +57,27 @@ Measured measure_one_thread(const Model& m, RunOptions o) {
     if (next.wall_seconds < r.wall_seconds) r = next;
   }
   return {r.wall_seconds / static_cast<double>(r.evaluations),
-          static_cast<double>(r.evaluations) / static_cast<double>(std::max(1L, r.steps)), r.steps};
+          static_cast<double>(r.evaluations) / static_cast<double>(std::max(1L, r.steps))};
 }
 
+// The network's Hockney figures, and how they were come by, for the table's header.
 Hockney network_model(const PlanArgs& a, std::string& described) {
   Hockney h;
+  std::vector<std::string> how;
   if (!a.alpha_us || !a.bandwidth_mbs) {
     h = fit_hockney(measure_exchange("tcp", {0, 1024, 65536}, 300));
     char line[160];
     std::snprintf(line, sizeof line, "tcp on loopback measured: alpha %.1f us, beta %.0f MB/s", 1e6 * h.alpha, h.beta / 1e6);
-    described = line;
+    how.push_back(line);
     if (a.network == "gbe") {
       h = gigabit_ethernet(h);
-      described += "; Gigabit Ethernet assumed: +" + std::to_string(static_cast<int>(1e6 * gbe_extra_latency_s)) +
-                   " us, at most " + std::to_string(static_cast<int>(gbe_bytes_per_s / 1e6)) + " MB/s";
+      how.push_back("Gigabit Ethernet assumed: +" + std::to_string(static_cast<int>(1e6 * gbe_extra_latency_s)) +
+                    " us, at most " + std::to_string(static_cast<int>(gbe_bytes_per_s / 1e6)) + " MB/s");
     }
   }
-  if (a.alpha_us) h.alpha = *a.alpha_us * 1e-6, described += "; alpha given";
-  if (a.bandwidth_mbs) h.beta = *a.bandwidth_mbs * 1e6, described += "; beta given";
-  if (described.rfind("; ", 0) == 0) described.erase(0, 2);
+  if (a.alpha_us) h.alpha = *a.alpha_us * 1e-6, how.push_back("alpha given");
+  if (a.bandwidth_mbs) h.beta = *a.bandwidth_mbs * 1e6, how.push_back("beta given");
+  for (const std::string& part : how) described += (described.empty() ? "" : "; ") + part;
   return h;
 }
 

@@ -57,7 +57,8 @@ MultibodySystem::MultibodySystem(std::shared_ptr<const Model> shared, int active
   active_ = std::clamp(active, 0, n);
   gravity_ = vec(model.gravity);
   // Exact sizes: growth by doubling would hold up to twice these (a million bodies).
-  for (auto* v : {&mass_, &inv_mass_}) v->reserve(model.bodies.size());
+  mass_.reserve(model.bodies.size());
+  inv_mass_.reserve(model.bodies.size());
   inertia_.reserve(model.bodies.size());
   inv_inertia_.reserve(model.bodies.size());
   initial_position_.reserve(model.bodies.size());
