@@ -27,6 +27,10 @@ ResultsFile::ResultsFile(const std::string& path) : path_(path) {
   }
   if (file_ < 0)
     throw InputError(path + ": cannot open the results file (a run that is ending holds it alone for a moment: try again)");
+  // A file this process has open already is handed out as it was opened, whatever the
+  // flags asked for now: a plain open then gets the live file (and must refresh it).
+  unsigned intent = 0;
+  if (H5Fget_intent(file_, &intent) >= 0 && (intent & H5F_ACC_SWMR_READ) != 0) live_ = true;
   ode_ = !has("/time") && has("/solution/time");
   if (!has("/time") && !ode_) {
     H5Fclose(file_);

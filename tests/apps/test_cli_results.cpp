@@ -195,6 +195,17 @@ TEST_CASE("a run's results are read while it goes by info and h5py and plot --fo
   }
   REQUIRE(rows >= 32);
   REQUIRE_FALSE(writer.wait(0.0));
+  {
+    // Opened twice, the second time while the first is held: HDF5 hands the second the
+    // file the first opened, and it must know that file is live (refresh what it reads).
+    const mbsflow::ResultsFile first((d / "live.h5").string());
+    const mbsflow::ResultsFile second((d / "live.h5").string());
+    CHECK(first.live());
+    CHECK(second.live());
+    const std::size_t seen = second.time().size();
+    std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+    CHECK(second.time().size() > seen);
+  }
   const Result info = run("info live.h5", dir, true);
   CHECK(info.code == 0);
   CHECK(info.out.find("(run ended early)") != std::string::npos);  // not at t_end yet: still going
