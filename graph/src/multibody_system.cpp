@@ -90,9 +90,9 @@ MultibodySystem::MultibodySystem(std::shared_ptr<const Model> shared, int active
     c.preload_force = {j.preload[0], j.preload[1], j.preload[2]};
     c.preload_torque = {j.preload[3], j.preload[4], j.preload[5]};
     c.rest_length = j.rest_length;
-    if (std::any_of(j.tables.begin(), j.tables.end(), [](const ForceTable& t) { return !t.empty(); })) {
+    if (j.tables.any()) {
       c.tables = static_cast<int>(tables_.size());
-      tables_.push_back(j.tables);
+      tables_.push_back(j.tables.all());
     }
     joints_.push_back(c);
   }

@@ -147,6 +147,10 @@ class Reader {
     if (list != bodies_list) return;
     if (count == 0) JsonNode(nlohmann::json::array(), list_names[list], src_).fail("must list at least one body");
     bodies_read_ = true;
+    // Most models have about as many joints as bodies: room for them now spares the moves
+    // and page faults of growing by doubling (a Joint is large). Pages that stay unused
+    // are never touched, so a model with fewer joints costs only address space.
+    m_.joints.reserve(m_.bodies.size());
     for (std::size_t l = joints_list; l < list_count; ++l) {
       for (std::size_t i = 0; i < waiting_[l].size(); ++i) dependent(l, i, waiting_[l][i]);
       waiting_[l].clear();

@@ -1,6 +1,5 @@
 #include "mbsflow/io/model_writer.hpp"
 
-#include <algorithm>
 #include <fstream>
 
 #include "json_text.hpp"
@@ -92,7 +91,7 @@ void write_joint(std::string& out, const Model& m, const Joint& jt) {
   o("stiffness", jt.stiffness);
   if (jt.damping != Vec6{}) o("damping", jt.damping);
   static const char* axes[6] = {"x", "y", "z", "rx", "ry", "rz"};
-  if (std::any_of(jt.tables.begin(), jt.tables.end(), [](const ForceTable& t) { return !t.empty(); }))
+  if (jt.tables.any())
     o.object("tables", [&](Object& tables) {
       for (std::size_t a = 0; a < 6; ++a)
         if (!jt.tables[a].empty())

@@ -23,3 +23,25 @@ TEST_CASE("force table energy is the integral of the force", "[graph]") {
     CHECK(table_energy(t, x) == Approx(sum).margin(1e-7));
   }
 }
+
+TEST_CASE("a joint's axis tables copy as values and reading an axis makes no tables", "[graph]") {
+  const AxisTables none;
+  CHECK_FALSE(none.any());
+  CHECK(none[4].empty());
+  CHECK(std::distance(none.begin(), none.end()) == 6);
+  AxisTables a;
+  a[1] = ForceTable{{-1.0, 0.0, 1.0}, {-2.0, 0.0, 3.0}};
+  CHECK(a.any());
+  AxisTables b = a;  // deep: changing the copy leaves the original
+  b[1].force[2] = 5.0;
+  CHECK(a[1].force[2] == 3.0);
+  CHECK(b[1].force[2] == 5.0);
+  CHECK(b[0].empty());
+  AxisTables c;
+  c = none;
+  CHECK_FALSE(c.any());
+  c = a;
+  CHECK(c[1].deflection == a[1].deflection);
+  const AxisTables moved = std::move(c);
+  CHECK(moved.any());
+}

@@ -1,6 +1,8 @@
 #pragma once
 // Nonlinear force-deflection characteristic: piecewise linear through the points,
 // extended linearly beyond the first and last segment.
+#include <array>
+#include <memory>
 #include <vector>
 
 namespace mbsflow {
@@ -9,6 +11,43 @@ struct ForceTable {
   std::vector<double> deflection;  // strictly increasing
   std::vector<double> force;
   bool empty() const { return deflection.empty(); }
+};
+
+// A bushing's six tables (x, y, z, rx, ry, rz). Most joints have none, so they are held
+// behind one pointer: a Joint stays small (a million of them) and copies as a value.
+// Reading an axis of a joint without tables gives an empty table; writing one makes room.
+class AxisTables {
+ public:
+  using Array = std::array<ForceTable, 6>;
+  AxisTables() = default;
+  AxisTables(const AxisTables& o) : t_(o.t_ ? std::make_unique<Array>(*o.t_) : nullptr) {}
+  AxisTables& operator=(const AxisTables& o) {
+    if (this != &o) t_ = o.t_ ? std::make_unique<Array>(*o.t_) : nullptr;
+    return *this;
+  }
+  AxisTables(AxisTables&&) noexcept = default;
+  AxisTables& operator=(AxisTables&&) noexcept = default;
+
+  const ForceTable& operator[](std::size_t axis) const { return all()[axis]; }
+  ForceTable& operator[](std::size_t axis) {
+    if (!t_) t_ = std::make_unique<Array>();
+    return (*t_)[axis];
+  }
+  const Array& all() const { return t_ ? *t_ : none(); }
+  Array::const_iterator begin() const { return all().begin(); }
+  Array::const_iterator end() const { return all().end(); }
+  bool any() const {
+    for (const ForceTable& t : all())
+      if (!t.empty()) return true;
+    return false;
+  }
+
+ private:
+  static const Array& none() {
+    static const Array empty{};
+    return empty;
+  }
+  std::unique_ptr<Array> t_;
 };
 
 double table_force(const ForceTable& t, double x);

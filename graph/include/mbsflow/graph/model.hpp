@@ -77,7 +77,7 @@ struct Joint {
   Quat frame2{1.0, 0.0, 0.0, 0.0};  // joint frame relative to body2 (at rest)
   Vec6 stiffness{};                 // bushing: per axis; spring: stiffness[0]
   Vec6 damping{};                   // bushing: per axis; spring: damping[0]
-  std::array<ForceTable, 6> tables{};  // nonlinear force(deflection) per axis; empty = linear
+  AxisTables tables;                // nonlinear force(deflection) per axis; empty = linear
   Vec6 preload{};                   // force/torque on body2 at zero deflection, joint frame
   double rest_length = 0.0;         // spring: rest length; distance: the rod's length
   bool rigid = true;                // kinematic joints: exact constraint, or compliant
