@@ -114,12 +114,19 @@ std::string format_input_error(const std::string& file, SourceLocation at, const
   return s + what;
 }
 
+std::string JsonNode::path() const {
+  if (!parent_) return root_path_;
+  return index_ == no_index ? member_path(parent_->path(), std::string(key_)) : item_path(parent_->path(), index_);
+}
+
 void JsonNode::fail(const std::string& what) const {
-  throw InputError(format_input_error(src_->file, src_->locations.value(path_), path_, what));
+  const std::string path = this->path();
+  throw InputError(format_input_error(src_->file, src_->locations.value(path), path, what));
 }
 
 void JsonNode::fail_at_key(const std::string& what) const {
-  throw InputError(format_input_error(src_->file, src_->locations.key(path_), path_, what));
+  const std::string path = this->path();
+  throw InputError(format_input_error(src_->file, src_->locations.key(path), path, what));
 }
 
 void JsonNode::expect_object() const {
@@ -134,7 +141,7 @@ void JsonNode::allow_only(std::initializer_list<const char*> keys) const {
     if (known) continue;
     std::string list;
     for (const char* k : keys) list += (list.empty() ? "" : ", ") + std::string(k);
-    JsonNode(it.value(), member_path(path_, it.key()), *src_).fail_at_key("unknown field (expected one of: " + list + ")");
+    member(it.value(), it.key()).fail_at_key("unknown field (expected one of: " + list + ")");
   }
 }
 
@@ -142,14 +149,14 @@ JsonNode JsonNode::operator[](const char* key) const {
   expect_object();
   const auto it = j_->find(key);
   if (it == j_->end()) fail(std::string("missing field '") + key + "'");
-  return JsonNode(*it, member_path(path_, key), *src_);
+  return member(*it, key);
 }
 
 std::optional<JsonNode> JsonNode::find(const char* key) const {
   expect_object();
   const auto it = j_->find(key);
   if (it == j_->end()) return std::nullopt;
-  return JsonNode(*it, member_path(path_, key), *src_);
+  return member(*it, key);
 }
 
 std::size_t JsonNode::array_size() const {
@@ -157,7 +164,7 @@ std::size_t JsonNode::array_size() const {
   return j_->size();
 }
 
-JsonNode JsonNode::item(std::size_t i) const { return JsonNode(j_->at(i), item_path(path_, i), *src_); }
+JsonNode JsonNode::item(std::size_t i) const { return JsonNode(j_->at(i), *this, {}, i); }
 
 double JsonNode::number() const {
   if (!j_->is_number()) fail(std::string("must be a number (got ") + j_->type_name() + ")");

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "json_locations.hpp"
@@ -17,12 +18,15 @@ struct JsonSource {
   JsonLocations locations;
 };
 
+// A child node refers to its parent and spells its path only when it reports an error (a
+// million-body model has tens of millions of fields): a child must not outlive its parent,
+// which holds for nodes made and used within one reading function.
 class JsonNode {
  public:
-  JsonNode(const nlohmann::json& j, std::string path, const JsonSource& src) : j_(&j), path_(std::move(path)), src_(&src) {}
+  JsonNode(const nlohmann::json& j, std::string path, const JsonSource& src) : j_(&j), src_(&src), root_path_(std::move(path)) {}
 
   const nlohmann::json& json() const { return *j_; }
-  const std::string& path() const { return path_; }
+  std::string path() const;
 
   [[noreturn]] void fail(const std::string& what) const;          // points at the value
   [[noreturn]] void fail_at_key(const std::string& what) const;   // points at the member's key
@@ -57,10 +61,17 @@ class JsonNode {
   }
 
  private:
-  std::string prefix(SourceLocation at) const;
+  JsonNode(const nlohmann::json& j, const JsonNode& parent, std::string_view key, std::size_t index)
+      : j_(&j), src_(parent.src_), parent_(&parent), key_(key), index_(index) {}
+  static constexpr std::size_t no_index = static_cast<std::size_t>(-1);
+  JsonNode member(const nlohmann::json& j, std::string_view key) const { return JsonNode(j, *this, key, no_index); }
+
   const nlohmann::json* j_;
-  std::string path_;
   const JsonSource* src_;
+  const JsonNode* parent_ = nullptr;  // none: a root, whose path is root_path_
+  std::string_view key_;              // a member's key (held by the parsed document or the caller)
+  std::size_t index_ = no_index;      // an array item's index
+  std::string root_path_;
 };
 
 // "file:line:col: path: what" with whatever of these is known.
