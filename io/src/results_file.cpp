@@ -21,16 +21,14 @@ ResultsFile::ResultsFile(const std::string& path) : path_(path) {
   // A file that a run is writing is in SWMR mode and takes only SWMR readers (as does one
   // whose writer was killed in that mode).
   file_ = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
-  if (file_ < 0) {
-    file_ = H5Fopen(path.c_str(), H5F_ACC_RDONLY | H5F_ACC_SWMR_READ, H5P_DEFAULT);
-    live_ = file_ >= 0;
-  }
+  if (file_ < 0) file_ = H5Fopen(path.c_str(), H5F_ACC_RDONLY | H5F_ACC_SWMR_READ, H5P_DEFAULT);
   if (file_ < 0)
     throw InputError(path + ": cannot open the results file (a run that is ending holds it alone for a moment: try again)");
-  // A file this process has open already is handed out as it was opened, whatever the
-  // flags asked for now: a plain open then gets the live file (and must refresh it).
+  // Live: open as an SWMR reader. Asked of the open file, not read off which open
+  // succeeded: a file this process has open already is handed out as it was first opened,
+  // so a plain open can get the live file (which must be refreshed).
   unsigned intent = 0;
-  if (H5Fget_intent(file_, &intent) >= 0 && (intent & H5F_ACC_SWMR_READ) != 0) live_ = true;
+  live_ = H5Fget_intent(file_, &intent) >= 0 && (intent & H5F_ACC_SWMR_READ) != 0;
   ode_ = !has("/time") && has("/solution/time");
   if (!has("/time") && !ode_) {
     H5Fclose(file_);
