@@ -25,8 +25,15 @@ constexpr std::uint32_t frame_version = 2;     // of the binary headers below; 2
 // (replayed, or a late one of a run that ended) is dropped.
 
 // The size caps of messages: ZeroMQ drops a peer whose message is larger before it is
-// received (ZMQ_MAXMSGSIZE). Control messages carry the model in the set-up.
+// received (ZMQ_MAXMSGSIZE). Control messages carry the set-up (the assignment of
+// every body) and the model's text in parts of model_part_bytes.
 constexpr std::int64_t max_control_bytes = (std::int64_t{1} << 30) + (std::int64_t{16} << 20);
+// A part small enough to be copied, encrypted and taken apart in a fraction of a second,
+// so that heartbeats go on between the parts: the 450 MB text of a million bodies in one
+// frame held the I/O of both sides for seconds (page faults), and the peers lost each other.
+constexpr std::size_t model_part_bytes = std::size_t{8} << 20;
+// The longest model text a worker takes.
+constexpr std::uint64_t max_model_bytes = std::uint64_t{1} << 38;
 // Boundary values and snapshots of a model of `bodies` bodies; coupling records of a run.
 std::int64_t max_data_bytes(std::size_t bodies);
 

@@ -1,5 +1,8 @@
 // mbsflow run --cluster / --processes: the coordinator (see cluster.hpp, docs/cluster.md).
+#include <chrono>
 #include <cstdio>
+#include <future>
+#include <limits>
 #include <map>
 #include <optional>
 
@@ -71,6 +74,27 @@ class Coordinator {
     j["run"] = id_text(run_);
     (void)wire::send_json(peers_[w].control, j);
   }
+  // The set-up's model after the set-up message, as "model_part" messages of a header and
+  // up to wire::model_part_bytes of text, heartbeats going out between them. The parts
+  // refer to the text without copying it: it belongs to run_cluster's caller and outlives
+  // this object, whose context ends (waiting for its I/O thread) before run_cluster returns.
+  void send_model(std::size_t w, std::string_view text) {
+    const json head = {{"type", "model_part"}, {"run", id_text(run_)}};
+    for (std::size_t at = 0; at < text.size(); at += wire::model_part_bytes) {
+      const std::size_t n = std::min(wire::model_part_bytes, text.size() - at);
+      zmq::message_t part(const_cast<char*>(text.data() + at), n, nullptr);  // no free: not ours
+      if (!wire::send_json(peers_[w].control, head, zmq::send_flags::sndmore | zmq::send_flags::dontwait) ||
+          !wire::send(peers_[w].control, part, zmq::send_flags::dontwait))
+        return;  // the worker has taken nothing for long: the heartbeat check reports it
+      beat_if_due();
+    }
+  }
+  // Heartbeats when due, between long steps outside pump (the set-ups of a large model).
+  void beat_if_due() {
+    if (wire::seconds_since(beat_) < c_.timeouts.heartbeat_s) return;
+    beat_ = Clock::now();
+    send_all({{"type", "heartbeat"}});
+  }
   const wire::Security* security() const { return security_ ? &*security_ : nullptr; }
   void send_all(const json& j) {
     for (std::size_t w = 0; w < peers_.size(); ++w) send(w, j);
@@ -104,15 +128,28 @@ class Coordinator {
     }
   }
 
-  // One round of waiting (at most a heartbeat interval): control messages to on_control,
-  // results to on_result; sends heartbeats when due.
+  // One round of waiting while the workers wait for the start: heartbeats, a worker's
+  // error, a lost worker, Ctrl-C.
+  void wait_for_start() {
+    pump(
+        [&](std::size_t w, const json& j) {
+          if (wire::text(j, "type") == "error") throw RunError(who(w) + ": " + wire::text(j, "message", "failed"));
+        },
+        nullptr, 0.0);
+    check_alive("");
+    check_stop(o_, o_.t_start);
+  }
+
+  // One round of waiting (at most a heartbeat interval, or max_wait_s): control messages
+  // to on_control, results to on_result; sends heartbeats when due.
   void pump(const std::function<void(std::size_t, const json&)>& on_control,
-            const std::function<void(const wire::ResultHeader&, zmq::message_t&)>& on_result) {
+            const std::function<void(const wire::ResultHeader&, zmq::message_t&)>& on_result,
+            double max_wait_s = std::numeric_limits<double>::infinity()) {
     std::vector<zmq::pollitem_t> items;
     for (Peer& p : peers_) items.push_back({p.control.handle(), 0, ZMQ_POLLIN, 0});
     items.push_back({results_.handle(), 0, ZMQ_POLLIN, 0});
-    const double wait = std::max(0.0, c_.timeouts.heartbeat_s - wire::seconds_since(beat_));
-    wire::poll(items.data(), items.size(), wait + 0.001);
+    const double wait = std::min(max_wait_s, std::max(0.0, c_.timeouts.heartbeat_s - wire::seconds_since(beat_)) + 0.001);
+    wire::poll(items.data(), items.size(), wait);
     for (std::size_t w = 0; w < peers_.size(); ++w) {
       if (!(items[w].revents & ZMQ_POLLIN)) continue;
       zmq::message_t m;
@@ -141,10 +178,7 @@ class Coordinator {
         if (on_result) on_result(*h, payload);
       }
     }
-    if (wire::seconds_since(beat_) >= c_.timeouts.heartbeat_s) {
-      beat_ = Clock::now();
-      send_all({{"type", "heartbeat"}});
-    }
+    beat_if_due();
   }
 
   // RunError naming a worker that is silent (killed, stopped, cut off) or whose
@@ -198,11 +232,12 @@ class Coordinator {
   std::uint64_t run_ = random_id();
 };
 
-json setup_message(const std::string& model_json, const Decomposition& d, const std::vector<int>& worker_of, std::size_t w,
+json setup_message(std::size_t model_bytes, const Decomposition& d, const std::vector<int>& worker_of, std::size_t w,
                    const ClusterWorker& cw, const RunOptions& o, const std::string& results_address,
                    const ClusterCoupling& coupling, const wire::Security* security, const std::string& resume) {
+  // The model's text follows in parts (Coordinator::send_model).
   json j = {{"type", "setup"},
-          {"model", model_json},
+          {"model_bytes", model_bytes},
           {"part_of_body", d.part_of_body},
           {"submodels", d.submodels.size()},
           {"worker_of", worker_of},
@@ -386,26 +421,36 @@ RunSummary run_cluster(const Model& model, const std::string& model_json, const 
                       {"heartbeat_s", cluster.timeouts.heartbeat_s},
                       {"lost_s", cluster.timeouts.lost_s}}}});
       co.gather("hello_ok", cluster.timeouts.connect_s, [](std::size_t, const json&) {});
-      for (std::size_t w = 0; w < peers.size(); ++w)
-        co.send(w, setup_message(model_json, d, worker_of, w, cluster.workers[w], o, co.results_address(), coupling,
+      for (std::size_t w = 0; w < peers.size(); ++w) {
+        co.send(w, setup_message(model_json.size(), d, worker_of, w, cluster.workers[w], o, co.results_address(), coupling,
                                  co.security(), resume_hex[w]));
+        co.send_model(w, model_json);
+      }
       co.gather("ready", 0.0, [&](std::size_t w, const json& j) { peers[w].data_address = wire::text(j, "data_address"); });
       json names = json::array(), addresses = json::array();
       for (const Peer& p : peers) {
         names.push_back(p.config->name);
         addresses.push_back(p.data_address);
       }
+      // The results file only once every worker is in: a refused run writes nothing. Its
+      // start (the model's text, the first snapshot) takes seconds for a million bodies,
+      // so it is written on a thread of its own while this one keeps the heartbeats going.
+      if (resumed || sink) {
+        auto begun = std::async(std::launch::async, [&] {
+          if (resumed) {
+            resume_results(*resumed, *c, sink, whole, results_id, out);
+          } else {
+            sink->begin(whole);
+            emit(whole, sink, o.t_start, y, out);
+          }
+        });
+        while (begun.wait_for(std::chrono::milliseconds(10)) != std::future_status::ready) co.wait_for_start();
+        begun.get();
+      }
       co.send_all({{"type", "start"}, {"names", names}, {"data_addresses", addresses}});
       // Like run_partitioned's, the run's clock starts when the parts are set up.
       if (stats) stats->setup_seconds = std::chrono::duration<double>(Clock::now() - start_clock).count();
       start_clock = Clock::now();
-      // The results file only once every worker is in: a refused run writes nothing.
-      if (resumed) {
-        resume_results(*resumed, *c, sink, whole, results_id, out);
-      } else if (sink) {
-        sink->begin(whole);
-        emit(whole, sink, o.t_start, y, out);
-      }
 
       struct Pending {
         Eigen::VectorXd y;

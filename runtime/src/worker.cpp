@@ -91,7 +91,7 @@ void check_start(const json& start, const Session& s, const std::string& listen)
 
 Session read_setup(const WorkerOptions& wo, const json& setup, const std::string& listen) {
   Session s;
-  s.model = wo.read_model(setup.at("model").get<std::string>());
+  s.model = wo.read_model(setup.at("model").get_ref<const std::string&>());
   const int bodies = static_cast<int>(s.model.bodies.size());
   const int k = setup_integer(setup.at("submodels"), "submodels", 1, std::max(1, bodies));
   s.d = decompose(s.model, setup_integers(setup.at("part_of_body"), "part_of_body", 0, k - 1), k);

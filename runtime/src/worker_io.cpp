@@ -109,6 +109,27 @@ void WorkerIo::command(nlohmann::json j) {
   changed_.notify_all();
 }
 
+void WorkerIo::begin_setup(nlohmann::json j) {
+  const auto bytes = wire::number(j, "model_bytes", 0.0, static_cast<double>(wire::max_model_bytes));
+  if (!bytes) return command(std::move(j));  // the main thread refuses it: no model
+  setup_ = std::move(j);
+  model_expected_ = static_cast<std::size_t>(*bytes);
+  model_.clear();
+  model_.reserve(model_expected_);  // address space: the pages are touched as parts arrive
+  take_model_part(zmq::message_t());
+}
+
+void WorkerIo::take_model_part(const zmq::message_t& part) {
+  if (!setup_) return;  // a part without a set-up before it
+  if (part.size() > model_expected_ - model_.size()) return lose("the set-up's model came longer than announced");
+  model_.append(static_cast<const char*>(part.data()), part.size());
+  if (model_.size() < model_expected_) return;
+  (*setup_)["model"] = std::move(model_);
+  command(std::move(*setup_));
+  setup_.reset();
+  model_ = std::string();
+}
+
 void WorkerIo::lose(const std::string& why) {
   std::lock_guard lock(mutex_);
   if (lost_) return;
@@ -151,10 +172,11 @@ void WorkerIo::loop() {
     while (wire::recv(wake_in_, ignored, zmq::recv_flags::dontwait)) {
     }
     if (items[0].revents & ZMQ_POLLIN) {
-      zmq::message_t id, body;
+      zmq::message_t id, body, attachment;
       (void)wire::recv(control_, id);
       if (id.more()) (void)wire::recv(control_, body);
-      wire::skip_rest(control_, body);
+      if (body.more()) (void)wire::recv(control_, attachment);
+      wire::skip_rest(control_, attachment);
       const std::string from = id.to_string();
       // Before the hello, only a hello with a run id and sane timeouts is taken; after it,
       // only the coordinator's messages of its run. Anything else is dropped unread.
@@ -178,7 +200,13 @@ void WorkerIo::loop() {
         if (j) reply_error(from, "this worker is busy with another run");  // another coordinator
       } else {
         heard_ = Clock::now();
-        if (wire::text(*j, "type") != "heartbeat") command(std::move(*j));
+        const std::string type = wire::text(*j, "type");
+        if (type == "setup")
+          begin_setup(std::move(*j));
+        else if (type == "model_part")
+          take_model_part(attachment);
+        else if (type != "heartbeat")
+          command(std::move(*j));
       }
     }
     if (!coordinator_.empty() && !lost) {

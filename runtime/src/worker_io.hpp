@@ -50,6 +50,10 @@ class WorkerIo {
  private:
   void loop();
   void command(nlohmann::json j);
+  // The set-up waits for its model, which follows in "model_part" messages; it is handed
+  // on complete (with "model": the text).
+  void begin_setup(nlohmann::json j);
+  void take_model_part(const zmq::message_t& part);
   void lose(const std::string& why);
   void reply_error(const std::string& to, const std::string& message);  // I/O thread
   void post_locked(std::function<void()> f);  // runs f on the I/O thread; call with mutex_ held
@@ -74,6 +78,9 @@ class WorkerIo {
   std::string coordinator_;  // its routing id
   std::uint64_t run_ = 0;    // the run id of its hello (read by send() only after the hello)
   std::chrono::steady_clock::time_point heard_, beat_;
+  std::optional<nlohmann::json> setup_;  // a set-up still waiting for parts of its model
+  std::string model_;
+  std::size_t model_expected_ = 0;
 };
 
 }  // namespace mbsflow

@@ -19,6 +19,7 @@
 #include "mbsflow/runtime/partitioned_run.hpp"
 #include "mbsflow/runtime/simulation.hpp"
 #include "memory_sink.hpp"
+#include "cluster_wire.hpp"
 #include "thread_workers.hpp"
 
 using namespace mbsflow;
@@ -70,6 +71,29 @@ TEST_CASE("cluster runs over tcp and ipc equal the one-process run bit for bit",
       }
     std::filesystem::remove_all(dir);
   }
+}
+
+TEST_CASE("a model longer than one set-up part reaches the workers whole: the run equals the one-process run bit for bit",
+          "[runtime][cluster]") {
+  ChainParams chain;
+  chain.bodies = 24000;
+  Model m = short_run(make_chain(chain), 3);
+  m.simulation.output_every = 1;
+  const std::string json = model_to_json(m);
+  REQUIRE(json.size() > wire::model_part_bytes);  // two parts, the second one short
+  MultibodySystem sys(m);
+  test::MemorySink reference;
+  const RunOptions o = options_from_model(m);
+  run_simulation(sys, o, &reference);
+  ThreadWorkers pool({"tcp://127.0.0.1:*", "tcp://127.0.0.1:*"});
+  ClusterConfig c = cluster_of(pool.endpoints, "", "tcp://127.0.0.1:*");
+  for (auto& w : c.workers) w.data_bind = "tcp://127.0.0.1:*";
+  const Decomposition d = decompose(m, cluster_submodels(c));
+  test::MemorySink sink;
+  run_cluster(m, json, d, c, o, &sink, nullptr);
+  REQUIRE(sink.states.size() == reference.states.size());
+  CHECK(sink.states.back() == reference.states.back());
+  for (const std::string& e : pool.errors) CHECK(e.empty());
 }
 
 TEST_CASE("tight DOPRI5 across processes equals the one-process run bit for bit, rejected attempts included",

@@ -17,7 +17,7 @@
 namespace mbsflow {
 
 // Raised with every incompatible change of the messages between processes.
-constexpr int cluster_protocol_version = 5;  // 2: loose coupling records, newest-value lag; 3: tight DOPRI5; 4: run ids, frame versions; 5: checkpoints
+constexpr int cluster_protocol_version = 6;  // 2: loose coupling records, newest-value lag; 3: tight DOPRI5; 4: run ids, frame versions; 5: checkpoints; 6: the set-up's model in a frame of its own
 
 struct ClusterTimeouts {
   double connect_s = 10.0;   // every worker must answer the coordinator's hello within this
