@@ -25,6 +25,7 @@ class Rk4Stepper final : public Stepper {
     t_ = t_previous_ = t;
     t_end_ = t_end;
     y_ = y;
+    y_previous_ = y;  // its memory now, before the first step
   }
   void step() override {
     if (done()) return;

@@ -25,7 +25,10 @@ void combine(Y&& y, const K& k1, const K& k2, const K& k3, const K& k4, double h
 
 class Rk4 {
  public:
-  explicit Rk4(Eigen::Index n) : k_{Eigen::VectorXd(n), Eigen::VectorXd(n), Eigen::VectorXd(n), Eigen::VectorXd(n)}, tmp_(n) {}
+  // Zeroed: the workspace's pages are touched here, in the set-up, not in the first step.
+  explicit Rk4(Eigen::Index n)
+      : k_{Eigen::VectorXd::Zero(n), Eigen::VectorXd::Zero(n), Eigen::VectorXd::Zero(n), Eigen::VectorXd::Zero(n)},
+        tmp_(Eigen::VectorXd::Zero(n)) {}
 
   // Advances y from t to t + h. Four evaluations of f.
   template <OdeSystem S>
