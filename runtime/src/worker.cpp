@@ -164,6 +164,7 @@ void serve_worker(const WorkerOptions& wo) {
     s = read_setup(wo, setup, io.endpoint());
     s.run = std::stoull(wire::text(hello, "run"), nullptr, 16);  // WorkerIo took only a valid one
     s.hang_after_s = wo.hang_after_s;
+    if (!s.loose) prepare_tight(s);
     if (security) {
       s.security = security;
       const auto keys = setup.find("worker_keys");

@@ -4,6 +4,7 @@
 // workers, and the results channel to the coordinator.
 #include <algorithm>
 #include <atomic>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -12,6 +13,7 @@
 
 #include "cluster_wire.hpp"
 #include "mbsflow/runtime/loose_coupling.hpp"
+#include "partitioned_state.hpp"
 #include "remote_exchange.hpp"
 #include "worker_io.hpp"
 
@@ -32,6 +34,10 @@ struct Session {
   int threads = 0;                    // > 0: the cluster file's threads for this worker
   std::optional<wire::Security> security;  // CURVE: the peers' public keys
   double hang_after_s = -1.0;              // tests (WorkerOptions::hang_after_s)
+  // Tight coupling: the local submodels' state (null where a submodel runs elsewhere),
+  // made before the worker says it is ready, so that the run's clock, which starts with
+  // the coordinator's "start", does not count it (prepare_tight).
+  std::vector<std::unique_ptr<partitioned::Part>> tight_parts;
   std::size_t workers() const {            // of the run: worker_of names each
     return static_cast<std::size_t>(*std::max_element(worker_of.begin(), worker_of.end())) + 1;
   }
@@ -90,6 +96,9 @@ class WorkerPart {
   std::int64_t answered_ = -1;  // the last request answered
   std::vector<int> bodies_;  // global indices of the local submodels' own bodies, as the coordinator expects them
 };
+
+// Makes s.tight_parts.
+void prepare_tight(Session& s);
 
 // The loops, each with its local submodels' state: RK4 or DOPRI5 with values exchanged
 // every stage (tight), or macro steps (loose).

@@ -47,14 +47,21 @@ class CoordinatorOutput final : public TightOutput {
 
 }  // namespace
 
+void prepare_tight(Session& s) {
+  const int stages = tight_stages(s.o.method);
+  const std::size_t k = s.d.submodels.size();
+  s.tight_parts.clear();
+  s.tight_parts.resize(k);
+  for (std::size_t q = 0; q < k; ++q)
+    if (s.worker_of[q] == s.me) s.tight_parts[q] = std::make_unique<Part>(s.model, s.d.submodels[q], stages);
+}
+
 Outcome run_tight(Session& s, WorkerIo& io, zmq::context_t& ctx, zmq::socket_t& inbox, const nlohmann::json& start,
                   int threads, const std::atomic<bool>* stop) {
   const int stages = tight_stages(s.o.method);
-  const std::size_t k = s.d.submodels.size();
-  std::vector<std::unique_ptr<Part>> owned(k);
-  std::vector<Part*> parts(k, nullptr);
-  for (std::size_t q = 0; q < k; ++q)
-    if (s.worker_of[q] == s.me) parts[q] = (owned[q] = std::make_unique<Part>(s.model, s.d.submodels[q], stages)).get();
+  if (s.tight_parts.size() != s.d.submodels.size()) prepare_tight(s);
+  std::vector<Part*> parts;
+  for (const auto& p : s.tight_parts) parts.push_back(p.get());
   WorkerPart w(s, io, ctx, inbox, start, parts, stages, stop);
   CoordinatorOutput output(w);
   std::string failure;
