@@ -19,6 +19,8 @@ struct BenchArgs {
   std::string dir = ".";    // output: where the results files go
   std::string csv;          // default: bench_WHAT.csv
   int threads = 0;          // parallel: up to this many threads (default: all cores)
+  int processes = -1;       // parallel: 2 .. this many worker processes (default: up to 4, at most the cores; 0 or 1: none)
+  std::vector<std::string> executors;  // parallel: flow, barrier (default both)
   std::vector<std::string> problems;  // ode: default hnw, b1, heat1000, heat100000, heat1000000
   std::vector<double> tolerances;     // ode: default 1e-4, 1e-6, 1e-8, 1e-10
   std::string tableau;                // iterations: default radau3

@@ -12,7 +12,8 @@ Action add_bench(CLI::App& app) {
   sub->add_option("what", a->what,
                   "rhs: cost of one right-hand-side evaluation per body; "
                   "output: cost of writing results (6500-body chain, none / every 10 steps / every step); "
-                  "parallel: scaling of partitioned runs over threads, flow graph vs barrier; "
+                  "parallel: scaling of partitioned runs over 1, 2, 4, ... threads (flow graph vs barrier) and 2..4 "
+                  "processes, against the efficiency mbsflow plan predicts; "
                   "cluster: 2 threads vs 2 processes over tcp and ipc, exchange cost, predicted speedup on a cluster; "
                   "latency: tight vs loose coupling on 2 processes as the network gets slower; "
                   "ode: work-precision of the block and tirk methods against CVODE and Boost.Odeint on the seed's problems; "
@@ -47,8 +48,13 @@ Action add_bench(CLI::App& app) {
       ->check(CLI::IsMember({"rk4", "dopri5", "tirk-newton", "tirk-newton-triangular", "colloc", "colloc-s2", "cvode-klu", "cvode-bdf"}));
   sub->add_option("--bodies", a->bodies, "Chain sizes (rhs: 2000,6500,100000; output: 6500; parallel, cluster: 2000,4000,6500; stiff: 2000; load: 1000,10000,100000,1000000, a grid the nearest square)")
       ->delimiter(',');
-  sub->add_option("--threads", a->threads, "parallel: up to this many threads (default: all cores); ivp: the thread count "
+  sub->add_option("--threads", a->threads, "parallel: 1, 2, 4, ... up to this many threads (default: all cores); ivp: the thread count "
                   "of the parallel runs beside the sequential ones, on problems of 100 or more equations (default 2)")->check(CLI::PositiveNumber);
+  sub->add_option("--processes", a->processes, "parallel: also 2 .. this many worker processes of one thread over "
+                  "loopback tcp (default: up to 4, at most the cores; 0: none)")->check(CLI::NonNegativeNumber);
+  sub->add_option("--executors", a->executors, "parallel: the thread runs' executors, flow and barrier (default both)")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"flow", "barrier"}));
   sub->add_option("--seconds", a->seconds, "rhs: time per measurement")->check(CLI::PositiveNumber);
   sub->add_option("--steps", a->steps, "output: steps per run")->check(CLI::PositiveNumber);
   sub->add_option("--repeats", a->repeats, "output, parallel, cluster, iftomm: runs per case; the fastest counts")->check(CLI::PositiveNumber);

@@ -113,3 +113,34 @@ TEST_CASE("cli bench load: a chain and a grid generated and started in their own
   CHECK(run("bench load --dir no-such-folder", dir).code == 2);
   fs::remove_all(fs::path(dir).parent_path());
 }
+
+TEST_CASE("cli bench parallel: threads by doubling and worker processes with the predicted efficiency", "[cli][bench]") {
+  const std::string dir = scratch("bench_parallel").string();
+  const Result r = run("bench parallel --bodies 600 --threads 3 --processes 2 --executors flow --repeats 1 --csv par.csv", dir, true);
+  INFO(r.err << r.out);
+  REQUIRE(r.code == 0);
+  std::istringstream csv(read_text(fs::path(dir) / "par.csv"));
+  std::string line;
+  std::getline(csv, line);
+  CHECK(line ==
+        "bodies,executor,threads,partitions,steps,wall_s,s_per_simulated_s,speedup,efficiency,wait_fraction,"
+        "predicted_speedup,predicted_efficiency");
+  std::vector<std::string> runs;
+  while (std::getline(csv, line)) {
+    const std::vector<std::string> cells = csv_cells(line);
+    REQUIRE(cells.size() == 12);
+    runs.push_back(cells[1] + " " + cells[2]);
+    CHECK(std::stod(cells[5]) > 0.0);
+    const double predicted_speedup = std::stod(cells[10]), predicted_efficiency = std::stod(cells[11]);
+    // The sequential run is its own prediction; a cut can only lose to imbalance and messages.
+    if (cells[1] == "sequential") CHECK(predicted_speedup == 1.0);
+    CHECK(predicted_efficiency > 0.0);
+    CHECK(predicted_efficiency <= 1.0 + 1e-12);
+    CHECK(predicted_speedup == Approx(predicted_efficiency * std::stod(cells[2])).epsilon(1e-4));
+  }
+  // Threads double up to the limit, which is taken too; processes run from 2.
+  CHECK(runs == std::vector<std::string>{"sequential 1", "flow 1", "flow 2", "flow 3", "processes 2"});
+  CHECK(r.out.find("alpha") != std::string::npos);
+  CHECK(run("bench parallel --executors nowhere", dir).code != 0);
+  fs::remove_all(fs::path(dir).parent_path());
+}
