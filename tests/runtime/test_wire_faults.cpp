@@ -193,3 +193,25 @@ TEST_CASE("a keyed run (CURVE with the ZAP handler) equals the one-process run a
     if (!listed) CHECK_THAT(refusals[0], Catch::Contains("key " + intruder.public_key + " is not in the cluster file"));
   }
 }
+
+TEST_CASE("a worker ends its run when the model's parts come longer than its set-up announced", "[runtime][cluster][wire]") {
+  ThreadWorkers pool({"tcp://127.0.0.1:*"});
+  {
+    zmq::context_t ctx;
+    zmq::socket_t coordinator(ctx, zmq::socket_type::dealer);
+    coordinator.set(zmq::sockopt::linger, 0);
+    coordinator.connect(pool.endpoints[0]);
+    const std::string run = R"("run":"0123456789abcdef")";
+    const zmq::message_t ok =
+        ask(coordinator, R"({"type":"hello","program":")" + std::string(MBSFLOW_PROGRAM_VERSION) +
+                             R"(","protocol":)" + std::to_string(cluster_protocol_version) + "," + run +
+                             R"(,"timeouts":{"connect_s":10,"heartbeat_s":0.5,"lost_s":3}})");
+    REQUIRE(ok.to_string().find("hello_ok") != std::string::npos);
+    coordinator.send(zmq::buffer(R"({"type":"setup","model_bytes":10,)" + run + "}"), zmq::send_flags::none);
+    coordinator.send(zmq::buffer(R"({"type":"model_part",)" + run + "}"), zmq::send_flags::sndmore);
+    coordinator.send(zmq::buffer(std::string(20, 'x')), zmq::send_flags::none);
+    for (auto& t : pool.threads) t.join();  // the worker gives the run up at once
+    pool.threads.clear();
+  }
+  CHECK_THAT(pool.errors[0], Catch::Contains("the set-up's model came longer than announced"));
+}
