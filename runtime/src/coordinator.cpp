@@ -100,6 +100,11 @@ class Coordinator {
     for (std::size_t w = 0; w < peers_.size(); ++w) send(w, j);
   }
 
+  // RunError with a worker's error reply.
+  void throw_if_error(std::size_t w, const json& j) const {
+    if (wire::text(j, "type") == "error") throw RunError(who(w) + ": " + wire::text(j, "message", "failed"));
+  }
+
   // Waits until every worker has answered with `want`, sending heartbeats; RunError on an error reply, a lost worker or, with a deadline, silence.
   void gather(const std::string& want, double deadline_s, const std::function<void(std::size_t, const json&)>& take) {
     for (Peer& p : peers_) p.answered = false;
@@ -111,8 +116,8 @@ class Coordinator {
             if (type == want) {
               peers_[w].answered = true;
               take(w, j);
-            } else if (type == "error") {
-              throw RunError(who(w) + ": " + wire::text(j, "message", "failed"));
+            } else {
+              throw_if_error(w, j);
             }
           },
           nullptr);
@@ -132,10 +137,7 @@ class Coordinator {
   // error, a lost worker, Ctrl-C.
   void wait_for_start() {
     pump(
-        [&](std::size_t w, const json& j) {
-          if (wire::text(j, "type") == "error") throw RunError(who(w) + ": " + wire::text(j, "message", "failed"));
-        },
-        nullptr, 0.0);
+        [&](std::size_t w, const json& j) { throw_if_error(w, j); }, nullptr, 0.0);
     check_alive("");
     check_stop(o_, o_.t_start);
   }

@@ -60,4 +60,6 @@ Hockney fit_hockney(const std::vector<ExchangeSample>& s) {
   return {f.intercept, 1.0 / f.slope};
 }
 
+Hockney fit_loopback_tcp() { return fit_hockney(measure_exchange("tcp", {0, 1024, 65536}, 300)); }
+
 }  // namespace mbsflow

@@ -23,6 +23,9 @@ struct Hockney {
   double time(double bytes) const { return alpha + bytes / beta; }
 };
 Hockney fit_hockney(const std::vector<ExchangeSample>& samples);
+// The fit mbsflow plan and bench parallel predict with: tcp between two processes on this
+// host (loopback), messages of 0, 1 KiB and 64 KiB, 300 round trips each.
+Hockney fit_loopback_tcp();
 
 // Gigabit Ethernet as predictions assume it (not measured: this host has no network to
 // measure): the payload rate of 1 Gbit/s less Ethernet/IP/TCP framing, and the NIC, switch

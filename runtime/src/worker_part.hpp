@@ -97,7 +97,7 @@ class WorkerPart {
   std::vector<int> bodies_;  // global indices of the local submodels' own bodies, as the coordinator expects them
 };
 
-// Makes s.tight_parts.
+// Makes s.tight_parts; run_tight needs them.
 void prepare_tight(Session& s);
 
 // The loops, each with its local submodels' state: RK4 or DOPRI5 with values exchanged

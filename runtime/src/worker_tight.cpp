@@ -5,6 +5,7 @@
 #include <oneapi/tbb/task_arena.h>
 
 #include <memory>
+#include <stdexcept>
 #include <optional>
 
 #include "mbsflow/error.hpp"
@@ -59,7 +60,8 @@ void prepare_tight(Session& s) {
 Outcome run_tight(Session& s, WorkerIo& io, zmq::context_t& ctx, zmq::socket_t& inbox, const nlohmann::json& start,
                   int threads, const std::atomic<bool>* stop) {
   const int stages = tight_stages(s.o.method);
-  if (s.tight_parts.size() != s.d.submodels.size()) prepare_tight(s);
+  // serve_worker made them (prepare_tight) before it said ready: not in the timed run.
+  if (s.tight_parts.size() != s.d.submodels.size()) throw std::logic_error("run_tight: the local submodels were not prepared");
   std::vector<Part*> parts;
   for (const auto& p : s.tight_parts) parts.push_back(p.get());
   WorkerPart w(s, io, ctx, inbox, start, parts, stages, stop);
