@@ -115,7 +115,7 @@ std::string format_input_error(const std::string& file, SourceLocation at, const
 }
 
 std::string JsonNode::path() const {
-  if (!parent_) return root_path_;
+  if (!parent_) return index_ == no_index ? root_path_ : item_path(std::string(key_), index_);
   return index_ == no_index ? member_path(parent_->path(), std::string(key_)) : item_path(parent_->path(), index_);
 }
 
@@ -129,46 +129,88 @@ void JsonNode::fail_at_key(const std::string& what) const {
   throw InputError(format_input_error(src_->file, src_->locations.key(path), path, what));
 }
 
-void JsonNode::expect_object() const {
-  if (!j_->is_object()) fail(std::string("must be an object (got ") + j_->type_name() + ")");
+bool JsonNode::is_string() const { return tape_ ? entry().kind == JsonTape::Kind::string : j_->is_string(); }
+
+std::optional<std::uint32_t> JsonNode::tape_member(std::string_view key) const {
+  const auto& e = tape_->entries;
+  for (std::uint32_t k = at_ + 1; k < entry().end; k = e[k + 1].end)
+    if (e[k].text == key) return k + 1;
+  return std::nullopt;
 }
+
+std::uint32_t JsonNode::tape_item(std::size_t i) const {
+  std::uint32_t k = at_ + 1;
+  for (std::size_t n = 0; n < i; ++n) k = tape_->entries[k].end;
+  return k;
+}
+
+void JsonNode::expect_object() const {
+  const bool object = tape_ ? entry().kind == JsonTape::Kind::object : j_->is_object();
+  if (!object) fail(std::string("must be an object (got ") + type_name() + ")");
+}
+
+bool JsonNode::has(const char* key) const {
+  if (tape_) return entry().kind == JsonTape::Kind::object && tape_member(key).has_value();
+  return j_->is_object() && j_->contains(key);
+}
+
+namespace {
+[[noreturn]] void unknown_field(const JsonNode& member, std::initializer_list<const char*> keys) {
+  std::string list;
+  for (const char* k : keys) list += (list.empty() ? "" : ", ") + std::string(k);
+  member.fail_at_key("unknown field (expected one of: " + list + ")");
+}
+bool known(std::string_view key, std::initializer_list<const char*> keys) {
+  for (const char* k : keys)
+    if (key == k) return true;
+  return false;
+}
+}  // namespace
 
 void JsonNode::allow_only(std::initializer_list<const char*> keys) const {
   expect_object();
-  for (auto it = j_->begin(); it != j_->end(); ++it) {
-    bool known = false;
-    for (const char* k : keys) known = known || it.key() == k;
-    if (known) continue;
-    std::string list;
-    for (const char* k : keys) list += (list.empty() ? "" : ", ") + std::string(k);
-    member(it.value(), it.key()).fail_at_key("unknown field (expected one of: " + list + ")");
+  if (tape_) {
+    const auto& e = tape_->entries;
+    for (std::uint32_t k = at_ + 1; k < entry().end; k = e[k + 1].end)
+      if (!known(e[k].text, keys)) unknown_field(JsonNode(k + 1, *this, e[k].text, no_index), keys);
+    return;
   }
+  for (auto it = j_->begin(); it != j_->end(); ++it)
+    if (!known(it.key(), keys)) unknown_field(member(it.value(), it.key()), keys);
 }
 
 JsonNode JsonNode::operator[](const char* key) const {
-  expect_object();
-  const auto it = j_->find(key);
-  if (it == j_->end()) fail(std::string("missing field '") + key + "'");
-  return member(*it, key);
+  if (auto n = find(key)) return *n;
+  fail(std::string("missing field '") + key + "'");
 }
 
 std::optional<JsonNode> JsonNode::find(const char* key) const {
   expect_object();
+  if (tape_) {
+    const auto at = tape_member(key);
+    if (!at) return std::nullopt;
+    return JsonNode(*at, *this, key, no_index);
+  }
   const auto it = j_->find(key);
   if (it == j_->end()) return std::nullopt;
   return member(*it, key);
 }
 
 std::size_t JsonNode::array_size() const {
-  if (!j_->is_array()) fail(std::string("must be an array (got ") + j_->type_name() + ")");
-  return j_->size();
+  const bool array = tape_ ? entry().kind == JsonTape::Kind::array : j_->is_array();
+  if (!array) fail(std::string("must be an array (got ") + type_name() + ")");
+  return tape_ ? entry().count : j_->size();
 }
 
-JsonNode JsonNode::item(std::size_t i) const { return JsonNode(j_->at(i), *this, {}, i); }
+JsonNode JsonNode::item(std::size_t i) const {
+  if (tape_) return JsonNode(tape_item(i), *this, {}, i);
+  return JsonNode(j_->at(i), *this, {}, i);
+}
 
 double JsonNode::number() const {
-  if (!j_->is_number()) fail(std::string("must be a number (got ") + j_->type_name() + ")");
-  const double v = j_->get<double>();
+  const bool is_number = tape_ ? entry().kind == JsonTape::Kind::number : j_->is_number();
+  if (!is_number) fail(std::string("must be a number (got ") + type_name() + ")");
+  const double v = tape_ ? entry().number : j_->get<double>();
   if (!std::isfinite(v)) fail("must be a finite number");
   return v;
 }
@@ -195,13 +237,48 @@ long JsonNode::integer(long min, long max) const {
 }
 
 std::string JsonNode::string() const {
-  if (!j_->is_string()) fail(std::string("must be a string (got ") + j_->type_name() + ")");
-  return j_->get<std::string>();
+  if (!is_string()) fail(std::string("must be a string (got ") + type_name() + ")");
+  return tape_ ? std::string(entry().text) : j_->get<std::string>();
+}
+
+bool JsonNode::boolean() const {
+  const bool is_boolean = tape_ ? entry().kind == JsonTape::Kind::boolean : j_->is_boolean();
+  if (!is_boolean) fail("must be true or false");
+  return tape_ ? entry().flag : j_->get<bool>();
+}
+
+void JsonNode::fixed(double* out, std::size_t n) const {
+  auto wrong_size = [&](std::size_t size) {
+    fail("must have " + std::to_string(n) + " numbers (got " + std::to_string(size) + ")");
+  };
+  if (!tape_) {
+    const std::vector<double> v = numbers();
+    if (v.size() != n) wrong_size(v.size());
+    std::copy(v.begin(), v.end(), out);
+    return;
+  }
+  // As numbers() then the size: each item checked first, but without a vector.
+  const std::size_t size = array_size();
+  std::uint32_t k = at_ + 1;
+  for (std::size_t i = 0; i < size; ++i, k = tape_->entries[k].end) {
+    const JsonTape::Entry& x = tape_->entries[k];
+    const double v = x.kind == JsonTape::Kind::number && std::isfinite(x.number) ? x.number : item(i).number();
+    if (i < n) out[i] = v;
+  }
+  if (size != n) wrong_size(size);
 }
 
 std::vector<double> JsonNode::numbers() const {
   const std::size_t n = array_size();
   std::vector<double> v(n);
+  if (tape_) {
+    std::uint32_t k = at_ + 1;
+    for (std::size_t i = 0; i < n; ++i, k = tape_->entries[k].end) {
+      const JsonTape::Entry& x = tape_->entries[k];
+      v[i] = x.kind == JsonTape::Kind::number && std::isfinite(x.number) ? x.number : item(i).number();
+    }
+    return v;
+  }
   for (std::size_t i = 0; i < n; ++i) {
     const nlohmann::json& x = (*j_)[i];
     // The item's own node (and path) only to report a bad number.

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "json_locations.hpp"
+#include "json_tape.hpp"
 
 namespace mbsflow {
 
@@ -21,11 +22,16 @@ struct JsonSource {
 // A child node refers to its parent and spells its path only when it reports an error (a
 // million-body model has tens of millions of fields): a child must not outlive its parent,
 // which holds for nodes made and used within one reading function.
+// A node views either a nlohmann-json value or an entry of a JsonTape (the fast reader's):
+// the getters behave the same on both.
 class JsonNode {
  public:
   JsonNode(const nlohmann::json& j, std::string path, const JsonSource& src) : j_(&j), src_(&src), root_path_(std::move(path)) {}
+  // An item of a top-level list (path "list[index]", spelt only for a message).
+  JsonNode(const JsonTape& tape, const char* list, std::size_t index, const JsonSource& src)
+      : tape_(&tape), src_(&src), key_(list), index_(index) {}
 
-  const nlohmann::json& json() const { return *j_; }
+  bool is_string() const;
   std::string path() const;
 
   [[noreturn]] void fail(const std::string& what) const;          // points at the value
@@ -34,7 +40,7 @@ class JsonNode {
   // Objects.
   void expect_object() const;
   void allow_only(std::initializer_list<const char*> keys) const;  // unknown field -> error
-  bool has(const char* key) const { return j_->is_object() && j_->contains(key); }
+  bool has(const char* key) const;
   JsonNode operator[](const char* key) const;                        // required member
   std::optional<JsonNode> find(const char* key) const;               // optional member
 
@@ -50,23 +56,31 @@ class JsonNode {
   long integer(long min, long max = max_integer) const;
   static constexpr long max_integer = 9'000'000'000'000'000;  // below 2^53: every one exact in a double
   std::string string() const;
+  bool boolean() const;  // true or false
   std::vector<double> numbers() const;  // array of finite numbers, any length
   template <std::size_t N>
   std::array<double, N> fixed() const {
-    const std::vector<double> v = numbers();
-    if (v.size() != N) fail("must have " + std::to_string(N) + " numbers (got " + std::to_string(v.size()) + ")");
     std::array<double, N> a{};
-    for (std::size_t i = 0; i < N; ++i) a[i] = v[i];
+    fixed(a.data(), N);
     return a;
   }
 
  private:
   JsonNode(const nlohmann::json& j, const JsonNode& parent, std::string_view key, std::size_t index)
       : j_(&j), src_(parent.src_), parent_(&parent), key_(key), index_(index) {}
+  JsonNode(std::uint32_t at, const JsonNode& parent, std::string_view key, std::size_t index)
+      : tape_(parent.tape_), at_(at), src_(parent.src_), parent_(&parent), key_(key), index_(index) {}
   static constexpr std::size_t no_index = static_cast<std::size_t>(-1);
   JsonNode member(const nlohmann::json& j, std::string_view key) const { return JsonNode(j, *this, key, no_index); }
+  const JsonTape::Entry& entry() const { return tape_->entries[at_]; }
+  void fixed(double* out, std::size_t n) const;  // exactly n finite numbers
+  const char* type_name() const { return tape_ ? tape_type_name(entry().kind) : j_->type_name(); }
+  std::optional<std::uint32_t> tape_member(std::string_view key) const;  // the value's entry
+  std::uint32_t tape_item(std::size_t i) const;
 
-  const nlohmann::json* j_;
+  const nlohmann::json* j_ = nullptr;  // or:
+  const JsonTape* tape_ = nullptr;
+  std::uint32_t at_ = 0;               // the entry in tape_
   const JsonSource* src_;
   const JsonNode* parent_ = nullptr;  // none: a root, whose path is root_path_
   std::string_view key_;              // a member's key (held by the parsed document or the caller)

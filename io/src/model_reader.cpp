@@ -8,14 +8,16 @@
 #include <cstdio>
 #include <fstream>
 #include <limits>
-#include <unordered_map>
 #include <sstream>
 
 #include "json_list_stream.hpp"
+#include "json_depth.hpp"
 #include "json_node.hpp"
 #include "mbsflow/error.hpp"
 #include "mbsflow/methods/stepper.hpp"
 #include "model_fields.hpp"
+#include "model_reading.hpp"
+#include "name_index.hpp"
 
 namespace mbsflow {
 namespace model_fields {
@@ -36,7 +38,7 @@ Quat unit_quat(const JsonNode& n) {
 }
 
 TimeFunction time_function(const JsonNode& n) {
-  if (n.json().is_string()) {
+  if (n.is_string()) {
     if (n.string() != "constant") n.fail("must be \"constant\" or an object with a \"type\" (got '" + n.string() + "')");
     return TimeFunction::constant(1.0);
   }
@@ -124,6 +126,13 @@ std::optional<JointType> kinematic_type(const std::string& name) {
   return std::nullopt;
 }
 
+// The names a NameIndex compares with: those of the bodies or joints read so far.
+template <class Item>
+struct NamesOf {
+  const std::vector<Item>& items;
+  std::string_view operator()(int i) const { return items[static_cast<std::size_t>(i)].name; }
+};
+
 // Reads a model as its text is parsed: each body, joint, load and driver as soon as it
 // is complete (joints, loads and drivers listed before the bodies wait for them), then
 // the rest of the document.
@@ -138,9 +147,18 @@ class Reader {
     if (list == bodies_list)
       body(JsonNode(j, item_path(list_names[list], index), src_));
     else if (bodies_read_)
-      dependent(list, index, j);
+      dependent(list, JsonNode(j, item_path(list_names[list], index), src_));
     else
       waiting_[list].push_back(std::move(j));
+  }
+  // The fast reader's items (read_model_fast), which comes to a list of joints, loads or
+  // drivers only once the bodies are read.
+  void item(std::size_t list, std::size_t index, const JsonTape& tape) {
+    const JsonNode n(tape, list_names[list], index, src_);
+    if (list == bodies_list)
+      body(n);
+    else
+      dependent(list, n);
   }
 
   void end(std::size_t list, std::size_t count) {
@@ -152,7 +170,7 @@ class Reader {
     // are never touched, so a model with fewer joints costs only address space.
     m_.joints.reserve(m_.bodies.size());
     for (std::size_t l = joints_list; l < list_count; ++l) {
-      for (std::size_t i = 0; i < waiting_[l].size(); ++i) dependent(l, i, waiting_[l][i]);
+      for (std::size_t i = 0; i < waiting_[l].size(); ++i) dependent(l, JsonNode(waiting_[l][i], item_path(list_names[l], i), src_));
       waiting_[l].clear();
     }
   }
@@ -174,8 +192,7 @@ class Reader {
   }
 
  private:
-  void dependent(std::size_t list, std::size_t index, const nlohmann::json& j) {
-    const JsonNode n(j, item_path(list_names[list], index), src_);
+  void dependent(std::size_t list, const JsonNode& n) {
     if (list == joints_list)
       joint(n);
     else if (list == loads_list)
@@ -191,8 +208,8 @@ class Reader {
     b.name = name.string();
     if (b.name.empty()) name.fail("must not be empty");
     if (b.name == "ground") name.fail("'ground' is reserved for the fixed world frame");
-    if (auto [it, fresh] = body_index_.emplace(b.name, static_cast<int>(m_.bodies.size())); !fresh)
-      name.fail("duplicate body name '" + b.name + "' (first at " + item_path(list_names[bodies_list], static_cast<std::size_t>(it->second)) + ")");
+    if (const int first = body_index_.insert(b.name, static_cast<int>(m_.bodies.size()), NamesOf<Body>{m_.bodies}); first >= 0)
+      name.fail("duplicate body name '" + b.name + "' (first at " + item_path(list_names[bodies_list], static_cast<std::size_t>(first)) + ")");
     b.mass = n["mass"].positive();
     b.inertia = inertia(n["inertia"]);
     b.position = vec3(n, "position");
@@ -208,9 +225,9 @@ class Reader {
       if (!ground_ok) n.fail("must name a body, not ground");
       return ground;
     }
-    const auto it = body_index_.find(name);
-    if (it == body_index_.end()) n.fail("unknown body '" + name + "'");
-    return it->second;
+    const int body = body_index_.find(name, NamesOf<Body>{m_.bodies});
+    if (body < 0) n.fail("unknown body '" + name + "'");
+    return body;
   }
 
   void joint(const JsonNode& n) {
@@ -232,8 +249,8 @@ class Reader {
     }
     const std::size_t index = m_.joints.size();
     j.name = n.find("name") ? n["name"].string() : "j" + std::to_string(index);
-    if (auto [it, fresh] = joint_index_.emplace(j.name, index); !fresh)
-      (n.find("name") ? n["name"] : n).fail("duplicate joint name '" + j.name + "' (first at " + item_path("joints", it->second) + ")");
+    if (const int first = joint_index_.insert(j.name, static_cast<int>(index), NamesOf<Joint>{m_.joints}); first >= 0)
+      (n.find("name") ? n["name"] : n).fail("duplicate joint name '" + j.name + "' (first at " + item_path("joints", static_cast<std::size_t>(first)) + ")");
     j.body1 = body_ref(n["body1"], true);
     j.body2 = body_ref(n["body2"], false);
     if (j.body1 == j.body2) n["body2"].fail("joins body '" + m_.bodies[static_cast<std::size_t>(j.body2)].name + "' to itself");
@@ -358,13 +375,133 @@ class Reader {
   std::array<std::vector<nlohmann::json>, list_count> waiting_;
   // Names to indices, so that each reference is found in constant time (a model of a
   // million bodies names as many in its joints).
-  std::unordered_map<std::string, int> body_index_;
-  std::unordered_map<std::string, std::size_t> joint_index_;
+  NameIndex body_index_, joint_index_;
+
 };
+
+// The items of the list whose '[' is at text[pos], each parsed into the tape and handed to
+// item(index, tape); the position after the list's ']', or npos where an item is outside
+// the fast reader's subset.
+template <class Item>
+std::size_t read_tape_list(std::string_view text, std::size_t pos, JsonTape& tape, Item item) {
+  constexpr int item_depth = max_json_depth - 2;  // inside the document and the list
+  pos = skip_json_space(text, pos + 1);
+  if (pos < text.size() && text[pos] == ']') return pos + 1;
+  for (std::size_t index = 0;; ++index) {
+    pos = parse_json_tape(text, pos, item_depth, tape);
+    if (pos == std::string_view::npos) return pos;
+    item(index, tape);
+    pos = skip_json_space(text, pos);
+    if (pos >= text.size()) return std::string_view::npos;
+    if (text[pos] == ']') return pos + 1;
+    if (text[pos] != ',') return std::string_view::npos;
+    pos = skip_json_space(text, pos + 1);
+  }
+}
+
+// Where the JSON value at text[pos] ends, by its first character and, for strings and
+// containers, quotes and brackets; npos if the text ends first. Not a check: nlohmann
+// parses what this delimits.
+std::size_t value_end(std::string_view text, std::size_t pos) {
+  int depth = 0;
+  bool in_string = false;
+  for (std::size_t i = pos; i < text.size(); ++i) {
+    const char c = text[i];
+    if (in_string) {
+      if (c == '\\')
+        ++i;
+      else if (c == '"' && (in_string = false, depth == 0))
+        return i + 1;
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == '{' || c == '[') {
+      ++depth;
+    } else if (c == '}' || c == ']') {
+      if (depth == 0) return i;  // a scalar's end
+      if (--depth == 0) return i + 1;
+    } else if (depth == 0 && (c == ',' || c == ' ' || c == '\n' || c == '\r' || c == '\t')) {
+      return i;
+    }
+  }
+  return depth == 0 && !in_string ? text.size() : std::string_view::npos;
+}
+
+// The model read by the fast reader (json_tape.hpp): the lists' items straight from the
+// text, the rest of the document (a few small members) by nlohmann. nullopt where the text
+// is outside the fast reader's subset or the model has an error: read_model_text then
+// reads it again the slow way, whose checks and messages are the reference.
+std::optional<Model> read_model_fast(std::string_view text, const JsonSource& src) try {
+  constexpr std::size_t npos = std::string_view::npos;
+  Reader reader(src);
+  JsonTape tape;
+  nlohmann::json rest = nlohmann::json::object();
+  std::vector<std::string_view> keys;
+  std::array<std::size_t, Reader::list_count> deferred;  // lists before the bodies: their '['
+  deferred.fill(npos);
+  bool bodies_read = false;
+  auto read_list = [&](std::size_t list, std::size_t pos) {
+    std::size_t count = 0;
+    pos = read_tape_list(text, pos, tape, [&](std::size_t index, const JsonTape& item) {
+      reader.item(list, index, item);
+      count = index + 1;
+    });
+    if (pos != npos) reader.end(list, count);
+    return pos;
+  };
+  std::size_t pos = skip_json_space(text, 0);
+  if (pos >= text.size() || text[pos] != '{') return std::nullopt;
+  pos = skip_json_space(text, pos + 1);
+  while (true) {
+    std::string_view key;
+    pos = parse_plain_json_string(text, pos, key);
+    if (pos == npos || std::find(keys.begin(), keys.end(), key) != keys.end()) return std::nullopt;
+    keys.push_back(key);
+    pos = skip_json_space(text, pos);
+    if (pos >= text.size() || text[pos] != ':') return std::nullopt;
+    pos = skip_json_space(text, pos + 1);
+    const auto list = std::find(Reader::list_names.begin(), Reader::list_names.end(), key);
+    if (list != Reader::list_names.end() && pos < text.size() && text[pos] == '[') {
+      const auto l = static_cast<std::size_t>(list - Reader::list_names.begin());
+      rest[std::string(key)] = nlohmann::json::array();
+      if (l != Reader::bodies_list && !bodies_read) {
+        deferred[l] = pos;
+        pos = read_tape_list(text, pos, tape, [](std::size_t, const JsonTape&) {});
+      } else {
+        pos = read_list(l, pos);
+      }
+      if (l == Reader::bodies_list && pos != npos) {
+        bodies_read = true;
+        for (std::size_t d = Reader::joints_list; d < Reader::list_count; ++d)
+          if (deferred[d] != npos && read_list(d, deferred[d]) == npos) return std::nullopt;
+      }
+    } else {
+      const std::size_t end = value_end(text, pos);
+      if (end == npos || json_too_deep(text.substr(pos, end - pos), max_json_depth - 1) != npos) return std::nullopt;
+      rest[std::string(key)] = nlohmann::json::parse(text.substr(pos, end - pos));
+      pos = end;
+    }
+    if (pos == npos) return std::nullopt;
+    pos = skip_json_space(text, pos);
+    if (pos >= text.size()) return std::nullopt;
+    if (text[pos] == '}') break;
+    if (text[pos] != ',') return std::nullopt;
+    pos = skip_json_space(text, pos + 1);
+  }
+  if (skip_json_space(text, pos + 1) != text.size() || !bodies_read) return std::nullopt;
+  return reader.finish(rest);
+} catch (const InputError&) {
+  return std::nullopt;
+} catch (const nlohmann::json::exception&) {
+  return std::nullopt;
+}
 
 }  // namespace
 
-Model read_model_text(const std::string& text, const std::string& name) {
+std::optional<Model> read_model_fast(const std::string& text, const std::string& name) {
+  return read_model_fast(text, JsonSource{name, JsonLocations(text)});
+}
+
+Model read_model_reference(const std::string& text, const std::string& name) {
   const JsonSource src{name, JsonLocations(text)};
   Reader reader(src);
   JsonListHandlers lists;
@@ -372,6 +509,11 @@ Model read_model_text(const std::string& text, const std::string& name) {
   lists.item = [&](std::size_t list, std::size_t i, nlohmann::json&& item) { reader.item(list, i, std::move(item)); };
   lists.end = [&](std::size_t list, std::size_t count) { reader.end(list, count); };
   return reader.finish(parse_json_streaming_lists(text, name, lists));
+}
+
+Model read_model_text(const std::string& text, const std::string& name) {
+  if (std::optional<Model> m = read_model_fast(text, name)) return std::move(*m);
+  return read_model_reference(text, name);
 }
 
 std::string read_model_file_text(const std::string& path) { return read_input_file(path, "model file", max_model_bytes); }
