@@ -91,7 +91,7 @@ bool has_analytic_jacobian(const Model& m, std::string* why) {
 bool MultibodySystem::has_analytic_jacobian(std::string* why) const {
   if (active_ != layout_.bodies) return no_jacobian(why, "the system is a submodel (its ghost bodies' states come from other submodels)");
   if (!mbsflow::has_analytic_jacobian(model(), why)) return false;
-  for (const auto& e : elements_)  // added after construction
+  for (const auto& e : compiled_->elements)  // added after construction
     if (!e->constant_wrench()) return no_jacobian(why, "the model has user force elements");
   return true;
 }
@@ -103,7 +103,7 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
   std::fill_n(jac.valuePtr(), jac.nonZeros(), 0.0);
   const Eigen::Index n = layout_.bodies;
   // A kinematics index whose state is a variable: not ground (index n), not driven.
-  auto free = [&](int k) { return k < n && driver_of_body_[static_cast<std::size_t>(k)] < 0; };
+  auto free = [&](int k) { return k < n && compiled_->driver_of_body[static_cast<std::size_t>(k)] < 0; };
   auto constant_frame = [&](int k) {
     BodyFrameT<Dual> f;
     f.rot = rot_[static_cast<std::size_t>(k)].cast<Dual>();
@@ -116,12 +116,12 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
 
   // d (wrench of joint k) / d (states of its body1, then of its body2).
   using JointDerivatives = Eigen::Matrix<double, 9, 2 * body_states>;
-  jacobian_scratch_.resize(joints_.size() * JointDerivatives::SizeAtCompileTime);
+  jacobian_scratch_.resize(compiled_->joints.size() * JointDerivatives::SizeAtCompileTime);
   auto joint_derivatives = [&](std::size_t k) {
     return Eigen::Map<JointDerivatives>(jacobian_scratch_.data() + k * JointDerivatives::SizeAtCompileTime);
   };
-  for (std::size_t k = 0; k < joints_.size(); ++k) {
-    const CompiledJoint& j = joints_[k];
+  for (std::size_t k = 0; k < compiled_->joints.size(); ++k) {
+    const CompiledJoint& j = compiled_->joints[k];
     const BodyFrameT<Dual> a = free(j.a) ? seeded_frame(y, layout_, j.a, 0) : constant_frame(j.a);
     const BodyFrameT<Dual> b = free(j.b) ? seeded_frame(y, layout_, j.b, body_states) : constant_frame(j.b);
     Eigen::Matrix<Dual, 9, 1> out;
@@ -144,17 +144,17 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
     const Matrix3T<Dual> rot = rotation_matrix<Dual>(own.q);
     // Loads: through the orientation only.
     Vector3T<Dual> load_force = Vector3T<Dual>::Zero(), load_torque = Vector3T<Dual>::Zero();
-    for (int p = load_start_[bi]; p < load_start_[bi + 1]; ++p) {
-      const Load& l = model().loads[static_cast<std::size_t>(load_index_[static_cast<std::size_t>(p)])];
+    for (int p = compiled_->load_start[bi]; p < compiled_->load_start[bi + 1]; ++p) {
+      const Load& l = model().loads[static_cast<std::size_t>(compiled_->load_index[static_cast<std::size_t>(p)])];
       add_load<Dual>(l, evaluate(l.function, t).value, rot, load_force, load_torque);
     }
     Block6& self = block_of(static_cast<int>(i));
     self.topRows<3>() = derivatives<3>(load_force, 0);
     self.bottomRows<3>() = derivatives<3>(load_torque, 0);
     // Joints: body1 gets minus the force and the torque rows 3-5, body2 the force and rows 6-8.
-    for (int p = incidence_start_[bi]; p < incidence_start_[bi + 1]; ++p) {
-      const int code = incidence_[static_cast<std::size_t>(p)];
-      const CompiledJoint& j = joints_[static_cast<std::size_t>(code / 2)];
+    for (int p = compiled_->incidence_start[bi]; p < compiled_->incidence_start[bi + 1]; ++p) {
+      const int code = compiled_->incidence[static_cast<std::size_t>(p)];
+      const CompiledJoint& j = compiled_->joints[static_cast<std::size_t>(code / 2)];
       const auto d = joint_derivatives(static_cast<std::size_t>(code / 2));
       const bool body2 = code & 1;
       for (int side = 0; side < 2; ++side) {
@@ -173,12 +173,12 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
     // gyroscopic term through the body's own quaternion and angular velocity.
     Eigen::Vector3d force, torque;
     applied_wrench(i, t, force, torque);
-    const Eigen::Matrix3d to_w = inv_inertia_[bi] * rot_[bi].transpose();
+    const Eigen::Matrix3d to_w = compiled_->inv_inertia[bi] * rot_[bi].transpose();
     const Vector3T<Dual> w_rate =
-        angular_acceleration<Dual>(rot, own.w, Vector3T<Dual>(torque.cast<Dual>()), inertia_[bi], inv_inertia_[bi]);
+        angular_acceleration<Dual>(rot, own.w, Vector3T<Dual>(torque.cast<Dual>()), compiled_->inertia[bi], compiled_->inv_inertia[bi]);
     for (const auto& [b, m] : blocks) {
       Block6 rows;
-      rows.topRows<3>() = inv_mass_[bi] * m.topRows<3>();
+      rows.topRows<3>() = compiled_->inv_mass[bi] * m.topRows<3>();
       rows.bottomRows<3>() = to_w * m.bottomRows<3>();
       if (b == i) rows.bottomRows<3>() += derivatives<3>(w_rate, 0);
       for (int c = 0; c < body_states; ++c) {

@@ -107,8 +107,8 @@ JointGeometry joint_geometry(const Joint& j) {
   g.fa = rotation_matrix(Eigen::Vector4d(j.frame1[0], j.frame1[1], j.frame1[2], j.frame1[3]));
   g.fb = rotation_matrix(Eigen::Vector4d(j.frame2[0], j.frame2[1], j.frame2[2], j.frame2[3]));
   g.length = j.rest_length;
-  g.motor = j.motor;
-  g.limits = j.limits;
+  g.motor = j.motor.get();
+  g.limits = j.limits.get();
   return g;
 }
 

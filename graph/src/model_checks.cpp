@@ -103,12 +103,12 @@ void check_joint(const Joint& j, int bodies, const std::string& where) {
       if (t.deflection.size() < 2) bad(where + " tables", "a table needs at least 2 points");
       increasing(t.deflection, t.force, where + " tables");
     }
-  check_function(j.motor.function, where + " motor");
-  if (j.limits.active) {
-    finite(std::array<double, 2>{j.limits.lower, j.limits.upper}, where + " limits");
-    if (!(j.limits.upper > j.limits.lower)) bad(where + " limits", "upper must be > lower");
-    positive(j.limits.stiffness, where + " limits stiffness");
-    non_negative(std::array<double, 1>{j.limits.damping}, where + " limits damping");
+  check_function(j.motor->function, where + " motor");
+  if (j.limits->active) {
+    finite(std::array<double, 2>{j.limits->lower, j.limits->upper}, where + " limits");
+    if (!(j.limits->upper > j.limits->lower)) bad(where + " limits", "upper must be > lower");
+    positive(j.limits->stiffness, where + " limits stiffness");
+    non_negative(std::array<double, 1>{j.limits->damping}, where + " limits damping");
   }
 }
 

@@ -60,10 +60,10 @@ void MultibodySystem::compile_constraints() {
   for (std::size_t j = 0; j < model().joints.size(); ++j) {
     const Joint& joint = model().joints[j];
     if (!is_kinematic(joint.type)) continue;
-    CompiledJoint& c = joints_[j];
+    CompiledJoint& c = compiled_->joints[j];
     c.kinematic = static_cast<int>(k.geometry.size());
     c.rigid = joint.rigid;
-    c.applies_force = !joint.rigid || joint.limits.active || joint.motor.kind == JointMotor::Kind::effort;
+    c.applies_force = !joint.rigid || joint.limits->active || joint.motor->kind == JointMotor::Kind::effort;
     k.geometry.push_back(joint_geometry(joint));
     if (!joint.rigid) continue;
     touched[static_cast<std::size_t>(joint.body2)] = 1;
@@ -97,7 +97,7 @@ void MultibodySystem::compile_constraints() {
       return static_cast<int>(std::lower_bound(list.begin(), list.end(), body) - list.begin());
     };
     ClusterJoint cj{static_cast<int>(j), slot(joint.body1), slot(joint.body2), rows[c],
-                    constraint_rows(k.geometry[static_cast<std::size_t>(joints_[j].kinematic)])};
+                    constraint_rows(k.geometry[static_cast<std::size_t>(compiled_->joints[j].kinematic)])};
     rows[c] += cj.rows;
     joints[c].push_back(cj);
   }
@@ -133,7 +133,7 @@ const std::vector<int>& MultibodySystem::cluster_bodies(int c) const {
 int MultibodySystem::cluster_of(int body) const { return constraints_->cluster_of_body[static_cast<std::size_t>(body)]; }
 
 void MultibodySystem::kinematic_joint_force(std::size_t k) {
-  const CompiledJoint& j = joints_[k];
+  const CompiledJoint& j = compiled_->joints[k];
   auto out = joint_out_.col(static_cast<Eigen::Index>(k));
   out.setZero();
   if (!j.applies_force) return;
@@ -205,7 +205,7 @@ void MultibodySystem::solve_cluster(int c, double t, const Eigen::VectorXd& y, E
     const int i = bodies[s];
     const auto bi = static_cast<std::size_t>(i);
     applied_wrench(i, t, k.force[s], k.torque[s]);
-    if (const int d = driver_of_body_[bi]; d >= 0) {
+    if (const int d = compiled_->driver_of_body[bi]; d >= 0) {
       rc.inv_mass[s] = 0.0;
       rc.inv_inertia[s].setZero();
       const Driver& drv = model().drivers[static_cast<std::size_t>(d)];
@@ -215,14 +215,14 @@ void MultibodySystem::solve_cluster(int c, double t, const Eigen::VectorXd& y, E
     }
     const Eigen::Matrix3d& r = rot_[bi];
     const Eigen::Vector3d w = y.segment<3>(layout_.angular_velocity(i));
-    rc.inv_mass[s] = inv_mass_[bi];
-    rc.inv_inertia[s] = r * inv_inertia_[bi] * r.transpose();
-    accel[s].head<3>() = inv_mass_[bi] * k.force[s];
-    accel[s].tail<3>() = r * (inv_inertia_[bi] * (r.transpose() * k.torque[s] - w.cross(inertia_[bi] * w)));
+    rc.inv_mass[s] = compiled_->inv_mass[bi];
+    rc.inv_inertia[s] = r * compiled_->inv_inertia[bi] * r.transpose();
+    accel[s].head<3>() = compiled_->inv_mass[bi] * k.force[s];
+    accel[s].tail<3>() = r * (compiled_->inv_inertia[bi] * (r.transpose() * k.torque[s] - w.cross(compiled_->inertia[bi] * w)));
   }
   Eigen::VectorXd& lambda = k.lambda[static_cast<std::size_t>(c)];
   for (const ClusterJoint& cj : rc.joints()) {
-    const CompiledJoint& j = joints_[static_cast<std::size_t>(cj.joint)];
+    const CompiledJoint& j = compiled_->joints[static_cast<std::size_t>(cj.joint)];
     const BodyMotion a = motion_at(j.a);
     const BodyMotion b = motion_at(j.b);
     ConstraintRow* rows = rc.rows.data() + cj.first_row;
@@ -267,7 +267,7 @@ void MultibodySystem::project_cluster(int c, double t, Eigen::VectorXd& y) const
   auto evaluate_rows = [&](bool masses) {
     double worst = 0.0;
     for (const ClusterJoint& cj : rc.joints()) {
-      const CompiledJoint& j = joints_[static_cast<std::size_t>(cj.joint)];
+      const CompiledJoint& j = compiled_->joints[static_cast<std::size_t>(cj.joint)];
       ConstraintRow* rows = rc.rows.data() + cj.first_row;
       evaluate_constraint(k.geometry[static_cast<std::size_t>(j.kinematic)], state_motion(layout_, y, j.a),
                           state_motion(layout_, y, j.b), t, rows);
@@ -277,10 +277,10 @@ void MultibodySystem::project_cluster(int c, double t, Eigen::VectorXd& y) const
     for (std::size_t s = 0; masses && s < nb; ++s) {
       const int i = bodies[s];
       const auto bi = static_cast<std::size_t>(i);
-      const bool driven = driver_of_body_[bi] >= 0;
+      const bool driven = compiled_->driver_of_body[bi] >= 0;
       const Eigen::Matrix3d r = rotation_matrix(y.segment<4>(layout_.orientation(i)));
-      rc.inv_mass[s] = driven ? 0.0 : inv_mass_[bi];
-      rc.inv_inertia[s] = driven ? Eigen::Matrix3d::Zero() : Eigen::Matrix3d(r * inv_inertia_[bi] * r.transpose());
+      rc.inv_mass[s] = driven ? 0.0 : compiled_->inv_mass[bi];
+      rc.inv_inertia[s] = driven ? Eigen::Matrix3d::Zero() : Eigen::Matrix3d(r * compiled_->inv_inertia[bi] * r.transpose());
     }
     return worst;
   };
@@ -306,7 +306,7 @@ void MultibodySystem::project_cluster(int c, double t, Eigen::VectorXd& y) const
   }
   // Velocities: remove the part that violates phi' = 0.
   for (const ClusterJoint& cj : rc.joints()) {
-    const CompiledJoint& j = joints_[static_cast<std::size_t>(cj.joint)];
+    const CompiledJoint& j = compiled_->joints[static_cast<std::size_t>(cj.joint)];
     const Row12 v = velocities(state_motion(layout_, y, j.a), state_motion(layout_, y, j.b));
     for (int r = 0; r < cj.rows; ++r) {
       const ConstraintRow& row = rc.rows[static_cast<std::size_t>(cj.first_row + r)];
@@ -327,8 +327,8 @@ void MultibodySystem::project_cluster(int c, double t, Eigen::VectorXd& y) const
 double MultibodySystem::constraint_violation(double t, const Eigen::VectorXd& y, int* joint) const {
   double worst = 0.0;
   std::array<ConstraintRow, max_joint_rows> rows;
-  for (std::size_t k = 0; k < joints_.size(); ++k) {
-    const CompiledJoint& j = joints_[k];
+  for (std::size_t k = 0; k < compiled_->joints.size(); ++k) {
+    const CompiledJoint& j = compiled_->joints[k];
     if (j.kinematic < 0 || !j.rigid) continue;
     const JointGeometry& g = constraints_->geometry[static_cast<std::size_t>(j.kinematic)];
     evaluate_constraint(g, state_motion(layout_, y, j.a), state_motion(layout_, y, j.b), t, rows.data());
@@ -349,7 +349,7 @@ void MultibodySystem::add_reactions(Eigen::VectorXd& out) {
       Eigen::Matrix<double, 9, 1> w = Eigen::Matrix<double, 9, 1>::Zero();
       for (int r = 0; r < cj.rows; ++r)
         add_row_wrench(rc.rows[static_cast<std::size_t>(cj.first_row + r)], k.lambda[c][cj.first_row + r], w);
-      const CompiledJoint& j = joints_[static_cast<std::size_t>(cj.joint)];
+      const CompiledJoint& j = compiled_->joints[static_cast<std::size_t>(cj.joint)];
       // A position or velocity motor is the joint's last row: its multiplier is the effort.
       const JointMotor::Kind motor = k.geometry[static_cast<std::size_t>(j.kinematic)].motor.kind;
       if (motor != JointMotor::Kind::none && motor != JointMotor::Kind::effort)

@@ -57,18 +57,18 @@ MultibodySystem::MultibodySystem(std::shared_ptr<const Model> shared, int active
   active_ = std::clamp(active, 0, n);
   gravity_ = vec(model.gravity);
   // Exact sizes: growth by doubling would hold up to twice these (a million bodies).
-  mass_.reserve(model.bodies.size());
-  inv_mass_.reserve(model.bodies.size());
-  inertia_.reserve(model.bodies.size());
-  inv_inertia_.reserve(model.bodies.size());
-  initial_position_.reserve(model.bodies.size());
-  joints_.reserve(model.joints.size());
+  compiled_->mass.reserve(model.bodies.size());
+  compiled_->inv_mass.reserve(model.bodies.size());
+  compiled_->inertia.reserve(model.bodies.size());
+  compiled_->inv_inertia.reserve(model.bodies.size());
+  compiled_->initial_position.reserve(model.bodies.size());
+  compiled_->joints.reserve(model.joints.size());
   for (const Body& b : model.bodies) {
-    mass_.push_back(b.mass);
-    inv_mass_.push_back(1.0 / b.mass);
-    inertia_.push_back(inertia_matrix(b.inertia));
-    inv_inertia_.push_back(inertia_.back().inverse());
-    initial_position_.push_back(vec(b.position));
+    compiled_->mass.push_back(b.mass);
+    compiled_->inv_mass.push_back(1.0 / b.mass);
+    compiled_->inertia.push_back(inertia_matrix(b.inertia));
+    compiled_->inv_inertia.push_back(compiled_->inertia.back().inverse());
+    compiled_->initial_position.push_back(vec(b.position));
   }
   auto kin = [n](int body) { return body == ground ? n : body; };
   for (const Joint& j : model.joints) {
@@ -91,25 +91,25 @@ MultibodySystem::MultibodySystem(std::shared_ptr<const Model> shared, int active
     c.preload_torque = {j.preload[3], j.preload[4], j.preload[5]};
     c.rest_length = j.rest_length;
     if (j.tables.any()) {
-      c.tables = static_cast<int>(tables_.size());
-      tables_.push_back(j.tables.all());
+      c.tables = static_cast<int>(compiled_->tables.size());
+      compiled_->tables.push_back(j.tables.all());
     }
-    joints_.push_back(c);
+    compiled_->joints.push_back(c);
   }
   const int nj = static_cast<int>(model.joints.size());
   build_csr(n, nj, [&](int k, auto& out) {
     const Joint& j = model.joints[static_cast<std::size_t>(k)];
     if (j.body1 != ground) out.emplace_back(j.body1, 2 * k);
     out.emplace_back(j.body2, 2 * k + 1);
-  }, incidence_start_, incidence_);
+  }, compiled_->incidence_start, compiled_->incidence);
   build_csr(n, static_cast<int>(model.loads.size()), [&](int k, auto& out) {
     out.emplace_back(model.loads[static_cast<std::size_t>(k)].body, k);
-  }, load_start_, load_index_);
-  element_start_.assign(static_cast<std::size_t>(n) + 1, 0);
-  driver_of_body_.assign(static_cast<std::size_t>(n), -1);
+  }, compiled_->load_start, compiled_->load_index);
+  compiled_->element_start.assign(static_cast<std::size_t>(n) + 1, 0);
+  compiled_->driver_of_body.assign(static_cast<std::size_t>(n), -1);
   drive_memo_.assign(model.drivers.size(), DriveMemo{});
   for (std::size_t k = 0; k < model.drivers.size(); ++k)
-    driver_of_body_[static_cast<std::size_t>(model.drivers[k].body)] = static_cast<int>(k);
+    compiled_->driver_of_body[static_cast<std::size_t>(model.drivers[k].body)] = static_cast<int>(k);
 
   rot_.assign(static_cast<std::size_t>(n) + 1, Eigen::Matrix3d::Identity());
   pos_ = Eigen::Matrix3Xd::Zero(3, n + 1);
@@ -199,12 +199,12 @@ void MultibodySystem::kinematics_of(double t, const Eigen::VectorXd& y, std::spa
   for (int i : bodies) {
     body_kinematics(i, y);
     // The last driver of a body wins, as in update_kinematics.
-    if (const int d = driver_of_body_[static_cast<std::size_t>(i)]; d >= 0) drive(model().drivers[static_cast<std::size_t>(d)], t);
+    if (const int d = compiled_->driver_of_body[static_cast<std::size_t>(i)]; d >= 0) drive(model().drivers[static_cast<std::size_t>(d)], t);
   }
 }
 
 [[gnu::always_inline]] inline void MultibodySystem::joint_force(std::size_t k) {
-  const CompiledJoint& j = joints_[k];
+  const CompiledJoint& j = compiled_->joints[k];
   if (j.kinematic >= 0) {
     kinematic_joint_force(k);
     return;
@@ -213,12 +213,12 @@ void MultibodySystem::kinematics_of(double t, const Eigen::VectorXd& y, std::spa
 }
 
 void MultibodySystem::compute_joint_forces() {
-  for (std::size_t k = 0; k < joints_.size(); ++k) joint_force(k);
-  if (elements_.empty()) return;
+  for (std::size_t k = 0; k < compiled_->joints.size(); ++k) joint_force(k);
+  if (compiled_->elements.empty()) return;
   const Kinematics k = kinematics();
-  for (std::size_t e = 0; e < elements_.size(); ++e) {
-    const std::size_t first = element_first_[e], count = element_first_[e + 1] - first;
-    elements_[e]->evaluate(time_, k, std::span<Wrench>(element_out_.data() + first, count));
+  for (std::size_t e = 0; e < compiled_->elements.size(); ++e) {
+    const std::size_t first = compiled_->element_first[e], count = compiled_->element_first[e + 1] - first;
+    compiled_->elements[e]->evaluate(time_, k, std::span<Wrench>(element_out_.data() + first, count));
   }
 }
 
@@ -230,21 +230,22 @@ void MultibodySystem::add_force_element(std::shared_ptr<const ForceElement> elem
   const std::vector<int> bodies = element->bodies();
   for (int b : bodies)
     if (b < 0 || b >= layout_.bodies) throw InputError("force element: body index " + std::to_string(b) + " out of range");
-  if (element_first_.empty()) element_first_.push_back(0);
+  if (compiled_.use_count() > 1) compiled_ = std::make_shared<Compiled>(*compiled_);  // shared with a copy
+  if (compiled_->element_first.empty()) compiled_->element_first.push_back(0);
   const std::size_t first = element_out_.size();
   element_out_.resize(first + bodies.size());
-  element_first_.push_back(element_out_.size());
-  elements_.push_back(std::move(element));
+  compiled_->element_first.push_back(element_out_.size());
+  compiled_->elements.push_back(std::move(element));
   // Rebuild the per-body slot lists, in element order.
   const int n = static_cast<int>(layout_.bodies);
   std::vector<int> body_of_slot(element_out_.size());
-  for (std::size_t e = 0; e < elements_.size(); ++e) {
-    const std::vector<int> b = elements_[e]->bodies();
-    for (std::size_t i = 0; i < b.size(); ++i) body_of_slot[element_first_[e] + i] = b[i];
+  for (std::size_t e = 0; e < compiled_->elements.size(); ++e) {
+    const std::vector<int> b = compiled_->elements[e]->bodies();
+    for (std::size_t i = 0; i < b.size(); ++i) body_of_slot[compiled_->element_first[e] + i] = b[i];
   }
   build_csr(n, static_cast<int>(body_of_slot.size()), [&](int slot, auto& out) {
     out.emplace_back(body_of_slot[static_cast<std::size_t>(slot)], slot);
-  }, element_start_, element_slot_);
+  }, compiled_->element_start, compiled_->element_slot);
 }
 
 void MultibodySystem::joint_wrenches(double t, const Eigen::VectorXd& y, Eigen::VectorXd& out) {
@@ -255,9 +256,9 @@ void MultibodySystem::joint_wrenches(double t, const Eigen::VectorXd& y, Eigen::
     update_kinematics(t, y);
     compute_joint_forces();
   }
-  out.resize(6 * static_cast<Eigen::Index>(joints_.size()));
-  for (std::size_t k = 0; k < joints_.size(); ++k) {
-    const CompiledJoint& j = joints_[k];
+  out.resize(6 * static_cast<Eigen::Index>(compiled_->joints.size()));
+  for (std::size_t k = 0; k < compiled_->joints.size(); ++k) {
+    const CompiledJoint& j = compiled_->joints[k];
     const auto col = joint_out_.col(static_cast<Eigen::Index>(k));
     const Eigen::Vector3d force = col.segment<3>(0);
     const Eigen::Vector3d arm = rot_[static_cast<std::size_t>(j.b)] * j.pb;  // centre of body2 to its point
@@ -272,14 +273,14 @@ void MultibodySystem::joint_wrenches(double t, const Eigen::VectorXd& y, Eigen::
 void MultibodySystem::applied_wrench(Eigen::Index i, double t, Eigen::Vector3d& force, Eigen::Vector3d& torque) const {
   const auto bi = static_cast<std::size_t>(i);
   const Eigen::Matrix3d& r = rot_[bi];
-  force = mass_[bi] * gravity_;
+  force = compiled_->mass[bi] * gravity_;
   torque = Eigen::Vector3d::Zero();
-  for (int p = load_start_[bi]; p < load_start_[bi + 1]; ++p) {
-    const Load& l = model().loads[static_cast<std::size_t>(load_index_[static_cast<std::size_t>(p)])];
+  for (int p = compiled_->load_start[bi]; p < compiled_->load_start[bi + 1]; ++p) {
+    const Load& l = model().loads[static_cast<std::size_t>(compiled_->load_index[static_cast<std::size_t>(p)])];
     add_load<double>(l, evaluate(l.function, t).value, r, force, torque);
   }
-  for (int p = incidence_start_[bi]; p < incidence_start_[bi + 1]; ++p) {
-    const int code = incidence_[static_cast<std::size_t>(p)];
+  for (int p = compiled_->incidence_start[bi]; p < compiled_->incidence_start[bi + 1]; ++p) {
+    const int code = compiled_->incidence[static_cast<std::size_t>(p)];
     const auto col = joint_out_.col(code / 2);
     if (code & 1) {
       force += col.segment<3>(0);
@@ -289,8 +290,8 @@ void MultibodySystem::applied_wrench(Eigen::Index i, double t, Eigen::Vector3d& 
       torque += col.segment<3>(3);
     }
   }
-  for (int p = element_start_[bi]; p < element_start_[bi + 1]; ++p) {
-    const Wrench& w = element_out_[static_cast<std::size_t>(element_slot_[static_cast<std::size_t>(p)])];
+  for (int p = compiled_->element_start[bi]; p < compiled_->element_start[bi + 1]; ++p) {
+    const Wrench& w = element_out_[static_cast<std::size_t>(compiled_->element_slot[static_cast<std::size_t>(p)])];
     force += w.force;
     torque += w.torque;
   }
@@ -299,7 +300,7 @@ void MultibodySystem::applied_wrench(Eigen::Index i, double t, Eigen::Vector3d& 
 void MultibodySystem::write_derivative(Eigen::Index i, double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt,
                                        const Eigen::Vector3d& force, const Eigen::Vector3d& torque) const {
   const auto bi = static_cast<std::size_t>(i);
-  const int drv = driver_of_body_[bi];
+  const int drv = compiled_->driver_of_body[bi];
   if (drv >= 0) {
     const Driver& d = model().drivers[static_cast<std::size_t>(drv)];
     const DriveMemo& memo = drive_memo_[static_cast<std::size_t>(drv)];
@@ -315,8 +316,8 @@ void MultibodySystem::write_derivative(Eigen::Index i, double t, const Eigen::Ve
   const Eigen::Vector3d w = y.segment<3>(layout_.angular_velocity(i));
   const Eigen::Vector4d q = y.segment<4>(layout_.orientation(i));
   dydt.segment<3>(layout_.position(i)) = y.segment<3>(layout_.velocity(i));
-  dydt.segment<3>(layout_.velocity(i)) = inv_mass_[bi] * force;
-  dydt.segment<3>(layout_.angular_velocity(i)) = angular_acceleration<double>(rot_[bi], w, torque, inertia_[bi], inv_inertia_[bi]);
+  dydt.segment<3>(layout_.velocity(i)) = compiled_->inv_mass[bi] * force;
+  dydt.segment<3>(layout_.angular_velocity(i)) = angular_acceleration<double>(rot_[bi], w, torque, compiled_->inertia[bi], compiled_->inv_inertia[bi]);
   dydt.segment<4>(layout_.orientation(i)) = quaternion_rate<double>(q, w);
 }
 
@@ -371,7 +372,7 @@ void MultibodySystem::after_step(double t, Eigen::VectorXd& y) const {
 void MultibodySystem::after_step_of(double t, Eigen::VectorXd& y, std::span<const int> bodies) const {
   for (int i : bodies) {
     y.segment<4>(layout_.orientation(i)).normalize();
-    if (const int d = driver_of_body_[static_cast<std::size_t>(i)]; d >= 0) impose(model().drivers[static_cast<std::size_t>(d)], t, y);
+    if (const int d = compiled_->driver_of_body[static_cast<std::size_t>(i)]; d >= 0) impose(model().drivers[static_cast<std::size_t>(d)], t, y);
   }
   for (int c : clusters_of(bodies)) project_cluster(c, t, y);
 }
@@ -390,7 +391,7 @@ double MultibodySystem::elastic_energy(const CompiledJoint& j) const {
   for (int axis = 0; axis < 6; ++axis) {
     const double x = axis < 3 ? def.d[axis] : theta[axis - 3];
     const double k = axis < 3 ? j.kt[axis] : j.kr[axis - 3];
-    const ForceTable* table = j.tables >= 0 ? &tables_[static_cast<std::size_t>(j.tables)][static_cast<std::size_t>(axis)] : nullptr;
+    const ForceTable* table = j.tables >= 0 ? &compiled_->tables[static_cast<std::size_t>(j.tables)][static_cast<std::size_t>(axis)] : nullptr;
     e += (table && !table->empty()) ? table_energy(*table, x) : 0.5 * k * x * x;
   }
   return e;
@@ -403,12 +404,12 @@ Energy MultibodySystem::energy(double t, const Eigen::VectorXd& y) {
     const auto bi = static_cast<std::size_t>(i);
     const double m = model().bodies[bi].mass;
     const Eigen::Vector3d w = y.segment<3>(layout_.angular_velocity(i));
-    e.kinetic += 0.5 * m * vel_.col(i).squaredNorm() + 0.5 * w.dot(inertia_[bi] * w);
+    e.kinetic += 0.5 * m * vel_.col(i).squaredNorm() + 0.5 * w.dot(compiled_->inertia[bi] * w);
     e.gravity -= m * gravity_.dot(pos_.col(i));
   }
-  for (const CompiledJoint& j : joints_) e.elastic += elastic_energy(j);
+  for (const CompiledJoint& j : compiled_->joints) e.elastic += elastic_energy(j);
   const Kinematics k = kinematics();
-  for (const auto& element : elements_) e.elastic += element->energy(t, k);
+  for (const auto& element : compiled_->elements) e.elastic += element->energy(t, k);
   return e;
 }
 

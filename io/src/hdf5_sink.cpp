@@ -238,7 +238,7 @@ void Hdf5Sink::lay_out(File& f, const MultibodySystem& system, bool make) {
   if (fields_.energy) f.energy = series(energy_dataset, {3}, 1024, energy_unit);
   if (fields_.energy) f.body_energy = series(body_energy_dataset, {n, 2}, rows, energy_unit);
   if (fields_.joint_force && joints > 0) f.joint_force = series(joint_force_dataset, {joints, 6}, rows, joint_force_unit);
-  const bool motors = std::any_of(m.joints.begin(), m.joints.end(), [](const Joint& j) { return j.motor.kind != JointMotor::Kind::none; });
+  const bool motors = std::any_of(m.joints.begin(), m.joints.end(), [](const Joint& j) { return j.motor->kind != JointMotor::Kind::none; });
   if (f.joint_force && motors) f.motor_effort = series(motor_effort_dataset, {joints, 1}, rows, motor_effort_unit);
   if (fields_.body[0] && joints > 0) f.attachment = series(joint_attachment_dataset, {joints, 6}, rows, joint_attachment_unit);
 }

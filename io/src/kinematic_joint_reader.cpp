@@ -78,16 +78,17 @@ void motor(const JsonNode& n, Joint& j) {
   n.allow_only({"type", "function"});
   const JsonNode type = n["type"];
   const std::string t = type.string();
-  if (t == "position") j.motor.kind = JointMotor::Kind::position;
-  else if (t == "velocity") j.motor.kind = JointMotor::Kind::velocity;
-  else if (t == "effort") j.motor.kind = JointMotor::Kind::effort;
+  JointMotor::Kind kind = JointMotor::Kind::none;
+  if (t == "position") kind = JointMotor::Kind::position;
+  else if (t == "velocity") kind = JointMotor::Kind::velocity;
+  else if (t == "effort") kind = JointMotor::Kind::effort;
   else type.fail("must be one of position, velocity, effort (got '" + t + "')");
-  j.motor.function = model_fields::time_function(n["function"]);
+  j.motor.edit() = {kind, model_fields::time_function(n["function"])};
 }
 
 void limits(const JsonNode& n, Joint& j) {
   n.allow_only({"lower", "upper", "stiffness", "damping"});
-  JointLimits& l = j.limits;
+  JointLimits& l = j.limits.edit();
   l.active = true;
   l.lower = n["lower"].number();
   l.upper = n["upper"].number();
@@ -103,8 +104,7 @@ void read_kinematic_joint(const JsonNode& n, const Model& m, Joint& j) {
                 "frequency", "damping_ratio", "stiffness", "damping", "motor", "limits", "length"});
   const std::string type = joint_type_name(j.type);
   if (auto r = n.find("rigid")) {
-    if (!r->json().is_boolean()) r->fail("must be true or false");
-    j.rigid = r->json().get<bool>();
+    j.rigid = r->boolean();
   }
   frames(n, m, j);
   if (n.has("length") && j.type != JointType::distance) n["length"].fail_at_key("only a distance joint has a length");

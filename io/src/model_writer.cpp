@@ -56,14 +56,14 @@ void kinematic_fields(const Joint& jt, Object& o) {
   o("frame2", jt.frame2);
   if (jt.type == JointType::distance) o("length", jt.rest_length);
   if (!jt.rigid) o("rigid", false)("stiffness", jt.stiffness)("damping", jt.damping);
-  if (jt.motor.kind != JointMotor::Kind::none) {
-    const char* kind = jt.motor.kind == JointMotor::Kind::position ? "position"
-                       : jt.motor.kind == JointMotor::Kind::velocity ? "velocity" : "effort";
-    o.object("motor", [&](Object& motor) { motor("type", kind).object("function", function_of(jt.motor.function)); });
+  if (jt.motor->kind != JointMotor::Kind::none) {
+    const char* kind = jt.motor->kind == JointMotor::Kind::position ? "position"
+                       : jt.motor->kind == JointMotor::Kind::velocity ? "velocity" : "effort";
+    o.object("motor", [&](Object& motor) { motor("type", kind).object("function", function_of(jt.motor->function)); });
   }
-  if (jt.limits.active)
+  if (jt.limits->active)
     o.object("limits", [&](Object& l) {
-      l("lower", jt.limits.lower)("upper", jt.limits.upper)("stiffness", jt.limits.stiffness)("damping", jt.limits.damping);
+      l("lower", jt.limits->lower)("upper", jt.limits->upper)("stiffness", jt.limits->stiffness)("damping", jt.limits->damping);
     });
 }
 

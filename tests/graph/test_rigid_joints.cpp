@@ -64,7 +64,7 @@ TEST_CASE("motors prescribe a joint's position, velocity or effort", "[joints]")
   const double inertia = 1.0 / 3.0;  // the rod about its pivot
   SECTION("effort: a constant torque spins the rod up uniformly") {
     Model m = pinned_rod(0.0);
-    m.joints[0].motor = {JointMotor::Kind::effort, TimeFunction::constant(0.2)};
+    m.joints[0].motor.edit() = {JointMotor::Kind::effort, TimeFunction::constant(0.2)};
     MultibodySystem sys(m);
     const Eigen::VectorXd y = test::integrate_rk4(sys, 1.0, 1000);
     CHECK(rod_angle(sys, y) == Approx(0.5 * 0.2 / inertia).epsilon(1e-9));
@@ -72,7 +72,7 @@ TEST_CASE("motors prescribe a joint's position, velocity or effort", "[joints]")
   SECTION("position: the angle is the function and the effort is I f''") {
     Model m = pinned_rod(0.0);
     const TimeFunction f = TimeFunction::harmonic(0.4, 0.5);
-    m.joints[0].motor = {JointMotor::Kind::position, f};
+    m.joints[0].motor.edit() = {JointMotor::Kind::position, f};
     MultibodySystem sys(m);
     double worst = 0.0;
     const Eigen::VectorXd y = test::integrate_rk4(sys, 1.3, 2600, [&](double t, const Eigen::VectorXd& s) {
@@ -85,7 +85,7 @@ TEST_CASE("motors prescribe a joint's position, velocity or effort", "[joints]")
   }
   SECTION("velocity: the rate is the function") {
     Model m = pinned_rod(g);
-    m.joints[0].motor = {JointMotor::Kind::velocity, TimeFunction::constant(2.0)};
+    m.joints[0].motor.edit() = {JointMotor::Kind::velocity, TimeFunction::constant(2.0)};
     MultibodySystem sys(m);
     const Eigen::VectorXd y = test::integrate_rk4(sys, 1.0, 1000);
     CHECK(rod_angle(sys, y) == Approx(2.0).epsilon(1e-9));
@@ -96,7 +96,7 @@ TEST_CASE("motors prescribe a joint's position, velocity or effort", "[joints]")
     Joint j = test::make_joint(JointType::prismatic, ground, 0, {0, 0, 0}, {0, 0, 0});
     j.frame1 = {std::sqrt(0.5), 0, std::sqrt(0.5), 0};  // axis z along world x
     j.frame2 = rest_frame2(m, j);
-    j.motor = {JointMotor::Kind::effort, TimeFunction::constant(3.0)};
+    j.motor.edit() = {JointMotor::Kind::effort, TimeFunction::constant(3.0)};
     m.joints.push_back(j);
     m.loads.push_back({0, {0, 5, 0}, {0, 0, 1}, {}, false, TimeFunction::constant(1.0)});  // the joint holds these
     MultibodySystem sys(m);
@@ -109,8 +109,8 @@ TEST_CASE("motors prescribe a joint's position, velocity or effort", "[joints]")
 
 TEST_CASE("a limit stop holds a driven joint at its limit plus effort over stiffness", "[joints]") {
   Model m = pinned_rod(0.0);
-  m.joints[0].motor = {JointMotor::Kind::effort, TimeFunction::constant(1.0)};
-  m.joints[0].limits = {true, -0.5, 0.5, 1000.0, 30.0};
+  m.joints[0].motor.edit() = {JointMotor::Kind::effort, TimeFunction::constant(1.0)};
+  m.joints[0].limits.edit() = {true, -0.5, 0.5, 1000.0, 30.0};
   MultibodySystem sys(m);
   const Eigen::VectorXd y = test::integrate_rk4(sys, 8.0, 16000);
   CHECK(rod_angle(sys, y) == Approx(0.5 + 1.0 / 1000.0).epsilon(1e-6));

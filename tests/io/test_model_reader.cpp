@@ -67,8 +67,8 @@ TEST_CASE("models written and read back are the same model", "[io]") {
       CHECK(back.joints[j].frame1 == m.joints[j].frame1);
       CHECK(back.joints[j].frame2 == m.joints[j].frame2);
       CHECK(back.joints[j].rest_length == m.joints[j].rest_length);
-      CHECK(back.joints[j].motor.kind == m.joints[j].motor.kind);
-      CHECK(back.joints[j].limits.upper == m.joints[j].limits.upper);
+      CHECK(back.joints[j].motor->kind == m.joints[j].motor->kind);
+      CHECK(back.joints[j].limits->upper == m.joints[j].limits->upper);
       CHECK(back.joints[j].stiffness == m.joints[j].stiffness);
       CHECK(back.joints[j].damping == m.joints[j].damping);
       CHECK(back.joints[j].frame2 == m.joints[j].frame2);

@@ -2,8 +2,9 @@
 // Nonlinear force-deflection characteristic: piecewise linear through the points,
 // extended linearly beyond the first and last segment.
 #include <array>
-#include <memory>
 #include <vector>
+
+#include "mbsflow/graph/rare_value.hpp"
 
 namespace mbsflow {
 
@@ -19,21 +20,10 @@ struct ForceTable {
 class AxisTables {
  public:
   using Array = std::array<ForceTable, 6>;
-  AxisTables() = default;
-  AxisTables(const AxisTables& o) : t_(o.t_ ? std::make_unique<Array>(*o.t_) : nullptr) {}
-  AxisTables& operator=(const AxisTables& o) {
-    if (this != &o) t_ = o.t_ ? std::make_unique<Array>(*o.t_) : nullptr;
-    return *this;
-  }
-  AxisTables(AxisTables&&) noexcept = default;
-  AxisTables& operator=(AxisTables&&) noexcept = default;
 
   const ForceTable& operator[](std::size_t axis) const { return all()[axis]; }
-  ForceTable& operator[](std::size_t axis) {
-    if (!t_) t_ = std::make_unique<Array>();
-    return (*t_)[axis];
-  }
-  const Array& all() const { return t_ ? *t_ : none(); }
+  ForceTable& operator[](std::size_t axis) { return t_.edit()[axis]; }
+  const Array& all() const { return t_.get(); }
   Array::const_iterator begin() const { return all().begin(); }
   Array::const_iterator end() const { return all().end(); }
   bool any() const {
@@ -43,11 +33,7 @@ class AxisTables {
   }
 
  private:
-  static const Array& none() {
-    static const Array empty{};
-    return empty;
-  }
-  std::unique_ptr<Array> t_;
+  RareValue<Array> t_;
 };
 
 double table_force(const ForceTable& t, double x);

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "mbsflow/graph/force_table.hpp"
+#include "mbsflow/graph/rare_value.hpp"
 #include "mbsflow/method.hpp"
 #include "mbsflow/graph/time_function.hpp"
 
@@ -81,8 +82,9 @@ struct Joint {
   Vec6 preload{};                   // force/torque on body2 at zero deflection, joint frame
   double rest_length = 0.0;         // spring: rest length; distance: the rod's length
   bool rigid = true;                // kinematic joints: exact constraint, or compliant
-  JointMotor motor;                 // revolute and prismatic only
-  JointLimits limits;               // revolute and prismatic only
+  // Revolute and prismatic only; few joints have them, so each is behind a pointer.
+  RareValue<JointMotor> motor;
+  RareValue<JointLimits> limits;
 };
 
 struct Load {

@@ -179,7 +179,7 @@ class MultibodySystem {
   void body_derivative(Eigen::Index i, double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const;
   BodyFrameView body_frame_at(int i) const;  // kinematics index i of the current evaluation
   const std::array<ForceTable, 6>* tables_of(const CompiledJoint& j) const {
-    return j.tables >= 0 ? &tables_[static_cast<std::size_t>(j.tables)] : nullptr;
+    return j.tables >= 0 ? &compiled_->tables[static_cast<std::size_t>(j.tables)] : nullptr;
   }
   double elastic_energy(const CompiledJoint& j) const;
 
@@ -187,14 +187,26 @@ class MultibodySystem {
   StateLayout layout_;
   Eigen::Index active_ = 0;
   Eigen::Vector3d gravity_;
-  std::vector<double> mass_, inv_mass_;
-  std::vector<Eigen::Matrix3d> inertia_, inv_inertia_;
-  std::vector<CompiledJoint> joints_;
-  std::vector<std::array<ForceTable, 6>> tables_;
-  // Per body: incident joints (joint * 2 + side, side 1 = body2) in joint order, and loads.
-  std::vector<int> incidence_start_, incidence_;
-  std::vector<int> load_start_, load_index_;
-  std::vector<int> driver_of_body_;  // -1 if free
+  // What the model compiles to: read by every evaluation, written only while the system
+  // is built (or a force element is added). Copies of a system share it, each with its own
+  // workspace below: the results writer's copy of a million-body system would otherwise
+  // hold another 570 bytes per body. add_force_element copies it first if it is shared.
+  struct Compiled {
+    std::vector<double> mass, inv_mass;
+    std::vector<Eigen::Matrix3d> inertia, inv_inertia;
+    std::vector<CompiledJoint> joints;
+    std::vector<std::array<ForceTable, 6>> tables;
+    // Per body: incident joints (joint * 2 + side, side 1 = body2) in joint order, and loads.
+    std::vector<int> incidence_start, incidence;
+    std::vector<int> load_start, load_index;
+    std::vector<int> driver_of_body;  // -1 if free
+    // Force elements, and per body the slots into element_out_ in element order.
+    std::vector<std::shared_ptr<const ForceElement>> elements;
+    std::vector<std::size_t> element_first;  // first slot of each element
+    std::vector<int> element_start, element_slot;
+    std::vector<Eigen::Vector3d> initial_position;
+  };
+  std::shared_ptr<Compiled> compiled_ = std::make_shared<Compiled>();
   // The prescribed displacement, rate and acceleration of each driver at its last few
   // times: implicit methods and difference Jacobians evaluate many states at one time, and
   // a rough-track driver costs a hundred sines per evaluation.
@@ -210,12 +222,7 @@ class MultibodySystem {
     }
   };
   std::vector<DriveMemo> drive_memo_;
-  // Force elements: their wrenches, and per body the slots into element_out_ in element order.
-  std::vector<std::shared_ptr<const ForceElement>> elements_;
-  std::vector<std::size_t> element_first_;  // first slot of each element
-  std::vector<Wrench> element_out_;
-  std::vector<int> element_start_, element_slot_;
-  std::vector<Eigen::Vector3d> initial_position_;
+  std::vector<Wrench> element_out_;  // the force elements' wrenches of the current evaluation
 
   // Kinematics of the current evaluation, n bodies plus ground at index n.
   std::vector<Eigen::Matrix3d> rot_;

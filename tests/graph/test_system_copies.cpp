@@ -1,0 +1,79 @@
+// Copies of a MultibodySystem share what the model compiles to (a million-body system's
+// writer copy would otherwise double it) and keep their own workspace: copies evaluate
+// bit for bit as the original, on threads of their own at once, and a force element added
+// to one copy is its own.
+#include <catch2/catch.hpp>
+#include <thread>
+
+#include "mbsflow/graph/generators.hpp"
+#include "mbsflow/graph/multibody_system.hpp"
+
+using namespace mbsflow;
+
+namespace {
+
+struct Tether final : ForceElement {
+  int a, b;
+  Tether(int a_, int b_) : a(a_), b(b_) {}
+  std::vector<int> bodies() const override { return {a, b}; }
+  void evaluate(double, const Kinematics& k, std::span<Wrench> out) const override {
+    const Eigen::Vector3d d = k.position(b) - k.position(a);
+    out[0].force = 30.0 * d;
+    out[1].force = -30.0 * d;
+  }
+};
+
+Model grid() {
+  GridParams p;
+  p.rows = 6;
+  p.cols = 7;
+  return make_grid(p);
+}
+
+// Derivatives at n states along a path away from the initial one.
+std::vector<Eigen::VectorXd> evaluations(MultibodySystem& sys, int n) {
+  std::vector<Eigen::VectorXd> out;
+  Eigen::VectorXd y = sys.initial_state(), dydt(sys.dimension());
+  for (int i = 0; i < n; ++i) {
+    sys.rhs(0.01 * i, y, dydt);
+    out.push_back(dydt);
+    y += 1e-4 * dydt;
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("copies of a system evaluate bit for bit as the original on threads of their own", "[graph]") {
+  MultibodySystem original(grid());
+  original.add_force_element(std::make_shared<Tether>(0, 40));
+  MultibodySystem reference = original;  // evaluated alone first
+  const std::vector<Eigen::VectorXd> expected = evaluations(reference, 50);
+  MultibodySystem a = original, b = original;
+  std::vector<Eigen::VectorXd> from_a, from_b;
+  std::thread ta([&] { from_a = evaluations(a, 50); });
+  std::thread tb([&] { from_b = evaluations(b, 50); });
+  const std::vector<Eigen::VectorXd> from_original = evaluations(original, 50);
+  ta.join();
+  tb.join();
+  for (std::size_t i = 0; i < expected.size(); ++i) {
+    CHECK(from_a[i] == expected[i]);
+    CHECK(from_b[i] == expected[i]);
+    CHECK(from_original[i] == expected[i]);
+  }
+}
+
+TEST_CASE("a force element added to a copy of a system stays its own", "[graph]") {
+  MultibodySystem original(grid());
+  const std::vector<Eigen::VectorXd> before = evaluations(original, 3);
+  MultibodySystem copy = original;
+  copy.add_force_element(std::make_shared<Tether>(3, 30));
+  const std::vector<Eigen::VectorXd> tethered = evaluations(copy, 3);
+  const std::vector<Eigen::VectorXd> after = evaluations(original, 3);
+  for (std::size_t i = 0; i < before.size(); ++i) CHECK(after[i] == before[i]);
+  CHECK(tethered[1] != before[1]);
+  // The same element on a fresh system: the copy's derivatives, bit for bit.
+  MultibodySystem fresh(grid());
+  fresh.add_force_element(std::make_shared<Tether>(3, 30));
+  CHECK(evaluations(fresh, 3) == tethered);
+}
