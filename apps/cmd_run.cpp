@@ -30,6 +30,7 @@
 #include "mbsflow/runtime/run.hpp"
 #include "mbsflow/runtime/run_request.hpp"
 #include "mbsflow/runtime/simulation.hpp"
+#include "phase_timings.hpp"
 #include "progress.hpp"
 #include "mbsflow/runtime/stop_signals.hpp"
 
@@ -47,6 +48,7 @@ struct RunArgs {
   std::string output;
   std::string fields = "position,orientation,velocity,angular_velocity,energy";
   bool quiet = false;
+  bool timings = false;
   int threads = 0;  // 0: all cores
   std::optional<int> partitions;
   std::string executor = "flow";
@@ -213,22 +215,29 @@ int run(const RunArgs& a, const CheckpointFile* resumed = nullptr, const std::st
     if (slurm->step.rank > 0) return serve_slurm_task(*slurm, a.threads, a.quiet);  // reads no model
   }
   const bool slurm_workers = slurm && slurm->step.tasks() > 1;
+  PhaseTimings timings(a.timings);
   std::string model_text = resumed ? resumed->model_text : read_model_file_text(a.model);
+  timings.mark("read the model file");
   // Held shared: the run's systems share it rather than copy it.
   const auto model = std::make_shared<Model>(read_model_text(model_text, a.model));
   Model& m = *model;
+  const long bodies = static_cast<long>(m.bodies.size());
+  timings.mark("parse and check the model", bodies);
   if (!(a.checkpoint_every > 0.0)) std::string().swap(model_text);  // only checkpoints keep the text
   ModelOverrides overrides{a.t_end, a.step, a.rtol, a.atol, a.output_interval, a.every, std::nullopt, a.variant};
   if (!a.method.empty()) overrides.method = *find_method(a.method);
   apply_overrides(m, overrides);
   const StableStep stable = estimate_stable_step(m);
   RunOptions o = choose_options(m, a, stable);
+  timings.mark("stable step and options", bodies);
   std::unique_ptr<AsyncSink> sink;
   if (!a.output.empty()) {
     const FieldSet fields = parse_fields(a.fields);
     RunInfo info{model_to_json(m), method_name(o.method), o.step, o.t_start, o.t_end, o.output_every, invocation()};
     info.output_interval = o.output_interval;
+    timings.mark("the model's text for the results", bodies);
     sink = std::make_unique<AsyncSink>(std::make_unique<Hdf5Sink>(a.output, fields, std::move(info)));
+    timings.mark("open the results file", bodies);
   }
   const int threads = a.threads > 0 ? a.threads : static_cast<int>(std::thread::hardware_concurrency());
   const bool cluster = !a.cluster.empty() || a.processes > 0 || slurm_workers;
@@ -264,6 +273,7 @@ int run(const RunArgs& a, const CheckpointFile* resumed = nullptr, const std::st
   const bool stage_split = o.method == Method::rk4 || o.method == Method::dopri5;
   const int default_k = cluster ? cluster_submodels(cc) : stage_split || loose ? default_partitions(m, threads) : 1;
   const std::optional<Decomposition> d = choose_decomposition(m, a, default_k, !cluster && !loose);
+  timings.mark("cut into submodels", bodies);
   if (cluster && !a.quiet) {
     char coupling[96] = "";
     if (loose) std::snprintf(coupling, sizeof coupling, ", loosely coupled: macro step %.4g s", macro_step);
@@ -293,6 +303,7 @@ int run(const RunArgs& a, const CheckpointFile* resumed = nullptr, const std::st
   }
   ProgressLine progress(o.t_start, o.t_end, !a.quiet);
   o.progress = [&](double t, long steps) { progress.update(t, steps); };
+  if (a.timings) o.phase = [&](const char* phase) { timings.mark(phase, bodies); };
   o.stop = install_stop_handlers();
   if (sink) sink->set_stop(o.stop);
   // Checkpoints: the file holds the arguments, folder and model text with the run's state.
@@ -331,7 +342,9 @@ int run(const RunArgs& a, const CheckpointFile* resumed = nullptr, const std::st
   RunSummary r;
   try {
     RunStats stats;
+    timings.mark("prepare the run", bodies);
     r = mbsflow::run(std::shared_ptr<const Model>(model), plan, sink.get(), &stats);
+    timings.mark("the run's end", bodies);
     if (cluster) {
       stats.loose.records = stats.cluster.coupling;
       summarise_records(stats.loose);
@@ -466,6 +479,8 @@ void add_run_options(CLI::App* sub, RunArgs& args) {
                   "What to write: position, orientation, velocity, angular_velocity, energy, joint_force, or all")
       ->capture_default_str();
   sub->add_flag("-q,--quiet", a->quiet, "Print only warnings, errors and the closing line");
+  sub->add_flag("--timings", a->timings,
+                "Print each set-up phase's time and the memory held after it (resident, peak, bytes per body)");
   sub->add_option("--threads", a->threads, "Threads (default: all cores)")->check(CLI::Range(1, 4096));
   sub->add_option("--partitions", a->partitions,
                   "Submodels (default: one per thread, fewer for small models); results are the same bit for bit")

@@ -4,10 +4,12 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "huge_pages.hpp"
 #include "mbsflow/error.hpp"
 #include "mbsflow/version.hpp"
 
 int main(int argc, char** argv) {
+  mbsflow::cli::restart_with_huge_pages(argv);
   CLI::App app{"mbsflow: multibody dynamics and large ODE systems, in parallel"};
   app.set_version_flag("--version", MBSFLOW_VERSION);
   app.require_subcommand(1);

@@ -1,6 +1,8 @@
 #include "mbsflow/runtime/partitioned_run.hpp"
 
 #include <oneapi/tbb/info.h>
+#include <oneapi/tbb/parallel_for.h>
+#include <oneapi/tbb/parallel_invoke.h>
 #include <oneapi/tbb/task_arena.h>
 
 #include <chrono>
@@ -93,11 +95,22 @@ RunSummary run_partitioned(std::shared_ptr<const Model> shared, const Decomposit
   tbb::task_arena arena(threads);
   RunSummary out;
   BusyClock clock;
+  // The parts and the whole system (for the sink: layout, names, energies; it shares the
+  // model) are built side by side: each is a pass over its bodies and joints, and a
+  // million-body model's take seconds each.
+  std::vector<std::optional<Part>> built(d.submodels.size());
+  std::optional<MultibodySystem> built_whole;
+  arena.execute([&] {
+    tbb::parallel_invoke(
+        [&] { tbb::parallel_for(std::size_t{0}, built.size(), [&](std::size_t i) { built[i].emplace(model, d.submodels[i], stages); }); },
+        [&] { built_whole.emplace(std::move(shared), static_cast<int>(model.bodies.size())); });
+  });
   std::vector<Part> parts;
-  parts.reserve(d.submodels.size());
-  for (const Submodel& s : d.submodels) parts.emplace_back(model, s, stages);
-  const int all = static_cast<int>(model.bodies.size());
-  MultibodySystem whole(std::move(shared), all);  // for the sink: layout, names, energies (shares the model)
+  parts.reserve(built.size());
+  for (std::optional<Part>& p : built) parts.push_back(std::move(*p));
+  built.clear();
+  MultibodySystem& whole = *built_whole;
+  phase_done(o, "build the submodels and the whole system");
   // Like run_simulation, which gets its system built: the clock starts with the run.
   const auto start = Clock::now();
   Eigen::VectorXd y = whole.initial_state();
@@ -106,6 +119,7 @@ RunSummary run_partitioned(std::shared_ptr<const Model> shared, const Decomposit
     resumed = restore_tight(*o.checkpoint, o, parts, whole, sink, out);
   else if (sink)
     sink->begin(whole);
+  if (sink) phase_done(o, "start the results file");
   std::vector<Part*> local;
   for (Part& p : parts) local.push_back(&p);
   LocalExchange exchange(local);
@@ -120,6 +134,7 @@ RunSummary run_partitioned(std::shared_ptr<const Model> shared, const Decomposit
       out.evaluations = counts.evaluations;
     });
   });
+  phase_done(o, sink ? "steps, and the results written" : "steps");
   partitioned::gather(parts, whole.layout(), y);
   out.wall_seconds = std::chrono::duration<double>(Clock::now() - start).count();
   out.final_state = std::move(y);

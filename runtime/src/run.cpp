@@ -56,6 +56,7 @@ RunSummary run_plan(const Model& model, std::shared_ptr<const Model> shared, con
   if (plan.partition && !loose && kind != "simulation")
     return run_partitioned(shared, *plan.partition, plan.options, plan.parallel, sink, &st.parallel);
   MultibodySystem system(shared, static_cast<int>(model.bodies.size()));
+  phase_done(plan.options, "build the system");
   RunOptions whole = plan.options;
   if (whole.threads == 0) whole.threads = plan.parallel.threads;
   return run_simulation(system, whole, sink);

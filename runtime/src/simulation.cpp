@@ -124,11 +124,13 @@ RunSummary run_simulation(MultibodySystem& sys, const RunOptions& o, ResultSink*
   const StepperSystem system = stepper_system(sys, o.jacobian);
   std::unique_ptr<Stepper> stepper = entry.make(system, stepper_settings(o));
   stepper->start(o.t_start, y, o.t_end);
+  phase_done(o, "set up the method");
   // Like run_partitioned's, the clock starts once the stepper and its workspace are set up.
   const auto start = Clock::now();
   const bool resume = o.checkpoint && !o.checkpoint->resume.empty();
   const long next = resume ? restore_point(*o.checkpoint, sink, sys, *stepper, o.method, out) : 1;
   if (sink && !resume) sink->begin(sys);
+  if (sink) phase_done(o, "start the results file");
   run_with_sink(sink, out, [&] {
     if (sink && !resume) emit(sys, sink, o.t_start, y, out);
     if (entry.adaptive)
@@ -136,6 +138,7 @@ RunSummary run_simulation(MultibodySystem& sys, const RunOptions& o, ResultSink*
     else
       run_fixed(sys, *stepper, o, sink, out, next);
   });
+  phase_done(o, sink ? "steps, and the results written" : "steps");
   out.steps = stepper->stats().accepted;
   out.rejected = stepper->stats().rejected;
   out.evaluations = stepper->stats().evaluations;

@@ -121,3 +121,32 @@ TEST_CASE("run reports its peak memory per body and the fixed part of it thins o
   CHECK(large < small);
   fs::remove_all(d.parent_path());
 }
+
+TEST_CASE("run --timings names each set-up phase and says whether malloc has huge pages", "[apps]") {
+  const std::string dir = scratch("timings").string();
+  REQUIRE(run("generate chain --bodies 200 -o chain.json", dir).code == 0);
+  const Result r = run("run chain.json --t-end 0.01 --threads 2 -q --timings -o chain.h5", dir);
+  REQUIRE(r.code == 0);
+  for (const char* phase : {"read the model file", "parse and check the model", "stable step and options",
+                            "open the results file", "cut into submodels", "build the submodels and the whole system",
+                            "start the results file", "steps, and the results written", "the run's end"})
+    CHECK(r.err.find(phase) != std::string::npos);
+  // Resident memory per body on the phases after reading: a number of bytes.
+  const std::size_t parse = r.err.find("parse and check the model");
+  const std::string line = r.err.substr(parse, r.err.find('\n', parse) - parse);
+  CHECK(std::stod(line.substr(line.find_last_of(' ') + 1)) > 0.0);
+  // mbsflow restarts itself with glibc's huge-page tunable where the kernel gives them.
+  const std::string modes = read_text("/sys/kernel/mm/transparent_hugepage/enabled");
+  const bool kernel = modes.find("[always]") != std::string::npos || modes.find("[madvise]") != std::string::npos;
+  CHECK(r.err.find(kernel ? "transparent huge pages: on" : "transparent huge pages: off") != std::string::npos);
+  ::setenv("MBSFLOW_HUGE_PAGES", "0", 1);
+  const Result off = run("run chain.json --t-end 0.01 -q --timings", dir);
+  ::unsetenv("MBSFLOW_HUGE_PAGES");
+  CHECK(off.code == 0);
+  CHECK(off.err.find("transparent huge pages: off") != std::string::npos);
+  // A tunable the caller set is left as it is.
+  ::setenv("GLIBC_TUNABLES", "glibc.malloc.hugetlb=0", 1);
+  const Result theirs = run("run chain.json --t-end 0.01 -q --timings", dir);
+  ::unsetenv("GLIBC_TUNABLES");
+  CHECK(theirs.err.find("transparent huge pages: off") != std::string::npos);
+}

@@ -48,7 +48,16 @@ struct RunOptions {
   const std::atomic<bool>* stop = nullptr;
   // Checkpoints to write, or one to go on from (mbsflow/runtime/checkpoint.hpp); may be null.
   Checkpointing* checkpoint = nullptr;
+  // Told as each part of a run's set-up ends ("build the system", "start the results
+  // file", ...) and when the steps end, so that mbsflow run --timings can say what each
+  // took and held; may be empty.
+  std::function<void(const char* phase)> phase;
 };
+
+// Calls o.phase(name) if it is set.
+inline void phase_done(const RunOptions& o, const char* name) {
+  if (o.phase) o.phase(name);
+}
 
 struct RunSummary {
   long steps = 0;

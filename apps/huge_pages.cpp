@@ -1,0 +1,50 @@
+#include "huge_pages.hpp"
+
+#include <unistd.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <iterator>
+#include <string>
+
+namespace mbsflow::cli {
+namespace {
+
+constexpr const char* tunable = "glibc.malloc.hugetlb";
+
+std::string environment(const char* name) {
+  const char* v = std::getenv(name);
+  return v ? v : "";
+}
+
+// THP in "always" or "madvise" mode (not "never", and readable).
+bool kernel_gives_huge_pages() {
+  std::ifstream in("/sys/kernel/mm/transparent_hugepage/enabled");
+  const std::string modes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  return modes.find("[always]") != std::string::npos || modes.find("[madvise]") != std::string::npos;
+}
+
+}  // namespace
+
+bool huge_pages_on() {
+  const std::string t = environment("GLIBC_TUNABLES");
+  const auto at = t.find(std::string(tunable) + "=");
+  return at != std::string::npos && (t[at + std::char_traits<char>::length(tunable) + 1] == '1' ||
+                                     t[at + std::char_traits<char>::length(tunable) + 1] == '2');
+}
+
+void restart_with_huge_pages(char** argv) {
+  const std::string before = environment("GLIBC_TUNABLES");
+  if (environment("MBSFLOW_HUGE_PAGES") == "0" || before.find(tunable) != std::string::npos || !kernel_gives_huge_pages())
+    return;
+  const std::string after = (before.empty() ? "" : before + ":") + tunable + "=1:glibc.malloc.mmap_threshold=4294967295";
+  if (::setenv("GLIBC_TUNABLES", after.c_str(), 1) != 0) return;
+  ::execv("/proc/self/exe", argv);
+  // exec failed (no /proc): go on as we are, without the tunable in the environment
+  if (before.empty())
+    ::unsetenv("GLIBC_TUNABLES");
+  else
+    ::setenv("GLIBC_TUNABLES", before.c_str(), 1);
+}
+
+}  // namespace mbsflow::cli
