@@ -35,7 +35,10 @@ bool huge_pages_on() {
 
 void restart_with_huge_pages(char** argv) {
   const std::string before = environment("GLIBC_TUNABLES");
-  if (environment("MBSFLOW_HUGE_PAGES") == "0" || before.find(tunable) != std::string::npos || !kernel_gives_huge_pages())
+  // Under valgrind, /proc/self/exe is valgrind's tool, which will not run by itself.
+  const bool valgrind = environment("LD_PRELOAD").find("vgpreload") != std::string::npos;
+  if (environment("MBSFLOW_HUGE_PAGES") == "0" || before.find(tunable) != std::string::npos || !kernel_gives_huge_pages() ||
+      valgrind)
     return;
   const std::string after = (before.empty() ? "" : before + ":") + tunable + "=1:glibc.malloc.mmap_threshold=4294967295";
   if (::setenv("GLIBC_TUNABLES", after.c_str(), 1) != 0) return;

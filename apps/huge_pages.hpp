@@ -8,8 +8,8 @@
 // when the next is made. Together they halve a 300 000-body start (3.9 s -> 1.8 s on the
 // 2-core VM, `mbsflow run c300k.json --t-end 1e-9`). Tunables are read only when a
 // process starts, so mbsflow starts itself once more with them set. MBSFLOW_HUGE_PAGES=0
-// turns this off; nothing happens where the kernel never gives huge pages, or where
-// GLIBC_TUNABLES already names glibc.malloc.hugetlb.
+// turns this off; nothing happens where the kernel never gives huge pages, where
+// GLIBC_TUNABLES already names glibc.malloc.hugetlb, or under valgrind.
 
 namespace mbsflow::cli {
 

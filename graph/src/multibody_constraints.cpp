@@ -51,6 +51,16 @@ struct MultibodySystem::Constraints {
   std::vector<Eigen::Vector3d> force, torque;  // scratch, per cluster slot
 };
 
+std::size_t MultibodySystem::constraint_bytes() const {
+  const Constraints& k = *constraints_;
+  std::size_t lambda = 0;
+  for (const Eigen::VectorXd& l : k.lambda) lambda += static_cast<std::size_t>(l.size()) * sizeof(double);
+  return sizeof(Constraints) + k.geometry.capacity() * sizeof(JointGeometry) + k.clusters.capacity() * sizeof(RigidCluster) +
+         k.cluster_of_body.capacity() * sizeof(int) + k.lambda.capacity() * sizeof(Eigen::VectorXd) + lambda + k.marked.capacity() +
+         k.wrench.capacity() * sizeof(Vector6d) + k.motion.capacity() * sizeof(BodyMotion) +
+         (k.force.capacity() + k.torque.capacity()) * sizeof(Eigen::Vector3d);
+}
+
 void MultibodySystem::compile_constraints() {
   constraints_ = detail::DeepPtr<Constraints>(
       new Constraints, [](const Constraints& c) { return new Constraints(c); }, [](Constraints* c) { delete c; });

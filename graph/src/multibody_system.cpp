@@ -212,6 +212,30 @@ void MultibodySystem::kinematics_of(double t, const Eigen::VectorXd& y, std::spa
   compliant_joint_wrench<double>(j, tables_of(j), body_frame_at(j.a), body_frame_at(j.b), joint_out_.col(static_cast<Eigen::Index>(k)));
 }
 
+namespace {
+template <class V>
+std::size_t bytes_of(const V& v) {
+  return v.capacity() * sizeof(typename V::value_type);
+}
+template <class M>
+std::size_t matrix_bytes(const M& m) {
+  return static_cast<std::size_t>(m.size()) * sizeof(typename M::Scalar);
+}
+}  // namespace
+
+MultibodySystem::MemoryUse MultibodySystem::memory_use() const {
+  const Compiled& c = *compiled_;
+  MemoryUse m;
+  m.compiled = bytes_of(c.mass) + bytes_of(c.inv_mass) + bytes_of(c.inertia) + bytes_of(c.inv_inertia) + bytes_of(c.joints) +
+               bytes_of(c.tables) + bytes_of(c.incidence_start) + bytes_of(c.incidence) + bytes_of(c.load_start) +
+               bytes_of(c.load_index) + bytes_of(c.driver_of_body) + bytes_of(c.elements) + bytes_of(c.element_first) +
+               bytes_of(c.element_start) + bytes_of(c.element_slot) + bytes_of(c.initial_position);
+  m.workspace = bytes_of(drive_memo_) + bytes_of(element_out_) + bytes_of(rot_) + matrix_bytes(pos_) + matrix_bytes(vel_) +
+                matrix_bytes(omega_) + matrix_bytes(quat_) + matrix_bytes(joint_out_) + bytes_of(jacobian_scratch_) +
+                matrix_bytes(motor_effort_) + constraint_bytes();
+  return m;
+}
+
 void MultibodySystem::compute_joint_forces() {
   for (std::size_t k = 0; k < compiled_->joints.size(); ++k) joint_force(k);
   if (compiled_->elements.empty()) return;

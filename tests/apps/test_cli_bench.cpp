@@ -144,3 +144,32 @@ TEST_CASE("cli bench parallel: threads by doubling and worker processes with the
   CHECK(run("bench parallel --executors nowhere", dir).code != 0);
   fs::remove_all(fs::path(dir).parent_path());
 }
+
+TEST_CASE("cli bench rhs: nanoseconds per body with the roofline's bytes per body, bandwidth and peak", "[cli][bench]") {
+  const std::string dir = scratch("bench_rhs").string();
+  const Result r = run("bench rhs --bodies 300 --seconds 0.02 --csv rhs.csv", dir, true);
+  INFO(r.err << r.out);
+  REQUIRE(r.code == 0);
+  CHECK(r.out.find("roofline, one thread: this machine's triad bandwidth") != std::string::npos);
+  std::istringstream csv(read_text(fs::path(dir) / "rhs.csv"));
+  std::string line;
+  std::getline(csv, line);
+  CHECK(line.find(",bytes_per_body,compiled_bytes_per_body,workspace_bytes_per_body,achieved_GB_s,triad_GB_s,peak_GFLOP_s") !=
+        std::string::npos);
+  REQUIRE(std::getline(csv, line));
+  const std::vector<std::string> cells = csv_cells(line);
+  REQUIRE(cells.size() == 15);
+  CHECK(cells[0] == "300");
+  const double ns = std::stod(cells[2]), bytes = std::stod(cells[9]), compiled = std::stod(cells[10]),
+               workspace = std::stod(cells[11]);
+  CHECK(ns > 0.0);
+  // One evaluation streams the state in and out (13 numbers a body each way), the compiled
+  // model and the workspace written and read back.
+  CHECK(bytes == Approx(2 * 13 * 8 + compiled + 2 * workspace));
+  CHECK(compiled > 300.0);  // a chain's compiled joint alone is a few hundred bytes
+  CHECK(workspace > 100.0);
+  CHECK(std::stod(cells[12]) == Approx(bytes / ns));
+  CHECK(std::stod(cells[13]) > 0.0);
+  CHECK(std::stod(cells[14]) > 0.0);
+  fs::remove_all(fs::path(dir).parent_path());
+}

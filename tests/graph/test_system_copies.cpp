@@ -56,6 +56,9 @@ TEST_CASE("copies of a system evaluate bit for bit as the original on threads of
   const std::vector<Eigen::VectorXd> from_original = evaluations(original, 50);
   ta.join();
   tb.join();
+  // The copies hold the compiled model once: the same block, counted the same.
+  CHECK(a.memory_use().compiled == original.memory_use().compiled);
+  CHECK(a.memory_use().workspace > 0);
   for (std::size_t i = 0; i < expected.size(); ++i) {
     CHECK(from_a[i] == expected[i]);
     CHECK(from_b[i] == expected[i]);

@@ -132,6 +132,14 @@ class MultibodySystem {
   // a matrix of jacobian_pattern()'s pattern. Throws std::logic_error without one.
   void jacobian(double t, const Eigen::VectorXd& y, Eigen::SparseMatrix<double>& jac);
 
+  // Bytes this system holds: what the model compiles to (shared by its copies) and its own
+  // workspace (the kinematics and joint outputs of an evaluation, constraint scratch),
+  // from the containers' capacities. The model itself is not counted.
+  struct MemoryUse {
+    std::size_t compiled = 0, workspace = 0;
+  };
+  MemoryUse memory_use() const;
+
   // The three phases of rhs(), public so the benchmark can time them apart.
   void update_kinematics(double t, const Eigen::VectorXd& y);
   void compute_joint_forces();  // joints and force elements
@@ -162,6 +170,7 @@ class MultibodySystem {
   };
   struct Constraints;  // multibody_constraints.cpp
   void compile_constraints();
+  std::size_t constraint_bytes() const;  // the constraints' containers (a cluster's own solver not counted)
   void kinematic_joint_force(std::size_t k);
   double kinematic_energy(const CompiledJoint& j) const;
   void solve_cluster(int c, double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const;
