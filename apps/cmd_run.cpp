@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
+#include <future>
 #include <csignal>
 #include <cstdio>
 #include <memory>
@@ -230,17 +231,14 @@ int run(const RunArgs& a, const CheckpointFile* resumed = nullptr, const std::st
   const StableStep stable = estimate_stable_step(m);
   RunOptions o = choose_options(m, a, stable);
   timings.mark("stable step and options", bodies);
-  std::unique_ptr<AsyncSink> sink;
-  if (!a.output.empty()) {
-    const FieldSet fields = parse_fields(a.fields);
-    RunInfo info{model_to_json(m), method_name(o.method), o.step, o.t_start, o.t_end, o.output_every, invocation()};
-    info.output_interval = o.output_interval;
-    timings.mark("the model's text for the results", bodies);
-    sink = std::make_unique<AsyncSink>(std::make_unique<Hdf5Sink>(a.output, fields, std::move(info)));
-    timings.mark("open the results file", bodies);
-  }
+  const FieldSet fields = a.output.empty() ? FieldSet{} : parse_fields(a.fields);
   const int threads = a.threads > 0 ? a.threads : static_cast<int>(std::thread::hardware_concurrency());
   const bool cluster = !a.cluster.empty() || a.processes > 0 || slurm_workers;
+  // The model's text for the results file and the worker processes is written on a
+  // thread of its own while the run is cut and set up (1.4 s for a million-body model).
+  // Nothing changes the model from here on.
+  std::future<std::string> model_json;
+  if (!a.output.empty() || cluster) model_json = std::async(std::launch::async, [&m] { return model_to_json(m); });
   const bool loose = a.coupling == "loose";
   if (a.exchange_delay > 0.0 && !cluster) throw InputError("--exchange-delay: only with --cluster or --processes");
   LooseRequest request{a.macro_step, a.coupling_tol, a.overlap, a.extrapolation, a.max_lag, a.exact_lag,
@@ -305,7 +303,6 @@ int run(const RunArgs& a, const CheckpointFile* resumed = nullptr, const std::st
   o.progress = [&](double t, long steps) { progress.update(t, steps); };
   if (a.timings) o.phase = [&](const char* phase) { timings.mark(phase, bodies); };
   o.stop = install_stop_handlers();
-  if (sink) sink->set_stop(o.stop);
   // Checkpoints: the file holds the arguments, folder and model text with the run's state.
   Checkpointing checkpointing;
   CheckpointFile checkpoint_file;
@@ -329,6 +326,17 @@ int run(const RunArgs& a, const CheckpointFile* resumed = nullptr, const std::st
     if (!a.quiet) std::fprintf(stderr, "mbsflow: going on from checkpoint %s\n", resumed_path.c_str());
   }
   if (checkpointing.write || resumed) o.checkpoint = &checkpointing;
+  std::string text = model_json.valid() ? model_json.get() : std::string();
+  timings.mark("the model's text (written alongside)", bodies);
+  std::unique_ptr<AsyncSink> sink;
+  if (!a.output.empty()) {
+    RunInfo info{cluster ? text : std::move(text), method_name(o.method), o.step, o.t_start, o.t_end, o.output_every,
+                 invocation()};
+    info.output_interval = o.output_interval;
+    sink = std::make_unique<AsyncSink>(std::make_unique<Hdf5Sink>(a.output, fields, std::move(info)));
+    sink->set_stop(o.stop);
+    timings.mark("open the results file", bodies);
+  }
   RunPlan plan;
   plan.options = o;
   plan.partition = d;
@@ -336,7 +344,7 @@ int run(const RunArgs& a, const CheckpointFile* resumed = nullptr, const std::st
   plan.parallel = {threads, a.executor == "flow" ? Executor::flow_graph : Executor::barrier};
   if (cluster) {
     plan.cluster = cc;
-    plan.model_json = model_to_json(m);
+    plan.model_json = std::move(text);
     plan.exchange_delay_s = a.exchange_delay;
   }
   RunSummary r;
