@@ -1,5 +1,4 @@
 // mbsflow run MODEL.json: one simulation on this process.
-#include <sys/resource.h>
 
 #include <algorithm>
 #include <cmath>
@@ -389,9 +388,7 @@ int run(const RunArgs& a, const CheckpointFile* resumed = nullptr, const std::st
   if (checkpoints > 0) output += "; " + std::to_string(checkpoints) + " checkpoints, the last in " + checkpoint_at;
   // The process's peak resident memory: model, systems, workspace and output buffers (on
   // worker processes, theirs are their own).
-  rusage usage{};
-  if (::getrusage(RUSAGE_SELF, &usage) == 0 && usage.ru_maxrss > 0) {
-    const double peak = 1024.0 * static_cast<double>(usage.ru_maxrss);
+  if (const double peak = memory_use().peak_bytes; peak > 0.0) {
     char mem[96];
     std::snprintf(mem, sizeof mem, "; peak memory %s (%.0f B per body)", human_bytes(peak).c_str(),
                   peak / static_cast<double>(m.bodies.size()));

@@ -27,10 +27,10 @@ bool kernel_gives_huge_pages() {
 }  // namespace
 
 bool huge_pages_on() {
-  const std::string t = environment("GLIBC_TUNABLES");
-  const auto at = t.find(std::string(tunable) + "=");
-  return at != std::string::npos && (t[at + std::char_traits<char>::length(tunable) + 1] == '1' ||
-                                     t[at + std::char_traits<char>::length(tunable) + 1] == '2');
+  const std::string t = environment("GLIBC_TUNABLES"), setting = std::string(tunable) + "=";
+  const auto at = t.find(setting);
+  const char value = at == std::string::npos || at + setting.size() >= t.size() ? '0' : t[at + setting.size()];
+  return value == '1' || value == '2';
 }
 
 void restart_with_huge_pages(char** argv) {

@@ -26,7 +26,8 @@ MemoryUse memory_use() {
 PhaseTimings::PhaseTimings(bool enabled) : enabled_(enabled), start_(Clock::now()), last_(start_) {
   if (!enabled_) return;
   std::fprintf(stderr, "mbsflow: malloc with transparent huge pages: %s\n",
-               huge_pages_on() ? "on" : "off (MBSFLOW_HUGE_PAGES=0, or the kernel gives none)");
+               huge_pages_on() ? "on"
+                               : "off (MBSFLOW_HUGE_PAGES=0, the caller's GLIBC_TUNABLES, valgrind, or none from the kernel)");
   std::fprintf(stderr, "mbsflow: %-34s %9s %9s %11s %11s %10s\n", "phase", "s", "total s", "resident MB", "peak MB", "B/body");
 }
 

@@ -258,25 +258,29 @@ void JsonNode::fixed(double* out, std::size_t n) const {
     return;
   }
   // As numbers() then the size: each item checked first, but without a vector.
+  const std::size_t size = tape_numbers([&](std::size_t i, double v) {
+    if (i < n) out[i] = v;
+  });
+  if (size != n) wrong_size(size);
+}
+
+template <class Take>
+std::size_t JsonNode::tape_numbers(Take take) const {
   const std::size_t size = array_size();
   std::uint32_t k = at_ + 1;
   for (std::size_t i = 0; i < size; ++i, k = tape_->entries[k].end) {
     const JsonTape::Entry& x = tape_->entries[k];
-    const double v = x.kind == JsonTape::Kind::number && std::isfinite(x.number) ? x.number : item(i).number();
-    if (i < n) out[i] = v;
+    // The item's own node (and path) only to report a bad number.
+    take(i, x.kind == JsonTape::Kind::number && std::isfinite(x.number) ? x.number : item(i).number());
   }
-  if (size != n) wrong_size(size);
+  return size;
 }
 
 std::vector<double> JsonNode::numbers() const {
   const std::size_t n = array_size();
   std::vector<double> v(n);
   if (tape_) {
-    std::uint32_t k = at_ + 1;
-    for (std::size_t i = 0; i < n; ++i, k = tape_->entries[k].end) {
-      const JsonTape::Entry& x = tape_->entries[k];
-      v[i] = x.kind == JsonTape::Kind::number && std::isfinite(x.number) ? x.number : item(i).number();
-    }
+    tape_numbers([&](std::size_t i, double x) { v[i] = x; });
     return v;
   }
   for (std::size_t i = 0; i < n; ++i) {

@@ -77,6 +77,10 @@ class JsonNode {
   const char* type_name() const { return tape_ ? tape_type_name(entry().kind) : j_->type_name(); }
   std::optional<std::uint32_t> tape_member(std::string_view key) const;  // the value's entry
   std::uint32_t tape_item(std::size_t i) const;
+  // Hands each item of this tape array to take(index, value), each a finite number (or
+  // fails naming it); returns the array's size.
+  template <class Take>
+  std::size_t tape_numbers(Take take) const;
 
   const nlohmann::json* j_ = nullptr;  // or:
   const JsonTape* tape_ = nullptr;

@@ -376,7 +376,6 @@ class Reader {
   // Names to indices, so that each reference is found in constant time (a model of a
   // million bodies names as many in its joints).
   NameIndex body_index_, joint_index_;
-
 };
 
 // The items of the list whose '[' is at text[pos], each parsed into the tape and handed to
