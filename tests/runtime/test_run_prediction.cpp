@@ -35,3 +35,24 @@ TEST_CASE("run prediction: compute of the slowest submodel plus its host's messa
   CHECK(four.exchange_s == Approx(2 * net.time(144)).epsilon(1e-12));
   CHECK_THROWS_AS(predict_stage(d, 3, 1, per_cost, net), InputError);
 }
+
+TEST_CASE("measure exchange: every round trip is answered and the last reply is not lost at close", "[runtime][plan]") {
+  // Each measurement ends with the echo's socket closing right after its last reply: a
+  // socket that drops what it still holds at close (linger 0) loses that reply now and
+  // then, and the measurement waited for it for ever (bench parallel hung in CI).
+  for (int i = 0; i < 150; ++i) {
+    const std::string transport = i % 3 == 0 ? "ipc" : "tcp";
+    const std::vector<ExchangeSample> s = measure_exchange(transport, {65536}, 1);
+    REQUIRE(s.size() == 1);
+    CHECK(s[0].bytes == 65536);
+    CHECK(s[0].seconds > 0.0);
+  }
+}
+
+TEST_CASE("hockney fit: alpha and beta of exact samples", "[runtime][plan]") {
+  const Hockney h = fit_hockney({{0, 2e-5}, {1000, 2e-5 + 1000 / 5e8}, {65536, 2e-5 + 65536 / 5e8}});
+  CHECK(h.alpha == Approx(2e-5).epsilon(1e-9));
+  CHECK(h.beta == Approx(5e8).epsilon(1e-9));
+  CHECK(h.time(1e6) == Approx(2e-5 + 1e6 / 5e8).epsilon(1e-9));
+  CHECK_THROWS_AS(fit_hockney({{0, 1e-5}}), InputError);
+}
