@@ -19,6 +19,7 @@
 #include "slurm_launch.hpp"
 #include "mbsflow/io/checkpoint_file.hpp"
 #include "mbsflow/io/cluster_file.hpp"
+#include "mbsflow/io/file_text.hpp"
 #include "mbsflow/io/hdf5_sink.hpp"
 #include "mbsflow/io/model_reader.hpp"
 #include "mbsflow/io/model_writer.hpp"
@@ -216,14 +217,18 @@ int run(const RunArgs& a, const CheckpointFile* resumed = nullptr, const std::st
   }
   const bool slurm_workers = slurm && slurm->step.tasks() > 1;
   PhaseTimings timings(a.timings);
-  std::string model_text = resumed ? resumed->model_text : read_model_file_text(a.model);
+  // The file is mapped, not copied, and let go once parsed; only checkpoints keep its text.
+  std::optional<FileText> file;
+  if (!resumed) file.emplace(a.model, "model file", max_model_bytes);
+  const std::string_view source = resumed ? std::string_view(resumed->model_text) : file->text();
   timings.mark("read the model file");
   // Held shared: the run's systems share it rather than copy it.
-  const auto model = std::make_shared<Model>(read_model_text(model_text, a.model));
+  const auto model = std::make_shared<Model>(read_model_text(source, a.model));
   Model& m = *model;
   const long bodies = static_cast<long>(m.bodies.size());
   timings.mark("parse and check the model", bodies);
-  if (!(a.checkpoint_every > 0.0)) std::string().swap(model_text);  // only checkpoints keep the text
+  std::string model_text = a.checkpoint_every > 0.0 ? std::string(source) : std::string();
+  file.reset();
   ModelOverrides overrides{a.t_end, a.step, a.rtol, a.atol, a.output_interval, a.every, std::nullopt, a.variant};
   if (!a.method.empty()) overrides.method = *find_method(a.method);
   apply_overrides(m, overrides);

@@ -104,7 +104,7 @@ class ListStream final : public JsonEvents {
 
 }  // namespace
 
-nlohmann::json parse_json_streaming_lists(const std::string& text, const std::string& name, const JsonListHandlers& handlers) {
+nlohmann::json parse_json_streaming_lists(std::string_view text, const std::string& name, const JsonListHandlers& handlers) {
   ListStream stream(name, handlers);
   parse_json_events(text, name, stream);
   return stream.take_document();

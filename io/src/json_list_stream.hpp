@@ -21,6 +21,6 @@ struct JsonListHandlers {
 
 // Parses the text (with parse_json_document's checks and errors); returns the document
 // with each streamed list an empty array. A streamed list named twice is an error.
-nlohmann::json parse_json_streaming_lists(const std::string& text, const std::string& name, const JsonListHandlers& handlers);
+nlohmann::json parse_json_streaming_lists(std::string_view text, const std::string& name, const JsonListHandlers& handlers);
 
 }  // namespace mbsflow

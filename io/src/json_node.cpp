@@ -26,7 +26,7 @@ std::string syntax_error(const nlohmann::json::parse_error& e, const std::string
 }
 
 // Line and column of a byte offset.
-SourceLocation location_of(const std::string& text, std::size_t offset) {
+SourceLocation location_of(std::string_view text, std::size_t offset) {
   SourceLocation at;
   at.line = 1 + static_cast<int>(std::count(text.begin(), text.begin() + static_cast<long>(offset), '\n'));
   const std::size_t line_start = text.rfind('\n', offset);
@@ -36,7 +36,7 @@ SourceLocation location_of(const std::string& text, std::size_t offset) {
 
 // A number too large for a double ("1e999"): nlohmann names the literal, in quotes, but
 // not its place; the first occurrence in the text gives line and column.
-std::string overflow_error(const nlohmann::json::out_of_range& e, const std::string& text, const std::string& name) {
+std::string overflow_error(const nlohmann::json::out_of_range& e, std::string_view text, const std::string& name) {
   const std::string what = e.what();
   const std::size_t open = what.find('\''), close = what.rfind('\'');
   const std::string number = open != std::string::npos && close > open ? what.substr(open + 1, close - open - 1) : "";
@@ -50,7 +50,7 @@ std::string overflow_error(const nlohmann::json::out_of_range& e, const std::str
 // Runs parse (nlohmann's parser on text) with the depth checked first and nlohmann's
 // errors turned into InputErrors that point into the text.
 template <class Parse>
-auto parse_checked(const std::string& text, const std::string& name, Parse parse) {
+auto parse_checked(std::string_view text, const std::string& name, Parse parse) {
   if (const std::size_t at = json_too_deep(text, max_json_depth); at != std::string::npos) {
     throw InputError(format_input_error(name, location_of(text, at), "", "nested deeper than " + std::to_string(max_json_depth) + " levels"));
   }
@@ -83,7 +83,7 @@ std::string read_input_file(const std::string& path, const std::string& what, st
   return text.str();
 }
 
-nlohmann::json parse_json_document(const std::string& text, const std::string& name) {
+nlohmann::json parse_json_document(std::string_view text, const std::string& name) {
   return parse_checked(text, name, [&] { return nlohmann::json::parse(text); });
 }
 
@@ -93,7 +93,7 @@ bool JsonEvents::parse_error(std::size_t, const std::string&, const nlohmann::js
   throw InputError(e.what());
 }
 
-void parse_json_events(const std::string& text, const std::string& name, JsonEvents& events) {
+void parse_json_events(std::string_view text, const std::string& name, JsonEvents& events) {
   parse_checked(text, name, [&] { return nlohmann::json::sax_parse(text, &events); });
 }
 

@@ -103,12 +103,12 @@ std::string read_input_file(const std::string& path, const std::string& what, st
 inline constexpr int max_json_depth = 64;
 // Parses a JSON document; InputError("name:line:col: invalid JSON: ...") if it is not one,
 // or if it nests deeper than max_json_depth.
-nlohmann::json parse_json_document(const std::string& text, const std::string& name);
+nlohmann::json parse_json_document(std::string_view text, const std::string& name);
 // A handler of parse events whose syntax errors throw as the document parser's do.
 struct JsonEvents : nlohmann::json_sax<nlohmann::json> {
   bool parse_error(std::size_t position, const std::string& last_token, const nlohmann::json::exception& e) override;
 };
 // Parses a JSON document into events, with parse_json_document's checks and errors.
-void parse_json_events(const std::string& text, const std::string& name, JsonEvents& events);
+void parse_json_events(std::string_view text, const std::string& name, JsonEvents& events);
 
 }  // namespace mbsflow

@@ -14,6 +14,7 @@
 #include "json_depth.hpp"
 #include "json_node.hpp"
 #include "mbsflow/error.hpp"
+#include "mbsflow/io/file_text.hpp"
 #include "mbsflow/methods/stepper.hpp"
 #include "model_fields.hpp"
 #include "model_reading.hpp"
@@ -496,11 +497,11 @@ std::optional<Model> read_model_fast(std::string_view text, const JsonSource& sr
 
 }  // namespace
 
-std::optional<Model> read_model_fast(const std::string& text, const std::string& name) {
+std::optional<Model> read_model_fast(std::string_view text, const std::string& name) {
   return read_model_fast(text, JsonSource{name, JsonLocations(text)});
 }
 
-Model read_model_reference(const std::string& text, const std::string& name) {
+Model read_model_reference(std::string_view text, const std::string& name) {
   const JsonSource src{name, JsonLocations(text)};
   Reader reader(src);
   JsonListHandlers lists;
@@ -510,13 +511,16 @@ Model read_model_reference(const std::string& text, const std::string& name) {
   return reader.finish(parse_json_streaming_lists(text, name, lists));
 }
 
-Model read_model_text(const std::string& text, const std::string& name) {
+Model read_model_text(std::string_view text, const std::string& name) {
   if (std::optional<Model> m = read_model_fast(text, name)) return std::move(*m);
   return read_model_reference(text, name);
 }
 
 std::string read_model_file_text(const std::string& path) { return read_input_file(path, "model file", max_model_bytes); }
 
-Model read_model_file(const std::string& path) { return read_model_text(read_model_file_text(path), path); }
+Model read_model_file(const std::string& path) {
+  const FileText file = map_model_file(path);
+  return read_model_text(file.text(), path);
+}
 
 }  // namespace mbsflow

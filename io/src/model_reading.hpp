@@ -10,7 +10,7 @@
 
 namespace mbsflow {
 
-std::optional<Model> read_model_fast(const std::string& text, const std::string& name);
-Model read_model_reference(const std::string& text, const std::string& name);
+std::optional<Model> read_model_fast(std::string_view text, const std::string& name);
+Model read_model_reference(std::string_view text, const std::string& name);
 
 }  // namespace mbsflow

@@ -3,6 +3,7 @@
 // Every problem is an InputError "file:line:col: field.path: what is wrong".
 #include <cstddef>
 #include <string>
+#include <string_view>
 
 #include "mbsflow/graph/model.hpp"
 
@@ -16,6 +17,6 @@ Model read_model_file(const std::string& path);
 // The text of a model file, checked for size as read_model_file does.
 std::string read_model_file_text(const std::string& path);
 // `name` is used in messages in place of a file name.
-Model read_model_text(const std::string& text, const std::string& name);
+Model read_model_text(std::string_view text, const std::string& name);
 
 }  // namespace mbsflow
