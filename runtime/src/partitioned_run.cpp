@@ -102,7 +102,7 @@ RunSummary run_partitioned(std::shared_ptr<const Model> shared, const Decomposit
   std::optional<MultibodySystem> built_whole;
   arena.execute([&] {
     tbb::parallel_invoke(
-        [&] { tbb::parallel_for(std::size_t{0}, built.size(), [&](std::size_t i) { built[i].emplace(model, d.submodels[i], stages); }); },
+        [&] { tbb::parallel_for(std::size_t{0}, built.size(), [&](std::size_t i) { built[i].emplace(model, d.submodels[i], stages, true); }); },
         [&] { built_whole.emplace(std::move(shared), static_cast<int>(model.bodies.size())); });
   });
   std::vector<Part> parts;

@@ -20,10 +20,12 @@ void copy_body(const StateLayout& from_layout, const Eigen::VectorXd& from, Eige
 
 }  // namespace
 
-Part::Part(const Model& model, const Submodel& s, int stages)
-    : sub(&s), system(submodel_model(model, s), s.integrated()), own(static_cast<Eigen::Index>(s.own.size())) {
-  x.assign(static_cast<std::size_t>(stages), system.initial_state());
-  k.assign(static_cast<std::size_t>(stages), Eigen::VectorXd::Zero(system.dimension()));
+Part::Part(const Model& model, const Submodel& s, int stages, bool fold)
+    : sub(&s), system(submodel_model(model, s), s.integrated()), own(static_cast<Eigen::Index>(s.own.size())),
+      rk4_folded(fold && stages == 4 && s.borrowed.empty()) {
+  const auto vectors = static_cast<std::size_t>(rk4_folded ? 3 : stages);
+  x.assign(vectors, system.initial_state());
+  k.assign(vectors, Eigen::VectorXd::Zero(system.dimension()));
   global_element = own_elements(s, StateLayout{static_cast<Eigen::Index>(model.bodies.size())});
   const auto n_own = static_cast<int>(own);
   // Clusters of borrowed bodies (loose coupling's overlap) have local indices past the own ones.
@@ -54,11 +56,11 @@ Part::Part(const Model& model, const Submodel& s, int stages)
 
 void copy_ghosts(const StateLayout& owner_layout, const Eigen::VectorXd& from, const Submodel::Exchange& e, Part& me, int s) {
   for (std::size_t i = 0; i < e.from.size(); ++i)
-    copy_body(owner_layout, from, e.from[i], me.system.layout(), me.x[static_cast<std::size_t>(s)], e.to[i]);
+    copy_body(owner_layout, from, e.from[i], me.system.layout(), me.input(s), e.to[i]);
 }
 
 void copy_ghosts(const Part& owner, const Submodel::Exchange& e, Part& me, int s) {
-  copy_ghosts(owner.system.layout(), owner.x[static_cast<std::size_t>(s)], e, me, s);
+  copy_ghosts(owner.system.layout(), owner.input(s), e, me, s);
 }
 
 void copy_local_ghosts(const std::vector<Part*>& parts, std::size_t p, int s) {
@@ -109,21 +111,29 @@ void unpack_bodies(const StateLayout& l, Eigen::VectorXd& x, const std::vector<i
   }
 }
 
+namespace {
+
+// RK4's update of stage s on the entries [at, at + n) of own bodies: the next stage input,
+// or after stage 3 the new state (before renormalisation).
+void rk4_update_entries(Part& part, int s, double h, Eigen::Index at, Eigen::Index n) {
+  auto seg = [&](Eigen::VectorXd& v) { return v.segment(at, n); };
+  if (s < 3) {
+    rk4::stage_input(seg(part.x[0]), seg(part.derivative(s)), h, s, seg(part.input(s + 1)));
+    if (part.rk4_folded && s == 2) rk4::fold(seg(part.k[0]), seg(part.k[1]), seg(part.k[2]));
+  } else if (part.rk4_folded) {
+    rk4::finish(seg(part.x[0]), seg(part.k[0]), seg(part.derivative(3)), h);
+  } else {
+    rk4::combine(seg(part.x[0]), seg(part.k[0]), seg(part.k[1]), seg(part.k[2]), seg(part.k[3]), h);
+  }
+}
+
+}  // namespace
+
 void rk4_stage(Part& part, int s, double t, double t_next) {
   const double h = t_next - t;
-  const auto i = static_cast<std::size_t>(s);
-  part.system.rhs(t + rk4::stage_fraction[s] * h, part.x[i], part.k[i]);
-  if (s < 3) {
-    for_own_blocks(part, [&](Eigen::Index at, Eigen::Index n) {
-      rk4::stage_input(part.x[0].segment(at, n), part.k[i].segment(at, n), h, s, part.x[i + 1].segment(at, n));
-    });
-    return;
-  }
-  for_own_blocks(part, [&](Eigen::Index at, Eigen::Index n) {
-    rk4::combine(part.x[0].segment(at, n), part.k[0].segment(at, n), part.k[1].segment(at, n), part.k[2].segment(at, n),
-                 part.k[3].segment(at, n), h);
-  });
-  part.system.after_step(t_next, part.x[0]);
+  part.system.rhs(t + rk4::stage_fraction[s] * h, part.input(s), part.derivative(s));
+  for_own_blocks(part, [&](Eigen::Index at, Eigen::Index n) { rk4_update_entries(part, s, h, at, n); });
+  if (s == 3) part.system.after_step(t_next, part.x[0]);
 }
 
 namespace {
@@ -148,18 +158,8 @@ void for_bodies(const Part& part, const std::vector<int>& bodies, F f) {
 // The stage update of rk4_stage, for some own bodies: the next stage input, or after
 // stage 3 the new state (renormalised, drivers imposed).
 void rk4_update(Part& part, const std::vector<int>& bodies, int s, double h, double t_next) {
-  const auto i = static_cast<std::size_t>(s);
-  if (s < 3) {
-    for_bodies(part, bodies, [&](Eigen::Index at, Eigen::Index n) {
-      rk4::stage_input(part.x[0].segment(at, n), part.k[i].segment(at, n), h, s, part.x[i + 1].segment(at, n));
-    });
-    return;
-  }
-  for_bodies(part, bodies, [&](Eigen::Index at, Eigen::Index n) {
-    rk4::combine(part.x[0].segment(at, n), part.k[0].segment(at, n), part.k[1].segment(at, n), part.k[2].segment(at, n),
-                 part.k[3].segment(at, n), h);
-  });
-  part.system.after_step_of(t_next, part.x[0], bodies);
+  for_bodies(part, bodies, [&](Eigen::Index at, Eigen::Index n) { rk4_update_entries(part, s, h, at, n); });
+  if (s == 3) part.system.after_step_of(t_next, part.x[0], bodies);
 }
 
 // Half of rk4_stage: kinematics of `moved`, forces of `joints`, derivatives and stage
@@ -167,10 +167,9 @@ void rk4_update(Part& part, const std::vector<int>& bodies, int s, double h, dou
 void rk4_half(Part& part, int s, double t, double t_next, const std::vector<int>& moved, const std::vector<int>& joints,
               const std::vector<int>& bodies) {
   const double h = t_next - t, ts = t + rk4::stage_fraction[s] * h;
-  const auto i = static_cast<std::size_t>(s);
-  part.system.kinematics_of(ts, part.x[i], moved);
+  part.system.kinematics_of(ts, part.input(s), moved);
   part.system.joint_forces_of(joints);
-  part.system.derivatives_of(ts, part.x[i], part.k[i], bodies);
+  part.system.derivatives_of(ts, part.input(s), part.derivative(s), bodies);
   rk4_update(part, bodies, s, h, t_next);
 }
 

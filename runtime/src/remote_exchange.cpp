@@ -162,7 +162,7 @@ void RemoteExchange::receive(int p, long n, int s) {
   for (const Submodel::Exchange& e : d_.submodels[static_cast<std::size_t>(p)].exchanges) {
     if (parts_[static_cast<std::size_t>(e.neighbour)]) continue;
     const zmq::message_t m = pop({p, e.neighbour, s}, n, "boundary values of submodel " + std::to_string(e.neighbour));
-    partitioned::unpack_bodies(me.system.layout(), me.x[static_cast<std::size_t>(s)], e.to, m.data());
+    partitioned::unpack_bodies(me.system.layout(), me.input(s), e.to, m.data());
   }
 }
 
@@ -270,7 +270,7 @@ void RemoteExchange::take_upto(int p, int q, int s, long cap, const std::functio
   }
 }
 
-void RemoteExchange::send(int p, long n, int s) { send(p, n, s, parts_[static_cast<std::size_t>(p)]->x[static_cast<std::size_t>(s)]); }
+void RemoteExchange::send(int p, long n, int s) { send(p, n, s, parts_[static_cast<std::size_t>(p)]->input(s)); }
 
 void RemoteExchange::send(int p, long n, int s, const Eigen::VectorXd& x) {
   const partitioned::Part& me = *parts_[static_cast<std::size_t>(p)];

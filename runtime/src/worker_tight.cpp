@@ -54,7 +54,7 @@ void prepare_tight(Session& s) {
   s.tight_parts.clear();
   s.tight_parts.resize(k);
   for (std::size_t q = 0; q < k; ++q)
-    if (s.worker_of[q] == s.me) s.tight_parts[q] = std::make_unique<Part>(s.model, s.d.submodels[q], stages);
+    if (s.worker_of[q] == s.me) s.tight_parts[q] = std::make_unique<Part>(s.model, s.d.submodels[q], stages, true);
 }
 
 Outcome run_tight(Session& s, WorkerIo& io, zmq::context_t& ctx, zmq::socket_t& inbox, const nlohmann::json& start,

@@ -7,6 +7,7 @@
 #include "mbsflow/graph/stable_step.hpp"
 #include "mbsflow/runtime/partitioned_run.hpp"
 #include "mbsflow/runtime/simulation.hpp"
+#include "partitioned_state.hpp"
 #include "reference_run.hpp"
 
 using namespace mbsflow;
@@ -125,4 +126,22 @@ TEST_CASE("METIS cuts a bushy tree far better than band cuts, best keeps the fas
   ChainParams c;
   c.bodies = 500;
   CHECK(decompose(make_chain(c), 5).cut_joints == 4);  // a chain: k - 1 cuts
+}
+
+TEST_CASE("RK4 parts keep three state vectors and three derivatives, DOPRI5 parts seven each", "[runtime][identity]") {
+  ChainParams c;
+  c.bodies = 40;
+  const Model m = make_chain(c);
+  const Decomposition d = decompose(m, 2, Partitioner::band);
+  const partitioned::Part rk4(m, d.submodels[0], 4, true), plain(m, d.submodels[0], 4), dopri5(m, d.submodels[0], 7, true);
+  CHECK(rk4.rk4_folded);
+  CHECK(rk4.x.size() == 3);
+  CHECK(rk4.k.size() == 3);
+  CHECK(&rk4.input(3) == &rk4.input(1));  // stage inputs 1 and 3 share a vector
+  CHECK(&rk4.input(2) != &rk4.input(1));
+  CHECK(!plain.rk4_folded);
+  CHECK(plain.x.size() == 4);
+  CHECK(!dopri5.rk4_folded);
+  CHECK(dopri5.x.size() == 7);
+  CHECK(dopri5.k.size() == 7);
 }
