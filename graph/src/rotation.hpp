@@ -60,6 +60,20 @@ struct RotationLogT {
 };
 using RotationLog = RotationLogT<double>;
 
+// atan2(s, w) for 0 <= s <= w / 4 (angles below 0.49 rad, the bending of a stiff bushing):
+// the series of atan(s / w) through x^29, whose remainder is below 3e-20 of the sum, in a
+// tenth of libm's instructions; within 2 ulp of atan2 (tests/graph/test_rotation.cpp).
+inline constexpr double atan_series[15] = {1.0,        -1.0 / 3,  1.0 / 5,  -1.0 / 7,  1.0 / 9,
+                                           -1.0 / 11,  1.0 / 13,  -1.0 / 15, 1.0 / 17, -1.0 / 19,
+                                           1.0 / 21,   -1.0 / 23, 1.0 / 25, -1.0 / 27, 1.0 / 29};
+template <class S>
+[[gnu::always_inline]] inline S small_atan2(const S& s, const S& w) {
+  const S x = s / w, x2 = x * x;
+  S p = S(atan_series[14]);
+  for (int n = 13; n >= 0; --n) p = atan_series[n] + x2 * p;
+  return x * p;
+}
+
 template <class S>
 [[gnu::always_inline]] inline RotationLogT<S> rotation_log(const Vector4T<S>& q) {
   using std::atan2;  // and Eigen's, for automatic differentiation, by argument-dependent lookup
@@ -73,7 +87,7 @@ template <class S>
     r.theta = (2.0 / w) * v;
     a2 = r.theta.squaredNorm();
   } else {
-    const S angle = 2.0 * atan2(s, w);
+    const S angle = 2.0 * (s <= 0.25 * w ? small_atan2<S>(s, w) : S(atan2(s, w)));
     r.theta = (angle / s) * v;
     a2 = angle * angle;
     if (a2 >= 1e-2) {
