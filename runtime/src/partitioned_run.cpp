@@ -1,21 +1,25 @@
 #include "mbsflow/runtime/partitioned_run.hpp"
 
 #include <oneapi/tbb/info.h>
-#include <oneapi/tbb/parallel_for.h>
-#include <oneapi/tbb/parallel_invoke.h>
+#include <oneapi/tbb/task_group.h>
 #include <oneapi/tbb/task_arena.h>
 
 #include <chrono>
 #include <cstdint>
+#include <memory>
 #include <optional>
 
 #include "mbsflow/error.hpp"
 #include "partitioned_state.hpp"
 #include "sink_runner.hpp"
+#include "tsan_annotations.hpp"
 #include "tight_coupling.hpp"
 
 namespace mbsflow {
 namespace {
+
+// Tokens of the parallel build of a run's parts (for ThreadSanitizer; see run_partitioned).
+const char build_start = 0, build_done = 0;
 
 using Clock = std::chrono::steady_clock;
 using partitioned::Part;
@@ -100,11 +104,30 @@ RunSummary run_partitioned(std::shared_ptr<const Model> shared, const Decomposit
   // million-body model's take seconds each.
   std::vector<std::optional<Part>> built(d.submodels.size());
   std::optional<MultibodySystem> built_whole;
-  arena.execute([&] {
-    tbb::parallel_invoke(
-        [&] { tbb::parallel_for(std::size_t{0}, built.size(), [&](std::size_t i) { built[i].emplace(model, d.submodels[i], stages, true); }); },
-        [&] { built_whole.emplace(std::move(shared), static_cast<int>(model.bodies.size())); });
-  });
+  {
+    // ThreadSanitizer does not see oneTBB's orderings (tsan_annotations.hpp): the tasks
+    // state that they see what this thread wrote before (a token at namespace scope, taken
+    // before any capture is read), and this thread that it sees what they built. The group
+    // lives on the heap: its completion count, which the tasks update after their last
+    // statement, would otherwise share stack addresses with what this thread writes next.
+    auto group = std::make_unique<tbb::task_group>();  // made before the token: the tasks update it
+    happens_before(&build_start);
+    arena.execute([&] {
+      for (std::size_t i = 0; i < built.size(); ++i)
+        group->run([&, i] {
+          happens_after(&build_start);
+          built[i].emplace(model, d.submodels[i], stages, true);
+          happens_before(&build_done);
+        });
+      group->run([&] {
+        happens_after(&build_start);
+        built_whole.emplace(std::move(shared), static_cast<int>(model.bodies.size()));
+        happens_before(&build_done);
+      });
+      group->wait();
+    });
+    happens_after(&build_done);
+  }
   std::vector<Part> parts;
   parts.reserve(built.size());
   for (std::optional<Part>& p : built) parts.push_back(std::move(*p));
