@@ -58,8 +58,8 @@ TEST_CASE("bushing torque is the exact gradient of the rotational energy", "[gra
   }
 }
 
-TEST_CASE("small-angle atan2 by its series: within 2 ulp of libm over its whole range", "[graph]") {
-  std::mt19937_64 random(3);
+TEST_CASE("small-angle atan2 by its series: within 3 ulp of libm over its whole range", "[graph]") {
+  std::mt19937_64 random(3);  // 200 000 draws: 1.0 ulp worst by Horner, 2.0 by Estrin
   std::uniform_real_distribution<double> ratio(0.0, 0.25), scale(-3.0, 3.0);
   double worst = 0.0;
   for (int i = 0; i < 200000; ++i) {
@@ -69,7 +69,7 @@ TEST_CASE("small-angle atan2 by its series: within 2 ulp of libm over its whole 
     worst = std::max(worst, std::abs(small_atan2(s, w) - exact) / (std::numeric_limits<double>::epsilon() * exact));
   }
   INFO("worst error " << worst << " ulp (of the value)");
-  CHECK(worst <= 2.0);
+  CHECK(worst <= 3.0);
   // At the switch to libm (s = w / 4) and at tiny angles.
   CHECK(std::abs(small_atan2(0.25, 1.0) - std::atan2(0.25, 1.0)) <= 3 * std::numeric_limits<double>::epsilon() * 0.245);
   CHECK(small_atan2(1e-300, 1.0) == std::atan2(1e-300, 1.0));
