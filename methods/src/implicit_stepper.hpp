@@ -25,7 +25,13 @@ class ImplicitStepper : public Stepper {
     count();
   }
   void step() override {
-    if (!integrator_->advance()) return;
+    if (!integrator_->advance()) {
+      // The integrator has ended within its 1e-12 (relative) of t_end: a last step fell a
+      // rounding short of it (ten steps of 0.1 make 0.9999999999999999). That is the end;
+      // without this done() stayed false and the caller stepped for ever.
+      t_ = t_end_;
+      return;
+    }
     t_previous_ = t_;
     t_ = integrator_->t();
     y_ = integrator_->y();

@@ -155,3 +155,28 @@ TEST_CASE("after_step projects every accepted step of every method", "[methods][
     CHECK(projections == stepper->stats().accepted);
   }
 }
+
+TEST_CASE("implicit steppers end a run whose steps fall a rounding short of its end", "[methods][stepper]") {
+  // Ten fixed steps of 0.1 add up to 0.9999999999999999: within the integrators' 1e-12 of
+  // t = 1, so they stop there, and a stepper that waited for t >= 1 called them for ever
+  // (an adaptive run can end the same way: test_checkpoint's stiff chain did).
+  for (Method m : {Method::colloc, Method::tirk}) {
+    INFO(m.name());
+    StepperSettings o;
+    o.threads = 1;
+    o.step = 0.1;
+    o.fixed_step = true;
+    const StepperSystem sys = oscillator();
+    auto stepper = make_stepper(m, sys, o);
+    stepper->start(0.0, exact(0.0), 1.0);
+    int calls = 0;
+    while (!stepper->done() && calls < 100) {
+      stepper->step();
+      ++calls;
+    }
+    CHECK(stepper->done());
+    CHECK(calls <= 11);
+    CHECK(stepper->t() == 1.0);
+    CHECK((stepper->y() - exact(1.0)).cwiseAbs().maxCoeff() < 1e-3);
+  }
+}
