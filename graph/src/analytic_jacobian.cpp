@@ -18,27 +18,32 @@ namespace mbsflow {
 namespace {
 
 constexpr int body_states = 13;  // position 3, quaternion 4, velocity 3, angular velocity 3
+// A joint's wrench depends on the states of its two bodies, a body's own rates on its own.
 using Dual = Eigen::AutoDiffScalar<Eigen::Matrix<double, 2 * body_states, 1>>;
+using BodyDual = Eigen::AutoDiffScalar<Eigen::Matrix<double, body_states, 1>>;
 using Block6 = Eigen::Matrix<double, 6, body_states>;
 
 // Body i's state numbers as the variables first..first+12, in the order position,
 // quaternion, velocity, body-frame angular velocity.
+template <class D>
 struct SeededState {
-  Vector3T<Dual> r, v, w;
-  Vector4T<Dual> q;
+  Vector3T<D> r, v, w;
+  Vector4T<D> q;
 };
-SeededState seeded_state(const Eigen::VectorXd& y, const StateLayout& l, Eigen::Index i, int first) {
-  SeededState s;
+template <class D>
+SeededState<D> seeded_state(const Eigen::VectorXd& y, const StateLayout& l, Eigen::Index i, int first) {
+  constexpr int variables = D::DerType::SizeAtCompileTime;
+  SeededState<D> s;
   for (int k = 0; k < 3; ++k) {
-    s.r[k] = Dual(y[l.position(i) + k], 2 * body_states, first + k);
-    s.v[k] = Dual(y[l.velocity(i) + k], 2 * body_states, first + 7 + k);
-    s.w[k] = Dual(y[l.angular_velocity(i) + k], 2 * body_states, first + 10 + k);
+    s.r[k] = D(y[l.position(i) + k], variables, first + k);
+    s.v[k] = D(y[l.velocity(i) + k], variables, first + 7 + k);
+    s.w[k] = D(y[l.angular_velocity(i) + k], variables, first + 10 + k);
   }
-  for (int k = 0; k < 4; ++k) s.q[k] = Dual(y[l.orientation(i) + k], 2 * body_states, first + 3 + k);
+  for (int k = 0; k < 4; ++k) s.q[k] = D(y[l.orientation(i) + k], variables, first + 3 + k);
   return s;
 }
 BodyFrameT<Dual> seeded_frame(const Eigen::VectorXd& y, const StateLayout& l, Eigen::Index i, int first) {
-  const SeededState s = seeded_state(y, l, i, first);
+  const SeededState<Dual> s = seeded_state<Dual>(y, l, i, first);
   return body_frame<Dual>(s.r, s.q, s.v, s.w);
 }
 
@@ -50,24 +55,71 @@ Eigen::Index state_index(const StateLayout& l, Eigen::Index b, int c) {
   return l.angular_velocity(b) + c - 10;
 }
 
-// The stored values of jac at rows row..row+count-1 of column col, which the pattern must
-// hold (then they are consecutive in the column: its rows are sorted).
-double* entries(Eigen::SparseMatrix<double>& jac, Eigen::Index row, Eigen::Index col, int count = 1) {
+// The offset in jac's values of rows row..row+count-1 of column col, which the pattern
+// must hold (then they are consecutive in the column: its rows are sorted).
+int entries(const Eigen::SparseMatrix<double>& jac, Eigen::Index row, Eigen::Index col, int count = 1) {
   const int* first = jac.innerIndexPtr() + jac.outerIndexPtr()[col];
   const int* last = jac.innerIndexPtr() + jac.outerIndexPtr()[col + 1];
   const int* at = std::lower_bound(first, last, static_cast<int>(row));
   if (last - at < count || at[count - 1] != row + count - 1)
     throw std::logic_error("multibody Jacobian: entry outside the Jacobian pattern");
-  return jac.valuePtr() + (at - jac.innerIndexPtr());
+  return static_cast<int>(at - jac.innerIndexPtr());
 }
 
 // Derivative rows of a dual vector, columns first..first+12.
-template <int Rows>
-Eigen::Matrix<double, Rows, body_states> derivatives(const Eigen::Matrix<Dual, Rows, 1>& v, int first) {
+template <int Rows, class D>
+Eigen::Matrix<double, Rows, body_states> derivatives(const Eigen::Matrix<D, Rows, 1>& v, int first) {
   Eigen::Matrix<double, Rows, body_states> d;
   for (int r = 0; r < Rows; ++r) d.row(r) = v[r].derivatives().template segment<body_states>(first).transpose();
   return d;
 }
+
+// jacobian()'s writes into the matrix's values. The first call finds each one's place by
+// search and keeps it; later calls with a matrix of the same column starts take the kept
+// places in order, each checked against its rows, so a matrix of another pattern is still
+// filled right: from the first place that does not fit, by search, and the places are
+// found afresh at the next call.
+class SlotWriter {
+ public:
+  explicit SlotWriter(Eigen::SparseMatrix<double>& jac, std::vector<int>& outer, std::vector<int>& slots)
+      : jac_(jac), outer_(outer), slots_(slots) {
+    const auto columns = static_cast<std::size_t>(jac.outerSize()) + 1;
+    replay_ = jac.isCompressed() && !slots.empty() && outer.size() == columns &&
+              std::equal(outer.begin(), outer.end(), jac.outerIndexPtr());
+    if (!replay_) {
+      slots.clear();
+      outer.assign(jac.outerIndexPtr(), jac.outerIndexPtr() + columns);
+    }
+  }
+  ~SlotWriter() {
+    if (broken_ || !jac_.isCompressed() || (replay_ && next_ != slots_.size())) slots_.clear();
+  }
+  // The values at rows row..row+count-1 of column col.
+  double* at(Eigen::Index row, Eigen::Index col, int count = 1) {
+    if (replay_) {
+      const int* rows = jac_.innerIndexPtr();
+      if (next_ < slots_.size()) {
+        const int k = slots_[next_];
+        if (rows[k] == row && rows[k + count - 1] == row + count - 1) {
+          ++next_;
+          return jac_.valuePtr() + k;
+        }
+      }
+      replay_ = false;
+      broken_ = true;
+    }
+    const int k = entries(jac_, row, col, count);
+    if (!broken_) slots_.push_back(k);
+    return jac_.valuePtr() + k;
+  }
+
+ private:
+  Eigen::SparseMatrix<double>& jac_;
+  std::vector<int>& outer_;
+  std::vector<int>& slots_;
+  bool replay_ = false, broken_ = false;
+  std::size_t next_ = 0;
+};
 
 }  // namespace
 
@@ -130,6 +182,7 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
     for (int r = 0; r < 9; ++r) d.row(r) = out[r].derivatives().transpose();
   }
 
+  SlotWriter slots(jac, jacobian_slots_.outer, jacobian_slots_.slots);
   std::vector<std::pair<int, Block6>> blocks;  // per body read: d (force, torque) / d (its state)
   auto block_of = [&](int body) -> Block6& {
     for (auto& [b, m] : blocks)
@@ -140,13 +193,13 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
     const auto bi = static_cast<std::size_t>(i);
     if (!free(static_cast<int>(i))) continue;  // a driven body's rates do not depend on the state
     blocks.clear();
-    const SeededState own = seeded_state(y, layout_, i, 0);
-    const Matrix3T<Dual> rot = rotation_matrix<Dual>(own.q);
+    const SeededState<BodyDual> own = seeded_state<BodyDual>(y, layout_, i, 0);
+    const Matrix3T<BodyDual> rot = rotation_matrix<BodyDual>(own.q);
     // Loads: through the orientation only.
-    Vector3T<Dual> load_force = Vector3T<Dual>::Zero(), load_torque = Vector3T<Dual>::Zero();
+    Vector3T<BodyDual> load_force = Vector3T<BodyDual>::Zero(), load_torque = Vector3T<BodyDual>::Zero();
     for (int p = compiled_->load_start[bi]; p < compiled_->load_start[bi + 1]; ++p) {
       const Load& l = model().loads[static_cast<std::size_t>(compiled_->load_index[static_cast<std::size_t>(p)])];
-      add_load<Dual>(l, evaluate(l.function, t).value, rot, load_force, load_torque);
+      add_load<BodyDual>(l, evaluate(l.function, t).value, rot, load_force, load_torque);
     }
     Block6& self = block_of(static_cast<int>(i));
     self.topRows<3>() = derivatives<3>(load_force, 0);
@@ -174,8 +227,8 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
     Eigen::Vector3d force, torque;
     applied_wrench(i, t, force, torque);
     const Eigen::Matrix3d to_w = compiled_->inv_inertia[bi] * rot_[bi].transpose();
-    const Vector3T<Dual> w_rate =
-        angular_acceleration<Dual>(rot, own.w, Vector3T<Dual>(torque.cast<Dual>()), compiled_->inertia[bi], compiled_->inv_inertia[bi]);
+    const Vector3T<BodyDual> w_rate = angular_acceleration<BodyDual>(rot, own.w, Vector3T<BodyDual>(torque.cast<BodyDual>()),
+                                                                     compiled_->inertia[bi], compiled_->inv_inertia[bi]);
     for (const auto& [b, m] : blocks) {
       Block6 rows;
       rows.topRows<3>() = compiled_->inv_mass[bi] * m.topRows<3>();
@@ -183,8 +236,8 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
       if (b == i) rows.bottomRows<3>() += derivatives<3>(w_rate, 0);
       for (int c = 0; c < body_states; ++c) {
         const Eigen::Index col = state_index(layout_, b, c);
-        double* v = entries(jac, layout_.velocity(i), col, 3);
-        double* w = entries(jac, layout_.angular_velocity(i), col, 3);
+        double* v = slots.at(layout_.velocity(i), col, 3);
+        double* w = slots.at(layout_.angular_velocity(i), col, 3);
         for (int r = 0; r < 3; ++r) {
           v[r] = rows(r, c);
           w[r] = rows(3 + r, c);
@@ -192,16 +245,16 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
       }
     }
     // q' = q (x) (0, w) / 2 and r' = v.
-    const Eigen::Matrix<double, 4, body_states> q_rate = derivatives<4>(quaternion_rate<Dual>(own.q, own.w), 0);
+    const Eigen::Matrix<double, 4, body_states> q_rate = derivatives<4>(quaternion_rate<BodyDual>(own.q, own.w), 0);
     for (int c = 0; c < 4; ++c) {
-      double* q = entries(jac, layout_.orientation(i), layout_.orientation(i) + c, 4);
+      double* q = slots.at(layout_.orientation(i), layout_.orientation(i) + c, 4);
       for (int r = 0; r < 4; ++r) q[r] = q_rate(r, 3 + c);
     }
     for (int c = 0; c < 3; ++c) {
-      double* q = entries(jac, layout_.orientation(i), layout_.angular_velocity(i) + c, 4);
+      double* q = slots.at(layout_.orientation(i), layout_.angular_velocity(i) + c, 4);
       for (int r = 0; r < 4; ++r) q[r] = q_rate(r, 10 + c);
     }
-    for (int k = 0; k < 3; ++k) *entries(jac, layout_.position(i) + k, layout_.velocity(i) + k) = 1.0;
+    for (int k = 0; k < 3; ++k) *slots.at(layout_.position(i) + k, layout_.velocity(i) + k) = 1.0;
   }
 }
 

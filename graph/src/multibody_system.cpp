@@ -232,6 +232,7 @@ MultibodySystem::MemoryUse MultibodySystem::memory_use() const {
                bytes_of(c.element_start) + bytes_of(c.element_slot) + bytes_of(c.initial_position);
   m.workspace = bytes_of(drive_memo_) + bytes_of(element_out_) + bytes_of(rot_) + matrix_bytes(pos_) + matrix_bytes(vel_) +
                 matrix_bytes(omega_) + matrix_bytes(quat_) + matrix_bytes(joint_out_) + bytes_of(jacobian_scratch_) +
+                bytes_of(jacobian_slots_.outer) + bytes_of(jacobian_slots_.slots) +
                 matrix_bytes(motor_effort_) + constraint_bytes();
   return m;
 }

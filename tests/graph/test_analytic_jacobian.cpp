@@ -197,3 +197,54 @@ TEST_CASE("models without an analytic Jacobian say which item stands in the way"
     CHECK(why.find("submodel") != std::string::npos);
   }
 }
+
+TEST_CASE("the analytic Jacobian fills matrices of another pattern right after the first", "[graph][jacobian]") {
+  // jacobian() keeps where its writes landed in the first matrix and checks them in every
+  // later one: a matrix with extra entries (the diagonal added), then the pattern again,
+  // must get the same numbers where the pattern has entries and zeros elsewhere.
+  MultibodySystem sys(jacobian_model());
+  const Eigen::VectorXd y = shaken_state(sys, 4);
+  Eigen::SparseMatrix<double> first = sys.jacobian_pattern();
+  sys.jacobian(0.2, y, first);
+  Eigen::SparseMatrix<double> identity(first.rows(), first.cols());
+  identity.setIdentity();
+  Eigen::SparseMatrix<double> wider = first + identity;  // the pattern's entries and the diagonal
+  wider.makeCompressed();
+  REQUIRE(wider.nonZeros() > first.nonZeros());
+  sys.jacobian(0.2, y, wider);
+  const Eigen::MatrixXd expected(first);
+  CHECK((Eigen::MatrixXd(wider) - expected).cwiseAbs().maxCoeff() == 0.0);
+  // The same column starts as `wider`, but one column's extra entry moved from the
+  // diagonal to another row on the far side of some of the pattern's rows: the places kept
+  // from `wider` are off by one there, and the checks must notice.
+  Eigen::Index column = -1, moved_to = -1;
+  for (Eigen::Index c = 0; c < first.cols() && column < 0; ++c) {
+    if (first.coeff(c, c) != 0 || Eigen::SparseMatrix<double>(first.col(c)).nonZeros() == 0) continue;
+    for (Eigen::Index r : {Eigen::Index(0), first.rows() - 1}) {
+      bool held = false, between = false;
+      for (Eigen::SparseMatrix<double>::InnerIterator it(first, c); it; ++it) {
+        held = held || it.row() == r;
+        between = between || (it.row() - r) * (it.row() - c) < 0;
+      }
+      if (!held && r != c && between) {
+        column = c;
+        moved_to = r;
+        break;
+      }
+    }
+  }
+  REQUIRE(column >= 0);
+  std::vector<Eigen::Triplet<double>> entries;
+  for (Eigen::Index c = 0; c < wider.cols(); ++c)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(wider, c); it; ++it)
+      entries.emplace_back(c == column && it.row() == column ? moved_to : it.row(), c, 1.0);
+  Eigen::SparseMatrix<double> shifted(wider.rows(), wider.cols());
+  shifted.setFromTriplets(entries.begin(), entries.end());
+  shifted.makeCompressed();
+  REQUIRE(std::equal(shifted.outerIndexPtr(), shifted.outerIndexPtr() + shifted.cols() + 1, wider.outerIndexPtr()));
+  sys.jacobian(0.2, y, shifted);
+  CHECK((Eigen::MatrixXd(shifted) - expected).cwiseAbs().maxCoeff() == 0.0);
+  Eigen::SparseMatrix<double> again = sys.jacobian_pattern();
+  sys.jacobian(0.2, y, again);
+  CHECK((Eigen::MatrixXd(again) - expected).cwiseAbs().maxCoeff() == 0.0);
+}

@@ -241,6 +241,13 @@ class MultibodySystem {
   double time_ = 0.0;
   detail::DeepPtr<Constraints> constraints_;
   std::vector<double> jacobian_scratch_;  // jacobian(): each joint's wrench derivatives, kept between calls
+  // jacobian(): where its writes land in the matrix's values, in the order it writes them,
+  // found by search on the first call and reused while the matrix has the same column
+  // starts and every write still lands on its rows (each is checked).
+  struct JacobianSlots {
+    std::vector<int> outer, slots;
+  };
+  JacobianSlots jacobian_slots_;
   Eigen::VectorXd motor_effort_;
 
   Kinematics kinematics() const { return Kinematics(rot_, pos_, vel_, omega_); }
