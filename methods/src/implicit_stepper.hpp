@@ -4,6 +4,7 @@
 // and the counters.
 #include <memory>
 
+#include "mbsflow/methods/step_grid.hpp"
 #include "stepper_system.hpp"
 
 namespace mbsflow {
@@ -33,7 +34,10 @@ class ImplicitStepper : public Stepper {
       return;
     }
     t_previous_ = t_;
-    t_ = integrator_->t();
+    // A step that ends within rounding of t_end is the last (as the integrator will find at
+    // its next advance): done() says so now, so the caller does not take it for a step
+    // between others (a checkpoint after it, an extra call).
+    t_ = landed_time(integrator_->t(), 0.0, t_end_);
     y_ = integrator_->y();
     count();
   }
