@@ -81,8 +81,7 @@ Eigen::Matrix<double, Rows, body_states> derivatives(const Eigen::Matrix<D, Rows
 // found afresh at the next call.
 class SlotWriter {
  public:
-  explicit SlotWriter(Eigen::SparseMatrix<double>& jac, std::vector<int>& outer, std::vector<int>& slots)
-      : jac_(jac), outer_(outer), slots_(slots) {
+  SlotWriter(Eigen::SparseMatrix<double>& jac, std::vector<int>& outer, std::vector<int>& slots) : jac_(jac), slots_(slots) {
     const auto columns = static_cast<std::size_t>(jac.outerSize()) + 1;
     replay_ = jac.isCompressed() && !slots.empty() && outer.size() == columns &&
               std::equal(outer.begin(), outer.end(), jac.outerIndexPtr());
@@ -115,7 +114,6 @@ class SlotWriter {
 
  private:
   Eigen::SparseMatrix<double>& jac_;
-  std::vector<int>& outer_;
   std::vector<int>& slots_;
   bool replay_ = false, broken_ = false;
   std::size_t next_ = 0;
