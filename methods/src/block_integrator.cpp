@@ -17,6 +17,7 @@
 #include "starting_step.hpp"
 #include "step_controller.hpp"
 #include "mbsflow/methods/jacobian.hpp"
+#include "mbsflow/methods/step_grid.hpp"
 #include "tsan_annotations.hpp"
 
 namespace mbsflow {
@@ -304,7 +305,7 @@ bool BlockIntegrator::Driver::advance() {
   BlockStats& st = result_.stats;
   const int s = s_.method.s, q = small_.method().order;
   double& tau = tau_;
-  const double t_end = p_.t_end, eps_t = 1e-12 * std::max(1.0, std::abs(t_end));
+  const double t_end = p_.t_end, eps_t = end_tolerance(t_end);
   auto fail = [&](const std::string& why, const char* hint = "") {
     std::ostringstream os;
     os << why << " at t = " << t_ << " (step " << tau << ")" << hint;

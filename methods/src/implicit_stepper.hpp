@@ -27,17 +27,17 @@ class ImplicitStepper : public Stepper {
   }
   void step() override {
     if (!integrator_->advance()) {
-      // The integrator has ended within its 1e-12 (relative) of t_end: a last step fell a
-      // rounding short of it (ten steps of 0.1 make 0.9999999999999999). That is the end;
-      // without this done() stayed false and the caller stepped for ever.
+      // Nothing left to integrate: the stretch began within rounding of t_end. That is the
+      // end; without this done() stayed false and the caller stepped for ever.
       t_ = t_end_;
       return;
     }
     t_previous_ = t_;
-    // A step that ends within rounding of t_end is the last (as the integrator will find at
-    // its next advance): done() says so now, so the caller does not take it for a step
-    // between others (a checkpoint after it, an extra call).
-    t_ = landed_time(integrator_->t(), 0.0, t_end_);
+    // A step that ends within rounding of t_end (ten steps of 0.1 make 0.9999999999999999)
+    // is the last, as the integrator will find at its next advance: done() says so now, so
+    // the caller does not take it for a step between others (a checkpoint after it, an
+    // extra call).
+    t_ = reached_end(integrator_->t(), t_end_) ? t_end_ : integrator_->t();
     y_ = integrator_->y();
     count();
   }

@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "mbsflow/methods/jacobian.hpp"
+#include "mbsflow/methods/step_grid.hpp"
 #include "cubic_hermite.hpp"
 #include "error_norm.hpp"
 #include "settings_checks.hpp"
@@ -461,7 +462,7 @@ bool TirkIntegrator::Driver::advance() {
   Eigen::VectorXd& fx = fx_;
   const bool fixed = fixed_;
   bool& after_rejection = after_rejection_;
-  const double t_end = p_.t_end, eps_t = 1e-12 * std::max(1.0, std::abs(t_end));
+  const double t_end = p_.t_end, eps_t = end_tolerance(t_end);
   while (t_end - t > eps_t) {
     if (st.steps >= s_.max_steps) fail("reached the maximum number of steps", tau);
     if (const char* hint = step_underflow(tau, t, s_.min_step)) fail("step size underflow", tau, hint);

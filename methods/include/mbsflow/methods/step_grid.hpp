@@ -33,10 +33,13 @@ inline StepGrid step_grid(double t_start, double t_end, double h) {
   return g;
 }
 
+// How close to t_end an adaptive run counts as there (1e-12, relative): the integrators
+// step while t_end - t is larger, and a step that ends this close lands on t_end.
+inline double end_tolerance(double t_end) { return 1e-12 * std::max(1.0, std::abs(t_end)); }
+inline bool reached_end(double t, double t_end) { return t_end - t <= end_tolerance(t_end); }
+
 // Where an adaptive step of `taken` from t lands: exactly on t_end when within rounding.
-inline double landed_time(double t, double taken, double t_end) {
-  return (t_end - (t + taken)) <= 1e-12 * std::max(1.0, std::abs(t_end)) ? t_end : t + taken;
-}
+inline double landed_time(double t, double taken, double t_end) { return reached_end(t + taken, t_end) ? t_end : t + taken; }
 
 // Steps per chunk of RK4: snapshots fall on chunk ends; at most 64 steps unrolled.
 inline int chunk_length(int output_every) {
