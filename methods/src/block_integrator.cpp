@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <sstream>
 
 #include "block_solve.hpp"
@@ -135,6 +136,7 @@ class BlockIntegrator::Driver {
   std::unique_ptr<BlockSolve> starter_;
   std::unique_ptr<JacobianEvaluator> jacobian_;
   Eigen::SparseMatrix<double> jac_;
+  std::optional<LinearSolverKind> kind_;  // chosen for jac_'s pattern, which stays (a bandwidth scan of J)
   BlockResult result_;
   double t_ = 0;
   double tau_ = 0;  // the step (point spacing) to try next
@@ -177,7 +179,8 @@ bool BlockIntegrator::Driver::factorize(std::initializer_list<BlockSolve*> block
   }
   const double ratio = s_.refactor_ratio;
   if (factorized_for_ == *blocks.begin() && std::abs(tau / factorized_tau_ - 1) <= ratio) return true;
-  const LinearSolverKind kind = choose_linear_solver(jac_, s_.linear_solver);
+  if (!kind_) kind_ = choose_linear_solver(jac_, s_.linear_solver);
+  const LinearSolverKind kind = *kind_;
   for (BlockSolve* b : blocks) {
     b->request_factorization(jac_, tau, kind);
     st.factorizations += b->systems();

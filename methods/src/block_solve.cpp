@@ -30,7 +30,8 @@ BlockSolve::BlockSolve(const BlockCoefficients& method, const OdeProblem& proble
   f_not_finite_.assign(static_cast<std::size_t>(slices() * k), 0);
   if (kind_ != BlockIteration::newton) return;
   r_.assign(k, Eigen::VectorXd::Zero(n_));
-  split_ = std::make_unique<EigenSplit>(method_.g, n_, "the block method's matrix g");
+  split_ = std::make_unique<EigenSplit>(method_.g, n_, "the block method's matrix g",
+                                        make_elimination(problem.eliminable));
 }
 
 void BlockSolve::request_factorization(const Eigen::SparseMatrix<double>& jac, double tau, LinearSolverKind kind) {

@@ -10,7 +10,8 @@ namespace mbsflow {
 
 // g = T diag(mu) T^-1, with real columns for real eigenvalues and conjugate columns for a
 // complex pair, so that only one system per pair is solved.
-EigenSplit::EigenSplit(const Eigen::MatrixXd& g, Eigen::Index n, const std::string& what) {
+EigenSplit::EigenSplit(const Eigen::MatrixXd& g, Eigen::Index n, const std::string& what,
+                       const std::shared_ptr<Elimination>& elimination) {
   const auto k = static_cast<int>(g.rows());
   Eigen::EigenSolver<Eigen::MatrixXd> eig(g);
   if (eig.info() != Eigen::Success) throw InputError("cannot diagonalise " + what);
@@ -46,6 +47,8 @@ EigenSplit::EigenSplit(const Eigen::MatrixXd& g, Eigen::Index n, const std::stri
       sys.zc.resize(n);
     }
     if (std::abs(sys.mu) == 0) throw InputError(what + " is singular");
+    sys.real_solver.eliminate_first(elimination);
+    sys.complex_solver.eliminate_first(elimination);
     systems_.push_back(std::move(sys));
   }
   Eigen::FullPivLU<Eigen::MatrixXcd> lu(t_);

@@ -8,6 +8,7 @@
 // can be a node of a flow graph; the transforms work on slices of rows.
 #include <Eigen/Core>
 #include <complex>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -18,7 +19,9 @@ namespace mbsflow {
 class EigenSplit {
  public:
   // Throws InputError when G is singular or not diagonalisable (`what` names G).
-  EigenSplit(const Eigen::MatrixXd& g, Eigen::Index n, const std::string& what);
+  // elimination: for every system's solver (ShiftedSolver::eliminate_first).
+  EigenSplit(const Eigen::MatrixXd& g, Eigen::Index n, const std::string& what,
+             const std::shared_ptr<Elimination>& elimination = nullptr);
 
   int points() const { return static_cast<int>(t_.rows()); }
   int systems() const { return static_cast<int>(systems_.size()); }

@@ -1,8 +1,8 @@
 #include "mbsflow/methods/shifted_solver.hpp"
 
-#include <cstring>
-
 #include "klu_lu.hpp"
+#include "scalar_archive.hpp"
+#include "schur_reduction.hpp"
 #include "mbsflow/error.hpp"
 
 #include <algorithm>
@@ -44,9 +44,6 @@ LinearSolverKind choose_linear_solver(const Eigen::SparseMatrix<double>& j, Line
   return b.lower + b.upper <= 64 ? LinearSolverKind::banded : LinearSolverKind::klu;
 }
 
-// matrix_ = I - gamma J. While J keeps its pattern only the numbers are written, through
-// the slots found when the pattern first came; true when the sparse LU of the current kind
-// has already analysed that pattern.
 namespace {
 
 // Compressed, with every column sorted by row (as the merge below needs).
@@ -59,76 +56,116 @@ bool compressed_and_sorted(const Eigen::SparseMatrix<double>& j) {
   return true;
 }
 
+// J itself when compressed with sorted columns, else such a copy in `storage` (a
+// transposed copy of a transpose has its columns sorted).
+const Eigen::SparseMatrix<double>& tidy(const Eigen::SparseMatrix<double>& given, Eigen::SparseMatrix<double>& storage) {
+  if (compressed_and_sorted(given)) return given;
+  const Eigen::SparseMatrix<double, Eigen::RowMajor> t = given;
+  storage = t;
+  storage.makeCompressed();
+  return storage;
+}
+
 }  // namespace
 
+// What depends on J's pattern only is worked out when the pattern is new: the automatic
+// choice of kind, and (fill_sparse) the layout of the sparse matrix. A pattern is kept for
+// comparison when J is compressed with sorted columns (as the Jacobian evaluators make it).
 template <class Scalar>
-bool ShiftedSolver<Scalar>::fill_sparse(const Eigen::SparseMatrix<double>& given, Scalar gamma) {
-  const Eigen::SparseMatrix<double>* jp = &given;
-  Eigen::SparseMatrix<double> sorted;
-  const bool tidy = compressed_and_sorted(given);
-  if (!tidy) {  // a transposed copy of a transpose has its columns sorted
-    const Eigen::SparseMatrix<double, Eigen::RowMajor> t = given;
-    sorted = t;
-    sorted.makeCompressed();
-    jp = &sorted;
-  }
-  const Eigen::SparseMatrix<double>& j = *jp;
+void ShiftedSolver<Scalar>::note_pattern(const Eigen::SparseMatrix<double>& j) {
   const Eigen::Index n = j.rows(), nnz = j.nonZeros();
   const int* outer = j.outerIndexPtr();
   const int* inner = j.innerIndexPtr();
-  const bool same = tidy && static_cast<Eigen::Index>(slot_.size()) == nnz &&
-                    std::equal(j_outer_.begin(), j_outer_.end(), outer, outer + n + 1) &&
-                    std::equal(j_inner_.begin(), j_inner_.end(), inner, inner + nnz);
-  if (!same) {
-    // The pattern of I - gamma J: J's columns merged with the diagonal, written directly
-    // (an Eigen expression over complex entries took a tenth of a short run's time), and
-    // where each entry of J and of the identity lands.
-    slot_.assign(static_cast<std::size_t>(nnz), 0);
-    diagonal_slot_.assign(static_cast<std::size_t>(n), 0);
-    std::vector<int> m_outer(static_cast<std::size_t>(n + 1)), m_inner;
-    m_inner.reserve(static_cast<std::size_t>(nnz + n));
-    for (Eigen::Index c = 0; c < n; ++c) {
-      m_outer[static_cast<std::size_t>(c)] = static_cast<int>(m_inner.size());
-      bool diagonal = false;
-      for (int k = outer[c]; k < outer[c + 1]; ++k) {
-        if (!diagonal && inner[k] >= c) {
-          diagonal = true;
-          diagonal_slot_[static_cast<std::size_t>(c)] = static_cast<int>(m_inner.size());
-          if (inner[k] > c) m_inner.push_back(static_cast<int>(c));
-        }
-        slot_[static_cast<std::size_t>(k)] = static_cast<int>(m_inner.size());
-        m_inner.push_back(inner[k]);
-      }
-      if (!diagonal) {
-        diagonal_slot_[static_cast<std::size_t>(c)] = static_cast<int>(m_inner.size());
-        m_inner.push_back(static_cast<int>(c));
-      }
+  if (j.isCompressed() && !j_outer_.empty() && std::equal(j_outer_.begin(), j_outer_.end(), outer, outer + n + 1) &&
+      std::equal(j_inner_.begin(), j_inner_.end(), inner, inner + nnz))
+    return;
+  j_outer_.clear();
+  j_inner_.clear();
+  if (compressed_and_sorted(j)) {
+    j_outer_.assign(outer, outer + n + 1);
+    j_inner_.assign(inner, inner + nnz);
+  }
+  chosen_ = choose_linear_solver(j, LinearSolverKind::automatic);
+  laid_out_ = false;
+}
+
+// matrix_ = I - gamma J, or its Schur complement when blocks can be eliminated. While J
+// keeps its pattern only the numbers are written, through the slots found when the
+// pattern first came; true when the sparse LU of the current kind has already analysed
+// that pattern. After note_pattern(given).
+template <class Scalar>
+bool ShiftedSolver<Scalar>::fill_sparse(const Eigen::SparseMatrix<double>& given, Scalar gamma) {
+  Eigen::SparseMatrix<double> sorted;
+  const Eigen::SparseMatrix<double>& j = j_outer_.empty() ? tidy(given, sorted) : given;  // a kept pattern is tidy
+  const Eigen::Index nnz = j.nonZeros();
+  if (!laid_out_) {
+    schur_pattern_ = elimination_ ? elimination_->pattern_for(j) : nullptr;
+    if (schur_pattern_) {
+      const SchurPattern& p = *schur_pattern_;
+      matrix_ = Eigen::SparseMatrix<Scalar>(p.kept_count, p.kept_count);
+      matrix_.resizeNonZeros(static_cast<Eigen::Index>(p.s_inner.size()));
+      std::copy(p.s_outer.begin(), p.s_outer.end(), matrix_.outerIndexPtr());
+      std::copy(p.s_inner.begin(), p.s_inner.end(), matrix_.innerIndexPtr());
+      schur_ = std::make_shared<SchurReduction<Scalar>>();
+    } else {
+      lay_out(j);
     }
-    m_outer[static_cast<std::size_t>(n)] = static_cast<int>(m_inner.size());
-    matrix_ = Eigen::SparseMatrix<Scalar>(n, n);
-    matrix_.resizeNonZeros(static_cast<Eigen::Index>(m_inner.size()));
-    std::copy(m_outer.begin(), m_outer.end(), matrix_.outerIndexPtr());
-    std::copy(m_inner.begin(), m_inner.end(), matrix_.innerIndexPtr());
-    j_outer_.clear();
-    j_inner_.clear();
-    if (tidy) {
-      j_outer_.assign(outer, outer + n + 1);
-      j_inner_.assign(inner, inner + nnz);
-    }
+    laid_out_ = !j_outer_.empty();  // an untidy J is laid out anew every time
     sparse_.reset();
     klu_.reset();
   }
   Scalar* v = matrix_.valuePtr();
-  std::fill(v, v + matrix_.nonZeros(), Scalar(0));
-  const double* jv = j.valuePtr();
-  for (Eigen::Index k = 0; k < nnz; ++k) v[slot_[static_cast<std::size_t>(k)]] = -gamma * jv[k];
-  for (int d : diagonal_slot_) v[d] += Scalar(1);
-  return same && (kind_ == LinearSolverKind::klu ? klu_ != nullptr : sparse_ != nullptr);
+  if (schur_pattern_) {
+    schur_->reduce(*schur_pattern_, j, gamma, v);
+  } else {
+    std::fill(v, v + matrix_.nonZeros(), Scalar(0));
+    const double* jv = j.valuePtr();
+    for (Eigen::Index k = 0; k < nnz; ++k) v[slot_[static_cast<std::size_t>(k)]] = -gamma * jv[k];
+    for (int d : diagonal_slot_) v[d] += Scalar(1);
+  }
+  return kind_ == LinearSolverKind::klu ? klu_ != nullptr : sparse_ != nullptr;
+}
+
+// The pattern of I - gamma J: J's columns merged with the diagonal, written directly (an
+// Eigen expression over complex entries took a tenth of a short run's time), and where
+// each entry of J and of the identity lands.
+template <class Scalar>
+void ShiftedSolver<Scalar>::lay_out(const Eigen::SparseMatrix<double>& j) {
+  const Eigen::Index n = j.rows(), nnz = j.nonZeros();
+  const int* outer = j.outerIndexPtr();
+  const int* inner = j.innerIndexPtr();
+  slot_.assign(static_cast<std::size_t>(nnz), 0);
+  diagonal_slot_.assign(static_cast<std::size_t>(n), 0);
+  std::vector<int> m_outer(static_cast<std::size_t>(n + 1)), m_inner;
+  m_inner.reserve(static_cast<std::size_t>(nnz + n));
+  for (Eigen::Index c = 0; c < n; ++c) {
+    m_outer[static_cast<std::size_t>(c)] = static_cast<int>(m_inner.size());
+    bool diagonal = false;
+    for (int k = outer[c]; k < outer[c + 1]; ++k) {
+      if (!diagonal && inner[k] >= c) {
+        diagonal = true;
+        diagonal_slot_[static_cast<std::size_t>(c)] = static_cast<int>(m_inner.size());
+        if (inner[k] > c) m_inner.push_back(static_cast<int>(c));
+      }
+      slot_[static_cast<std::size_t>(k)] = static_cast<int>(m_inner.size());
+      m_inner.push_back(inner[k]);
+    }
+    if (!diagonal) {
+      diagonal_slot_[static_cast<std::size_t>(c)] = static_cast<int>(m_inner.size());
+      m_inner.push_back(static_cast<int>(c));
+    }
+  }
+  m_outer[static_cast<std::size_t>(n)] = static_cast<int>(m_inner.size());
+  matrix_ = Eigen::SparseMatrix<Scalar>(n, n);
+  matrix_.resizeNonZeros(static_cast<Eigen::Index>(m_inner.size()));
+  std::copy(m_outer.begin(), m_outer.end(), matrix_.outerIndexPtr());
+  std::copy(m_inner.begin(), m_inner.end(), matrix_.innerIndexPtr());
 }
 
 template <class Scalar>
 void ShiftedSolver<Scalar>::factorize(const Eigen::SparseMatrix<double>& j, Scalar gamma, LinearSolverKind kind) {
-  kind_ = kind == LinearSolverKind::automatic ? choose_linear_solver(j, kind) : kind;
+  note_pattern(j);
+  kind_ = kind == LinearSolverKind::automatic ? chosen_ : kind;
   const Eigen::Index n = j.rows();
   factorized_ = false;
   if (kind_ == LinearSolverKind::dense || kind_ == LinearSolverKind::banded) {
@@ -179,28 +216,6 @@ void ShiftedSolver<Scalar>::factorize(const Eigen::SparseMatrix<double>& j, Scal
   factorized_ = true;
 }
 
-namespace {
-
-// Scalars as doubles (a complex one as two), for checkpoints.
-template <class Scalar>
-Eigen::VectorXd as_reals(const Scalar* v, Eigen::Index n) {
-  constexpr int k = sizeof(Scalar) / sizeof(double);
-  Eigen::VectorXd out(n * k);
-  std::memcpy(out.data(), v, static_cast<std::size_t>(n) * sizeof(Scalar));
-  return out;
-}
-
-template <class Scalar>
-std::vector<Scalar> from_reals(const Eigen::VectorXd& r, StateReader& in) {
-  constexpr int k = sizeof(Scalar) / sizeof(double);
-  if (r.size() % k != 0) in.fail("a complex vector of odd length");
-  std::vector<Scalar> out(static_cast<std::size_t>(r.size() / k));
-  if (!out.empty()) std::memcpy(static_cast<void*>(out.data()), r.data(), out.size() * sizeof(Scalar));
-  return out;
-}
-
-}  // namespace
-
 template <class Scalar>
 void ShiftedSolver<Scalar>::save(StateWriter& out) const {
   out.flag(factorized_);
@@ -211,6 +226,8 @@ void ShiftedSolver<Scalar>::save(StateWriter& out) const {
     out.vector(as_reals(&dense_gamma_, 1));
     return;
   }
+  out.flag(schur_pattern_ != nullptr);
+  if (schur_pattern_) schur_->save(out);
   out.vector(as_reals(matrix_.valuePtr(), matrix_.nonZeros()));
   if (kind_ == LinearSolverKind::klu) {
     out.vector(as_reals(klu_->full_values().data(), static_cast<Eigen::Index>(klu_->full_values().size())));
@@ -231,7 +248,10 @@ void ShiftedSolver<Scalar>::restore(StateReader& in, const Eigen::SparseMatrix<d
     return;
   }
   kind_ = kind;
+  note_pattern(pattern);
   fill_sparse(pattern, Scalar(0));  // the layout of I - gamma J, and where J's entries go
+  if (in.flag() != (schur_pattern_ != nullptr)) in.fail("a Newton matrix reduced otherwise than its Jacobian's pattern allows");
+  if (schur_pattern_) schur_->restore(in);
   const std::vector<Scalar> values = from_reals<Scalar>(in.vector(), in);
   if (static_cast<Eigen::Index>(values.size()) != matrix_.nonZeros()) in.fail("a Newton matrix does not fit the Jacobian's pattern");
   std::copy(values.begin(), values.end(), matrix_.valuePtr());
@@ -263,9 +283,23 @@ void ShiftedSolver<Scalar>::solve(Vector& b) const {
   switch (kind_) {
     case LinearSolverKind::dense: b = dense_.solve(b); break;
     case LinearSolverKind::banded: band_.solve(b); break;
-    case LinearSolverKind::klu: klu_->solve(b); break;
-    default: b = sparse_->solve(b); break;
+    case LinearSolverKind::klu:
+      if (schur_pattern_)
+        schur_->solve(b, [this](Vector& x) { klu_->solve(x); });
+      else
+        klu_->solve(b);
+      break;
+    default:
+      if (schur_pattern_)
+        schur_->solve(b, [this](Vector& x) { x = sparse_->solve(x); });
+      else
+        b = sparse_->solve(b);
+      break;
   }
+}
+
+std::shared_ptr<Elimination> make_elimination(const std::vector<RowRange>& blocks) {
+  return blocks.empty() ? nullptr : std::make_shared<Elimination>(blocks);
 }
 
 template class ShiftedSolver<double>;

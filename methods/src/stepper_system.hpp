@@ -34,6 +34,7 @@ inline OdeProblem problem_of(const StepperSystem& s) {
     };
   p.describe = s.describe;
   if (s.sparsity) p.sparsity = s.sparsity();
+  p.eliminable = s.eliminable;
   return p;
 }
 

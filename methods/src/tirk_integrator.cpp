@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <sstream>
 
 #include "mbsflow/methods/jacobian.hpp"
@@ -170,6 +171,7 @@ class TirkIntegrator::Driver {
   TirkStages stages_;
   JacobianEvaluator jacobian_;
   Eigen::SparseMatrix<double> jac_;
+  std::optional<LinearSolverKind> kind_;  // chosen for jac_'s pattern, which stays (a bandwidth scan of J)
   ConvergenceMonitor monitor_;
   StepController controller_;
   TirkResult result_;
@@ -227,7 +229,8 @@ bool TirkIntegrator::Driver::factorize(const Eigen::VectorXd& x, const Eigen::Ve
     jacobian_at_point_ = true;
     jacobian_stale_ = false;
   }
-  const LinearSolverKind kind = choose_linear_solver(jac_, s_.linear_solver);
+  if (!kind_) kind_ = choose_linear_solver(jac_, s_.linear_solver);
+  const LinearSolverKind kind = *kind_;
   stages_.request_factorization(jac_, tau, kind);
   st.factorizations += stages_.systems();
   st.linear_solver = kind;

@@ -30,8 +30,11 @@ TirkStages::TirkStages(const RkTableau& tableau, const Eigen::MatrixXd& t, TirkI
   f_bad_.assign(cells, 0);
   if (!newton()) return;
   filter_gamma_ = filter_gamma;
+  const std::shared_ptr<Elimination> elimination = make_elimination(problem.eliminable);
+  filter_.eliminate_first(elimination);
   if (full_newton()) {
-    split_ = std::make_unique<EigenSplit>(tableau.implicit_block(), n_, "the matrix A of tableau " + tableau.name);
+    split_ = std::make_unique<EigenSplit>(tableau.implicit_block(), n_, "the matrix A of tableau " + tableau.name,
+                                          elimination);
     filter_system_ = split_->real_system(filter_gamma);
     r_.assign(static_cast<std::size_t>(si_), zero);
     return;
@@ -49,6 +52,7 @@ TirkStages::TirkStages(const RkTableau& tableau, const Eigen::MatrixXd& t, TirkI
     }
   }
   solvers_.resize(diagonal_values_.size());
+  for (ShiftedSolver<double>& s : solvers_) s.eliminate_first(elimination);
 }
 
 void TirkStages::save(StateWriter& out) const {

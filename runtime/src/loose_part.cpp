@@ -6,6 +6,7 @@
 
 #include "mbsflow/error.hpp"
 #include "mbsflow/runtime/divergence.hpp"
+#include "mbsflow/runtime/eliminable.hpp"
 #include "sink_runner.hpp"
 
 namespace mbsflow::loose {
@@ -62,6 +63,7 @@ LoosePart::LoosePart(const Model& model, const Submodel& sub, const RunOptions& 
   system_.rhs = [this](double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) { ghosted_rhs(t, y, dydt); };
   system_.after_step = [this](double t, Eigen::VectorXd& y) { part.system.after_step(t, y); };
   system_.sparsity = [this] { return part.system.jacobian_pattern(); };
+  system_.eliminable = eliminable_unknowns(part.system.layout());
   system_.describe = [this](Eigen::Index i) { return describe_unknown(part.system.model(), i); };
   RunOptions mine = o;
   mine.method = method;

@@ -6,6 +6,7 @@
 #include "mbsflow/graph/multibody_system.hpp"
 #include "mbsflow/methods/stepper.hpp"
 #include "mbsflow/runtime/divergence.hpp"
+#include "mbsflow/runtime/eliminable.hpp"
 
 namespace mbsflow {
 
@@ -17,6 +18,7 @@ inline StepperSystem stepper_system(MultibodySystem& sys, const std::string& jac
   s.rhs = [&sys](double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) { sys.rhs(t, y, dydt); };
   s.after_step = [&sys](double t, Eigen::VectorXd& y) { sys.after_step(t, y); };
   s.sparsity = [&sys] { return sys.jacobian_pattern(); };
+  s.eliminable = eliminable_unknowns(sys.layout());
   s.describe = [&sys](Eigen::Index i) { return describe_unknown(sys.model(), i); };
   return s;
 }

@@ -7,6 +7,7 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace mbsflow {
 
@@ -44,6 +45,11 @@ struct OdeProblem {
   // (atol_i = rtol * absolute_scale_i: chemical kinetics with components of 1e-14 next to
   // ones of 1); empty: 1 for all, i.e. atol = rtol.
   Eigen::VectorXd absolute_scale;
+  // Optional: small blocks of unknowns whose rates read, among the unknowns of all blocks,
+  // only their own block (a body's position, r' = v, and its quaternion, q' = q (x) (0, w) / 2).
+  // The sparse Newton solvers eliminate them first and factorise the rest (the Schur
+  // complement, schur_reduction.hpp), where the Jacobian's pattern allows it.
+  std::vector<RowRange> eliminable;
 
   void evaluate(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const { rhs(t, y, dydt, {0, size}); }
 };

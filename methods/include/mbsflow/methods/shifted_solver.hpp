@@ -4,7 +4,9 @@
 // dense LU for small systems, band LU when J is banded, sparse LU otherwise: SuiteSparse
 // KLU by default (faster on the multibody and heat matrices, docs/methods.md), or Eigen's
 // SparseLU with COLAMD ordering. Both keep their symbolic analysis while the pattern of
-// the matrix stays the same.
+// the matrix stays the same. With eliminate_first(), the sparse kinds eliminate small
+// diagonal blocks of unknowns first and factorise the Schur complement of the rest
+// (schur_reduction.hpp): a multibody model's positions and quaternions.
 #include "mbsflow/error.hpp"
 #include <Eigen/Core>
 #include <Eigen/LU>
@@ -16,6 +18,7 @@
 #include <vector>
 
 #include "mbsflow/methods/banded_lu.hpp"
+#include "mbsflow/methods/ode_problem.hpp"
 #include "mbsflow/methods/state_archive.hpp"
 
 namespace mbsflow {
@@ -34,11 +37,21 @@ LinearSolverKind choose_linear_solver(const Eigen::SparseMatrix<double>& j, Line
 
 template <class Scalar>
 class KluLu;  // klu_lu.hpp
+struct SchurPattern;  // schur_reduction.hpp
+class Elimination;
+template <class Scalar>
+class SchurReduction;
 
 template <class Scalar>
 class ShiftedSolver {
  public:
   using Vector = Eigen::Matrix<Scalar, Eigen::Dynamic, 1>;
+  // Blocks of unknowns (OdeProblem::eliminable) that the sparse kinds eliminate before the
+  // LU where J's pattern allows (else they factorise the whole matrix). Set before factorize;
+  // solvers of one integrator share one (make_elimination).
+  void eliminate_first(std::shared_ptr<Elimination> e) { elimination_ = std::move(e); }
+  // Whether the last sparse factorisation was of the Schur complement.
+  bool reduced() const { return schur_pattern_ != nullptr; }
   // Throws RunError when the matrix is singular.
   void factorize(const Eigen::SparseMatrix<double>& j, Scalar gamma, LinearSolverKind kind);
   void solve(Vector& b) const;  // in place
@@ -57,8 +70,13 @@ class ShiftedSolver {
   Eigen::PartialPivLU<Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>> dense_;
   BandedLU<Scalar> band_;
   Eigen::SparseMatrix<Scalar> matrix_;  // I - gamma J, sparse kinds
-  std::vector<int> j_outer_, j_inner_;   // the pattern of J that matrix_ was built from
+  std::vector<int> j_outer_, j_inner_;   // the pattern of the last J (note_pattern)
+  LinearSolverKind chosen_ = LinearSolverKind::dense;  // the automatic kind for that pattern
+  bool laid_out_ = false;                             // matrix_ is laid out for that pattern
   std::vector<int> slot_, diagonal_slot_;  // where J's entries and the identity go in matrix_
+  std::shared_ptr<Elimination> elimination_;
+  std::shared_ptr<const SchurPattern> schur_pattern_;  // matrix_ is the Schur complement
+  std::shared_ptr<SchurReduction<Scalar>> schur_;
   std::shared_ptr<Eigen::SparseLU<Eigen::SparseMatrix<Scalar>, Eigen::COLAMDOrdering<int>>> sparse_;
   std::shared_ptr<KluLu<Scalar>> klu_;
   long analyses_ = 0;
@@ -66,7 +84,12 @@ class ShiftedSolver {
   Eigen::SparseMatrix<double> dense_j_;  // dense and banded kinds: the J and gamma last factorised, for checkpoints
   Scalar dense_gamma_ = Scalar(0);
   bool fill_sparse(const Eigen::SparseMatrix<double>& j, Scalar gamma);
+  void lay_out(const Eigen::SparseMatrix<double>& j);
+  void note_pattern(const Eigen::SparseMatrix<double>& j);
 };
+
+// The shared elimination of a problem's blocks (OdeProblem::eliminable), or nullptr when it has none.
+std::shared_ptr<Elimination> make_elimination(const std::vector<RowRange>& blocks);
 
 extern template class ShiftedSolver<double>;
 extern template class ShiftedSolver<std::complex<double>>;

@@ -20,6 +20,7 @@
 
 #include "mbsflow/error.hpp"
 #include "mbsflow/method.hpp"
+#include "mbsflow/methods/ode_problem.hpp"
 #include "mbsflow/methods/state_archive.hpp"
 
 namespace mbsflow {
@@ -38,6 +39,9 @@ struct StepperSystem {
   // Optional: makes that pattern. Called only by the methods that use a Jacobian, once
   // each, so the explicit methods never pay for building it.
   std::function<Eigen::SparseMatrix<double>()> sparsity;
+  // Optional: blocks of unknowns the implicit methods' sparse solvers may eliminate first
+  // (OdeProblem::eliminable).
+  std::vector<RowRange> eliminable;
   // Optional: what unknown i is, for the message of a failed run.
   std::function<std::string(Eigen::Index i)> describe;
 };
