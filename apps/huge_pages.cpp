@@ -40,7 +40,8 @@ void restart_with_huge_pages(char** argv) {
   if (environment("MBSFLOW_HUGE_PAGES") == "0" || before.find(tunable) != std::string::npos || !kernel_gives_huge_pages() ||
       valgrind)
     return;
-  const std::string after = (before.empty() ? "" : before + ":") + tunable + "=1:glibc.malloc.mmap_threshold=4294967295";
+  const std::string after = (before.empty() ? "" : before + ":") + tunable +
+                            "=1:glibc.malloc.mmap_threshold=4294967295:glibc.malloc.trim_threshold=268435456";
   if (::setenv("GLIBC_TUNABLES", after.c_str(), 1) != 0) return;
   ::execv("/proc/self/exe", argv);
   // exec failed (no /proc): go on as we are, without the tunable in the environment

@@ -6,7 +6,13 @@
 // glibc.malloc.mmap_threshold keeps large blocks (a state vector of a million bodies is
 // 100 MB) in the heap, so a freed one is reused rather than unmapped and zeroed afresh
 // when the next is made. Together they halve a 300 000-body start (3.9 s -> 1.8 s on the
-// 2-core VM, `mbsflow run c300k.json --t-end 1e-9`). Tunables are read only when a
+// 2-core VM, `mbsflow run c300k.json --t-end 1e-9`). A third, glibc.malloc.trim_threshold
+// = 256 MiB, keeps freed memory at the top of the heap instead of giving it back and
+// faulting in (and zeroing) a fresh huge page when the heap grows again, which the
+// default 128 KiB did at every step of an implicit run: a tirk run of the 2000-body chain
+// took 0.285-0.293 s on 2 threads and 0.187-0.247 s on 1 with it, 0.201-0.205 s and
+// 0.185-0.187 s without; CVODE in the same runs 0.207-0.214 s either way (`bench stiff
+// --problems chain --frequencies 1e4 --tolerances 1e-3`, alternated four times). Tunables are read only when a
 // process starts, so mbsflow starts itself once more with them set. MBSFLOW_HUGE_PAGES=0
 // turns this off; nothing happens where the kernel never gives huge pages, where
 // GLIBC_TUNABLES already names glibc.malloc.hugetlb, or under valgrind.
