@@ -185,7 +185,8 @@ Row run_cvode_klu(const Model& m, double tol, KeptStates& out) {
                                      // As a run's snapshots: unit quaternions, driven bodies exactly on their motion.
                                      sys.after_step(t, s.state);
                                      out.write(std::move(s));
-                                   });
+                                   },
+                                   {}, [&sys](double t, Eigen::VectorXd& y) { sys.after_step(t, y); });
   r.seconds = seconds_since(start);
   r.steps = c.steps;
   r.evaluations = c.evaluations;

@@ -1,6 +1,7 @@
 #include "cvode_driver.hpp"
 
 #include <cvode/cvode.h>
+#include <cvode/cvode_proj.h>
 #include <nvector/nvector_serial.h>
 #include <sunlinsol/sunlinsol_band.h>
 #include <sunlinsol/sunlinsol_dense.h>
@@ -36,6 +37,8 @@ struct Data {
   Eigen::SparseMatrix<double> jac;
   Eigen::SparseMatrix<double> zero_diagonal;  // stored zeros: CVODE adds I in place only where J has a diagonal
   long difference_evaluations = 0, jacobians = 0;
+  std::function<void(double, Eigen::VectorXd&)> project;  // optional (run_cvode)
+  Eigen::VectorXd projected;
 };
 
 int rhs(sunrealtype t, N_Vector y, N_Vector ydot, void* data) {
@@ -80,17 +83,28 @@ int jacobian(sunrealtype t, N_Vector y, N_Vector fy, SUNMatrix j, void* data, N_
   return 0;
 }
 
+// CVODE's projection (cvode_proj.h): the state of every accepted step put back where
+// `project` puts it; corr = projected - ycur, the error estimate left as it is.
+int project(sunrealtype t, N_Vector ycur, N_Vector corr, sunrealtype, N_Vector, void* data) {
+  auto* d = static_cast<Data*>(data);
+  const Eigen::Map<const Eigen::VectorXd> y(N_VGetArrayPointer(ycur), d->p->size);
+  d->projected = y;
+  d->project(t, d->projected);
+  Eigen::Map<Eigen::VectorXd>(N_VGetArrayPointer(corr), d->p->size) = d->projected - y;
+  return 0;
+}
+
 }  // namespace
 
 CvodeOutcome run_cvode(const OdeProblem& p, double rtol, double atol, CvodeLinearSolver solver,
                        const std::vector<double>& outputs, const std::function<void(double, const double*)>& on_output,
-                       const Eigen::VectorXd& atols) {
+                       const Eigen::VectorXd& atols, const std::function<void(double, Eigen::VectorXd&)>& projection) {
   CvodeOutcome o;
   SUNContext ctx;
   SUNContext_Create(nullptr, &ctx);
   N_Vector y = N_VNew_Serial(p.size, ctx);
   Eigen::Map<Eigen::VectorXd>(N_VGetArrayPointer(y), p.size) = p.y0;
-  Data d{&p, solver, Eigen::VectorXd(p.size), Eigen::VectorXd(p.size), nullptr, {}, {}, 0, 0};
+  Data d{&p, solver, Eigen::VectorXd(p.size), Eigen::VectorXd(p.size), nullptr, {}, {}, 0, 0, projection, {}};
   d.zero_diagonal.resize(p.size, p.size);
   d.zero_diagonal.setIdentity();
   d.zero_diagonal *= 0.0;
@@ -124,6 +138,7 @@ CvodeOutcome run_cvode(const OdeProblem& p, double rtol, double atol, CvodeLinea
   CVodeSetUserData(mem, &d);
   CVodeSetLinearSolver(mem, ls, a);
   CVodeSetJacFn(mem, jacobian);
+  if (projection) CVodeSetProjFn(mem, project);
   CVodeSetMaxNumSteps(mem, 10'000'000);
   CVodeSetStopTime(mem, p.t_end);
   CVodeSetMaxHnilWarns(mem, -1);  // its step-underflow warnings: reported in the note instead

@@ -22,9 +22,12 @@ struct CvodeOutcome {
 
 // From p.t0 to p.t_end at tolerances rtol, atol. With output times, on_output(t, y) sees
 // CVODE's interpolated solution at each of them; without, the solution after every step.
-// atols (one per equation), when given, replaces the scalar atol.
+// atols (one per equation), when given, replaces the scalar atol. projection, when given,
+// puts the state of every accepted step back on the problem's manifold (CVODE's own
+// projection; a multibody model's after_step, as mbsflow's steppers do).
 CvodeOutcome run_cvode(const OdeProblem& p, double rtol, double atol, CvodeLinearSolver solver,
                        const std::vector<double>& outputs, const std::function<void(double t, const double* y)>& on_output,
-                       const Eigen::VectorXd& atols = {});
+                       const Eigen::VectorXd& atols = {},
+                       const std::function<void(double t, Eigen::VectorXd& y)>& projection = {});
 
 }  // namespace mbsflow::cli
