@@ -75,7 +75,6 @@ std::shared_ptr<const SchurPattern> make_schur_pattern(const Eigen::SparseMatrix
   const Eigen::Index n = j.rows();
   if (ranges.empty() || j.cols() != n || !j.isCompressed()) return nullptr;
   auto p = std::make_shared<SchurPattern>();
-  p->n = n;
   const auto un = static_cast<std::size_t>(n);
   std::vector<int> block_of(un, -1), local(un, 0), reduced(un, -1);
   for (const RowRange& r : ranges) {
@@ -231,16 +230,19 @@ std::shared_ptr<const SchurPattern> make_schur_pattern(const Eigen::SparseMatrix
   return p;
 }
 
+bool same_pattern(const std::vector<int>& outer, const std::vector<int>& inner, const Eigen::SparseMatrix<double>& j) {
+  const int* o = j.outerIndexPtr();
+  const int* i = j.innerIndexPtr();
+  return j.isCompressed() && !outer.empty() && std::equal(outer.begin(), outer.end(), o, o + j.outerSize() + 1) &&
+         std::equal(inner.begin(), inner.end(), i, i + j.nonZeros());
+}
+
 std::shared_ptr<const SchurPattern> Elimination::pattern_for(const Eigen::SparseMatrix<double>& j) {
   std::lock_guard lock(mutex_);
-  const int* outer = j.outerIndexPtr();
-  const int* inner = j.innerIndexPtr();
-  const bool same = !outer_.empty() && std::equal(outer_.begin(), outer_.end(), outer, outer + j.outerSize() + 1) &&
-                    std::equal(inner_.begin(), inner_.end(), inner, inner + j.nonZeros());
-  if (!same) {
+  if (!same_pattern(outer_, inner_, j)) {
     pattern_ = make_schur_pattern(j, blocks_);
-    outer_.assign(outer, outer + j.outerSize() + 1);
-    inner_.assign(inner, inner + j.nonZeros());
+    outer_.assign(j.outerIndexPtr(), j.outerIndexPtr() + j.outerSize() + 1);
+    inner_.assign(j.innerIndexPtr(), j.innerIndexPtr() + j.nonZeros());
   }
   return pattern_;
 }

@@ -49,7 +49,7 @@ struct SchurPattern {
     int height() const { return rows_end - rows_begin; }
     bool identity() const { return ee_begin == ee_end; }  // M = I
   };
-  Eigen::Index n = 0, kept_count = 0;
+  Eigen::Index kept_count = 0;
   std::vector<int> kept;  // unknown of S -> unknown of the full system
   std::vector<Block> blocks;
   std::vector<Entry> ee, ed, de, dd;  // dd: at = S's slot
@@ -63,6 +63,9 @@ struct SchurPattern {
 // J: compressed, rows sorted in every column.
 std::shared_ptr<const SchurPattern> make_schur_pattern(const Eigen::SparseMatrix<double>& j,
                                                        const std::vector<RowRange>& blocks);
+
+// Whether j, compressed, has the pattern outer / inner (a kept copy; empty: none kept).
+bool same_pattern(const std::vector<int>& outer, const std::vector<int>& inner, const Eigen::SparseMatrix<double>& j);
 
 // The blocks to eliminate and the pattern made for them, shared by the solvers of one
 // integrator (its real and complex systems factorise shifts of the same J): the pattern

@@ -66,26 +66,31 @@ const Eigen::SparseMatrix<double>& tidy(const Eigen::SparseMatrix<double>& given
   return storage;
 }
 
+// m: n x n, compressed, with the pattern outer / inner and zero values.
+template <class Scalar>
+void set_pattern(Eigen::SparseMatrix<Scalar>& m, Eigen::Index n, const std::vector<int>& outer, const std::vector<int>& inner) {
+  m = Eigen::SparseMatrix<Scalar>(n, n);
+  m.resizeNonZeros(static_cast<Eigen::Index>(inner.size()));
+  std::copy(outer.begin(), outer.end(), m.outerIndexPtr());
+  std::copy(inner.begin(), inner.end(), m.innerIndexPtr());
+}
+
 }  // namespace
 
-// What depends on J's pattern only is worked out when the pattern is new: the automatic
-// choice of kind, and (fill_sparse) the layout of the sparse matrix. A pattern is kept for
-// comparison when J is compressed with sorted columns (as the Jacobian evaluators make it).
+// What depends on J's pattern only is worked out once per pattern: the automatic choice of
+// kind (when asked for) and (fill_sparse) the layout of the sparse matrix. A pattern is
+// kept for comparison when J is compressed with sorted columns (as the Jacobian evaluators
+// make it).
 template <class Scalar>
 void ShiftedSolver<Scalar>::note_pattern(const Eigen::SparseMatrix<double>& j) {
-  const Eigen::Index n = j.rows(), nnz = j.nonZeros();
-  const int* outer = j.outerIndexPtr();
-  const int* inner = j.innerIndexPtr();
-  if (j.isCompressed() && !j_outer_.empty() && std::equal(j_outer_.begin(), j_outer_.end(), outer, outer + n + 1) &&
-      std::equal(j_inner_.begin(), j_inner_.end(), inner, inner + nnz))
-    return;
+  if (same_pattern(j_outer_, j_inner_, j)) return;
   j_outer_.clear();
   j_inner_.clear();
   if (compressed_and_sorted(j)) {
-    j_outer_.assign(outer, outer + n + 1);
-    j_inner_.assign(inner, inner + nnz);
+    j_outer_.assign(j.outerIndexPtr(), j.outerIndexPtr() + j.outerSize() + 1);
+    j_inner_.assign(j.innerIndexPtr(), j.innerIndexPtr() + j.nonZeros());
   }
-  chosen_ = choose_linear_solver(j, LinearSolverKind::automatic);
+  chosen_.reset();
   laid_out_ = false;
 }
 
@@ -101,11 +106,7 @@ bool ShiftedSolver<Scalar>::fill_sparse(const Eigen::SparseMatrix<double>& given
   if (!laid_out_) {
     schur_pattern_ = elimination_ ? elimination_->pattern_for(j) : nullptr;
     if (schur_pattern_) {
-      const SchurPattern& p = *schur_pattern_;
-      matrix_ = Eigen::SparseMatrix<Scalar>(p.kept_count, p.kept_count);
-      matrix_.resizeNonZeros(static_cast<Eigen::Index>(p.s_inner.size()));
-      std::copy(p.s_outer.begin(), p.s_outer.end(), matrix_.outerIndexPtr());
-      std::copy(p.s_inner.begin(), p.s_inner.end(), matrix_.innerIndexPtr());
+      set_pattern(matrix_, schur_pattern_->kept_count, schur_pattern_->s_outer, schur_pattern_->s_inner);
       schur_ = std::make_shared<SchurReduction<Scalar>>();
     } else {
       lay_out(j);
@@ -156,16 +157,14 @@ void ShiftedSolver<Scalar>::lay_out(const Eigen::SparseMatrix<double>& j) {
     }
   }
   m_outer[static_cast<std::size_t>(n)] = static_cast<int>(m_inner.size());
-  matrix_ = Eigen::SparseMatrix<Scalar>(n, n);
-  matrix_.resizeNonZeros(static_cast<Eigen::Index>(m_inner.size()));
-  std::copy(m_outer.begin(), m_outer.end(), matrix_.outerIndexPtr());
-  std::copy(m_inner.begin(), m_inner.end(), matrix_.innerIndexPtr());
+  set_pattern(matrix_, n, m_outer, m_inner);
 }
 
 template <class Scalar>
 void ShiftedSolver<Scalar>::factorize(const Eigen::SparseMatrix<double>& j, Scalar gamma, LinearSolverKind kind) {
   note_pattern(j);
-  kind_ = kind == LinearSolverKind::automatic ? chosen_ : kind;
+  if (kind == LinearSolverKind::automatic && !chosen_) chosen_ = choose_linear_solver(j, kind);
+  kind_ = kind == LinearSolverKind::automatic ? *chosen_ : kind;
   const Eigen::Index n = j.rows();
   factorized_ = false;
   if (kind_ == LinearSolverKind::dense || kind_ == LinearSolverKind::banded) {
@@ -283,18 +282,19 @@ void ShiftedSolver<Scalar>::solve(Vector& b) const {
   switch (kind_) {
     case LinearSolverKind::dense: b = dense_.solve(b); break;
     case LinearSolverKind::banded: band_.solve(b); break;
-    case LinearSolverKind::klu:
+    default: {  // the sparse kinds: matrix_ is I - gamma J or its Schur complement
+      auto solve_matrix = [this](Vector& x) {
+        if (kind_ == LinearSolverKind::klu)
+          klu_->solve(x);
+        else
+          x = sparse_->solve(x);
+      };
       if (schur_pattern_)
-        schur_->solve(b, [this](Vector& x) { klu_->solve(x); });
+        schur_->solve(b, solve_matrix);
       else
-        klu_->solve(b);
+        solve_matrix(b);
       break;
-    default:
-      if (schur_pattern_)
-        schur_->solve(b, [this](Vector& x) { x = sparse_->solve(x); });
-      else
-        b = sparse_->solve(b);
-      break;
+    }
   }
 }
 

@@ -3,8 +3,6 @@
 // all positions (3 per body), then all quaternions (4), velocities (3), angular velocities (3).
 #include <Eigen/Core>
 #include <algorithm>
-#include <utility>
-#include <vector>
 
 namespace mbsflow {
 
@@ -16,17 +14,6 @@ struct StateLayout {
   Eigen::Index velocity(Eigen::Index i) const { return 7 * bodies + 3 * i; }
   Eigen::Index angular_velocity(Eigen::Index i) const { return 10 * bodies + 3 * i; }
 };
-
-// Per body, its position and its quaternion as {first unknown, count}: their rates read only
-// the same body's state (r' = v, q' = q (x) (0, w) / 2), so Newton solvers can eliminate them
-// first (OdeProblem::eliminable).
-inline std::vector<std::pair<Eigen::Index, Eigen::Index>> kinematic_blocks(const StateLayout& l) {
-  std::vector<std::pair<Eigen::Index, Eigen::Index>> blocks;
-  blocks.reserve(static_cast<std::size_t>(2 * l.bodies));
-  for (Eigen::Index i = 0; i < l.bodies; ++i) blocks.emplace_back(l.position(i), 3);
-  for (Eigen::Index i = 0; i < l.bodies; ++i) blocks.emplace_back(l.orientation(i), 4);
-  return blocks;
-}
 
 // Largest distance between the centres of mass of the same body in two states.
 inline double largest_position_gap(const StateLayout& l, const Eigen::VectorXd& a, const Eigen::VectorXd& b) {

@@ -14,6 +14,7 @@
 #include <Eigen/SparseLU>
 #include <complex>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -71,7 +72,7 @@ class ShiftedSolver {
   BandedLU<Scalar> band_;
   Eigen::SparseMatrix<Scalar> matrix_;  // I - gamma J, sparse kinds
   std::vector<int> j_outer_, j_inner_;   // the pattern of the last J (note_pattern)
-  LinearSolverKind chosen_ = LinearSolverKind::dense;  // the automatic kind for that pattern
+  std::optional<LinearSolverKind> chosen_;  // the automatic kind for that pattern, once asked for
   bool laid_out_ = false;                             // matrix_ is laid out for that pattern
   std::vector<int> slot_, diagonal_slot_;  // where J's entries and the identity go in matrix_
   std::shared_ptr<Elimination> elimination_;

@@ -8,9 +8,13 @@
 
 namespace mbsflow {
 
+// Per body its position and its quaternion: their rates read only the same body's state
+// (r' = v, q' = q (x) (0, w) / 2).
 inline std::vector<RowRange> eliminable_unknowns(const StateLayout& layout) {
   std::vector<RowRange> out;
-  for (const auto& [first, count] : kinematic_blocks(layout)) out.push_back({first, first + count});
+  out.reserve(static_cast<std::size_t>(2 * layout.bodies));
+  for (Eigen::Index i = 0; i < layout.bodies; ++i) out.push_back({layout.position(i), layout.position(i) + 3});
+  for (Eigen::Index i = 0; i < layout.bodies; ++i) out.push_back({layout.orientation(i), layout.orientation(i) + 4});
   return out;
 }
 
