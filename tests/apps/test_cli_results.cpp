@@ -240,7 +240,12 @@ TEST_CASE("a run's results are read while it goes by info and h5py and plot --fo
   CHECK(last_after > last_before);  // new snapshots in the page
   CHECK(refresh_before == 1.0);         // and it reloads itself
   Child follower({"plot", "live.h5", "--follow", "--interval", "0.3", "-o", "live.png"}, d, "follower");
-  std::this_thread::sleep_for(std::chrono::seconds(2));
+  // Until the follower has drawn the live run once: on a loaded CI machine its first
+  // frame (Python and matplotlib starting) can take longer than any fixed pause.
+  const auto follow_start = std::chrono::steady_clock::now();
+  while (follower.out().find("(run going)") == std::string::npos && !follower.wait(0.0) &&
+         std::chrono::steady_clock::now() - follow_start < std::chrono::seconds(120))
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
   writer.kill(SIGTERM);
   CHECK(writer.wait(60.0) == 1);
   CHECK(follower.wait(60.0) == 0);
