@@ -16,12 +16,25 @@ struct Simulation::HeldLoad final : ForceElement {
   bool constant_wrench() const override { return true; }  // between changes, which restart the method
 };
 
+namespace {
+
+// The stepper's view of a system the program may add force elements to between steps:
+// its stages take turns on the system itself, since copies made for concurrent stages
+// (StepperSystem::another_rhs) would not see an element added later.
+StepperSystem changing_stepper_system(MultibodySystem& sys, const std::string& jacobian) {
+  StepperSystem s = stepper_system(sys, jacobian);
+  s.another_rhs = nullptr;
+  return s;
+}
+
+}  // namespace
+
 Simulation::Simulation(const Model& model) : Simulation(model, options_from_model(model)) {}
 
 Simulation::Simulation(const Model& model, const RunOptions& options)
     : system_(std::make_unique<MultibodySystem>(model)), o_(options) {
   check_options(o_);
-  stepper_system_ = stepper_system(*system_, o_.jacobian);
+  stepper_system_ = changing_stepper_system(*system_, o_.jacobian);
   stepper_ = stepper_entry(o_.method).make(stepper_system_, stepper_settings(o_));
   stepper_->start(o_.t_start, system_->initial_state(), o_.t_end);
 }
@@ -35,7 +48,7 @@ void Simulation::add_force_element(std::shared_ptr<const ForceElement> element) 
     // The element has no analytic Jacobian: a stepper that differences (its counters restart).
     const double t = stepper_->t(), t_end = stepper_->t_end();
     const Eigen::VectorXd y = stepper_->y();
-    stepper_system_ = stepper_system(*system_, o_.jacobian);
+    stepper_system_ = changing_stepper_system(*system_, o_.jacobian);
     stepper_ = stepper_entry(o_.method).make(stepper_system_, stepper_settings(o_));
     stepper_->start(t, y, t_end);
   }

@@ -1,7 +1,9 @@
 // The Stepper interface and its registry: every method behind it, on problems with exact
 // solutions.
 #include <catch2/catch.hpp>
+#include <atomic>
 #include <cmath>
+#include <memory>
 #include <vector>
 
 #include "mbsflow/line_fit.hpp"
@@ -179,5 +181,44 @@ TEST_CASE("implicit steppers end a run whose steps fall a rounding short of its 
     CHECK(calls == 10);
     CHECK(stepper->t() == 1.0);
     CHECK((stepper->y() - exact(1.0)).cwiseAbs().maxCoeff() < 1e-3);
+  }
+}
+
+TEST_CASE("implicit steppers evaluate on the copies another_rhs makes with the same numbers", "[methods][stepper]") {
+  for (Method m : {Method::colloc, Method::tirk}) {
+    INFO(method_name(m));
+    StepperSettings o;
+    o.rtol = o.atol = 1e-8;
+    o.threads = 4;
+    auto run = [&](const StepperSystem& sys) {
+      auto stepper = make_stepper(m, sys, o);
+      stepper->start(0.0, exact(0.0), 2.0);
+      while (!stepper->done()) stepper->step();
+      return stepper->y();
+    };
+    const Eigen::VectorXd alone = run(oscillator());
+    // Each copy flags a call that overlaps another of its own (the pool hands a copy to
+    // one call at a time); the system's own rhs is not called.
+    std::atomic<int> copies = 0, overlaps = 0, own_calls = 0;
+    StepperSystem pooled = oscillator();
+    const StepperSystem::Rhs f = pooled.rhs;
+    pooled.rhs = [&, f](double t, const Eigen::VectorXd& y, Eigen::VectorXd& d) {
+      ++own_calls;
+      f(t, y, d);
+    };
+    pooled.another_rhs = [&, f]() -> StepperSystem::Rhs {
+      ++copies;
+      auto busy = std::make_shared<std::atomic<bool>>(false);
+      return [&, f, busy](double t, const Eigen::VectorXd& y, Eigen::VectorXd& d) {
+        if (busy->exchange(true)) ++overlaps;
+        f(t, y, d);
+        busy->store(false);
+      };
+    };
+    CHECK(run(pooled) == alone);
+    CHECK(copies >= 1);
+    CHECK(copies <= 16);  // a few, made when every one was busy; not one per call
+    CHECK(overlaps == 0);
+    CHECK(own_calls == 0);
   }
 }

@@ -29,7 +29,14 @@ namespace mbsflow {
 // time, so it may work in scratch of its own.
 struct StepperSystem {
   Eigen::Index size = 0;
-  std::function<void(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt)> rhs;
+  using Rhs = std::function<void(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt)>;
+  Rhs rhs;
+  // Optional: makes another rhs, giving the same numbers, that works in scratch of its
+  // own, so that calls of the ones it made may overlap each other (not rhs or jacobian,
+  // with which calls of another_rhs itself do not overlap). The implicit methods then
+  // evaluate their stages and difference columns on several threads at once; without it
+  // those calls take turns.
+  std::function<Rhs()> another_rhs;
   // Optional: after every accepted step, puts the state back on its manifold (a multibody
   // model renormalises quaternions and imposes prescribed motion).
   std::function<void(double t, Eigen::VectorXd& y)> after_step;
