@@ -273,8 +273,8 @@ void MultibodySystem::project_cluster(int c, double t, Eigen::VectorXd& y) const
   RigidCluster& rc = k.clusters[static_cast<std::size_t>(c)];
   const std::vector<int>& bodies = rc.bodies();
   const std::size_t nb = bodies.size();
-  // Rows at y, and with masses: the inverse masses at y for S.
-  auto evaluate_rows = [&](bool masses) {
+  // Rows and the inverse masses (for S) at y; the largest position violation.
+  auto evaluate_rows = [&] {
     double worst = 0.0;
     for (const ClusterJoint& cj : rc.joints()) {
       const CompiledJoint& j = compiled_->joints[static_cast<std::size_t>(cj.joint)];
@@ -284,7 +284,7 @@ void MultibodySystem::project_cluster(int c, double t, Eigen::VectorXd& y) const
       for (int r = 0; r < cj.rows; ++r)
         if (rows[r].holonomic) worst = std::max(worst, std::abs(rows[r].phi));
     }
-    for (std::size_t s = 0; masses && s < nb; ++s) {
+    for (std::size_t s = 0; s < nb; ++s) {
       const int i = bodies[s];
       const auto bi = static_cast<std::size_t>(i);
       const bool driven = compiled_->driver_of_body[bi] >= 0;
@@ -294,16 +294,18 @@ void MultibodySystem::project_cluster(int c, double t, Eigen::VectorXd& y) const
     }
     return worst;
   };
-  // One factorisation of S at the state the step left, used by every iteration below
-  // (simplified Newton: the state moves by no more than the drift of one step).
+  // Newton's method with S factored afresh at every iterate. A factorisation kept from
+  // the first iterate (simplified Newton) diverged on the A05 governor after implicit
+  // steps of tolerance 1e-3: its rods and shaft turn about their own axes with inertias
+  // of 5e-6 kg m^2, so S = J M^-1 J^T changes by far more than J does, and the stale S
+  // turned a violation of 3e-6 m into 0.18 m, then the velocity projection a spin of
+  // 5e5 rad/s. The velocities below are projected with S factored at the final positions.
   Eigen::VectorXd mu(rc.row_count());
   std::vector<Vector6d>& delta = k.wrench;
-  bool factored = false;
   for (int iteration = 0; iteration < newton_iterations; ++iteration) {
-    if (evaluate_rows(!factored) <= position_tolerance) break;
+    if (evaluate_rows() <= position_tolerance) break;
     for (int r = 0; r < rc.row_count(); ++r) mu[r] = rc.rows[static_cast<std::size_t>(r)].holonomic ? -rc.rows[static_cast<std::size_t>(r)].phi : 0.0;
-    if (!factored) rc.factor();
-    factored = true;
+    rc.factor();
     rc.solve(mu);
     rc.motion(mu, delta);
     for (std::size_t s = 0; s < nb; ++s) {
@@ -312,7 +314,7 @@ void MultibodySystem::project_cluster(int c, double t, Eigen::VectorXd& y) const
       const Eigen::Vector4d q = quat_multiply(quat_exp(delta[s].tail<3>()), y.segment<4>(layout_.orientation(i)));
       y.segment<4>(layout_.orientation(i)) = q.normalized();
     }
-    if (iteration == newton_iterations - 1) evaluate_rows(false);
+    if (iteration == newton_iterations - 1) evaluate_rows();
   }
   // Velocities: remove the part that violates phi' = 0.
   for (const ClusterJoint& cj : rc.joints()) {
@@ -323,7 +325,7 @@ void MultibodySystem::project_cluster(int c, double t, Eigen::VectorXd& y) const
       mu[cj.first_row + r] = -(row.j.dot(v) + row.rate);
     }
   }
-  if (!factored) rc.factor();
+  rc.factor();
   rc.solve(mu);
   rc.motion(mu, delta);
   for (std::size_t s = 0; s < nb; ++s) {
