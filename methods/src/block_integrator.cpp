@@ -263,7 +263,14 @@ void BlockIntegrator::Driver::accept(const BlockSolve& b, double tau) {
     past_f_[at] = c < w ? past_f_[static_cast<std::size_t>(c)] : b.f[static_cast<std::size_t>(c - w)];
   }
   t_ += b.method().span() * tau;
-  if (project_) project_(t_, past_u_.back());
+  if (project_) {
+    // f at the projected point: the next Jacobian's differences are taken from it (with the
+    // block's f at the unprojected point they were off by (f(u) - f(u_projected)) / delta,
+    // and Newton failed on every model with rigid joints), and multistep blocks read it.
+    project_(t_, past_u_.back());
+    p_.evaluate(t_, past_u_.back(), past_f_.back());
+    ++result_.stats.rhs_evaluations;
+  }
   window_tau_ = tau;
   jacobian_at_point_ = false;
   ++result_.stats.accepted;
