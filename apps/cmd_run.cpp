@@ -478,7 +478,7 @@ void add_run_options(CLI::App* sub, RunArgs& args) {
                   "dense, banded, klu (SuiteSparse) or sparselu (Eigen)")
       ->check(CLI::IsMember({"auto", "dense", "banded", "klu", "sparselu"}))->capture_default_str();
   sub->add_option("--jacobian", a->jacobian,
-                  "colloc, tirk: auto (analytic when every force comes from bushings, springs, loads and gravity; else "
+                  "colloc, tirk: auto (analytic when every force comes from bushings, springs, compliant joints, loads and gravity; else "
                   "differences grouped by the pattern's colouring) or differences")
       ->check(CLI::IsMember({"auto", "differences"}))->capture_default_str();
   sub->add_option("--rtol", a->rtol, "Adaptive methods (dopri5, colloc, tirk): relative tolerance")->check(CLI::PositiveNumber);

@@ -1,7 +1,8 @@
-// The analytic Jacobian of the multibody right-hand side: each spring's and bushing's
-// wrench differentiated in forward-mode dual numbers with respect to the 26 state numbers
-// of its two bodies (force_laws.hpp, the arithmetic the right-hand side runs), then
-// assembled body by body along the body graph with the chain rule through
+// The analytic Jacobian of the multibody right-hand side: the wrench of each spring,
+// bushing and compliant kinematic joint (with its motor and limit stops) differentiated
+// in forward-mode dual numbers with respect to the 26 state numbers of its two bodies
+// (force_laws.hpp and kinematic_joint_wrench.hpp, the arithmetic the right-hand side
+// runs), then assembled body by body along the body graph with the chain rule through
 //   v' = F / m,  w' = J^-1 (R(q)^T T - w x J w),  q' = q (x) (0, w) / 2,  r' = v.
 // Exact up to rounding, so Newton converges at its own rate, and no right-hand-side call
 // is spent on differences.
@@ -12,6 +13,7 @@
 #include <stdexcept>
 
 #include "force_laws.hpp"
+#include "kinematic_joint_wrench.hpp"
 #include "mbsflow/graph/multibody_system.hpp"
 
 namespace mbsflow {
@@ -45,6 +47,16 @@ SeededState<D> seeded_state(const Eigen::VectorXd& y, const StateLayout& l, Eige
 BodyFrameT<Dual> seeded_frame(const Eigen::VectorXd& y, const StateLayout& l, Eigen::Index i, int first) {
   const SeededState<Dual> s = seeded_state<Dual>(y, l, i, first);
   return body_frame<Dual>(s.r, s.q, s.v, s.w);
+}
+
+// The kinematic joints' view of a body's frame.
+BodyMotionT<Dual> motion(const BodyFrameT<Dual>& f) {
+  BodyMotionT<Dual> m;
+  m.r = f.pos;
+  m.R = f.rot;
+  m.v = f.vel;
+  m.w = f.omega;
+  return m;
 }
 
 // The index in y of body b's state number c (0..12, in seeded_frame's order).
@@ -130,9 +142,9 @@ bool no_jacobian(std::string* why, std::string reason) {
 
 bool has_analytic_jacobian(const Model& m, std::string* why) {
   for (const Joint& j : m.joints)
-    if (is_kinematic(j.type))
-      return no_jacobian(why, std::string(j.rigid ? "rigid " : "compliant ") + joint_type_name(j.type) + " joint '" + j.name +
-                                  "' (kinematic joints have no analytic Jacobian yet)");
+    if (is_kinematic(j.type) && j.rigid)
+      return no_jacobian(why, std::string("rigid ") + joint_type_name(j.type) + " joint '" + j.name +
+                                  "' (the reactions of rigid joints have no analytic Jacobian yet)");
   for (const auto& e : m.force_elements)
     if (!e->constant_wrench()) return no_jacobian(why, "the model has user force elements");
   return true;
@@ -175,7 +187,12 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
     const BodyFrameT<Dual> a = free(j.a) ? seeded_frame(y, layout_, j.a, 0) : constant_frame(j.a);
     const BodyFrameT<Dual> b = free(j.b) ? seeded_frame(y, layout_, j.b, body_states) : constant_frame(j.b);
     Eigen::Matrix<Dual, 9, 1> out;
-    compliant_joint_wrench<Dual>(j, tables_of(j), a, b, out);
+    if (j.kinematic >= 0) {  // compliant: has_analytic_jacobian refuses rigid ones
+      out.setZero();
+      if (j.applies_force) kinematic_joint_wrench<Dual>(j, geometry_of(j), motion(a), motion(b), t, out, nullptr);
+    } else {
+      compliant_joint_wrench<Dual>(j, tables_of(j), a, b, out);
+    }
     auto d = joint_derivatives(k);
     for (int r = 0; r < 9; ++r) d.row(r) = out[r].derivatives().transpose();
   }

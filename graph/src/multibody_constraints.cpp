@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "constraint_rows.hpp"
+#include "kinematic_joint_wrench.hpp"
 #include "mbsflow/error.hpp"
 #include "mbsflow/graph/decomposition.hpp"
 #include "mbsflow/graph/multibody_system.hpp"
@@ -16,20 +17,6 @@ namespace {
 
 constexpr double position_tolerance = 1e-10;  // largest |phi| a projection leaves (m, or rad)
 constexpr int newton_iterations = 6;
-constexpr int max_joint_rows = 7;
-
-using Row12 = Eigen::Matrix<double, 12, 1>;
-
-Row12 velocities(const BodyMotion& a, const BodyMotion& b) {
-  Row12 v;
-  v << a.v, a.w, b.v, b.w;
-  return v;
-}
-
-// The coefficient of a row's direction: translational (x y z) or rotational (about x y z).
-double on_axis(const ConstraintRow& r, const Eigen::Vector3d& translational, const Eigen::Vector3d& rotational) {
-  return r.axis < 3 ? translational[r.axis] : rotational[r.axis - 3];
-}
 
 // Rotation by the rotation vector theta, as a quaternion.
 Eigen::Vector4d quat_exp(const Eigen::Vector3d& theta) {
@@ -147,35 +134,12 @@ void MultibodySystem::kinematic_joint_force(std::size_t k) {
   auto out = joint_out_.col(static_cast<Eigen::Index>(k));
   out.setZero();
   if (!j.applies_force) return;
-  const JointGeometry& g = constraints_->geometry[static_cast<std::size_t>(j.kinematic)];
-  const BodyMotion a = motion_at(j.a);
-  const BodyMotion b = motion_at(j.b);
-  const Row12 v = velocities(a, b);
-  if (!j.rigid) {  // the seed's compliant joint: -(k phi + c phi') on every constrained direction
-    std::array<ConstraintRow, max_joint_rows> rows;
-    const int n = constraint_rows(g);
-    evaluate_constraint(g, a, b, time_, rows.data());
-    for (int r = 0; r < n; ++r) {
-      const ConstraintRow& row = rows[static_cast<std::size_t>(r)];
-      const double p = -(on_axis(row, j.kt, j.kr) * row.phi + on_axis(row, j.ct, j.cr) * (row.j.dot(v) + row.rate));
-      add_row_wrench(row, p, out);
-      if (r == n - 1 && g.motor.kind != JointMotor::Kind::none) motor_effort_[static_cast<Eigen::Index>(k)] = p;
-    }
-  }
-  if (g.motor.kind == JointMotor::Kind::effort) {
-    const double p = evaluate(g.motor.function, time_).value;
-    add_row_wrench(joint_coordinate(g, a, b), p, out);
-    motor_effort_[static_cast<Eigen::Index>(k)] = p;
-  }
-  if (g.limits.active) {
-    const ConstraintRow row = joint_coordinate(g, a, b);
-    const double rate = row.j.dot(v);
-    const JointLimits& l = g.limits;
-    double p = 0.0;
-    if (row.phi < l.lower) p = std::max(0.0, l.stiffness * (l.lower - row.phi) - l.damping * rate);
-    if (row.phi > l.upper) p = std::min(0.0, -l.stiffness * (row.phi - l.upper) - l.damping * rate);
-    add_row_wrench(row, p, out);
-  }
+  kinematic_joint_wrench<double>(j, geometry_of(j), motion_at(j.a), motion_at(j.b), time_, out,
+                                 &motor_effort_[static_cast<Eigen::Index>(k)]);
+}
+
+const JointGeometry& MultibodySystem::geometry_of(const CompiledJoint& j) const {
+  return constraints_->geometry[static_cast<std::size_t>(j.kinematic)];
 }
 
 double MultibodySystem::kinematic_energy(const CompiledJoint& j) const {
@@ -319,7 +283,7 @@ void MultibodySystem::project_cluster(int c, double t, Eigen::VectorXd& y) const
   // Velocities: remove the part that violates phi' = 0.
   for (const ClusterJoint& cj : rc.joints()) {
     const CompiledJoint& j = compiled_->joints[static_cast<std::size_t>(cj.joint)];
-    const Row12 v = velocities(state_motion(layout_, y, j.a), state_motion(layout_, y, j.b));
+    const RowJacobian v = row_velocities<double>(state_motion(layout_, y, j.a), state_motion(layout_, y, j.b));
     for (int r = 0; r < cj.rows; ++r) {
       const ConstraintRow& row = rc.rows[static_cast<std::size_t>(cj.first_row + r)];
       mu[cj.first_row + r] = -(row.j.dot(v) + row.rate);

@@ -1,7 +1,8 @@
 // The analytic Jacobian of the multibody right-hand side against central differences, for
 // every element it covers (bushings with frames, tables, preload and damping at small and
 // large rotations, springs, joints to ground, loads in either frame with time functions,
-// a driven body, gravity, the gyroscopic terms), and its refusal where it has none.
+// a driven body, gravity, the gyroscopic terms, compliant kinematic joints of every type
+// with motors and limit stops), and its refusal where it has none.
 #include <catch2/catch.hpp>
 
 #include <Eigen/Geometry>
@@ -172,9 +173,55 @@ TEST_CASE("the analytic multibody Jacobian holds at rest, where the rotation log
   CHECK((exact - fd).cwiseAbs().maxCoeff() < 1e-6 * fd.cwiseAbs().maxCoeff());
 }
 
+namespace {
+
+// Nine bodies in a row joined by a compliant joint of every kinematic type (each row's
+// reaction -(k phi + c phi')): revolute with a position motor, spherical, prismatic with a
+// velocity motor and narrow limits, cylindrical, universal, planar, fixed, a distance rod,
+// and a revolute joint with an effort motor and limits.
+Model compliant_joints_model() {
+  Model m;
+  m.gravity = {0.2, -9.81, 0.3};
+  for (int i = 0; i < 9; ++i) {
+    Body b = test::make_body("c", 1.0 + 0.2 * i, {0.03 + 0.01 * i, 0.04, 0.05 - 0.003 * i, 0.001, -0.002, 0.001},
+                             {0.6 * i, 0.02 * i, 0.0});
+    b.name += std::to_string(i);
+    m.bodies.push_back(b);
+  }
+  const JointType types[] = {JointType::revolute, JointType::spherical, JointType::prismatic,
+                             JointType::cylindrical, JointType::universal, JointType::planar,
+                             JointType::fixed,    JointType::distance,  JointType::revolute};
+  for (int k = 0; k < 9; ++k) {
+    Joint j = test::make_joint(types[k], k - 1, k, {k == 0 ? -0.3 : 0.3, k == 0 ? 0.0 : 0.01, 0}, {-0.3, -0.01, 0});
+    if (k == 0) j.body1 = ground;
+    j.name += "_" + std::to_string(k);
+    j.rigid = false;
+    j.stiffness = {2e4 + 1e3 * k, 3e4, 2.5e4, 60.0 + k, 50, 40};
+    j.damping = {5, 6, 7, 0.1, 0.2, 0.3};
+    j.frame1 = {std::cos(0.1 * k), std::sin(0.1 * k), 0.0, 0.0};
+    j.rest_length = 0.05;
+    m.joints.push_back(j);
+    m.joints.back().frame2 = rest_frame2(m, m.joints.back());
+  }
+  m.joints[0].motor.edit() = {JointMotor::Kind::position, TimeFunction::harmonic(0.3, 1.5)};
+  m.joints[2].motor.edit() = {JointMotor::Kind::velocity, TimeFunction::harmonic(0.2, 2.0, 0.4)};
+  m.joints[2].limits.edit() = {true, -1e-3, 1e-3, 4e4, 30};
+  m.joints[8].motor.edit() = {JointMotor::Kind::effort, TimeFunction::harmonic(2.0, 1.0)};
+  m.joints[8].limits.edit() = {true, -0.02, 0.02, 500, 2};
+  return m;
+}
+
+}  // namespace
+
+TEST_CASE("the analytic Jacobian covers compliant joints of every kind with their motors and limit stops",
+          "[graph][jacobian]") {
+  MultibodySystem sys(compliant_joints_model());
+  check_against_differences(sys);
+}
+
 TEST_CASE("models without an analytic Jacobian say which item stands in the way", "[graph][jacobian]") {
   std::string why;
-  SECTION("a kinematic joint") {
+  SECTION("a rigid kinematic joint") {
     Model m = jacobian_model();
     m.joints.push_back(test::make_joint(JointType::revolute, 4, 5, {0.3, 0, 0}, {-0.3, -0.05, 0}));
     m.joints.back().name = "hinge";

@@ -25,7 +25,10 @@
 
 namespace mbsflow {
 
-struct BodyMotion;  // constraint_rows.hpp
+template <class S>
+struct BodyMotionT;  // constraint_rows.hpp
+using BodyMotion = BodyMotionT<double>;
+struct JointGeometry;  // constraint_rows.hpp
 struct BodyFrameView;  // force_laws.hpp
 
 namespace detail {
@@ -172,6 +175,7 @@ class MultibodySystem {
   void compile_constraints();
   std::size_t constraint_bytes() const;  // the constraints' containers (a cluster's own solver not counted)
   void kinematic_joint_force(std::size_t k);
+  const JointGeometry& geometry_of(const CompiledJoint& j) const;  // a kinematic joint's
   double kinematic_energy(const CompiledJoint& j) const;
   void solve_cluster(int c, double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const;
   BodyMotion motion_at(int i) const;  // kinematics index i of the current evaluation
