@@ -337,9 +337,12 @@ int run(const RunArgs& a, const CheckpointFile* resumed = nullptr, const std::st
     RunInfo info{cluster ? text : std::move(text), method_name(o.method), o.step, o.t_start, o.t_end, o.output_every,
                  invocation()};
     info.output_interval = o.output_interval;
-    sink = std::make_unique<AsyncSink>(std::make_unique<Hdf5Sink>(a.output, fields, std::move(info)));
+    auto h5 = std::make_unique<Hdf5Sink>(a.output, fields, std::move(info));
+    // The model's text goes to disk now rather than being held while the run is set up.
+    if (!resumed) h5->prepare();
+    sink = std::make_unique<AsyncSink>(std::move(h5));
     sink->set_stop(o.stop);
-    timings.mark("open the results file", bodies);
+    timings.mark("open the results file, the model's text written", bodies);
   }
   RunPlan plan;
   plan.options = o;

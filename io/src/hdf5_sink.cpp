@@ -215,7 +215,12 @@ std::string xdmf_path(const std::string& h5) {
 Hdf5Sink::Hdf5Sink(std::string path, FieldSet fields, RunInfo info)
     : path_(std::move(path)), fields_(fields), info_(std::move(info)) {}
 
-Hdf5Sink::~Hdf5Sink() = default;
+// A file prepared for a run that never began (its set-up failed) is not left behind.
+Hdf5Sink::~Hdf5Sink() {
+  if (!created_) return;
+  created_.reset();
+  std::remove(part_path().c_str());
+}
 
 // The file's series: made in a new file, or opened in a file being resumed.
 void Hdf5Sink::lay_out(File& f, const MultibodySystem& system, bool make) {
@@ -243,22 +248,45 @@ void Hdf5Sink::lay_out(File& f, const MultibodySystem& system, bool make) {
   if (fields_.body[0] && joints > 0) f.attachment = series(joint_attachment_dataset, {joints, 6}, rows, joint_attachment_unit);
 }
 
-void Hdf5Sink::begin(const MultibodySystem& system) {
-  system_ = &system;
+// The file under its .part name, locked, with the model's text and the run's settings
+// written (and the text let go).
+std::unique_ptr<Hdf5Sink::File> Hdf5Sink::create() {
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // errors become exceptions, not stack dumps
-  const Model& m = system.model();
   auto f = std::make_unique<File>();
   // The file is made under another name and renamed when its layout is on disk: the path
   // holds either what was there or a readable file, never a half-made one. A file that
   // another run is writing (locked) is neither truncated nor replaced.
   WriterLock::check_free(path_);
-  const std::string making = path_ + ".part";
+  const std::string making = part_path();
   f->lock = WriterLock(making);  // before H5Fcreate, which truncates
   // File format 1.10: dense attribute storage, so that large model texts fit as
   // attributes, and single-writer/multiple-reader access (SWMR).
   const h5::Handle fapl = file_access();
   f->file = h5::Handle(H5Fcreate(making.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get()), H5Fclose,
                        "create the results file " + making);
+  const hid_t root = f->file.get();
+  h5::write_string_attribute(root, "mbsflow_version", MBSFLOW_VERSION);
+  h5::write_text_dataset(root, "model", info_.model_json);
+  std::string().swap(info_.model_json);  // on disk now; a million-body model's text is half a gigabyte
+  h5::write_string_attribute(root, "method", info_.method);
+  h5::write_number_attribute(root, "step", info_.step);
+  h5::write_number_attribute(root, "t_start", info_.t_start);
+  h5::write_number_attribute(root, "t_end", info_.t_end);
+  h5::write_number_attribute(root, "output_every", info_.output_every);
+  if (info_.output_interval > 0.0) h5::write_number_attribute(root, "output_interval", info_.output_interval);
+  h5::write_string_attribute(root, "command_line", info_.command_line);
+  h5::write_string_attribute(root, "fields", fields_text(fields_));
+  return f;
+}
+
+void Hdf5Sink::prepare() {
+  if (!created_) created_ = create();
+}
+
+void Hdf5Sink::begin(const MultibodySystem& system) {
+  system_ = &system;
+  const Model& m = system.model();
+  std::unique_ptr<File> f = created_ ? std::move(created_) : create();
   lay_out(*f, system, true);
   std::vector<std::string> names;
   for (const Body& b : m.bodies) names.push_back(b.name);
@@ -272,19 +300,8 @@ void Hdf5Sink::begin(const MultibodySystem& system) {
   }
   const hid_t root = f->file.get();
   identity_ = id_text(random_id());
-  h5::write_string_attribute(root, "mbsflow_version", MBSFLOW_VERSION);
   h5::write_string_attribute(root, "run_id", identity_);
   h5::write_string_attribute(root, "model_name", m.name);
-  h5::write_text_dataset(root, "model", info_.model_json);
-  std::string().swap(info_.model_json);  // on disk now; a million-body model's text is half a gigabyte
-  h5::write_string_attribute(root, "method", info_.method);
-  h5::write_number_attribute(root, "step", info_.step);
-  h5::write_number_attribute(root, "t_start", info_.t_start);
-  h5::write_number_attribute(root, "t_end", info_.t_end);
-  h5::write_number_attribute(root, "output_every", info_.output_every);
-  if (info_.output_interval > 0.0) h5::write_number_attribute(root, "output_interval", info_.output_interval);
-  h5::write_string_attribute(root, "command_line", info_.command_line);
-  h5::write_string_attribute(root, "fields", fields_text(fields_));
   // The layout on disk now: a run killed before its first rows leaves a readable file.
   h5::check(H5Fflush(root, H5F_SCOPE_GLOBAL), "flush " + path_);
   // From here on readers may open the file while it grows (HDF5 SWMR); nothing is created
@@ -292,8 +309,8 @@ void Hdf5Sink::begin(const MultibodySystem& system) {
   // into place: a file killed in another mode is marked open for writing, which only
   // h5clear undoes, and the path would hold a file that no reader opens.
   h5::check(H5Fstart_swmr_write(root), "let readers in while the run writes " + path_);
-  if (std::rename(making.c_str(), path_.c_str()) != 0)
-    throw InputError("cannot rename " + making + " to " + path_ + ": " + std::strerror(errno));
+  if (std::rename(part_path().c_str(), path_.c_str()) != 0)
+    throw InputError("cannot rename " + part_path() + " to " + path_ + ": " + std::strerror(errno));
   last_flush_ = now_seconds();
   file_ = std::move(f);
 }

@@ -232,3 +232,41 @@ TEST_CASE("the model text is kept whole in /model and files with the old model a
   fs::remove(file);
   fs::remove(old);
 }
+
+TEST_CASE("a prepared results file holds the model's text before the run begins and nothing is left if it never does",
+          "[io]") {
+  Model m = small_train();
+  m.simulation.t_end = 0.02;
+  const std::string json = model_to_json(m);
+  const fs::path file = temp_file("prepared.h5"), part = file.string() + ".part";
+  const RunOptions o = options_from_model(m);
+  const RunInfo info{json, "rk4", o.step, o.t_start, o.t_end, 1, "test"};
+  SECTION("prepared, then run") {
+    auto h5 = std::make_unique<Hdf5Sink>(file.string(), FieldSet{}, info);
+    h5->prepare();
+    CHECK(fs::exists(part));
+    CHECK(!fs::exists(file));
+    // The file is locked from here on: a second run to the same path is refused.
+    Hdf5Sink second(file.string(), FieldSet{}, info);
+    CHECK_THROWS_AS(second.prepare(), InputError);
+    {
+      MultibodySystem sys(m);
+      AsyncSink sink(std::move(h5));
+      run_simulation(sys, o, &sink);
+    }
+    CHECK(!fs::exists(part));
+    const ResultsFile r(file.string());
+    CHECK(r.model_text() == json);
+    CHECK(r.time().size() == 5);
+  }
+  SECTION("prepared, never begun (the run's set-up failed)") {
+    {
+      Hdf5Sink h5(file.string(), FieldSet{}, info);
+      h5.prepare();
+      REQUIRE(fs::exists(part));
+    }
+    CHECK(!fs::exists(part));
+    CHECK(!fs::exists(file));
+  }
+  fs::remove(file);
+}

@@ -38,6 +38,11 @@ class Hdf5Sink : public ResultSink {
   Hdf5Sink(std::string path, FieldSet fields, RunInfo info);
   ~Hdf5Sink() override;
   SnapshotContent content() const override { return {fields_.joint_force, fields_.energy}; }
+  // Creates the file now (under its .part name, locked) and writes the model's text and
+  // the run's settings, so the caller need not hold the text (half a gigabyte for a
+  // million bodies) while the run is set up; begin() lays out the rest. Not for a run
+  // that resumes the file. Without it, begin() does it all.
+  void prepare();
   void begin(const MultibodySystem& system) override;
   void write(Snapshot&& snapshot) override;
   void write_coupling(const std::vector<CouplingRecord>& records) override;
@@ -53,11 +58,14 @@ class Hdf5Sink : public ResultSink {
   struct File;  // HDF5 handles and the writer lock, in the .cpp
   void flush();
   void lay_out(File& f, const MultibodySystem& system, bool make);
+  std::unique_ptr<File> create();
+  std::string part_path() const { return path_ + ".part"; }
 
   std::string path_;
   FieldSet fields_;
   RunInfo info_;
   std::unique_ptr<File> file_;
+  std::unique_ptr<File> created_;  // prepared, not yet begun
   const MultibodySystem* system_ = nullptr;
   std::string identity_;
   std::vector<CouplingRecord> coupling_;  // written by end()
