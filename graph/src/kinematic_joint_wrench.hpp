@@ -47,13 +47,15 @@ void kinematic_joint_wrench(const Joint& j, const JointGeometry& g, const BodyMo
       if (r == n - 1 && g.motor.kind != JointMotor::Kind::none) keep_effort(p);
     }
   }
-  if (g.motor.kind == JointMotor::Kind::effort) {
+  const bool effort_motor = g.motor.kind == JointMotor::Kind::effort;
+  if (!effort_motor && !g.limits.active) return;
+  const ConstraintRowT<S> row = joint_coordinate<S>(g, a, b);  // the effort's and the stops' direction
+  if (effort_motor) {
     const S p(evaluate(g.motor.function, t).value);
-    add_row_wrench<S>(joint_coordinate<S>(g, a, b), p, out);
+    add_row_wrench<S>(row, p, out);
     keep_effort(p);
   }
   if (g.limits.active) {
-    const ConstraintRowT<S> row = joint_coordinate<S>(g, a, b);
     const S rate = row.j.dot(v);
     const JointLimits& l = g.limits;
     S p(0.0);  // a stop pushes, never pulls
