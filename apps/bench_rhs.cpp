@@ -12,6 +12,7 @@
 #include "mbsflow/error.hpp"
 #include "mbsflow/graph/generators.hpp"
 #include "mbsflow/graph/multibody_system.hpp"
+#include "mbsflow/graph/simd.hpp"
 #include "mbsflow/methods/jacobian.hpp"
 
 namespace mbsflow::cli {
@@ -88,15 +89,16 @@ int bench_rhs(const BenchArgs& a) {
   const std::vector<int> sizes = a.bodies.empty() ? std::vector<int>{2000, 6500, 100000} : a.bodies;
   auto [csv_path, csv] = open_csv(a);
   csv << "bodies,evaluations_per_s,ns_per_body_eval,ns_kinematics,ns_joints,ns_bodies,ns_jacobian,ns_differences,colours,"
-         "bytes_per_body,compiled_bytes_per_body,workspace_bytes_per_body,achieved_GB_s,triad_GB_s,peak_GFLOP_s\n";
+         "bytes_per_body,compiled_bytes_per_body,workspace_bytes_per_body,achieved_GB_s,triad_GB_s,peak_GFLOP_s,simd\n";
   const MachineRoof roof = measure_machine();
   struct Row {
     int bodies;
     double ns, bytes, compiled, workspace;
   };
   std::vector<Row> rows;
-  std::printf("right-hand side of generate chain, one thread (ns per body per evaluation; Jacobian: analytic, and by\n"
-              "coloured differences, ns per body per Jacobian)\n");
+  std::printf("right-hand side of generate chain, one thread, lane kernels on %s (ns per body per evaluation;\n"
+              "Jacobian: analytic, and by coloured differences, ns per body per Jacobian; MBSFLOW_SIMD=sse2 keeps SSE2)\n",
+              simd() == Simd::avx ? "AVX, 4 lanes" : "SSE2, 2 lanes");
   std::printf("%10s %12s %10s %12s %10s %10s %10s %12s\n", "bodies", "evals/s", "total", "kinematics", "joints", "bodies",
               "jacobian", "differences");
   for (const int n : sizes) {
@@ -131,7 +133,8 @@ int bench_rhs(const BenchArgs& a) {
     rows.push_back({n, total * per, bytes, compiled, workspace});
     csv << n << ',' << 1.0 / total << ',' << total * per << ',' << kin * per << ',' << joints * per << ',' << bodies * per
         << ',' << analytic * per << ',' << differenced * per << ',' << differences.colours() << ',' << bytes << ',' << compiled
-        << ',' << workspace << ',' << bytes / (total * per) << ',' << roof.triad_gb_s << ',' << roof.peak_gflop_s << '\n';
+        << ',' << workspace << ',' << bytes / (total * per) << ',' << roof.triad_gb_s << ',' << roof.peak_gflop_s << ','
+        << (simd() == Simd::avx ? "avx" : "sse2") << '\n';
     if (!dy.allFinite()) throw RunError("benchmark state produced non-finite derivatives");
   }
   std::printf("\nroofline, one thread: this machine's triad bandwidth %.1f GB/s, multiply-add peak of this build %.1f GFLOP/s\n"

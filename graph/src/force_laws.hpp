@@ -97,34 +97,38 @@ template <class S, class Joint, class Body>
 // Spring forces per axis (K d, or the tables), for axes first_axis..first_axis+2.
 template <class S, class Joint>
 [[gnu::always_inline]] inline Vector3T<S> axis_forces(const Joint& j, const std::array<ForceTable, 6>* tables, const Vector3T<S>& d, int first_axis) {
-  const Eigen::Vector3d& k = first_axis == 0 ? j.kt : j.kr;
+  const auto& k = first_axis == 0 ? j.kt : j.kr;
   Vector3T<S> f = as_scalar<S>(k).cwiseProduct(d);
-  if (tables)
-    for (int i = 0; i < 3; ++i) {
-      const ForceTable& table = (*tables)[static_cast<std::size_t>(first_axis + i)];
-      if (!table.empty()) f[i] = table_force_of<S>(table, d[i]);
-    }
+  if constexpr (!is_lanes_v<S>) {  // the lane kernels take no joint with tables
+    if (tables)
+      for (int i = 0; i < 3; ++i) {
+        const ForceTable& table = (*tables)[static_cast<std::size_t>(first_axis + i)];
+        if (!table.empty()) f[i] = table_force_of<S>(table, d[i]);
+      }
+  }
   return f;
 }
 
 // What a spring or bushing exerts, into out (9 rows): the force on body2 (rows 0-2; body1
 // gets its opposite), the torque on body1 (3-5) and on body2 (6-8), world frame, about the
-// centres of mass.
+// centres of mass. On Lanes, bushings only (lane_kernels.cpp).
 template <class S, class Joint, class Body, class Out>
 [[gnu::always_inline]] inline void compliant_joint_wrench(const Joint& j, const std::array<ForceTable, 6>* tables, const Body& a,
                                                           const Body& b, Out&& out) {
-  if (j.spring) {
-    const Vector3T<S> aw = a.rot * as_scalar<S>(j.pa), bw = b.rot * as_scalar<S>(j.pb);
-    const Vector3T<S> delta = b.pos + bw - a.pos - aw;
-    const S length = delta.norm();
-    const Vector3T<S> u = length > 0.0 ? Vector3T<S>(delta / length) : Vector3T<S>(Vector3T<S>::Zero());
-    const Vector3T<S> dv = b.vel + b.omega.cross(bw) - a.vel - a.omega.cross(aw);
-    const S f = j.kt[0] * (length - j.rest_length) + j.ct[0] * u.dot(dv);
-    const Vector3T<S> force = -f * u;  // on body2, at its attachment point
-    out.template segment<3>(0) = force;
-    out.template segment<3>(3) = aw.cross(-force);
-    out.template segment<3>(6) = bw.cross(force);
-    return;
+  if constexpr (!is_lanes_v<S>) {
+    if (j.spring) {
+      const Vector3T<S> aw = a.rot * as_scalar<S>(j.pa), bw = b.rot * as_scalar<S>(j.pb);
+      const Vector3T<S> delta = b.pos + bw - a.pos - aw;
+      const S length = delta.norm();
+      const Vector3T<S> u = length > 0.0 ? Vector3T<S>(delta / length) : Vector3T<S>(Vector3T<S>::Zero());
+      const Vector3T<S> dv = b.vel + b.omega.cross(bw) - a.vel - a.omega.cross(aw);
+      const S f = j.kt[0] * (length - j.rest_length) + j.ct[0] * u.dot(dv);
+      const Vector3T<S> force = -f * u;  // on body2, at its attachment point
+      out.template segment<3>(0) = force;
+      out.template segment<3>(3) = aw.cross(-force);
+      out.template segment<3>(6) = bw.cross(force);
+      return;
+    }
   }
   const DeflectionT<S> def = bushing_deflection<S>(j, a, b);
   const Vector3T<S> f = axis_forces<S>(j, tables, def.d, 0) + as_scalar<S>(j.ct).cwiseProduct(def.d_rate) - as_scalar<S>(j.preload_force);

@@ -8,7 +8,9 @@
 #include <stdexcept>
 
 #include "mbsflow/error.hpp"
+#include "mbsflow/graph/simd.hpp"
 #include "force_laws.hpp"
+#include "lanes.hpp"
 #include "rotation.hpp"
 
 namespace mbsflow {
@@ -30,6 +32,16 @@ void build_csr(int bodies, int items, BodyOf body_of, std::vector<int>& start, s
     list[p] = pairs[p].second;
   }
   for (std::size_t b = 0; b < static_cast<std::size_t>(bodies); ++b) start[b + 1] += start[b];
+}
+
+// in_lane_groups with the kernel of the CPU's instruction set (simd.hpp): four lanes on
+// AVX, else Lanes::width (two, SSE2).
+template <int Classes, class Classify, class Single, class Sse2, class Avx>
+void lane_groups_for_cpu(const int* list, std::size_t n, Classify&& classify, Single&& single, Sse2&& sse2, Avx&& avx) {
+  if (simd() == Simd::avx)
+    in_lane_groups<Classes, 4>(list, n, classify, single, avx);
+  else
+    in_lane_groups<Classes>(list, n, classify, single, sse2);
 }
 
 }  // namespace
@@ -148,16 +160,6 @@ Eigen::VectorXd MultibodySystem::initial_state() const {
   return y;
 }
 
-[[gnu::always_inline]] inline void MultibodySystem::body_kinematics(Eigen::Index i, const Eigen::VectorXd& y) {
-  const Eigen::Vector4d q = y.segment<4>(layout_.orientation(i));
-  const Eigen::Matrix3d r = rotation_matrix(q);
-  rot_[static_cast<std::size_t>(i)] = r;
-  quat_.col(i) = q;
-  pos_.col(i) = y.segment<3>(layout_.position(i));
-  vel_.col(i) = y.segment<3>(layout_.velocity(i));
-  omega_.col(i) = r * y.segment<3>(layout_.angular_velocity(i));
-}
-
 [[gnu::always_inline]] inline BodyFrameView MultibodySystem::body_frame_at(int i) const {
   return {rot_[static_cast<std::size_t>(i)], pos_.col(i), vel_.col(i), omega_.col(i), quat_.col(i)};
 }
@@ -188,19 +190,30 @@ void MultibodySystem::drive(const Driver& d, double t) {
   omega_.col(i).setZero();
 }
 
+void MultibodySystem::kinematics_in(const int* list, std::size_t n, const Eigen::VectorXd& y) {
+  for (std::size_t p = 0; p < n; ++p) {
+    const Eigen::Index i = list ? list[p] : static_cast<Eigen::Index>(p);
+    quat_.col(i) = y.segment<4>(layout_.orientation(i));
+    pos_.col(i) = y.segment<3>(layout_.position(i));
+    vel_.col(i) = y.segment<3>(layout_.velocity(i));
+  }
+  lane_groups_for_cpu<1>(
+      list, n, [](int) { return 0; }, [](int) {}, [&](const int* k) { kinematics_on_lanes(k, y); },
+      [&](const int* k) { kinematics_on_lanes_avx(k, y); });
+}
+
 void MultibodySystem::update_kinematics(double t, const Eigen::VectorXd& y) {
   time_ = t;
-  for (Eigen::Index i = 0; i < layout_.bodies; ++i) body_kinematics(i, y);
+  kinematics_in(nullptr, static_cast<std::size_t>(layout_.bodies), y);
   for (const Driver& d : model().drivers) drive(d, t);
 }
 
 void MultibodySystem::kinematics_of(double t, const Eigen::VectorXd& y, std::span<const int> bodies) {
   time_ = t;
-  for (int i : bodies) {
-    body_kinematics(i, y);
-    // The last driver of a body wins, as in update_kinematics.
+  kinematics_in(bodies.data(), bodies.size(), y);
+  // The last driver of a body wins, as in update_kinematics.
+  for (int i : bodies)
     if (const int d = compiled_->driver_of_body[static_cast<std::size_t>(i)]; d >= 0) drive(model().drivers[static_cast<std::size_t>(d)], t);
-  }
 }
 
 [[gnu::always_inline]] inline void MultibodySystem::joint_force(std::size_t k) {
@@ -237,8 +250,23 @@ MultibodySystem::MemoryUse MultibodySystem::memory_use() const {
   return m;
 }
 
+// Bushings without tables go several at a time (lane_kernels.cpp), grouped by their frame
+// class; the other joints one by one.
+bool MultibodySystem::on_lanes(const CompiledJoint& j) { return j.kinematic < 0 && !j.spring && j.tables < 0; }
+
+void MultibodySystem::joint_forces_in(const int* list, std::size_t n) {
+  lane_groups_for_cpu<4>(
+      list, n,
+      [&](int k) {
+        const CompiledJoint& j = compiled_->joints[static_cast<std::size_t>(k)];
+        return on_lanes(j) ? 2 * j.frame1_identity + j.frame2_identity : -1;
+      },
+      [&](int k) { joint_force(static_cast<std::size_t>(k)); }, [&](const int* k) { bushings_on_lanes(k); },
+      [&](const int* k) { bushings_on_lanes_avx(k); });
+}
+
 void MultibodySystem::compute_joint_forces() {
-  for (std::size_t k = 0; k < compiled_->joints.size(); ++k) joint_force(k);
+  joint_forces_in(nullptr, compiled_->joints.size());
   if (compiled_->elements.empty()) return;
   const Kinematics k = kinematics();
   for (std::size_t e = 0; e < compiled_->elements.size(); ++e) {
@@ -248,7 +276,7 @@ void MultibodySystem::compute_joint_forces() {
 }
 
 void MultibodySystem::joint_forces_of(std::span<const int> joints) {
-  for (int k : joints) joint_force(static_cast<std::size_t>(k));
+  joint_forces_in(joints.data(), joints.size());
 }
 
 void MultibodySystem::add_force_element(std::shared_ptr<const ForceElement> element) {

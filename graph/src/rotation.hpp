@@ -6,6 +6,8 @@
 #include <Eigen/Geometry>
 #include <cmath>
 
+#include "lanes.hpp"
+
 namespace mbsflow {
 
 // The helpers are templates on the scalar so that the analytic Jacobian can differentiate
@@ -80,28 +82,26 @@ template <class S>
   return x * p;
 }
 
+// Written with pick() rather than if, so that it runs on Lanes too (each lane its branch).
 template <class S>
 [[gnu::always_inline]] inline RotationLogT<S> rotation_log(const Vector4T<S>& q) {
   using std::atan2;  // and Eigen's, for automatic differentiation, by argument-dependent lookup
-  const double sign = q[0] < 0.0 ? -1.0 : 1.0;  // shortest rotation
+  using C = LaneConstant<S>;
+  const C sign = pick(q[0] < 0.0, [] { return C(-1.0); }, [] { return C(1.0); });  // shortest rotation
   const S w = sign * q[0];
   const Vector3T<S> v = sign * q.template tail<3>();
   const S s = v.norm();  // for dual numbers its derivatives are not finite at 0, but then unused
+  const auto tiny = s < 1e-7 * w;  // then angle/s = 2/w (1 - (s/w)^2/3 + ...) to rounding
+  const S angle = pick(tiny, [] { return S(0.0); }, [&]() -> S {
+    return 2.0 * pick(s <= 0.25 * w, [&]() -> S { return small_atan2<S>(s, w); }, [&]() -> S { return atan2(s, w); });
+  });
   RotationLogT<S> r;
-  S a2;
-  if (s < 1e-7 * w) {  // angle/s = 2/w (1 - (s/w)^2/3 + ...)
-    r.theta = (2.0 / w) * v;
-    a2 = r.theta.squaredNorm();
-  } else {
-    const S angle = 2.0 * (s <= 0.25 * w ? small_atan2<S>(s, w) : S(atan2(s, w)));
-    r.theta = (angle / s) * v;
-    a2 = angle * angle;
-    if (a2 >= 1e-2) {
-      r.c = 1.0 / a2 - w / (2.0 * angle * s);
-      return r;
-    }
-  }
-  r.c = 1.0 / 12.0 + a2 * (1.0 / 720.0 + a2 * (1.0 / 30240.0 + a2 / 1209600.0));  // series, error < 1e-16
+  r.theta = pick(tiny, [&]() -> S { return 2.0 / w; }, [&]() -> S { return angle / s; }) * v;
+  const S a2 = pick(tiny, [&]() -> S { return r.theta.squaredNorm(); }, [&]() -> S { return angle * angle; });
+  const auto series = [&]() -> S {  // error < 1e-16
+    return 1.0 / 12.0 + a2 * (1.0 / 720.0 + a2 * (1.0 / 30240.0 + a2 / 1209600.0));
+  };
+  r.c = pick(tiny, series, [&]() -> S { return pick(a2 >= 1e-2, [&]() -> S { return 1.0 / a2 - w / (2.0 * angle * s); }, series); });
   return r;
 }
 inline RotationLog rotation_log(const Eigen::Vector4d& q) { return rotation_log<double>(q); }

@@ -154,12 +154,13 @@ TEST_CASE("cli bench rhs: nanoseconds per body with the roofline's bytes per bod
   std::istringstream csv(read_text(fs::path(dir) / "rhs.csv"));
   std::string line;
   std::getline(csv, line);
-  CHECK(line.find(",bytes_per_body,compiled_bytes_per_body,workspace_bytes_per_body,achieved_GB_s,triad_GB_s,peak_GFLOP_s") !=
+  CHECK(line.find(",bytes_per_body,compiled_bytes_per_body,workspace_bytes_per_body,achieved_GB_s,triad_GB_s,peak_GFLOP_s,simd") !=
         std::string::npos);
   REQUIRE(std::getline(csv, line));
   const std::vector<std::string> cells = csv_cells(line);
-  REQUIRE(cells.size() == 15);
+  REQUIRE(cells.size() == 16);
   CHECK(cells[0] == "300");
+  CHECK((cells[15] == "avx" || cells[15] == "sse2"));
   const double ns = std::stod(cells[2]), bytes = std::stod(cells[9]), compiled = std::stod(cells[10]),
                workspace = std::stod(cells[11]);
   CHECK(ns > 0.0);

@@ -185,10 +185,18 @@ class MultibodySystem {
   void applied_wrench(Eigen::Index i, double t, Eigen::Vector3d& force, Eigen::Vector3d& torque) const;
   void write_derivative(Eigen::Index i, double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt,
                         const Eigen::Vector3d& force, const Eigen::Vector3d& torque) const;
-  void body_kinematics(Eigen::Index i, const Eigen::VectorXd& y);
+  void kinematics_in(const int* list, std::size_t n, const Eigen::VectorXd& y);  // list[0..n), or 0..n-1 when null
+  // Kernels on Lanes (lane_kernels.cpp), each for Lanes::width items: two (SSE2) or, with
+  // the suffix _avx, four (AVX).
+  void bushings_on_lanes(const int* joints);
+  void bushings_on_lanes_avx(const int* joints);
+  void kinematics_on_lanes(const int* bodies, const Eigen::VectorXd& y);
+  void kinematics_on_lanes_avx(const int* bodies, const Eigen::VectorXd& y);
   void drive(const Driver& d, double t);
   void impose(const Driver& d, double t, Eigen::VectorXd& y) const;
   void joint_force(std::size_t k);
+  void joint_forces_in(const int* list, std::size_t n);  // list[0..n), or 0..n-1 when list is null
+  static bool on_lanes(const CompiledJoint& j);        // a bushing the lane kernels take
   void body_derivative(Eigen::Index i, double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const;
   BodyFrameView body_frame_at(int i) const;  // kinematics index i of the current evaluation
   const std::array<ForceTable, 6>* tables_of(const CompiledJoint& j) const {

@@ -1,0 +1,89 @@
+// The right-hand side's work on Lanes (lanes.hpp), Lanes::width items at a time:
+// bushings without tables (the joints' phase, MultibodySystem::joint_forces_in) and the
+// bodies' rotation matrices and world angular velocities (kinematics_in). (A free body's
+// rates on Lanes, tried too, were no faster: gathering its two inertia matrices cost what
+// the lanes saved.) This file is compiled twice:
+// as it is for SSE2, two lanes, and by lane_kernels_avx.cpp for AVX, four lanes, with the
+// _avx suffix on each kernel's name; no FMA in either, so both round alike.
+//
+// A bushing is most of a compliant model's work, and one at a time it is a long chain of
+// dependent operations (quaternion product, norm, square root, arctangent, divisions) that
+// leaves the core waiting. Several side by side run the same force_laws.hpp arithmetic in
+// fewer instructions and hide each other's latency. Bushings are grouped by which of their
+// joint frames is the identity (a group runs one code path); the last incomplete group
+// repeats its last item. Each lane's numbers depend on its own item alone, so any order
+// and grouping of the items, which differ between partitions, gives the same numbers bit
+// for bit.
+//
+// Only Eigen objects of Lanes (whose type differs between the two builds) do arithmetic
+// here: the double objects are read and written coefficient by coefficient, so that no
+// double code built for AVX is shared with the rest of the library.
+#include "mbsflow/graph/multibody_system.hpp"
+
+#include "force_laws.hpp"
+#include "lanes.hpp"
+#include "rotation.hpp"
+
+#ifdef MBSFLOW_LANE_KERNEL_SUFFIX
+#define LANE_KERNEL(name) name##_avx
+#else
+#define LANE_KERNEL(name) name
+#endif
+
+namespace mbsflow {
+namespace {
+
+// A bushing's parameters, Lanes::width joints side by side (what compliant_joint_wrench reads).
+struct LaneBushing {
+  bool spring = false, frame1_identity = true, frame2_identity = true;
+  Matrix3T<Lanes> rfa;
+  Vector3T<Lanes> pa, pb, kt, ct, kr, cr, preload_force, preload_torque;
+  Vector4T<Lanes> qfa, qfb;
+};
+
+}  // namespace
+
+void MultibodySystem::LANE_KERNEL(bushings_on_lanes)(const int* k) {
+  const CompiledJoint* j[Lanes::width];
+  for (int l = 0; l < Lanes::width; ++l) j[l] = &compiled_->joints[static_cast<std::size_t>(k[l])];
+  LaneBushing p;
+  p.frame1_identity = j[0]->frame1_identity;
+  p.frame2_identity = j[0]->frame2_identity;
+  p.pa = gather([&](int l) -> auto& { return j[l]->pa; });
+  p.pb = gather([&](int l) -> auto& { return j[l]->pb; });
+  p.kt = gather([&](int l) -> auto& { return j[l]->kt; });
+  p.ct = gather([&](int l) -> auto& { return j[l]->ct; });
+  p.kr = gather([&](int l) -> auto& { return j[l]->kr; });
+  p.cr = gather([&](int l) -> auto& { return j[l]->cr; });
+  p.preload_force = gather([&](int l) -> auto& { return j[l]->preload_force; });
+  p.preload_torque = gather([&](int l) -> auto& { return j[l]->preload_torque; });
+  if (!p.frame1_identity) {
+    p.rfa = gather([&](int l) -> auto& { return j[l]->rfa; });
+    p.qfa = gather([&](int l) -> auto& { return j[l]->qfa; });
+  }
+  if (!p.frame2_identity) p.qfb = gather([&](int l) -> auto& { return j[l]->qfb; });
+  const auto frame = [&](int CompiledJoint::*body) {
+    BodyFrameT<Lanes> f;
+    f.quat = gather([&](int l) { return quat_.col(j[l]->*body); });
+    f.rot = rotation_matrix<Lanes>(f.quat);  // as rot_ holds it, bit for bit, for fewer loads
+    f.pos = gather([&](int l) { return pos_.col(j[l]->*body); });
+    f.vel = gather([&](int l) { return vel_.col(j[l]->*body); });
+    f.omega = gather([&](int l) { return omega_.col(j[l]->*body); });
+    return f;
+  };
+  const BodyFrameT<Lanes> a = frame(&CompiledJoint::a), b = frame(&CompiledJoint::b);
+  Eigen::Matrix<Lanes, 9, 1> out;
+  compliant_joint_wrench<Lanes>(p, nullptr, a, b, out);
+  scatter(out, [&](int l) { return joint_out_.col(k[l]); });
+}
+
+
+void MultibodySystem::LANE_KERNEL(kinematics_on_lanes)(const int* k, const Eigen::VectorXd& y) {
+  const Vector4T<Lanes> q = gather([&](int l) { return y.segment<4>(layout_.orientation(k[l])); });
+  const Vector3T<Lanes> w = gather([&](int l) { return y.segment<3>(layout_.angular_velocity(k[l])); });
+  const Matrix3T<Lanes> r = rotation_matrix<Lanes>(q);
+  scatter(r, [&](int l) -> auto& { return rot_[static_cast<std::size_t>(k[l])]; });
+  scatter(Vector3T<Lanes>(r * w), [&](int l) { return omega_.col(k[l]); });
+}
+
+}  // namespace mbsflow
