@@ -9,6 +9,7 @@ namespace {
 
 bool cpu_has_avx() {
 #if defined(__x86_64__) || defined(__i386__)
+  __builtin_cpu_init();  // in case this runs before libgcc's own constructor
   return __builtin_cpu_supports("avx");  // checks that the OS saves the AVX registers too
 #else
   return false;
