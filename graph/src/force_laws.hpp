@@ -94,6 +94,18 @@ template <class S, class Joint, class Body>
   return r;
 }
 
+// A bushing's parameters in scalar S, as compliant_joint_wrench reads them: the lane
+// kernels (lane_kernels.cpp) fill one with several joints side by side; tests build them
+// in double. (MultibodySystem's compiled joint has the same fields, in double.)
+template <class S>
+struct BushingParams {
+  bool spring = false, frame1_identity = true, frame2_identity = true;
+  Matrix3T<S> rfa;
+  Vector3T<S> pa, pb, kt, ct, kr, cr, preload_force, preload_torque;
+  Vector4T<S> qfa, qfb;
+  S rest_length = S(0.0);  // read by springs only
+};
+
 // Spring forces per axis (K d, or the tables), for axes first_axis..first_axis+2.
 template <class S, class Joint>
 [[gnu::always_inline]] inline Vector3T<S> axis_forces(const Joint& j, const std::array<ForceTable, 6>* tables, const Vector3T<S>& d, int first_axis) {

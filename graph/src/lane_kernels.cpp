@@ -31,22 +31,11 @@
 #endif
 
 namespace mbsflow {
-namespace {
-
-// A bushing's parameters, Lanes::width joints side by side (what compliant_joint_wrench reads).
-struct LaneBushing {
-  bool spring = false, frame1_identity = true, frame2_identity = true;
-  Matrix3T<Lanes> rfa;
-  Vector3T<Lanes> pa, pb, kt, ct, kr, cr, preload_force, preload_torque;
-  Vector4T<Lanes> qfa, qfb;
-};
-
-}  // namespace
 
 void MultibodySystem::LANE_KERNEL(bushings_on_lanes)(const int* k) {
   const CompiledJoint* j[Lanes::width];
   for (int l = 0; l < Lanes::width; ++l) j[l] = &compiled_->joints[static_cast<std::size_t>(k[l])];
-  LaneBushing p;
+  BushingParams<Lanes> p;
   p.frame1_identity = j[0]->frame1_identity;
   p.frame2_identity = j[0]->frame2_identity;
   p.pa = gather([&](int l) -> auto& { return j[l]->pa; });

@@ -35,7 +35,6 @@ inline namespace MBSFLOW_LANES_NAMESPACE {
 struct LaneMask {
   using Vec = long long __attribute__((vector_size(MBSFLOW_LANE_BYTES)));
   Vec m;
-  friend LaneMask operator!(LaneMask a) { return {a.m == 0}; }
 };
 
 struct Lanes {

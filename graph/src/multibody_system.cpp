@@ -190,6 +190,8 @@ void MultibodySystem::drive(const Driver& d, double t) {
   omega_.col(i).setZero();
 }
 
+// The plain copies here, the rotations on lanes after: the AVX kernels touch no Eigen
+// double arithmetic (see lane_kernels.cpp), and a copy gains nothing from lanes.
 void MultibodySystem::kinematics_in(const int* list, std::size_t n, const Eigen::VectorXd& y) {
   for (std::size_t p = 0; p < n; ++p) {
     const Eigen::Index i = list ? list[p] : static_cast<Eigen::Index>(p);

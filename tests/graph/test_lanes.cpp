@@ -42,17 +42,8 @@ Eigen::Vector3d random_vector(std::mt19937& g, double scale) {
   return {u(g), u(g), u(g)};
 }
 
-template <class S>
-struct Bushing {  // the fields compliant_joint_wrench reads
-  bool spring = false, frame1_identity = true, frame2_identity = true;
-  Matrix3T<S> rfa;
-  Vector3T<S> pa, pb, kt, ct, kr, cr, preload_force, preload_torque;
-  Vector4T<S> qfa, qfb;
-  double rest_length = 0.0;
-};
-
-Bushing<double> random_bushing(std::mt19937& g, bool frame1, bool frame2) {
-  Bushing<double> j;
+BushingParams<double> random_bushing(std::mt19937& g, bool frame1, bool frame2) {
+  BushingParams<double> j;
   j.frame1_identity = !frame1;
   j.frame2_identity = !frame2;
   j.qfa = frame1 ? random_rotation(g, 2) : Eigen::Vector4d(1, 0, 0, 0);
@@ -145,7 +136,7 @@ TEST_CASE("lanes: a bushing's wrench in a lane depends on its own joint alone", 
   std::mt19937 g(11);
   for (int trial = 0; trial < 2000; ++trial) {
     const bool frame1 = trial % 2, frame2 = (trial / 2) % 2;  // a group shares its frame class
-    Bushing<double> j[W];
+    BushingParams<double> j[W];
     BodyFrameT<double> a[W], b[W];
     for (int l = 0; l < W; ++l) {
       j[l] = random_bushing(g, frame1, frame2);
@@ -153,9 +144,9 @@ TEST_CASE("lanes: a bushing's wrench in a lane depends on its own joint alone", 
       b[l] = random_frame(g, static_cast<int>(g() % 4));
       if (g() % 3 == 0) b[l].quat = a[l].quat;  // no relative rotation at all
     }
-    using B = Bushing<double>;
+    using B = BushingParams<double>;
     const auto of = [&](auto field) { return gather([&](int l) -> auto& { return j[l].*field; }); };
-    Bushing<Lanes> jl;
+    BushingParams<Lanes> jl;
     jl.frame1_identity = !frame1;
     jl.frame2_identity = !frame2;
     jl.rfa = of(&B::rfa);
@@ -178,7 +169,7 @@ TEST_CASE("lanes: a bushing's wrench in a lane depends on its own joint alone", 
     compliant_joint_wrench<Lanes>(jl, nullptr, frames(a), frames(b), mixed);
     for (int l = 0; l < W; ++l) {
       // lane l's joint and bodies in every lane
-      Bushing<Lanes> jl_alone = jl;
+      BushingParams<Lanes> jl_alone = jl;
       const auto broadcast = [&](auto& m) {
         for (Eigen::Index c = 0; c < m.size(); ++c) m.data()[c] = Lanes(m.data()[c].v[l]);
       };
