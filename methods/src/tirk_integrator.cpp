@@ -197,6 +197,10 @@ class TirkIntegrator::Driver {
   Eigen::VectorXd x_, fx_, x_old_, f_old_;
   bool fixed_ = false, after_rejection_ = false;
   int slow_growth_ = 0;       // accepted steps that may still grow by 1.2 at most, after a fresh Jacobian failed
+  // Dear Jacobians only (dear_jacobian()): the step stays below 0.9 of the last one whose
+  // iteration failed with an old Jacobian, a bound that grows by 2 % per accepted step.
+  double h_cap_ = std::numeric_limits<double>::infinity();
+  bool dear_jacobian() const;
   int renew_every_step_ = 0;  // accepted steps that still renew the Jacobian, after an old one failed
 };
 
@@ -270,6 +274,17 @@ const std::vector<Eigen::VectorXd>* TirkIntegrator::Driver::extrapolate(double t
   return &guess_;
 }
 
+// A Jacobian is dear when its differences take more right-hand sides than two iterations
+// of a step. Where the iteration then fails with an old Jacobian, renewing it at every step
+// for a while (what pays where Jacobians are cheap) costs more than shorter steps do: on
+// IFToMM A05, whose rigid cluster makes every Jacobian 52 differenced right-hand sides,
+// capping the steps instead took 25 924 right-hand sides and 201 Jacobians in place of
+// 35 488 and 456 (tol 1e-4); on Van der Pol and Robertson, with analytic Jacobians, the
+// cap would have taken 2-6x more right-hand sides (docs/methods.md).
+bool TirkIntegrator::Driver::dear_jacobian() const {
+  return jacobian_.uses_differences() && jacobian_.colours() > 2 * tableau_.stages();
+}
+
 // After an accepted step of size h. Even with an exact Jacobian the triangular (or
 // diagonal) splitting contracts at a rate of its own on the stiff components (about 0.3
 // for Radau IIA), so a slow iteration is not by itself a sign of a stale Jacobian: the
@@ -278,7 +293,8 @@ const std::vector<Eigen::VectorXd>* TirkIntegrator::Driver::extrapolate(double t
 // from another step size: that mismatch slows the iteration too, and the extra iterations
 // cost less than new factorisations (on the 2000-body chain, refactorising whenever the
 // rate passed 0.1 took 27 factorisations in 59 steps). An iteration that fails with an old
-// Jacobian renews it, and then it is renewed at every step for the next 10 (in advance()).
+// Jacobian renews it, and then (in advance()) either it is renewed at every step for the
+// next 10, or, where Jacobians are dear (dear_jacobian()), the steps are kept shorter.
 void TirkIntegrator::Driver::keep_or_renew_jacobian(double h) {
   const double theta = monitor_.theta;
   if (jacobian_at_point_)
@@ -400,6 +416,7 @@ void TirkIntegrator::Driver::begin() {
   t_now_ = t_old_ = t;
   have_last_ = false;
   slow_growth_ = 0;
+  h_cap_ = std::numeric_limits<double>::infinity();
   reset_controller();
   renew_every_step_ = 0;
   after_rejection_ = false;  // the step after a rejected one does not grow (Hairer & Wanner, IV.8)
@@ -410,7 +427,7 @@ void TirkIntegrator::Driver::begin() {
 void TirkIntegrator::Driver::save(StateWriter& out) const {
   out.text("tirk");
   for (double v : {t_, factorized_tau_, theta_fresh_, last_t_, last_h_, t_now_, tau_, t_old_, controller_.h_accepted,
-                   controller_.err_accepted})
+                   controller_.err_accepted, h_cap_})
     out.real(v);
   for (bool v : {jacobian_at_point_, jacobian_stale_, have_last_, extrapolation_ok_, fixed_, after_rejection_}) out.flag(v);
   for (long v : {static_cast<long>(culprit_), static_cast<long>(iterations_), static_cast<long>(slow_growth_),
@@ -433,7 +450,7 @@ void TirkIntegrator::Driver::restore(StateReader& in) {
   in.expect("tirk");
   reset_controller();
   for (double* v : {&t_, &factorized_tau_, &theta_fresh_, &last_t_, &last_h_, &t_now_, &tau_, &t_old_,
-                    &controller_.h_accepted, &controller_.err_accepted})
+                    &controller_.h_accepted, &controller_.err_accepted, &h_cap_})
     *v = in.real();
   for (bool* v : {&jacobian_at_point_, &jacobian_stale_, &have_last_, &extrapolation_ok_, &fixed_, &after_rejection_})
     *v = in.flag();
@@ -494,7 +511,10 @@ bool TirkIntegrator::Driver::advance() {
         fail(newton() ? "the Newton-type iteration did not converge" : "the functional iteration diverged", h);
       if (newton() && !jacobian_at_point_) {
         jacobian_stale_ = true;
-        renew_every_step_ = 10;  // this model outruns its Jacobians: a fresh one per step for a while
+        if (dear_jacobian())
+          h_cap_ = 0.9 * h;  // this model outruns its Jacobians: shorter steps, so that one lasts longer
+        else
+          renew_every_step_ = 10;  // this model outruns its Jacobians: a fresh one per step for a while
       } else {
         tau = h * 0.5;
         renew_every_step_ = 0;  // a fresh Jacobian failed too: the step, not the Jacobian, was the trouble
@@ -555,6 +575,10 @@ bool TirkIntegrator::Driver::advance() {
     // Radau5 keeps the step when it would grow by less than 1.2, to keep its factorisations;
     // with refactor_ratio the step may change that much and keep them anyway.
     if (!fixed) tau = newton() && (!full_newton() || s_.refactor_ratio == 0) && fac >= 1 && fac <= 1.2 ? h : h * fac;
+    if (!fixed && std::isfinite(h_cap_)) {
+      h_cap_ *= 1.02;
+      tau = std::min(tau, h_cap_);
+    }
     return true;
   }
   return false;

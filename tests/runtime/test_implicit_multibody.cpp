@@ -134,7 +134,10 @@ TEST_CASE("tirk on a stiff chain: analytic and coloured-difference Jacobians, KL
   }
   CHECK(gap < 1e-5);
   CHECK(solvers < 1e-6);    // roundoff apart, within the run's tolerance
-  CHECK(jacobians < 1e-6);  // Newton converges to the same stages whichever Jacobian it iterates with
+  // The differenced Jacobian is dear here (dozens of coloured columns): after an iteration
+  // fails with an old one, that run shortens its steps where the analytic one renews its
+  // Jacobian, so the two agree within the runs' tolerance (1e-6), not to the iteration's.
+  CHECK(jacobians < 1e-5);
   o.jacobian = "exact";
   CHECK_THROWS_WITH(run_simulation(sys, o, nullptr), Catch::Contains("auto (analytic where the model has one) or differences"));
   o.jacobian = "auto";
@@ -159,7 +162,7 @@ Eigen::VectorXd fixed_step_end(const Model& m, Method method, const std::string&
 
 }  // namespace
 
-TEST_CASE("tirk on a chain of stiff compliant revolute joints: the analytic Jacobian saves evaluations and changes no result",
+TEST_CASE("tirk on a chain of stiff compliant revolute joints: the analytic Jacobian saves evaluations and agrees within the tolerance",
           "[runtime][implicit][sparse]") {
   ChainParams chain;
   chain.bodies = 40;
@@ -189,7 +192,7 @@ TEST_CASE("tirk on a chain of stiff compliant revolute joints: the analytic Jaco
     jacobians = std::max(jacobians, (exact.states[k] - differenced.states[k]).cwiseAbs().maxCoeff());
   }
   CHECK(gap < 1e-5);
-  CHECK(jacobians < 1e-6);  // Newton converges to the same stages whichever Jacobian it iterates with
+  CHECK(jacobians < 1e-5);  // different steps after a failed iteration (above): within the runs' tolerance
 }
 
 TEST_CASE("implicit methods show their order on a multibody chain with fixed steps", "[runtime][implicit][order]") {
@@ -285,6 +288,33 @@ TEST_CASE("tirk refuses a model on which its iteration keeps failing and names t
   CHECK_THROWS_WITH(run_simulation(sys, o, nullptr),
                     Catch::Contains("step size underflow") && Catch::Contains("the iteration failed") &&
                         Catch::Contains("the velocity (y) of body 'link3' (joints, stiffest first, 'j3', 'j4')"));
+}
+
+TEST_CASE("tirk on A05, whose differenced Jacobians are dear, shortens its steps rather than renew a Jacobian at each",
+          "[runtime][implicit]") {
+  // A05's rigid cluster makes every Jacobian 52 differenced right-hand sides, and its stiff
+  // couplers outrun a Jacobian in about 40 ms. Renewing one at every step for a while after
+  // an iteration failed with an old one took 137 Jacobians in 198 steps over these 3 s; the
+  // steps are now kept below the one that failed, and a Jacobian lasts several of them.
+  const Model m = read_model_file(std::string(MBSFLOW_EXAMPLES) + "/iftomm_a05_flyball_governor.json");
+  MultibodySystem sys(m);
+  REQUIRE_FALSE(sys.has_analytic_jacobian());
+  RunOptions o = options_from_model(m);
+  o.method = Method::tirk;
+  o.threads = 1;
+  o.t_end = o.t_start + 3.0;
+  o.rtol = o.atol = 1e-4;
+  const RunSummary run = run_simulation(sys, o, nullptr);
+  o.rtol = o.atol = 1e-8;
+  const RunSummary reference = run_simulation(sys, o, nullptr);
+  INFO(run.steps << " steps, " << run.jacobians << " Jacobians, " << run.evaluations << " evaluations");
+  CHECK(run.jacobians * 3 < run.steps);
+  double worst = 0;
+  for (Eigen::Index i = 0; i < sys.layout().bodies; ++i) {
+    const Eigen::Index at = sys.layout().position(i);
+    worst = std::max(worst, (run.final_state.segment<3>(at) - reference.final_state.segment<3>(at)).norm());
+  }
+  CHECK(worst < 1e-3);  // m, in a mechanism half a metre across
 }
 
 TEST_CASE("tirk variants name a tableau and an iteration, in any order", "[runtime][implicit]") {
