@@ -275,7 +275,8 @@ const std::vector<Eigen::VectorXd>* TirkIntegrator::Driver::extrapolate(double t
 }
 
 // A Jacobian is dear when its differences take more right-hand sides than two iterations
-// of a step. Where the iteration then fails with an old Jacobian, renewing it at every step
+// of a step. Where the iteration then fails with an old Jacobian (and the step is not
+// fixed, which only a fresh Jacobian can help), renewing it at every step
 // for a while (what pays where Jacobians are cheap) costs more than shorter steps do: on
 // IFToMM A05, whose rigid cluster makes every Jacobian 52 differenced right-hand sides,
 // capping the steps instead took 25 924 right-hand sides and 201 Jacobians in place of
@@ -511,7 +512,7 @@ bool TirkIntegrator::Driver::advance() {
         fail(newton() ? "the Newton-type iteration did not converge" : "the functional iteration diverged", h);
       if (newton() && !jacobian_at_point_) {
         jacobian_stale_ = true;
-        if (dear_jacobian())
+        if (dear_jacobian() && !fixed)
           h_cap_ = 0.9 * h;  // this model outruns its Jacobians: shorter steps, so that one lasts longer
         else
           renew_every_step_ = 10;  // this model outruns its Jacobians: a fresh one per step for a while
