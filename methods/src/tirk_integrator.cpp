@@ -148,6 +148,7 @@ class TirkIntegrator::Driver {
     return (s_.iteration == TirkIteration::newton_triangular || full_newton()) && nodes_.size() >= 2;
   }
   void keep_or_renew_jacobian(double h);
+  bool dear_jacobian() const;
   void begin_step(double t, const Eigen::VectorXd& x, const Eigen::VectorXd& fx, double tau,
                   const std::vector<Eigen::VectorXd>* guess = nullptr);
   const std::vector<Eigen::VectorXd>* extrapolate(double t, double tau);
@@ -200,7 +201,6 @@ class TirkIntegrator::Driver {
   // Dear Jacobians only (dear_jacobian()): the step stays below 0.9 of the last one whose
   // iteration failed with an old Jacobian, a bound that grows by 2 % per accepted step.
   double h_cap_ = std::numeric_limits<double>::infinity();
-  bool dear_jacobian() const;
   int renew_every_step_ = 0;  // accepted steps that still renew the Jacobian, after an old one failed
 };
 
