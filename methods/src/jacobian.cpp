@@ -39,10 +39,8 @@ JacobianEvaluator::JacobianEvaluator(const OdeProblem& problem, bool finite_diff
   }
   pattern_.makeCompressed();
   jac_ = pattern_;  // the problem's Jacobian writes its values into this pattern too
-  if (differences_) {
-    colour_ = colour_columns(pattern_);
-    colours_ = colour_.empty() ? 0 : *std::max_element(colour_.begin(), colour_.end()) + 1;
-  }
+  colour_ = colour_columns(pattern_);  // coloured also for an analytic Jacobian: colours() sizes its cost
+  colours_ = colour_.empty() ? 0 : *std::max_element(colour_.begin(), colour_.end()) + 1;
 }
 
 const Eigen::SparseMatrix<double>& JacobianEvaluator::evaluate(double t, const Eigen::VectorXd& y,

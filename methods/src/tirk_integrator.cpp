@@ -274,17 +274,19 @@ const std::vector<Eigen::VectorXd>* TirkIntegrator::Driver::extrapolate(double t
   return &guess_;
 }
 
-// A Jacobian is dear when its differences take more right-hand sides than two iterations
-// of a step. Where the iteration then fails with an old Jacobian (and the step is not
-// fixed, which only a fresh Jacobian can help), renewing it at every step
-// for a while (what pays where Jacobians are cheap) costs more than shorter steps do: on
-// IFToMM A05, whose rigid cluster makes every Jacobian 52 differenced right-hand sides,
-// capping the steps instead took 25 924 right-hand sides and 201 Jacobians in place of
-// 35 488 and 456 (tol 1e-4); on Van der Pol and Robertson, with analytic Jacobians, the
-// cap would have taken 2-6x more right-hand sides (docs/methods.md).
-bool TirkIntegrator::Driver::dear_jacobian() const {
-  return jacobian_.uses_differences() && jacobian_.colours() > 2 * tableau_.stages();
-}
+// A renewal of the Jacobian is dear when differences would take more right-hand sides than
+// two iterations of a step (the pattern's colours), whether it is differenced or not: the
+// analytic Jacobians of multibody models cost as much as their differences or more
+// (`mbsflow bench rhs`: A05 113 against 208 us, 29 right-hand sides; a 2000-body chain
+// 4986 against 3472 ns per body), while those of small ODEs (2 to 4 colours) cost less
+// than an iteration. Where the iteration then fails with an old Jacobian (and the step is
+// not fixed, which only a fresh Jacobian can help), renewing it at every step for a while
+// (what pays where renewals are cheap) costs more than shorter steps do: on IFToMM A05 at
+// tol 1e-4, with differenced Jacobians the cap took 25 924 right-hand sides and 201
+// Jacobians in place of 35 488 and 456, and with its analytic Jacobian 200 Jacobians and
+// 404 factorisations in place of 451 and 1322 (0.14 s in place of 0.20 s); on Van der Pol,
+// Robertson and B1 the cap would take up to 6x more right-hand sides (docs/methods.md).
+bool TirkIntegrator::Driver::dear_jacobian() const { return jacobian_.colours() > 2 * tableau_.stages(); }
 
 // After an accepted step of size h. Even with an exact Jacobian the triangular (or
 // diagonal) splitting contracts at a rate of its own on the stiff components (about 0.3

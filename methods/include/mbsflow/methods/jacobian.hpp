@@ -24,6 +24,7 @@ class JacobianEvaluator {
   const Eigen::SparseMatrix<double>& evaluate(double t, const Eigen::VectorXd& y, const Eigen::VectorXd& f,
                                               long& rhs_evaluations);
   bool uses_differences() const { return differences_; }
+  // The colours of the pattern: the evaluations of f one Jacobian by differences takes.
   int colours() const { return colours_; }
 
  private:
