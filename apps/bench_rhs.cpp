@@ -1,6 +1,7 @@
 // mbsflow bench rhs: nanoseconds per body per right-hand-side evaluation on chain models,
 // one thread, with the time split into the three phases of the evaluation; and per body
-// per Jacobian, analytic against coloured differences.
+// per Jacobian, analytic against coloured differences. Then the same for the examples with
+// rigid joints, whose clusters make differences dear.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -13,6 +14,7 @@
 #include "mbsflow/graph/generators.hpp"
 #include "mbsflow/graph/multibody_system.hpp"
 #include "mbsflow/graph/simd.hpp"
+#include "mbsflow/io/model_reader.hpp"
 #include "mbsflow/methods/jacobian.hpp"
 
 namespace mbsflow::cli {
@@ -83,6 +85,39 @@ MachineRoof measure_machine() {
   return roof;
 }
 
+// The examples with rigid joints: microseconds per right-hand side and per Jacobian
+// (analytic through the clusters' reactions, and by coloured differences) at the initial
+// state, one thread; to `path` as CSV.
+void rigid_models(const BenchArgs& a, const std::string& path) {
+  std::ofstream csv(path);
+  if (!csv) throw InputError("cannot write " + path);
+  csv << "model,bodies,equations,us_rhs,us_jacobian,us_differences,colours\n";
+  std::printf("\nexamples with rigid joints, one thread, initial state (microseconds per call)\n");
+  std::printf("%-32s %7s %9s %10s %12s %14s %8s\n", "model", "bodies", "equations", "rhs", "jacobian", "differences", "colours");
+  for (const char* file : {"slider_crank.json", "iftomm_a05_flyball_governor.json", "iftomm_a02_n_four_bar.json"}) {
+    MultibodySystem sys(read_model_file(examples_dir(a) + "/" + file));
+    const Eigen::VectorXd y = sys.initial_state();
+    Eigen::VectorXd dy(sys.dimension());
+    const double s = a.seconds;
+    const double rhs = time_per_call(s, [&] { sys.rhs(0.0, y, dy); });
+    Eigen::SparseMatrix<double> jac = sys.jacobian_pattern();
+    const double analytic = time_per_call(s, [&] { sys.jacobian(0.0, y, jac); });
+    OdeProblem problem = make_ode_problem(file, 0.0, 1.0, y, [&](double t, const Eigen::VectorXd& x, Eigen::VectorXd& f) {
+      sys.rhs(t, x, f);
+    });
+    problem.sparsity = jac;
+    JacobianEvaluator differences(problem, true);
+    sys.rhs(0.0, y, dy);
+    long evaluations = 0;
+    const double differenced = time_per_call(s, [&] { differences.evaluate(0.0, y, dy, evaluations); });
+    std::printf("%-32s %7ld %9ld %10.1f %12.1f %14.1f %8d\n", file, static_cast<long>(sys.layout().bodies),
+                static_cast<long>(sys.dimension()), rhs * 1e6, analytic * 1e6, differenced * 1e6, differences.colours());
+    csv << file << ',' << sys.layout().bodies << ',' << sys.dimension() << ',' << rhs * 1e6 << ',' << analytic * 1e6 << ','
+        << differenced * 1e6 << ',' << differences.colours() << '\n';
+  }
+  std::printf("written to %s\n", path.c_str());
+}
+
 }  // namespace
 
 int bench_rhs(const BenchArgs& a) {
@@ -146,6 +181,10 @@ int bench_rhs(const BenchArgs& a) {
     std::printf("%10d %10.1f %14.0f %14.0f %14.0f %12.2f %13.0f%%\n", r.bodies, r.ns, r.bytes, r.compiled, r.workspace,
                 r.bytes / r.ns, 100.0 * r.bytes / r.ns / roof.triad_gb_s);
   std::printf("written to %s\n", csv_path.c_str());
+  const std::string rigid_csv = csv_path.size() > 4 && csv_path.ends_with(".csv")
+                                    ? csv_path.substr(0, csv_path.size() - 4) + "_rigid.csv"
+                                    : csv_path + "_rigid";
+  rigid_models(a, rigid_csv);
   return 0;
 }
 

@@ -4,68 +4,20 @@
 // (force_laws.hpp and kinematic_joint_wrench.hpp, the arithmetic the right-hand side
 // runs), then assembled body by body along the body graph with the chain rule through
 //   v' = F / m,  w' = J^-1 (R(q)^T T - w x J w),  q' = q (x) (0, w) / 2,  r' = v.
-// Exact up to rounding, so Newton converges at its own rate, and no right-hand-side call
-// is spent on differences.
-#include <Eigen/Core>
-#include <unsupported/Eigen/AutoDiff>
-
+// The bodies of a rigid cluster get their rates' derivatives through the cluster's
+// reactions (cluster_jacobian.cpp). Exact up to rounding, so Newton converges at its own
+// rate, and no right-hand-side call is spent on differences.
 #include <algorithm>
 #include <stdexcept>
 
-#include "force_laws.hpp"
+#include "jacobian_seeds.hpp"
 #include "kinematic_joint_wrench.hpp"
 #include "mbsflow/graph/multibody_system.hpp"
 
 namespace mbsflow {
 namespace {
 
-constexpr int body_states = 13;  // position 3, quaternion 4, velocity 3, angular velocity 3
-// A joint's wrench depends on the states of its two bodies, a body's own rates on its own.
-using Dual = Eigen::AutoDiffScalar<Eigen::Matrix<double, 2 * body_states, 1>>;
-using BodyDual = Eigen::AutoDiffScalar<Eigen::Matrix<double, body_states, 1>>;
-using Block6 = Eigen::Matrix<double, 6, body_states>;
-
-// Body i's state numbers as the variables first..first+12, in the order position,
-// quaternion, velocity, body-frame angular velocity.
-template <class D>
-struct SeededState {
-  Vector3T<D> r, v, w;
-  Vector4T<D> q;
-};
-template <class D>
-SeededState<D> seeded_state(const Eigen::VectorXd& y, const StateLayout& l, Eigen::Index i, int first) {
-  constexpr int variables = D::DerType::SizeAtCompileTime;
-  SeededState<D> s;
-  for (int k = 0; k < 3; ++k) {
-    s.r[k] = D(y[l.position(i) + k], variables, first + k);
-    s.v[k] = D(y[l.velocity(i) + k], variables, first + 7 + k);
-    s.w[k] = D(y[l.angular_velocity(i) + k], variables, first + 10 + k);
-  }
-  for (int k = 0; k < 4; ++k) s.q[k] = D(y[l.orientation(i) + k], variables, first + 3 + k);
-  return s;
-}
-BodyFrameT<Dual> seeded_frame(const Eigen::VectorXd& y, const StateLayout& l, Eigen::Index i, int first) {
-  const SeededState<Dual> s = seeded_state<Dual>(y, l, i, first);
-  return body_frame<Dual>(s.r, s.q, s.v, s.w);
-}
-
-// The kinematic joints' view of a body's frame.
-BodyMotionT<Dual> motion(const BodyFrameT<Dual>& f) {
-  BodyMotionT<Dual> m;
-  m.r = f.pos;
-  m.R = f.rot;
-  m.v = f.vel;
-  m.w = f.omega;
-  return m;
-}
-
-// The index in y of body b's state number c (0..12, in seeded_frame's order).
-Eigen::Index state_index(const StateLayout& l, Eigen::Index b, int c) {
-  if (c < 3) return l.position(b) + c;
-  if (c < 7) return l.orientation(b) + c - 3;
-  if (c < 10) return l.velocity(b) + c - 7;
-  return l.angular_velocity(b) + c - 10;
-}
+using namespace jacobian_seeds;
 
 // The offset in jac's values of rows row..row+count-1 of column col, which the pattern
 // must hold (then they are consecutive in the column: its rows are sorted).
@@ -141,10 +93,6 @@ bool no_jacobian(std::string* why, std::string reason) {
 }  // namespace
 
 bool has_analytic_jacobian(const Model& m, std::string* why) {
-  for (const Joint& j : m.joints)
-    if (is_kinematic(j.type) && j.rigid)
-      return no_jacobian(why, std::string("rigid ") + joint_type_name(j.type) + " joint '" + j.name +
-                                  "' (the reactions of rigid joints have no analytic Jacobian yet)");
   for (const auto& e : m.force_elements)
     if (!e->constant_wrench()) return no_jacobian(why, "the model has user force elements");
   return true;
@@ -160,8 +108,22 @@ bool MultibodySystem::has_analytic_jacobian(std::string* why) const {
 
 void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::SparseMatrix<double>& jac) {
   if (std::string why; !has_analytic_jacobian(&why)) throw std::logic_error("no analytic Jacobian: " + why);
-  update_kinematics(t, y);
-  compute_joint_forces();  // the torques, whose value w' depends on through R(q)^T
+  // The rates themselves where rigid clusters need them (their accelerations, multipliers
+  // and factors, cluster_jacobian.cpp); the kinematics and joint forces in any case (the
+  // torques, whose value w' depends on through R(q)^T).
+  const int n_clusters = clusters();
+  Eigen::VectorXd rates;
+  if (n_clusters > 0) {
+    rates.resize(y.size());
+    rhs(t, y, rates);
+  } else {
+    update_kinematics(t, y);
+    compute_joint_forces();
+  }
+  // Per cluster and body slot: the rate blocks under the applied forces, which the
+  // cluster's part turns into its bodies' rows.
+  std::vector<std::vector<RateBlocks>> unconstrained(static_cast<std::size_t>(n_clusters));
+  for (int c = 0; c < n_clusters; ++c) unconstrained[static_cast<std::size_t>(c)].resize(cluster_bodies(c).size());
   std::fill_n(jac.valuePtr(), jac.nonZeros(), 0.0);
   const Eigen::Index n = layout_.bodies;
   // A kinematics index whose state is a variable: not ground (index n), not driven.
@@ -187,7 +149,7 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
     const BodyFrameT<Dual> a = free(j.a) ? seeded_frame(y, layout_, j.a, 0) : constant_frame(j.a);
     const BodyFrameT<Dual> b = free(j.b) ? seeded_frame(y, layout_, j.b, body_states) : constant_frame(j.b);
     Eigen::Matrix<Dual, 9, 1> out;
-    if (j.kinematic >= 0) {  // compliant: has_analytic_jacobian refuses rigid ones
+    if (j.kinematic >= 0) {  // compliant, or the limit stops and effort motor of a rigid one
       out.setZero();
       if (j.applies_force) kinematic_joint_wrench<Dual>(j, geometry_of(j), motion(a), motion(b), t, out, nullptr);
     } else {
@@ -244,11 +206,18 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
     const Eigen::Matrix3d to_w = compiled_->inv_inertia[bi] * rot_[bi].transpose();
     const Vector3T<BodyDual> w_rate = angular_acceleration<BodyDual>(rot, own.w, Vector3T<BodyDual>(torque.cast<BodyDual>()),
                                                                      compiled_->inertia[bi], compiled_->inv_inertia[bi]);
+    const int cluster = n_clusters > 0 ? cluster_of(static_cast<int>(i)) : -1;
     for (const auto& [b, m] : blocks) {
       Block6 rows;
       rows.topRows<3>() = compiled_->inv_mass[bi] * m.topRows<3>();
       rows.bottomRows<3>() = to_w * m.bottomRows<3>();
       if (b == i) rows.bottomRows<3>() += derivatives<3>(w_rate, 0);
+      if (cluster >= 0) {  // written with the cluster's reactions below
+        const std::vector<int>& members = cluster_bodies(cluster);
+        const auto slot = std::lower_bound(members.begin(), members.end(), static_cast<int>(i)) - members.begin();
+        unconstrained[static_cast<std::size_t>(cluster)][static_cast<std::size_t>(slot)].emplace_back(b, rows);
+        continue;
+      }
       for (int c = 0; c < body_states; ++c) {
         const Eigen::Index col = state_index(layout_, b, c);
         double* v = slots.at(layout_.velocity(i), col, 3);
@@ -270,6 +239,23 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
       for (int r = 0; r < 4; ++r) q[r] = q_rate(r, 10 + c);
     }
     for (int k = 0; k < 3; ++k) *slots.at(layout_.position(i) + k, layout_.velocity(i) + k) = 1.0;
+  }
+  for (int c = 0; c < n_clusters; ++c) {
+    const std::vector<int>& members = cluster_bodies(c);
+    cluster_jacobian(c, t, y, rates, unconstrained[static_cast<std::size_t>(c)],
+                     [&](int b, int k, const Eigen::VectorXd& d) {
+                       const Eigen::Index col = state_index(layout_, b, k);
+                       for (std::size_t s = 0; s < members.size(); ++s) {
+                         const int i = members[s];
+                         if (!free(i)) continue;
+                         double* v = slots.at(layout_.velocity(i), col, 3);
+                         double* w = slots.at(layout_.angular_velocity(i), col, 3);
+                         for (int r = 0; r < 3; ++r) {
+                           v[r] = d[static_cast<Eigen::Index>(6 * s) + r];
+                           w[r] = d[static_cast<Eigen::Index>(6 * s) + 3 + r];
+                         }
+                       }
+                     });
   }
 }
 

@@ -9,6 +9,7 @@
 #include "mbsflow/error.hpp"
 #include "mbsflow/graph/decomposition.hpp"
 #include "mbsflow/graph/multibody_system.hpp"
+#include "multibody_constraints.hpp"
 #include "rigid_cluster.hpp"
 #include "rotation.hpp"
 
@@ -26,17 +27,6 @@ Eigen::Vector4d quat_exp(const Eigen::Vector3d& theta) {
 }
 
 }  // namespace
-
-struct MultibodySystem::Constraints {
-  std::vector<JointGeometry> geometry;  // per kinematic joint
-  std::vector<RigidCluster> clusters;
-  std::vector<int> cluster_of_body;     // -1: in no cluster
-  std::vector<Eigen::VectorXd> lambda;  // per cluster, the multipliers of the last solve
-  std::vector<char> marked;             // scratch of derivatives_of
-  std::vector<Vector6d> wrench;         // scratch
-  std::vector<BodyMotion> motion;       // scratch, per cluster slot
-  std::vector<Eigen::Vector3d> force, torque;  // scratch, per cluster slot
-};
 
 std::size_t MultibodySystem::constraint_bytes() const {
   const Constraints& k = *constraints_;

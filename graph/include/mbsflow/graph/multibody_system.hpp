@@ -13,6 +13,7 @@
 #include <Eigen/SparseCore>
 #include <array>
 #include <cmath>
+#include <functional>
 #include <memory>
 #include <span>
 #include <string>
@@ -178,6 +179,15 @@ class MultibodySystem {
   const JointGeometry& geometry_of(const CompiledJoint& j) const;  // a kinematic joint's
   double kinematic_energy(const CompiledJoint& j) const;
   void solve_cluster(int c, double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const;
+  // jacobian()'s part for rigid cluster c (cluster_jacobian.cpp). unconstrained[s]: for
+  // each body b that the cluster's body s reads, d (v', w') / d (state of b) under the
+  // applied forces alone; dydt: the rates at (t, y), just evaluated. column(b, k, rates)
+  // gets, for state number k (0..12) of each free body b that any body of the cluster
+  // reads, the derivatives of the 6 rates (v', w') of each of the cluster's bodies.
+  using RateBlocks = std::vector<std::pair<int, Eigen::Matrix<double, 6, 13>>>;
+  void cluster_jacobian(int c, double t, const Eigen::VectorXd& y, const Eigen::VectorXd& dydt,
+                        const std::vector<RateBlocks>& unconstrained,
+                        const std::function<void(int body, int k, const Eigen::VectorXd& rates)>& column) const;
   BodyMotion motion_at(int i) const;  // kinematics index i of the current evaluation
   std::vector<int> clusters_of(std::span<const int> bodies) const;  // ascending, each once
   void add_reactions(Eigen::VectorXd& out);
