@@ -126,13 +126,14 @@ class MultibodySystem {
   // The implicit methods difference the Jacobian by this pattern's column colouring and
   // factor it as a sparse matrix.
   Eigen::SparseMatrix<double> jacobian_pattern() const;
-  // Whether jacobian() can give d rhs / d y: every force comes from gravity, loads, bushings
-  // and springs (the rigid and kinematic joints and user force elements have no analytic
-  // Jacobian; the methods then difference by the pattern's colouring), and the system is
-  // the whole model. Else *why says which item stands in the way.
+  // Whether jacobian() can give d rhs / d y: no user force element other than constant
+  // wrenches (those have no analytic Jacobian; the methods then difference by the
+  // pattern's colouring), and the system is the whole model. Else *why says which item
+  // stands in the way.
   bool has_analytic_jacobian(std::string* why = nullptr) const;
   // d rhs / d y at (t, y), exact up to rounding (forward-mode differentiation of each
-  // element's force law, assembled body by body along the body graph), written into jac,
+  // element's force law and of the rigid joints' constraint rows, assembled body by body
+  // along the body graph, and through each rigid cluster's reactions), written into jac,
   // a matrix of jacobian_pattern()'s pattern. Throws std::logic_error without one.
   void jacobian(double t, const Eigen::VectorXd& y, Eigen::SparseMatrix<double>& jac);
 
