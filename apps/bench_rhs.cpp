@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <vector>
 
@@ -89,12 +90,17 @@ MachineRoof measure_machine() {
 // (analytic through the clusters' reactions, and by coloured differences) at the initial
 // state, one thread; to `path` as CSV.
 void rigid_models(const BenchArgs& a, const std::string& path) {
+  const std::vector<const char*> files{"slider_crank.json", "iftomm_a05_flyball_governor.json", "iftomm_a02_n_four_bar.json"};
+  if (!std::filesystem::exists(examples_dir(a) + "/" + files.front())) {
+    std::printf("\nexamples with rigid joints: not in %s (run from the source folder, or give --dir)\n", examples_dir(a).c_str());
+    return;
+  }
   std::ofstream csv(path);
   if (!csv) throw InputError("cannot write " + path);
   csv << "model,bodies,equations,us_rhs,us_jacobian,us_differences,colours\n";
   std::printf("\nexamples with rigid joints, one thread, initial state (microseconds per call)\n");
   std::printf("%-32s %7s %9s %10s %12s %14s %8s\n", "model", "bodies", "equations", "rhs", "jacobian", "differences", "colours");
-  for (const char* file : {"slider_crank.json", "iftomm_a05_flyball_governor.json", "iftomm_a02_n_four_bar.json"}) {
+  for (const char* file : files) {
     MultibodySystem sys(read_model_file(examples_dir(a) + "/" + file));
     const Eigen::VectorXd y = sys.initial_state();
     Eigen::VectorXd dy(sys.dimension());

@@ -172,5 +172,27 @@ TEST_CASE("cli bench rhs: nanoseconds per body with the roofline's bytes per bod
   CHECK(std::stod(cells[12]) == Approx(bytes / ns));
   CHECK(std::stod(cells[13]) > 0.0);
   CHECK(std::stod(cells[14]) > 0.0);
+  CHECK(r.out.find("examples with rigid joints: not in examples/models") != std::string::npos);  // run outside the sources
+
+  // The examples with rigid joints: right-hand side, analytic Jacobian and differences.
+  const Result rigid =
+      run("bench rhs --bodies 300 --seconds 0.02 --csv rhs.csv --dir " + std::string(MBSFLOW_SOURCE) + "/examples/models", dir, true);
+  INFO(rigid.err << rigid.out);
+  REQUIRE(rigid.code == 0);
+  std::istringstream table(read_text(fs::path(dir) / "rhs_rigid.csv"));
+  std::getline(table, line);
+  CHECK(line == "model,bodies,equations,us_rhs,us_jacobian,us_differences,colours");
+  int models = 0;
+  while (std::getline(table, line)) {
+    const std::vector<std::string> c = csv_cells(line);
+    REQUIRE(c.size() == 7);
+    CHECK(std::stoi(c[2]) == 13 * std::stoi(c[1]));  // 13 state numbers a body
+    CHECK(std::stod(c[3]) > 0.0);
+    CHECK(std::stod(c[4]) > 0.0);
+    CHECK(std::stod(c[5]) > 0.0);
+    CHECK(std::stoi(c[6]) <= std::stoi(c[2]));
+    ++models;
+  }
+  CHECK(models == 3);
   fs::remove_all(fs::path(dir).parent_path());
 }
