@@ -295,8 +295,8 @@ TEST_CASE("tirk on A05, whose Jacobian renewals are dear, shortens its steps rat
   // A05's stiff couplers outrun a Jacobian in about 40 ms. Renewing one at every step for a
   // while after an iteration failed with an old one took 137 Jacobians in 198 steps over
   // these 3 s (differenced); the steps are now kept below the one that failed, and a
-  // Jacobian lasts several of them. Renewals are dear both ways: 78 equations, whose
-  // factorisations outweigh iterations, and with differences 52 right-hand sides each.
+  // Jacobian lasts several of them. Renewals are dear both ways: the pattern's 52 colours
+  // are 52 right-hand sides by differences, and the analytic Jacobian costs about 29.
   const Model m = read_model_file(std::string(MBSFLOW_EXAMPLES) + "/iftomm_a05_flyball_governor.json");
   MultibodySystem sys(m);
   REQUIRE(sys.has_analytic_jacobian());  // through the rigid cluster's reactions
