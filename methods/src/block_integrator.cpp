@@ -146,7 +146,6 @@ class BlockIntegrator::Driver {
   LastBlock last_;
   StepController controller_;
   bool after_rejection_ = false;  // no step growth right after a rejection
-  int slow_growth_ = 0;            // accepted blocks that may still grow by 1.2 at most, after a halving
   bool jacobian_at_point_ = false;  // evaluated at the window's last point
   bool jacobian_stale_ = true;      // to be evaluated (again) before the next factorisation
   const BlockSolve* factorized_for_ = nullptr;
@@ -303,7 +302,6 @@ void BlockIntegrator::Driver::begin() {
   jacobian_at_point_ = false;
   factorized_for_ = nullptr;
   after_rejection_ = false;
-  slow_growth_ = 0;
   reset_controller();
   tau_ = s_.fixed_step;
   if (!fixed_) {
@@ -323,11 +321,9 @@ bool BlockIntegrator::Driver::advance() {
     os << why << " at t = " << t_ << " (step " << tau << ")" << hint;
     throw RunError(os.str());
   };
-  // After an iteration that did not converge: a fresh Jacobian first, then a smaller step.
-  // The step the error allows can be beyond where the iteration converges (a nonlinear
-  // model far from its Jacobian, as A05's rotating stiff couplers): after a halving the
-  // step grows by 1.2 at most for the next 10 blocks, as tirk does, instead of doubling
-  // back into the same failure (A05, tol 1e-4: 141 rejections in 679 blocks, 422 in 624 before).
+  // After an iteration that did not converge: a fresh Jacobian first, then a smaller step
+  // that grows slowly for a while (step_controller.hpp; A05, tol 1e-4: 141 rejections in
+  // 679 blocks, 422 in 624 when a halving could grow back at once).
   auto iteration_failed = [&] {
     ++st.iteration_failures;
     ++st.rejected;
@@ -336,7 +332,7 @@ bool BlockIntegrator::Driver::advance() {
       jacobian_stale_ = true;
     } else {
       tau *= 0.5;
-      slow_growth_ = 10;
+      controller_.after_halving();
     }
   };
   while (t_end - t_ > eps_t) {
@@ -390,10 +386,7 @@ bool BlockIntegrator::Driver::advance() {
       continue;
     }
     if (after_rejection_) fac = std::min(fac, 1.0);
-    if (slow_growth_ > 0) {
-      --slow_growth_;
-      fac = std::min(fac, 1.2);
-    }
+    fac = controller_.limit_growth(fac);
     after_rejection_ = false;
     // A Newton iteration that needed more than two corrections: a fresh Jacobian for the
     // next block. (Renewing only when the contraction rate grows, as tirk does, and
@@ -425,7 +418,7 @@ void BlockIntegrator::Driver::save(StateWriter& out) const {
   for (double v : {t_, tau_, window_tau_, controller_.h_accepted, controller_.err_accepted, factorized_tau_}) out.real(v);
   for (bool v : {after_rejection_, jacobian_at_point_, jacobian_stale_}) out.flag(v);
   out.integer(block_id(factorized_for_));
-  out.integer(slow_growth_);
+  out.integer(controller_.slow_growth);
   out.vectors(past_u_);
   out.vectors(past_f_);
   out.integer(block_id(block_with(last_.method)));
@@ -449,7 +442,7 @@ void BlockIntegrator::Driver::restore(StateReader& in) {
   for (double* v : {&t_, &tau_, &window_tau_, &controller_.h_accepted, &controller_.err_accepted, &factorized_tau_}) *v = in.real();
   for (bool* v : {&after_rejection_, &jacobian_at_point_, &jacobian_stale_}) *v = in.flag();
   factorized_for_ = block_of(static_cast<int>(in.integer(0, 3)));
-  slow_growth_ = static_cast<int>(in.integer(0, 1 << 30));
+  controller_.slow_growth = static_cast<int>(in.integer(0, 1 << 30));
   past_u_ = in.vectors(p_.size);
   past_f_ = in.vectors(p_.size);
   if (past_u_.empty() || past_u_.size() != past_f_.size() || past_u_.size() > static_cast<std::size_t>(m()))

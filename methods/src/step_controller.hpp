@@ -17,6 +17,20 @@ struct StepController {
   bool predictive = true;
   // The last accepted step and its error (max(err, 1e-2), as Radau5).
   double h_accepted = 0, err_accepted = 0;
+  // Accepted steps that may still grow by 1.2 at most. The step the error allows can be
+  // beyond where the Newton iteration converges (a nonlinear model far from its last
+  // Jacobian, as A05's rotating stiff couplers): after an iteration with a fresh Jacobian
+  // failed and the step was halved, it grows slowly for a while instead of growing back
+  // into the same failure.
+  int slow_growth = 0;
+
+  void after_halving() { slow_growth = 10; }
+  // An accepted step's factor, held to 1.2 while the slow growth lasts.
+  double limit_growth(double fac) {
+    if (slow_growth <= 0) return fac;
+    --slow_growth;
+    return std::min(fac, 1.2);
+  }
 
   // Radau5: safe * (1 + 2 nit) / (newt + 2 nit): 0.9 after one iteration, 0.64 after seven.
   double newton_safety(int iterations) const {

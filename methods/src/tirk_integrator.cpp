@@ -197,7 +197,6 @@ class TirkIntegrator::Driver {
   double t_now_ = 0, tau_ = 0, t_old_ = 0;
   Eigen::VectorXd x_, fx_, x_old_, f_old_;
   bool fixed_ = false, after_rejection_ = false;
-  int slow_growth_ = 0;       // accepted steps that may still grow by 1.2 at most, after a fresh Jacobian failed
   // Dear Jacobians only (dear_jacobian()): the step stays below 0.9 of the last one whose
   // iteration failed with an old Jacobian, a bound that grows by 2 % per accepted step.
   double h_cap_ = std::numeric_limits<double>::infinity();
@@ -418,7 +417,6 @@ void TirkIntegrator::Driver::begin() {
   }
   t_now_ = t_old_ = t;
   have_last_ = false;
-  slow_growth_ = 0;
   h_cap_ = std::numeric_limits<double>::infinity();
   reset_controller();
   renew_every_step_ = 0;
@@ -433,7 +431,7 @@ void TirkIntegrator::Driver::save(StateWriter& out) const {
                    controller_.err_accepted, h_cap_})
     out.real(v);
   for (bool v : {jacobian_at_point_, jacobian_stale_, have_last_, extrapolation_ok_, fixed_, after_rejection_}) out.flag(v);
-  for (long v : {static_cast<long>(culprit_), static_cast<long>(iterations_), static_cast<long>(slow_growth_),
+  for (long v : {static_cast<long>(culprit_), static_cast<long>(iterations_), static_cast<long>(controller_.slow_growth),
                  static_cast<long>(renew_every_step_)})
     out.integer(v);
   for (const Eigen::VectorXd* v : {&scale_, &last_x_, &x_, &fx_, &x_old_, &f_old_}) out.vector(*v);
@@ -459,7 +457,7 @@ void TirkIntegrator::Driver::restore(StateReader& in) {
     *v = in.flag();
   culprit_ = in.integer(-1, p_.size);
   iterations_ = static_cast<int>(in.integer(0, 1 << 30));
-  slow_growth_ = static_cast<int>(in.integer(0, 1 << 30));
+  controller_.slow_growth = static_cast<int>(in.integer(0, 1 << 30));
   renew_every_step_ = static_cast<int>(in.integer(0, 1 << 30));
   for (Eigen::VectorXd* v : {&scale_, &last_x_, &x_, &fx_, &x_old_, &f_old_}) {
     *v = in.vector();
@@ -521,9 +519,7 @@ bool TirkIntegrator::Driver::advance() {
       } else {
         tau = h * 0.5;
         renew_every_step_ = 0;  // a fresh Jacobian failed too: the step, not the Jacobian, was the trouble
-        // The step the error estimate allows can be beyond where the iteration converges
-        // (a nonlinear model far from its last Jacobian): grow slowly for a while.
-        slow_growth_ = 10;
+        controller_.after_halving();  // grow slowly for a while (step_controller.hpp)
       }
       after_rejection = true;
       continue;
@@ -543,10 +539,7 @@ bool TirkIntegrator::Driver::advance() {
       continue;
     }
     if (after_rejection) fac = std::min(fac, 1.0);
-    if (slow_growth_ > 0) {
-      --slow_growth_;
-      fac = std::min(fac, 1.2);
-    }
+    fac = controller_.limit_growth(fac);
     after_rejection = false;
     rec.taken = tableau_.stages();
     result_.steps.push_back(rec);
