@@ -86,6 +86,22 @@ MachineRoof measure_machine() {
   return roof;
 }
 
+// Seconds per Jacobian of sys at (t, y) by coloured differences along jac's pattern; the
+// colours to *colours.
+double differenced_seconds(MultibodySystem& sys, double t, const Eigen::VectorXd& y, const Eigen::SparseMatrix<double>& jac,
+                           double seconds, int* colours) {
+  OdeProblem problem = make_ode_problem("model", 0.0, 1.0, y, [&](double time, const Eigen::VectorXd& x, Eigen::VectorXd& f) {
+    sys.rhs(time, x, f);
+  });
+  problem.sparsity = jac;
+  JacobianEvaluator differences(problem, true);
+  Eigen::VectorXd dy(sys.dimension());
+  sys.rhs(t, y, dy);
+  long evaluations = 0;
+  *colours = differences.colours();
+  return time_per_call(seconds, [&] { differences.evaluate(t, y, dy, evaluations); });
+}
+
 // The examples with rigid joints: microseconds per right-hand side and per Jacobian
 // (analytic through the clusters' reactions, and by coloured differences) at the initial
 // state, one thread; to `path` as CSV.
@@ -108,18 +124,12 @@ void rigid_models(const BenchArgs& a, const std::string& path) {
     const double rhs = time_per_call(s, [&] { sys.rhs(0.0, y, dy); });
     Eigen::SparseMatrix<double> jac = sys.jacobian_pattern();
     const double analytic = time_per_call(s, [&] { sys.jacobian(0.0, y, jac); });
-    OdeProblem problem = make_ode_problem(file, 0.0, 1.0, y, [&](double t, const Eigen::VectorXd& x, Eigen::VectorXd& f) {
-      sys.rhs(t, x, f);
-    });
-    problem.sparsity = jac;
-    JacobianEvaluator differences(problem, true);
-    sys.rhs(0.0, y, dy);
-    long evaluations = 0;
-    const double differenced = time_per_call(s, [&] { differences.evaluate(0.0, y, dy, evaluations); });
+    int colours = 0;
+    const double differenced = differenced_seconds(sys, 0.0, y, jac, s, &colours);
     std::printf("%-32s %7ld %9ld %10.1f %12.1f %14.1f %8d\n", file, static_cast<long>(sys.layout().bodies),
-                static_cast<long>(sys.dimension()), rhs * 1e6, analytic * 1e6, differenced * 1e6, differences.colours());
+                static_cast<long>(sys.dimension()), rhs * 1e6, analytic * 1e6, differenced * 1e6, colours);
     csv << file << ',' << sys.layout().bodies << ',' << sys.dimension() << ',' << rhs * 1e6 << ',' << analytic * 1e6 << ','
-        << differenced * 1e6 << ',' << differences.colours() << '\n';
+        << differenced * 1e6 << ',' << colours << '\n';
   }
   std::printf("written to %s\n", path.c_str());
 }
@@ -156,24 +166,19 @@ int bench_rhs(const BenchArgs& a) {
     const double bodies = time_per_call(s / 3, [&] { sys.compute_derivatives(0.1, y, dy); });
     Eigen::SparseMatrix<double> jac = sys.jacobian_pattern();
     const double analytic = time_per_call(s / 3, [&] { sys.jacobian(0.1, y, jac); });
-    OdeProblem problem = make_ode_problem("chain", 0.0, 1.0, y, [&](double t, const Eigen::VectorXd& x, Eigen::VectorXd& f) {
-      sys.rhs(t, x, f);
-    });
-    problem.sparsity = jac;
-    JacobianEvaluator differences(problem, true);
+    int colours = 0;
+    const double differenced = differenced_seconds(sys, 0.1, y, jac, s / 3, &colours);
     sys.rhs(0.1, y, dy);
-    long evaluations = 0;
-    const double differenced = time_per_call(s / 3, [&] { differences.evaluate(0.1, y, dy, evaluations); });
     const double per = 1e9 / n;
     std::printf("%10d %12.1f %10.1f %12.1f %10.1f %10.1f %10.1f %12.1f (%d colours)\n", n, 1.0 / total, total * per, kin * per,
-                joints * per, bodies * per, analytic * per, differenced * per, differences.colours());
+                joints * per, bodies * per, analytic * per, differenced * per, colours);
     // What one evaluation streams per body: the state read and the derivative written, the
     // compiled model read, the workspace written and read back.
     const double compiled = static_cast<double>(use.compiled) / n, workspace = static_cast<double>(use.workspace) / n;
     const double bytes = 2.0 * static_cast<double>(sys.dimension()) * sizeof(double) / n + compiled + 2.0 * workspace;
     rows.push_back({n, total * per, bytes, compiled, workspace});
     csv << n << ',' << 1.0 / total << ',' << total * per << ',' << kin * per << ',' << joints * per << ',' << bodies * per
-        << ',' << analytic * per << ',' << differenced * per << ',' << differences.colours() << ',' << bytes << ',' << compiled
+        << ',' << analytic * per << ',' << differenced * per << ',' << colours << ',' << bytes << ',' << compiled
         << ',' << workspace << ',' << bytes / (total * per) << ',' << roof.triad_gb_s << ',' << roof.peak_gflop_s << ','
         << (simd() == Simd::avx ? "avx" : "sse2") << '\n';
     if (!dy.allFinite()) throw RunError("benchmark state produced non-finite derivatives");
