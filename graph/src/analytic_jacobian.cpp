@@ -151,9 +151,9 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
     Eigen::Matrix<Dual, 9, 1> out;
     if (j.kinematic >= 0) {  // compliant, or the limit stops and effort motor of a rigid one
       out.setZero();
-      if (j.applies_force) kinematic_joint_wrench<Dual>(j, geometry_of(j), motion(a), motion(b), t, out, nullptr);
+      if (j.applies_force) kinematic_joint_wrench<Dual>(law_of(j), j.rigid, geometry_of(j), motion(a), motion(b), t, out, nullptr);
     } else {
-      compliant_joint_wrench<Dual>(j, tables_of(j), a, b, out);
+      compliant_joint_wrench<Dual>(law_of(j), tables_of(j), a, b, out);
     }
     auto d = joint_derivatives(k);
     for (int r = 0; r < 9; ++r) d.row(r) = out[r].derivatives().transpose();
@@ -203,13 +203,13 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
     // gyroscopic term through the body's own quaternion and angular velocity.
     Eigen::Vector3d force, torque;
     applied_wrench(i, t, force, torque);
-    const Eigen::Matrix3d to_w = compiled_->inv_inertia[bi] * rot_[bi].transpose();
+    const Eigen::Matrix3d to_w = body_law(bi).inv_inertia * rot_[bi].transpose();
     const Vector3T<BodyDual> w_rate = angular_acceleration<BodyDual>(rot, own.w, Vector3T<BodyDual>(torque.cast<BodyDual>()),
-                                                                     compiled_->inertia[bi], compiled_->inv_inertia[bi]);
+                                                                     body_law(bi).inertia, body_law(bi).inv_inertia);
     const int cluster = n_clusters > 0 ? cluster_of(static_cast<int>(i)) : -1;
     for (const auto& [b, m] : blocks) {
       Block6 rows;
-      rows.topRows<3>() = compiled_->inv_mass[bi] * m.topRows<3>();
+      rows.topRows<3>() = body_law(bi).inv_mass * m.topRows<3>();
       rows.bottomRows<3>() = to_w * m.bottomRows<3>();
       if (b == i) rows.bottomRows<3>() += derivatives<3>(w_rate, 0);
       if (cluster >= 0) {  // written with the cluster's reactions below

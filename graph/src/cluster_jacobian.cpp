@@ -75,7 +75,7 @@ void MultibodySystem::cluster_jacobian(int c, double t, const Eigen::VectorXd& y
     if (!free(i)) continue;
     d_rot[s] = rotation_derivatives(y.segment<4>(layout_.orientation(i)));
     applied_rate[s] = dydt.segment<3>(layout_.angular_velocity(i)) -
-                      compiled_->inv_inertia[bi] * (rot_[bi].transpose() * wrench[s].tail<3>());
+                      body_law(bi).inv_inertia * (rot_[bi].transpose() * wrench[s].tail<3>());
   }
 
   // Per row: d (j, bias) / d (states of body a, then of body b), and per body the joints on it.
@@ -127,7 +127,7 @@ void MultibodySystem::cluster_jacobian(int c, double t, const Eigen::VectorXd& y
         const auto s = static_cast<std::size_t>(sb);
         const Eigen::Matrix3d& dr = d_rot[s][static_cast<std::size_t>(q - 3)];
         const Eigen::Matrix3d& r = rot_[static_cast<std::size_t>(b)];
-        const Eigen::Matrix3d& ji = compiled_->inv_inertia[static_cast<std::size_t>(b)];
+        const Eigen::Matrix3d& ji = body_law(static_cast<std::size_t>(b)).inv_inertia;
         g[s].tail<3>() += dr * applied_rate[s] + (dr * ji * r.transpose() + r * ji * dr.transpose()) * wrench[s].tail<3>();
       }
       // The rows on body b: dJ acc + dbias, and dJ^T lambda.

@@ -26,23 +26,24 @@ double on_axis(const ConstraintRowT<S>& r, const Eigen::Vector3d& translational,
   return r.axis < 3 ? translational[r.axis] : rotational[r.axis - 3];
 }
 
-// Joint: MultibodySystem's compiled joint (rigid, kt, ct, kr, cr). out is added to.
-// effort (double only, may be null): the motor's effort, where the joint has a motor.
-template <class S, class Joint, class Out>
-void kinematic_joint_wrench(const Joint& j, const JointGeometry& g, const BodyMotionT<S>& a, const BodyMotionT<S>& b, double t,
+// Law: MultibodySystem's joint law (kt, ct, kr, cr, read where the joint is compliant,
+// rigid false). out is added to. effort (double only, may be null): the motor's effort,
+// where the joint has a motor.
+template <class S, class Law, class Out>
+void kinematic_joint_wrench(const Law& law, bool rigid, const JointGeometry& g, const BodyMotionT<S>& a, const BodyMotionT<S>& b, double t,
                             Out&& out, double* effort) {
   auto keep_effort = [effort](const S& p) {
     if constexpr (std::is_same_v<S, double>)
       if (effort) *effort = p;
   };
   const RowJacobianT<S> v = row_velocities<S>(a, b);
-  if (!j.rigid) {  // the seed's compliant joint: -(k phi + c phi') on every constrained direction
+  if (!rigid) {  // the seed's compliant joint: -(k phi + c phi') on every constrained direction
     std::array<ConstraintRowT<S>, max_joint_rows> rows;
     const int n = constraint_rows(g);
     evaluate_constraint<S>(g, a, b, t, rows.data());
     for (int r = 0; r < n; ++r) {
       const ConstraintRowT<S>& row = rows[static_cast<std::size_t>(r)];
-      const S p = -(on_axis(row, j.kt, j.kr) * row.phi + on_axis(row, j.ct, j.cr) * (row.j.dot(v) + row.rate));
+      const S p = -(on_axis(row, law.kt, law.kr) * row.phi + on_axis(row, law.ct, law.cr) * (row.j.dot(v) + row.rate));
       add_row_wrench<S>(row, p, out);
       if (r == n - 1 && g.motor.kind != JointMotor::Kind::none) keep_effort(p);
     }

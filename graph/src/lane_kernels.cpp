@@ -34,23 +34,28 @@ namespace mbsflow {
 
 void MultibodySystem::LANE_KERNEL(bushings_on_lanes)(const int* k) {
   const CompiledJoint* j[Lanes::width];
-  for (int l = 0; l < Lanes::width; ++l) j[l] = &compiled_->joints[static_cast<std::size_t>(k[l])];
-  BushingParams<Lanes> p;
-  p.frame1_identity = j[0]->frame1_identity;
-  p.frame2_identity = j[0]->frame2_identity;
-  p.pa = gather([&](int l) -> auto& { return j[l]->pa; });
-  p.pb = gather([&](int l) -> auto& { return j[l]->pb; });
-  p.kt = gather([&](int l) -> auto& { return j[l]->kt; });
-  p.ct = gather([&](int l) -> auto& { return j[l]->ct; });
-  p.kr = gather([&](int l) -> auto& { return j[l]->kr; });
-  p.cr = gather([&](int l) -> auto& { return j[l]->cr; });
-  p.preload_force = gather([&](int l) -> auto& { return j[l]->preload_force; });
-  p.preload_torque = gather([&](int l) -> auto& { return j[l]->preload_torque; });
-  if (!p.frame1_identity) {
-    p.rfa = gather([&](int l) -> auto& { return j[l]->rfa; });
-    p.qfa = gather([&](int l) -> auto& { return j[l]->qfa; });
+  const JointLaw* law[Lanes::width];
+  for (int l = 0; l < Lanes::width; ++l) {
+    j[l] = &compiled_->joints[static_cast<std::size_t>(k[l])];
+    law[l] = &law_of(*j[l]);
   }
-  if (!p.frame2_identity) p.qfb = gather([&](int l) -> auto& { return j[l]->qfb; });
+  const auto from_law = [&](auto field) { return gather([&](int l) -> auto& { return law[l]->*field; }); };
+  BushingParams<Lanes> p;
+  p.frame1_identity = law[0]->frame1_identity;
+  p.frame2_identity = law[0]->frame2_identity;
+  p.pa = from_law(&JointLaw::pa);
+  p.pb = from_law(&JointLaw::pb);
+  p.kt = from_law(&JointLaw::kt);
+  p.ct = from_law(&JointLaw::ct);
+  p.kr = from_law(&JointLaw::kr);
+  p.cr = from_law(&JointLaw::cr);
+  p.preload_force = from_law(&JointLaw::preload_force);
+  p.preload_torque = from_law(&JointLaw::preload_torque);
+  if (!p.frame1_identity) {
+    p.rfa = from_law(&JointLaw::rfa);
+    p.qfa = from_law(&JointLaw::qfa);
+  }
+  if (!p.frame2_identity) p.qfb = from_law(&JointLaw::qfb);
   const auto frame = [&](int CompiledJoint::*body) {
     BodyFrameT<Lanes> f;
     f.quat = gather([&](int l) { return quat_.col(j[l]->*body); });

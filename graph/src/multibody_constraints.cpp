@@ -124,7 +124,7 @@ void MultibodySystem::kinematic_joint_force(std::size_t k) {
   auto out = joint_out_.col(static_cast<Eigen::Index>(k));
   out.setZero();
   if (!j.applies_force) return;
-  kinematic_joint_wrench<double>(j, geometry_of(j), motion_at(j.a), motion_at(j.b), time_, out,
+  kinematic_joint_wrench<double>(law_of(j), j.rigid, geometry_of(j), motion_at(j.a), motion_at(j.b), time_, out,
                                  &motor_effort_[static_cast<Eigen::Index>(k)]);
 }
 
@@ -144,7 +144,7 @@ double MultibodySystem::kinematic_energy(const CompiledJoint& j) const {
     evaluate_constraint(g, a, b, time_, rows.data());
     for (int r = 0; r < n; ++r) {
       const ConstraintRow& row = rows[static_cast<std::size_t>(r)];
-      e += 0.5 * on_axis(row, j.kt, j.kr) * row.phi * row.phi;
+      e += 0.5 * on_axis(row, law_of(j).kt, law_of(j).kr) * row.phi * row.phi;
     }
   }
   if (g.limits.active) {
@@ -179,10 +179,10 @@ void MultibodySystem::solve_cluster(int c, double t, const Eigen::VectorXd& y, E
     }
     const Eigen::Matrix3d& r = rot_[bi];
     const Eigen::Vector3d w = y.segment<3>(layout_.angular_velocity(i));
-    rc.inv_mass[s] = compiled_->inv_mass[bi];
-    rc.inv_inertia[s] = r * compiled_->inv_inertia[bi] * r.transpose();
-    accel[s].head<3>() = compiled_->inv_mass[bi] * k.force[s];
-    accel[s].tail<3>() = r * (compiled_->inv_inertia[bi] * (r.transpose() * k.torque[s] - w.cross(compiled_->inertia[bi] * w)));
+    rc.inv_mass[s] = body_law(bi).inv_mass;
+    rc.inv_inertia[s] = r * body_law(bi).inv_inertia * r.transpose();
+    accel[s].head<3>() = body_law(bi).inv_mass * k.force[s];
+    accel[s].tail<3>() = r * (body_law(bi).inv_inertia * (r.transpose() * k.torque[s] - w.cross(body_law(bi).inertia * w)));
   }
   Eigen::VectorXd& lambda = k.lambda[static_cast<std::size_t>(c)];
   for (const ClusterJoint& cj : rc.joints()) {
@@ -243,8 +243,8 @@ void MultibodySystem::project_cluster(int c, double t, Eigen::VectorXd& y) const
       const auto bi = static_cast<std::size_t>(i);
       const bool driven = compiled_->driver_of_body[bi] >= 0;
       const Eigen::Matrix3d r = rotation_matrix(y.segment<4>(layout_.orientation(i)));
-      rc.inv_mass[s] = driven ? 0.0 : compiled_->inv_mass[bi];
-      rc.inv_inertia[s] = driven ? Eigen::Matrix3d::Zero() : Eigen::Matrix3d(r * compiled_->inv_inertia[bi] * r.transpose());
+      rc.inv_mass[s] = driven ? 0.0 : body_law(bi).inv_mass;
+      rc.inv_inertia[s] = driven ? Eigen::Matrix3d::Zero() : Eigen::Matrix3d(r * body_law(bi).inv_inertia * r.transpose());
     }
     return worst;
   };
@@ -320,7 +320,7 @@ void MultibodySystem::add_reactions(Eigen::VectorXd& out) {
       const JointMotor::Kind motor = k.geometry[static_cast<std::size_t>(j.kinematic)].motor.kind;
       if (motor != JointMotor::Kind::none && motor != JointMotor::Kind::effort)
         motor_effort_[cj.joint] = k.lambda[c][cj.first_row + cj.rows - 1];
-      const Eigen::Vector3d arm = rot_[static_cast<std::size_t>(j.b)] * j.pb;
+      const Eigen::Vector3d arm = rot_[static_cast<std::size_t>(j.b)] * law_of(j).pb;
       const Eigen::Index at = 6 * static_cast<Eigen::Index>(cj.joint);
       out.segment<3>(at) += w.segment<3>(0);
       out.segment<3>(at + 3) += w.segment<3>(6) - arm.cross(Eigen::Vector3d(w.segment<3>(0)));

@@ -12,6 +12,7 @@
 #include "force_laws.hpp"
 #include "lanes.hpp"
 #include "rotation.hpp"
+#include "shared_laws.hpp"
 
 namespace mbsflow {
 namespace {
@@ -69,24 +70,24 @@ MultibodySystem::MultibodySystem(std::shared_ptr<const Model> shared, int active
   active_ = std::clamp(active, 0, n);
   gravity_ = vec(model.gravity);
   // Exact sizes: growth by doubling would hold up to twice these (a million bodies).
-  compiled_->mass.reserve(model.bodies.size());
-  compiled_->inv_mass.reserve(model.bodies.size());
-  compiled_->inertia.reserve(model.bodies.size());
-  compiled_->inv_inertia.reserve(model.bodies.size());
-  compiled_->initial_position.reserve(model.bodies.size());
   compiled_->joints.reserve(model.joints.size());
-  for (const Body& b : model.bodies) {
-    compiled_->mass.push_back(b.mass);
-    compiled_->inv_mass.push_back(1.0 / b.mass);
-    compiled_->inertia.push_back(inertia_matrix(b.inertia));
-    compiled_->inv_inertia.push_back(compiled_->inertia.back().inverse());
-    compiled_->initial_position.push_back(vec(b.position));
+  DistinctIndex bodies = distinct_by_bits(model.bodies.size(), [&](std::size_t i) { return body_law_key(model.bodies[i]); });
+  compiled_->body_law = std::move(bodies.of_item);
+  compiled_->body_laws.reserve(bodies.first.size());
+  for (int first : bodies.first) {
+    const Body& b = model.bodies[static_cast<std::size_t>(first)];
+    BodyLaw& c = compiled_->body_laws.emplace_back();
+    c.mass = b.mass;
+    c.inv_mass = 1.0 / b.mass;
+    c.inertia = inertia_matrix(b.inertia);
+    c.inv_inertia = c.inertia.inverse();
   }
   auto kin = [n](int body) { return body == ground ? n : body; };
-  for (const Joint& j : model.joints) {
-    CompiledJoint c;
-    c.a = kin(j.body1);
-    c.b = kin(j.body2);
+  const DistinctIndex laws = distinct_by_bits(model.joints.size(), [&](std::size_t k) { return joint_law_key(model.joints[k]); });
+  compiled_->laws.reserve(laws.first.size());
+  for (int first : laws.first) {
+    const Joint& j = model.joints[static_cast<std::size_t>(first)];
+    JointLaw& c = compiled_->laws.emplace_back();
     c.spring = j.type == JointType::spring;
     c.pa = vec(j.point1);
     c.pb = vec(j.point2);
@@ -102,6 +103,13 @@ MultibodySystem::MultibodySystem(std::shared_ptr<const Model> shared, int active
     c.preload_force = {j.preload[0], j.preload[1], j.preload[2]};
     c.preload_torque = {j.preload[3], j.preload[4], j.preload[5]};
     c.rest_length = j.rest_length;
+  }
+  for (std::size_t k = 0; k < model.joints.size(); ++k) {
+    const Joint& j = model.joints[k];
+    CompiledJoint c;
+    c.a = kin(j.body1);
+    c.b = kin(j.body2);
+    c.law = laws.of_item[k];
     if (j.tables.any()) {
       c.tables = static_cast<int>(compiled_->tables.size());
       compiled_->tables.push_back(j.tables.all());
@@ -224,7 +232,7 @@ void MultibodySystem::kinematics_of(double t, const Eigen::VectorXd& y, std::spa
     kinematic_joint_force(k);
     return;
   }
-  compliant_joint_wrench<double>(j, tables_of(j), body_frame_at(j.a), body_frame_at(j.b), joint_out_.col(static_cast<Eigen::Index>(k)));
+  compliant_joint_wrench<double>(law_of(j), tables_of(j), body_frame_at(j.a), body_frame_at(j.b), joint_out_.col(static_cast<Eigen::Index>(k)));
 }
 
 namespace {
@@ -241,10 +249,10 @@ std::size_t matrix_bytes(const M& m) {
 MultibodySystem::MemoryUse MultibodySystem::memory_use() const {
   const Compiled& c = *compiled_;
   MemoryUse m;
-  m.compiled = bytes_of(c.mass) + bytes_of(c.inv_mass) + bytes_of(c.inertia) + bytes_of(c.inv_inertia) + bytes_of(c.joints) +
+  m.compiled = bytes_of(c.body_law) + bytes_of(c.body_laws) + bytes_of(c.joints) + bytes_of(c.laws) +
                bytes_of(c.tables) + bytes_of(c.incidence_start) + bytes_of(c.incidence) + bytes_of(c.load_start) +
                bytes_of(c.load_index) + bytes_of(c.driver_of_body) + bytes_of(c.elements) + bytes_of(c.element_first) +
-               bytes_of(c.element_start) + bytes_of(c.element_slot) + bytes_of(c.initial_position);
+               bytes_of(c.element_start) + bytes_of(c.element_slot);
   m.workspace = bytes_of(drive_memo_) + bytes_of(element_out_) + bytes_of(rot_) + matrix_bytes(pos_) + matrix_bytes(vel_) +
                 matrix_bytes(omega_) + matrix_bytes(quat_) + matrix_bytes(joint_out_) + bytes_of(jacobian_scratch_) +
                 bytes_of(jacobian_slots_.outer) + bytes_of(jacobian_slots_.slots) +
@@ -254,14 +262,14 @@ MultibodySystem::MemoryUse MultibodySystem::memory_use() const {
 
 // Bushings without tables go several at a time (lane_kernels.cpp), grouped by their frame
 // class; the other joints one by one.
-bool MultibodySystem::on_lanes(const CompiledJoint& j) { return j.kinematic < 0 && !j.spring && j.tables < 0; }
+bool MultibodySystem::on_lanes(const CompiledJoint& j) const { return j.kinematic < 0 && !law_of(j).spring && j.tables < 0; }
 
 void MultibodySystem::joint_forces_in(const int* list, std::size_t n) {
   lane_groups_for_cpu<4>(
       list, n,
       [&](int k) {
         const CompiledJoint& j = compiled_->joints[static_cast<std::size_t>(k)];
-        return on_lanes(j) ? 2 * j.frame1_identity + j.frame2_identity : -1;
+        return on_lanes(j) ? 2 * law_of(j).frame1_identity + law_of(j).frame2_identity : -1;
       },
       [&](int k) { joint_force(static_cast<std::size_t>(k)); }, [&](const int* k) { bushings_on_lanes(k); },
       [&](const int* k) { bushings_on_lanes_avx(k); });
@@ -316,7 +324,7 @@ void MultibodySystem::joint_wrenches(double t, const Eigen::VectorXd& y, Eigen::
     const CompiledJoint& j = compiled_->joints[k];
     const auto col = joint_out_.col(static_cast<Eigen::Index>(k));
     const Eigen::Vector3d force = col.segment<3>(0);
-    const Eigen::Vector3d arm = rot_[static_cast<std::size_t>(j.b)] * j.pb;  // centre of body2 to its point
+    const Eigen::Vector3d arm = rot_[static_cast<std::size_t>(j.b)] * law_of(j).pb;  // centre of body2 to its point
     out.segment<3>(6 * static_cast<Eigen::Index>(k)) = force;
     out.segment<3>(6 * static_cast<Eigen::Index>(k) + 3) = col.segment<3>(6) - arm.cross(force);
   }
@@ -328,7 +336,7 @@ void MultibodySystem::joint_wrenches(double t, const Eigen::VectorXd& y, Eigen::
 void MultibodySystem::applied_wrench(Eigen::Index i, double t, Eigen::Vector3d& force, Eigen::Vector3d& torque) const {
   const auto bi = static_cast<std::size_t>(i);
   const Eigen::Matrix3d& r = rot_[bi];
-  force = compiled_->mass[bi] * gravity_;
+  force = body_law(bi).mass * gravity_;
   torque = Eigen::Vector3d::Zero();
   for (int p = compiled_->load_start[bi]; p < compiled_->load_start[bi + 1]; ++p) {
     const Load& l = model().loads[static_cast<std::size_t>(compiled_->load_index[static_cast<std::size_t>(p)])];
@@ -371,8 +379,9 @@ void MultibodySystem::write_derivative(Eigen::Index i, double t, const Eigen::Ve
   const Eigen::Vector3d w = y.segment<3>(layout_.angular_velocity(i));
   const Eigen::Vector4d q = y.segment<4>(layout_.orientation(i));
   dydt.segment<3>(layout_.position(i)) = y.segment<3>(layout_.velocity(i));
-  dydt.segment<3>(layout_.velocity(i)) = compiled_->inv_mass[bi] * force;
-  dydt.segment<3>(layout_.angular_velocity(i)) = angular_acceleration<double>(rot_[bi], w, torque, compiled_->inertia[bi], compiled_->inv_inertia[bi]);
+  const BodyLaw& law = body_law(bi);
+  dydt.segment<3>(layout_.velocity(i)) = law.inv_mass * force;
+  dydt.segment<3>(layout_.angular_velocity(i)) = angular_acceleration<double>(rot_[bi], w, torque, law.inertia, law.inv_inertia);
   dydt.segment<4>(layout_.orientation(i)) = quaternion_rate<double>(q, w);
 }
 
@@ -434,18 +443,19 @@ void MultibodySystem::after_step_of(double t, Eigen::VectorXd& y, std::span<cons
 
 double MultibodySystem::elastic_energy(const CompiledJoint& j) const {
   if (j.kinematic >= 0) return kinematic_energy(j);
-  if (j.spring) {
-    const Eigen::Vector3d delta = pos_.col(j.b) + rot_[static_cast<std::size_t>(j.b)] * j.pb - pos_.col(j.a) -
-                                  rot_[static_cast<std::size_t>(j.a)] * j.pa;
-    const double e = delta.norm() - j.rest_length;
-    return 0.5 * j.kt[0] * e * e;
+  const JointLaw& law = law_of(j);
+  if (law.spring) {
+    const Eigen::Vector3d delta = pos_.col(j.b) + rot_[static_cast<std::size_t>(j.b)] * law.pb - pos_.col(j.a) -
+                                  rot_[static_cast<std::size_t>(j.a)] * law.pa;
+    const double e = delta.norm() - law.rest_length;
+    return 0.5 * law.kt[0] * e * e;
   }
-  const DeflectionT<double> def = bushing_deflection<double>(j, body_frame_at(j.a), body_frame_at(j.b));
+  const DeflectionT<double> def = bushing_deflection<double>(law, body_frame_at(j.a), body_frame_at(j.b));
   const Eigen::Vector3d& theta = def.rotation.theta;
-  double e = -j.preload_force.dot(def.d) - j.preload_torque.dot(theta);
+  double e = -law.preload_force.dot(def.d) - law.preload_torque.dot(theta);
   for (int axis = 0; axis < 6; ++axis) {
     const double x = axis < 3 ? def.d[axis] : theta[axis - 3];
-    const double k = axis < 3 ? j.kt[axis] : j.kr[axis - 3];
+    const double k = axis < 3 ? law.kt[axis] : law.kr[axis - 3];
     const ForceTable* table = j.tables >= 0 ? &compiled_->tables[static_cast<std::size_t>(j.tables)][static_cast<std::size_t>(axis)] : nullptr;
     e += (table && !table->empty()) ? table_energy(*table, x) : 0.5 * k * x * x;
   }
@@ -459,7 +469,7 @@ Energy MultibodySystem::energy(double t, const Eigen::VectorXd& y) {
     const auto bi = static_cast<std::size_t>(i);
     const double m = model().bodies[bi].mass;
     const Eigen::Vector3d w = y.segment<3>(layout_.angular_velocity(i));
-    e.kinetic += 0.5 * m * vel_.col(i).squaredNorm() + 0.5 * w.dot(compiled_->inertia[bi] * w);
+    e.kinetic += 0.5 * m * vel_.col(i).squaredNorm() + 0.5 * w.dot(body_law(bi).inertia * w);
     e.gravity -= m * gravity_.dot(pos_.col(i));
   }
   for (const CompiledJoint& j : compiled_->joints) e.elastic += elastic_energy(j);

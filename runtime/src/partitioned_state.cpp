@@ -26,7 +26,6 @@ Part::Part(const Model& model, const Submodel& s, int stages, bool fold)
   const auto vectors = static_cast<std::size_t>(rk4_folded ? 3 : stages);
   x.assign(vectors, system.initial_state());
   k.assign(vectors, Eigen::VectorXd::Zero(system.dimension()));
-  global_element = own_elements(s, StateLayout{static_cast<Eigen::Index>(model.bodies.size())});
   const auto n_own = static_cast<int>(own);
   // Clusters of borrowed bodies (loose coupling's overlap) have local indices past the own ones.
   std::vector<char> edge(static_cast<std::size_t>(s.integrated()), 0);
@@ -67,6 +66,20 @@ void copy_local_ghosts(const std::vector<Part*>& parts, std::size_t p, int s) {
   for (const Submodel::Exchange& e : parts[p]->sub->exchanges)
     if (const Part* owner = parts[static_cast<std::size_t>(e.neighbour)]) copy_ghosts(*owner, e, *parts[p], s);
 }
+
+namespace {
+// Own field block `block` (for_own_blocks' order), v, into its places in the global state
+// out: what own_elements lists, computed rather than held (8 bytes per number).
+void to_global(const Part& part, int block, const Eigen::VectorXd& v, Eigen::VectorXd& out) {
+  const StateLayout global{out.size() / body_numbers};
+  const Eigen::Index first[4] = {global.position(0), global.orientation(0), global.velocity(0), global.angular_velocity(0)};
+  const int width = block == 1 ? 4 : 3;
+  for (Eigen::Index b = 0; b < part.own; ++b) {
+    const Eigen::Index at = first[block] + width * static_cast<Eigen::Index>(part.sub->own[static_cast<std::size_t>(b)]);
+    for (int c = 0; c < width; ++c) out[at + c] = v[width * b + c];
+  }
+}
+}  // namespace
 
 std::vector<Eigen::Index> own_elements(const Submodel& sub, const StateLayout& global) {
   const struct {
@@ -187,7 +200,7 @@ void dopri5_stage(Part& part, int s, double t, double h, bool need_k0, double at
                   Eigen::VectorXd& squares) {
   const auto i = static_cast<std::size_t>(s);
   if (s > 0 || need_k0) part.system.rhs(t + dopri5::c[s] * h, part.x[i], part.k[i]);
-  Eigen::Index done = 0;
+  int block = 0;
   for_own_blocks(part, [&](Eigen::Index at, Eigen::Index n) {
     auto k = [&](int j) { return part.k[static_cast<std::size_t>(j)].segment(at, n); };
     if (s < 6) {
@@ -196,8 +209,7 @@ void dopri5_stage(Part& part, int s, double t, double h, bool need_k0, double at
     }
     Eigen::VectorXd sq(n);
     dopri5::error_squares(part.x[0].segment(at, n), part.x[6].segment(at, n), k, h, atol, rtol, sq);
-    for (Eigen::Index e = 0; e < n; ++e) squares[part.global_element[static_cast<std::size_t>(done + e)]] = sq[e];
-    done += n;
+    to_global(part, block++, sq, squares);
   });
 }
 
@@ -213,12 +225,11 @@ void dopri5_accept(Part& part, double h, double t_new) {
 }
 
 void dopri5_dense(const Part& part, double theta, Eigen::VectorXd& out) {
-  Eigen::Index done = 0;
+  int block = 0;
   for_own_blocks(part, [&](Eigen::Index at, Eigen::Index n) {
     Eigen::VectorXd v(n);
     dopri5::dense_eval([&](int j) { return part.r[static_cast<std::size_t>(j)].segment(at, n); }, theta, v);
-    for (Eigen::Index e = 0; e < n; ++e) out[part.global_element[static_cast<std::size_t>(done + e)]] = v[e];
-    done += n;
+    to_global(part, block++, v, out);
   });
 }
 

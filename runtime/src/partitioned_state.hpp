@@ -30,7 +30,6 @@ struct Part {
   const Eigen::VectorXd& input(int s) const { return x[slot(s)]; }
   Eigen::VectorXd& derivative(int s) { return k[slot(s)]; }
   std::size_t slot(int s) const { return rk4_folded && s == 3 ? 1 : static_cast<std::size_t>(s); }
-  std::vector<Eigen::Index> global_element;  // own elements' places in the global state
   // For a stage in two halves (rk4_inner_stage, rk4_edge_stage): own bodies with no joint
   // to a ghost (inner) and with one (edge), the ghosts, and the local joints that reach
   // no ghost and that do.

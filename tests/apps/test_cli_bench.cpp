@@ -167,7 +167,10 @@ TEST_CASE("cli bench rhs: nanoseconds per body with the roofline's bytes per bod
   // One evaluation streams the state in and out (13 numbers a body each way), the compiled
   // model and the workspace written and read back.
   CHECK(bytes == Approx(2 * 13 * 8 + compiled + 2 * workspace));
-  CHECK(compiled > 300.0);  // a chain's compiled joint alone is a few hundred bytes
+  // Per body a compiled joint and the indices and lists around it; the chain's one joint
+  // law and one body law are shared (shared_laws.hpp).
+  CHECK(compiled > 30.0);
+  CHECK(compiled < 120.0);
   CHECK(workspace > 100.0);
   CHECK(std::stod(cells[12]) == Approx(bytes / ns));
   CHECK(std::stod(cells[13]) > 0.0);

@@ -159,20 +159,35 @@ class MultibodySystem {
   void after_step_of(double t, Eigen::VectorXd& y, std::span<const int> bodies) const;
 
  private:
-  struct CompiledJoint {
-    int a = 0, b = 0;  // kinematics indices; ground is index n
+  // A bushing's or spring's force law and a joint's frames, as the model gives them. Joints
+  // with the same (every bushing of a generated chain or grid) share one: the compiled
+  // joints stay small, and the lane kernels load one law for several joints.
+  struct JointLaw {
     bool spring = false;
-    int kinematic = -1;  // index into the constraints' joint geometry; -1: bushing or spring
-    bool rigid = false;
-    bool applies_force = false;  // kinematic: compliant, a limit stop or an effort motor
     bool frame1_identity = true, frame2_identity = true;  // skip the frame products
-    int tables = -1;   // index into tables_, -1: linear
     Eigen::Vector3d pa, pb;
     Eigen::Vector4d qfa, qfb;  // joint frame relative to each body
     Eigen::Matrix3d rfa;       // rotation matrix of qfa
     Eigen::Vector3d kt, ct, kr, cr, preload_force, preload_torque;
     double rest_length = 0.0;
   };
+  struct CompiledJoint {
+    int a = 0, b = 0;  // kinematics indices; ground is index n
+    int law = 0;       // index into the compiled laws
+    int kinematic = -1;  // index into the constraints' joint geometry; -1: bushing or spring
+    int tables = -1;     // index into tables_, -1: linear
+    bool rigid = false;
+    bool applies_force = false;  // kinematic: compliant, a limit stop or an effort motor
+  };
+  const JointLaw& law_of(const CompiledJoint& j) const { return compiled_->laws[static_cast<std::size_t>(j.law)]; }
+  // A body's mass properties (body frame), shared like the joints' laws.
+  struct BodyLaw {
+    double mass = 0.0, inv_mass = 0.0;
+    Eigen::Matrix3d inertia, inv_inertia;
+  };
+  const BodyLaw& body_law(std::size_t i) const {
+    return compiled_->body_laws[static_cast<std::size_t>(compiled_->body_law[i])];
+  }
   struct Constraints;  // multibody_constraints.cpp
   void compile_constraints();
   std::size_t constraint_bytes() const;  // the constraints' containers (a cluster's own solver not counted)
@@ -207,7 +222,7 @@ class MultibodySystem {
   void impose(const Driver& d, double t, Eigen::VectorXd& y) const;
   void joint_force(std::size_t k);
   void joint_forces_in(const int* list, std::size_t n);  // list[0..n), or 0..n-1 when list is null
-  static bool on_lanes(const CompiledJoint& j);        // a bushing the lane kernels take
+  bool on_lanes(const CompiledJoint& j) const;  // a bushing the lane kernels take
   void body_derivative(Eigen::Index i, double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const;
   BodyFrameView body_frame_at(int i) const;  // kinematics index i of the current evaluation
   const std::array<ForceTable, 6>* tables_of(const CompiledJoint& j) const {
@@ -222,11 +237,12 @@ class MultibodySystem {
   // What the model compiles to: read by every evaluation, written only while the system
   // is built (or a force element is added). Copies of a system share it, each with its own
   // workspace below: the results writer's copy of a million-body system would otherwise
-  // hold another 570 bytes per body. add_force_element copies it first if it is shared.
+  // hold a copy of its own. add_force_element copies it first if it is shared.
   struct Compiled {
-    std::vector<double> mass, inv_mass;
-    std::vector<Eigen::Matrix3d> inertia, inv_inertia;
+    std::vector<int> body_law;       // per body, index into body_laws
+    std::vector<BodyLaw> body_laws;  // each distinct one once
     std::vector<CompiledJoint> joints;
+    std::vector<JointLaw> laws;  // each distinct one once
     std::vector<std::array<ForceTable, 6>> tables;
     // Per body: incident joints (joint * 2 + side, side 1 = body2) in joint order, and loads.
     std::vector<int> incidence_start, incidence;
@@ -236,7 +252,6 @@ class MultibodySystem {
     std::vector<std::shared_ptr<const ForceElement>> elements;
     std::vector<std::size_t> element_first;  // first slot of each element
     std::vector<int> element_start, element_slot;
-    std::vector<Eigen::Vector3d> initial_position;
   };
   std::shared_ptr<Compiled> compiled_ = std::make_shared<Compiled>();
   // The prescribed displacement, rate and acceleration of each driver at its last few
