@@ -27,7 +27,8 @@ using partitioned::Part;
 // The results of a run in one process: checks and snapshots of the gathered state.
 class SinkOutput final : public TightOutput {
  public:
-  SinkOutput(const Model& model, const RunOptions& o, const std::vector<Part>& parts, MultibodySystem& whole,
+  // whole: null where there is neither a sink nor checkpoints.
+  SinkOutput(const Model& model, const RunOptions& o, const std::vector<Part>& parts, MultibodySystem* whole,
              ResultSink* sink, RunSummary& out, Eigen::VectorXd& y)
       : model_(model), o_(o), parts_(parts), whole_(whole), sink_(sink), out_(out), y_(y) {}
 
@@ -35,21 +36,21 @@ class SinkOutput final : public TightOutput {
     if (auto dv = partitioned::check(parts_)) throw RunError(divergence_message(model_, *dv, t, o_.method, o_.step));
     check_stop(o_, t);
     if (sink_ && snapshot >= 0) {
-      partitioned::gather(parts_, whole_.layout(), y_);
-      emit(whole_, sink_, t, y_, out_);
+      partitioned::gather(parts_, whole_->layout(), y_);
+      emit(*whole_, sink_, t, y_, out_);
     }
     if (o_.progress) o_.progress(t, steps);
   }
   void dense(long, double t, Eigen::VectorXd& y) override {
-    whole_.after_step(t, y);
-    emit(whole_, sink_, t, y, out_);
+    whole_->after_step(t, y);
+    emit(*whole_, sink_, t, y, out_);
   }
   bool wants_dense() const override { return sink_ != nullptr; }
   bool checkpoint_due() override { return timer_.due(); }
   // The state whatever the partition: the global state and where the loop is.
   void checkpoint(const TightPoint& p) override {
     StateWriter w = checkpoint_head("tight", o_.method, sink_, out_);
-    partitioned::gather(parts_, whole_.layout(), y_);
+    partitioned::gather(parts_, whole_->layout(), y_);
     save_tight_point(w, p, y_);
     o_.checkpoint->write(w.take());
   }
@@ -58,7 +59,7 @@ class SinkOutput final : public TightOutput {
   const Model& model_;
   const RunOptions& o_;
   const std::vector<Part>& parts_;
-  MultibodySystem& whole_;
+  MultibodySystem* whole_;
   ResultSink* sink_;
   RunSummary& out_;
   Eigen::VectorXd& y_;
@@ -99,9 +100,11 @@ RunSummary run_partitioned(std::shared_ptr<const Model> shared, const Decomposit
   tbb::task_arena arena(threads);
   RunSummary out;
   BusyClock clock;
-  // The parts and the whole system (for the sink: layout, names, energies; it shares the
-  // model) are built side by side: each is a pass over its bodies and joints, and a
-  // million-body model's take seconds each.
+  // The parts and the whole system (for the sink: layout, names, energies, and for
+  // checkpoints; it shares the model) are built side by side: each is a pass over its
+  // bodies and joints, and a million-body model's take seconds each. A run with neither
+  // results nor checkpoints builds no whole system (a chain's is 300 bytes per body).
+  const bool need_whole = sink != nullptr || o.checkpoint != nullptr;
   std::vector<std::optional<Part>> built(d.submodels.size());
   std::optional<MultibodySystem> built_whole;
   {
@@ -119,11 +122,12 @@ RunSummary run_partitioned(std::shared_ptr<const Model> shared, const Decomposit
           built[i].emplace(model, d.submodels[i], stages, true);
           happens_before(&build_done);
         });
-      group->run([&] {
-        happens_after(&build_start);
-        built_whole.emplace(std::move(shared), static_cast<int>(model.bodies.size()));
-        happens_before(&build_done);
-      });
+      if (need_whole)
+        group->run([&] {
+          happens_after(&build_start);
+          built_whole.emplace(std::move(shared), static_cast<int>(model.bodies.size()));
+          happens_before(&build_done);
+        });
       group->wait();
     });
     happens_after(&build_done);
@@ -132,23 +136,25 @@ RunSummary run_partitioned(std::shared_ptr<const Model> shared, const Decomposit
   parts.reserve(built.size());
   for (std::optional<Part>& p : built) parts.push_back(std::move(*p));
   built.clear();
-  MultibodySystem& whole = *built_whole;
-  phase_done(o, "build the submodels and the whole system");
+  MultibodySystem* whole = built_whole ? &*built_whole : nullptr;
+  const StateLayout global{static_cast<Eigen::Index>(model.bodies.size())};
+  phase_done(o, whole ? "build the submodels and the whole system" : "build the submodels");
   // Like run_simulation, which gets its system built: the clock starts with the run.
   const auto start = Clock::now();
-  Eigen::VectorXd y = whole.initial_state();
+  Eigen::VectorXd y = Eigen::VectorXd::Zero(global.size());  // the state as the sink sees it
+  if (whole) y = whole->initial_state();
   std::optional<TightPoint> resumed;
   if (o.checkpoint && !o.checkpoint->resume.empty())
-    resumed = restore_tight(*o.checkpoint, o, parts, whole, sink, out);
+    resumed = restore_tight(*o.checkpoint, o, parts, *whole, sink, out);
   else if (sink)
-    sink->begin(whole);
+    sink->begin(*whole);
   if (sink) phase_done(o, "start the results file");
   std::vector<Part*> local;
   for (Part& p : parts) local.push_back(&p);
   LocalExchange exchange(local);
   SinkOutput output(model, o, parts, whole, sink, out, y);
   run_with_sink(sink, out, [&] {
-    if (sink && !resumed) emit(whole, sink, o.t_start, y, out);
+    if (sink && !resumed) emit(*whole, sink, o.t_start, y, out);
     arena.execute([&] {
       const TightCounts counts = run_tight_coupling(
           {d, local, o, exchange, output, par.executor == Executor::barrier, &clock, resumed ? &*resumed : nullptr});
@@ -158,7 +164,7 @@ RunSummary run_partitioned(std::shared_ptr<const Model> shared, const Decomposit
     });
   });
   phase_done(o, sink ? "steps, and the results written" : "steps");
-  partitioned::gather(parts, whole.layout(), y);
+  partitioned::gather(parts, global, y);
   out.wall_seconds = std::chrono::duration<double>(Clock::now() - start).count();
   out.final_state = std::move(y);
   if (stats) {

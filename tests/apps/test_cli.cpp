@@ -149,4 +149,14 @@ TEST_CASE("run --timings names each set-up phase and says whether malloc has hug
   const Result theirs = run("run chain.json --t-end 0.01 -q --timings", dir);
   ::unsetenv("GLIBC_TUNABLES");
   CHECK(theirs.err.find("transparent huge pages: off") != std::string::npos);
+  // Without results or checkpoints a partitioned run builds no whole system; its final
+  // state, as the summary prints it, is the one-thread run's.
+  const Result bare = run("run chain.json --t-end 0.01 --threads 2 --timings", dir, true);
+  REQUIRE(bare.code == 0);
+  CHECK(bare.err.find("build the submodels ") != std::string::npos);
+  CHECK(bare.err.find("the whole system") == std::string::npos);
+  const Result one = run("run chain.json --t-end 0.01 --threads 1", dir, true);
+  REQUIRE(one.code == 0);
+  CHECK(bare.out.find("final state of the first 10 bodies") != std::string::npos);
+  CHECK(bare.out == one.out);
 }
