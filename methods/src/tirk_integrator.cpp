@@ -20,6 +20,7 @@
 #include "settings_checks.hpp"
 #include "starting_step.hpp"
 #include "step_controller.hpp"
+#include "annotated_node.hpp"
 #include "tirk_stages.hpp"
 
 namespace mbsflow {
@@ -100,6 +101,7 @@ class TirkIntegrator::Driver {
       graph_ = std::make_unique<tbb::flow::graph>();
       stages_.build(*graph_);
     });
+    here_ = jobs_here(arena_, p.size);
     monitor_.tol = s.iteration_tol > 0 ? s.iteration_tol : newton_tolerance(s.rtol);
     monitor_.predict_failure = full_newton();
     monitor_.max_iterations = s.max_iterations > 0 ? s.max_iterations : newton() ? 10 : 50;
@@ -170,6 +172,18 @@ class TirkIntegrator::Driver {
   tbb::task_arena arena_;
   std::unique_ptr<tbb::flow::graph> graph_;  // declared before the stages: destroyed after their nodes
   TirkStages stages_;
+  bool here_ = false;  // the graph's jobs on this thread (jobs_here, TirkStages::*_here)
+  // One of the stages' jobs: on this thread, or through the graph.
+  void run_job(void (TirkStages::*here)(), void (TirkStages::*start)()) {
+    arena_.execute([&] {
+      if (here_) {
+        (stages_.*here)();
+        return;
+      }
+      (stages_.*start)();
+      graph_->wait_for_all();
+    });
+  }
   JacobianEvaluator jacobian_;
   Eigen::SparseMatrix<double> jac_;
   std::optional<LinearSolverKind> kind_;  // chosen for jac_'s pattern, which stays (a bandwidth scan of J)
@@ -237,10 +251,7 @@ bool TirkIntegrator::Driver::factorize(const Eigen::VectorXd& x, const Eigen::Ve
   stages_.request_factorization(jac_, tau, kind);
   st.factorizations += stages_.systems();
   st.linear_solver = kind;
-  arena_.execute([&] {
-    stages_.start_factorization();
-    graph_->wait_for_all();
-  });
+  run_job(&TirkStages::factorize_here, &TirkStages::start_factorization);
   stages_.finished_factorization();
   factorized_tau_ = stages_.factorization_ok() ? tau : std::numeric_limits<double>::quiet_NaN();
   return stages_.factorization_ok();
@@ -316,20 +327,14 @@ void TirkIntegrator::Driver::begin_step(double t, const Eigen::VectorXd& x, cons
   scale_ = tolerance_weights(s_, x.array().abs());
   stages_.setup(t, tau, x, fx, scale_, guess);
   iterations_ = 0;
-  arena_.execute([&] {
-    stages_.start_predictor();
-    graph_->wait_for_all();
-  });
+  run_job(&TirkStages::predict_here, &TirkStages::start_predictor);
   stages_.finished_predictor();
   result_.stats.rhs_evaluations += stages_.predictor_evaluations();
 }
 
 // One iteration through the graph; false when f was not finite.
 bool TirkIntegrator::Driver::iterate_once() {
-  arena_.execute([&] {
-    stages_.start();
-    graph_->wait_for_all();
-  });
+  run_job(&TirkStages::iterate_here, &TirkStages::start);
   stages_.finished();
   ++iterations_;
   ++result_.stats.iterations;

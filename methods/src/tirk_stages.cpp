@@ -221,21 +221,18 @@ void TirkStages::measure(int i, Eigen::Index r, const Eigen::VectorXd& y_new, co
 void TirkStages::build(flow::graph& g) {
   const Eigen::Index n_slices = slices();
   // A right-hand side that evaluates whole vectors only gets one node per stage.
-  const Eigen::Index f_nodes = problem_.sliceable ? n_slices : 1, per_node = problem_.sliceable ? 1 : n_slices;
+  const Eigen::Index f_nodes = this->f_nodes(), per_node = problem_.sliceable ? 1 : n_slices;
   start_ = std::make_unique<Start>(g);
   factor_start_ = std::make_unique<Start>(g);
   predict_start_ = std::make_unique<Start>(g);
   auto node = [&](auto body) -> Node& { return annotated_node(g, nodes_, &token_, body); };
   for (int i = 0; i < si_; ++i) {
     if (tableau_.c(first_ + i) == 0) continue;  // f(t_n, x) is known
-    for (Eigen::Index e = 0; e < f_nodes; ++e) {
-      const Eigen::Index begin = slice_begin(e * per_node),
-                         end = std::min(n_, slice_begin(e * per_node + per_node));
-      flow::make_edge(*predict_start_, node([this, i, begin, end] {
+    for (Eigen::Index e = 0; e < f_nodes; ++e)
+      flow::make_edge(*predict_start_, node([this, i, range = f_node_range(e)] {
                         const auto at = static_cast<std::size_t>(i);
-                        problem_.rhs(t_n_ + tableau_.c(first_ + i) * tau_, y_old_[at], f_old_[at], {begin, end});
+                        problem_.rhs(t_n_ + tableau_.c(first_ + i) * tau_, y_old_[at], f_old_[at], range);
                       }));
-    }
   }
   for (int k = 0; k < systems(); ++k) flow::make_edge(*factor_start_, node([this, k] { factorize(k); }));
   if (full_newton()) {
@@ -297,6 +294,43 @@ void TirkStages::build(flow::graph& g) {
     }
   }
   captures_published();
+}
+
+void TirkStages::factorize_here() {
+  for (int k = 0; k < systems(); ++k) factorize(k);
+}
+
+void TirkStages::predict_here() {
+  for (int i = 0; i < si_; ++i) {
+    if (tableau_.c(first_ + i) == 0) continue;
+    for (Eigen::Index e = 0; e < f_nodes(); ++e) {
+      const auto at = static_cast<std::size_t>(i);
+      problem_.rhs(t_n_ + tableau_.c(first_ + i) * tau_, y_old_[at], f_old_[at], f_node_range(e));
+    }
+  }
+}
+
+void TirkStages::iterate_here() {
+  const Eigen::Index n_slices = slices(), per_node = problem_.sliceable ? 1 : n_slices;
+  if (full_newton()) {
+    for (Eigen::Index r = 0; r < n_slices; ++r) residual(r);
+    for (int e = 0; e < split_->systems(); ++e) split_->solve(e);
+    for (Eigen::Index r = 0; r < n_slices; ++r) update(r);
+    for (int i = 0; i < si_; ++i)
+      for (Eigen::Index e = 0; e < f_nodes(); ++e) evaluate(i, e * per_node, per_node);
+    return;
+  }
+  // Stage by stage: a stage waits for the earlier ones' last evaluations (triangular), or
+  // reads none of their new values (Jacobi).
+  for (int i = 0; i < si_; ++i) {
+    for (Eigen::Index r = 0; r < n_slices; ++r) assemble(i, r);
+    if (newton()) solve(i);
+    for (int l = 0; l < layers(); ++l) {
+      for (Eigen::Index e = 0; e < f_nodes(); ++e) evaluate(i, e * per_node, per_node);
+      if (l == layers() - 1) break;
+      for (Eigen::Index r = 0; r < n_slices; ++r) substitute(i, r, l + 1);
+    }
+  }
 }
 
 void TirkStages::start() {

@@ -68,6 +68,14 @@ class TirkStages {
   long predictor_evaluations() const;
   void start();     // one iteration; call g.wait_for_all() after it
   void finished();  // after wait_for_all: the new iterate becomes the current one
+  // The same three jobs on the calling thread, the graph's node bodies in one of its
+  // orders, instead of start_factorization(), start_predictor() and start() with
+  // wait_for_all (finished_*() after each as before). Each node's numbers depend only on
+  // what its predecessors wrote, so the results are the graph's bit for bit; what goes is
+  // the dispatch of a task per node, which on a small system costs as much as the work.
+  void factorize_here();
+  void predict_here();
+  void iterate_here();
   // After finished(): the scaled size of the last correction, whether it was at rounding
   // level, whether some f was not finite, and |dF| / |dY| over the stages (0 if dY = 0).
   double correction() const;
@@ -95,6 +103,13 @@ class TirkStages {
   Eigen::Index slices() const { return (n_ + slice_ - 1) / slice_; }
   Eigen::Index slice_begin(Eigen::Index r) const { return r * slice_; }
   Eigen::Index slice_length(Eigen::Index r) const { return std::min(slice_, n_ - r * slice_); }
+  // The predictor's evaluations of a stage: one per slice, or one for a right-hand side
+  // that evaluates whole vectors only; node e's rows.
+  Eigen::Index f_nodes() const { return problem_.sliceable ? slices() : 1; }
+  RowRange f_node_range(Eigen::Index e) const {
+    const Eigen::Index per_node = problem_.sliceable ? 1 : slices();
+    return {slice_begin(e * per_node), std::min(n_, slice_begin(e * per_node + per_node))};
+  }
   bool newton() const { return is_newton(kind_); }
   bool full_newton() const { return kind_ == TirkIteration::newton; }
   void factorize(int k);
