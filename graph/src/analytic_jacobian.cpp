@@ -203,13 +203,14 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
     // gyroscopic term through the body's own quaternion and angular velocity.
     Eigen::Vector3d force, torque;
     applied_wrench(i, t, force, torque);
-    const Eigen::Matrix3d to_w = body_law(bi).inv_inertia * rot_[bi].transpose();
+    const BodyLaw& law = body_law(bi);
+    const Eigen::Matrix3d to_w = law.inv_inertia * rot_[bi].transpose();
     const Vector3T<BodyDual> w_rate = angular_acceleration<BodyDual>(rot, own.w, Vector3T<BodyDual>(torque.cast<BodyDual>()),
-                                                                     body_law(bi).inertia, body_law(bi).inv_inertia);
+                                                                     law.inertia, law.inv_inertia);
     const int cluster = n_clusters > 0 ? cluster_of(static_cast<int>(i)) : -1;
     for (const auto& [b, m] : blocks) {
       Block6 rows;
-      rows.topRows<3>() = body_law(bi).inv_mass * m.topRows<3>();
+      rows.topRows<3>() = law.inv_mass * m.topRows<3>();
       rows.bottomRows<3>() = to_w * m.bottomRows<3>();
       if (b == i) rows.bottomRows<3>() += derivatives<3>(w_rate, 0);
       if (cluster >= 0) {  // written with the cluster's reactions below

@@ -179,10 +179,11 @@ void MultibodySystem::solve_cluster(int c, double t, const Eigen::VectorXd& y, E
     }
     const Eigen::Matrix3d& r = rot_[bi];
     const Eigen::Vector3d w = y.segment<3>(layout_.angular_velocity(i));
-    rc.inv_mass[s] = body_law(bi).inv_mass;
-    rc.inv_inertia[s] = r * body_law(bi).inv_inertia * r.transpose();
-    accel[s].head<3>() = body_law(bi).inv_mass * k.force[s];
-    accel[s].tail<3>() = r * (body_law(bi).inv_inertia * (r.transpose() * k.torque[s] - w.cross(body_law(bi).inertia * w)));
+    const BodyLaw& law = body_law(bi);
+    rc.inv_mass[s] = law.inv_mass;
+    rc.inv_inertia[s] = r * law.inv_inertia * r.transpose();
+    accel[s].head<3>() = law.inv_mass * k.force[s];
+    accel[s].tail<3>() = r * (law.inv_inertia * (r.transpose() * k.torque[s] - w.cross(law.inertia * w)));
   }
   Eigen::VectorXd& lambda = k.lambda[static_cast<std::size_t>(c)];
   for (const ClusterJoint& cj : rc.joints()) {

@@ -17,16 +17,6 @@ using ContinueNode = tbb::flow::continue_node<tbb::flow::continue_msg>;
 
 inline long graph_capture_token = 0;
 
-// Whether tirk runs its graph's jobs on the calling thread (the nodes' bodies in one of
-// the graph's orders) instead of through the graph: with one thread, or below 1000
-// equations, where a node's work takes a few microseconds, about what the dispatch of its
-// task costs (docs/methods.md, "Small systems"). Each node writes its own rows only, so
-// the numbers are the same either way. Call after the arena has run something. (colloc
-// keeps its graph: its two blocks of a step run side by side, each a whole iteration.)
-inline bool jobs_here(const tbb::task_arena& arena, Eigen::Index equations) {
-  return arena.max_concurrency() == 1 || equations < 1000;
-}
-
 inline void captures_published() { happens_before(&graph_capture_token); }
 
 template <class Body>

@@ -20,7 +20,6 @@
 #include "settings_checks.hpp"
 #include "starting_step.hpp"
 #include "step_controller.hpp"
-#include "annotated_node.hpp"
 #include "tirk_stages.hpp"
 
 namespace mbsflow {
@@ -101,7 +100,12 @@ class TirkIntegrator::Driver {
       graph_ = std::make_unique<tbb::flow::graph>();
       stages_.build(*graph_);
     });
-    here_ = jobs_here(arena_, p.size);
+    // With one thread, or below 1000 equations, where a node's work takes a few
+    // microseconds, about what the dispatch of its task costs (docs/methods.md, "Small
+    // systems"), the graph's jobs run on this thread. Each node writes its own rows only,
+    // so the numbers are the same either way. (colloc keeps its graph: its two blocks of a
+    // step run side by side, each a whole iteration.)
+    here_ = arena_.max_concurrency() == 1 || p.size < 1000;
     monitor_.tol = s.iteration_tol > 0 ? s.iteration_tol : newton_tolerance(s.rtol);
     monitor_.predict_failure = full_newton();
     monitor_.max_iterations = s.max_iterations > 0 ? s.max_iterations : newton() ? 10 : 50;
@@ -172,7 +176,7 @@ class TirkIntegrator::Driver {
   tbb::task_arena arena_;
   std::unique_ptr<tbb::flow::graph> graph_;  // declared before the stages: destroyed after their nodes
   TirkStages stages_;
-  bool here_ = false;  // the graph's jobs on this thread (jobs_here, TirkStages::*_here)
+  bool here_ = false;  // the graph's jobs on this thread (TirkStages::*_here)
   // One of the stages' jobs: on this thread, or through the graph.
   void run_job(void (TirkStages::*here)(), void (TirkStages::*start)()) {
     arena_.execute([&] {

@@ -221,7 +221,7 @@ void TirkStages::measure(int i, Eigen::Index r, const Eigen::VectorXd& y_new, co
 void TirkStages::build(flow::graph& g) {
   const Eigen::Index n_slices = slices();
   // A right-hand side that evaluates whole vectors only gets one node per stage.
-  const Eigen::Index f_nodes = this->f_nodes(), per_node = problem_.sliceable ? 1 : n_slices;
+  const Eigen::Index f_nodes = this->f_nodes(), per_node = slices_per_f();
   start_ = std::make_unique<Start>(g);
   factor_start_ = std::make_unique<Start>(g);
   predict_start_ = std::make_unique<Start>(g);
@@ -311,7 +311,7 @@ void TirkStages::predict_here() {
 }
 
 void TirkStages::iterate_here() {
-  const Eigen::Index n_slices = slices(), per_node = problem_.sliceable ? 1 : n_slices;
+  const Eigen::Index n_slices = slices(), per_node = slices_per_f();
   if (full_newton()) {
     for (Eigen::Index r = 0; r < n_slices; ++r) residual(r);
     for (int e = 0; e < split_->systems(); ++e) split_->solve(e);

@@ -103,12 +103,12 @@ class TirkStages {
   Eigen::Index slices() const { return (n_ + slice_ - 1) / slice_; }
   Eigen::Index slice_begin(Eigen::Index r) const { return r * slice_; }
   Eigen::Index slice_length(Eigen::Index r) const { return std::min(slice_, n_ - r * slice_); }
-  // The predictor's evaluations of a stage: one per slice, or one for a right-hand side
-  // that evaluates whole vectors only; node e's rows.
+  // A stage's evaluations: one per slice, or one for a right-hand side that evaluates
+  // whole vectors only (slices per evaluation: slices_per_f()); evaluation e's rows.
   Eigen::Index f_nodes() const { return problem_.sliceable ? slices() : 1; }
+  Eigen::Index slices_per_f() const { return problem_.sliceable ? 1 : slices(); }
   RowRange f_node_range(Eigen::Index e) const {
-    const Eigen::Index per_node = problem_.sliceable ? 1 : slices();
-    return {slice_begin(e * per_node), std::min(n_, slice_begin(e * per_node + per_node))};
+    return {slice_begin(e * slices_per_f()), std::min(n_, slice_begin(e * slices_per_f() + slices_per_f()))};
   }
   bool newton() const { return is_newton(kind_); }
   bool full_newton() const { return kind_ == TirkIteration::newton; }

@@ -141,8 +141,8 @@ RunSummary run_partitioned(std::shared_ptr<const Model> shared, const Decomposit
   phase_done(o, whole ? "build the submodels and the whole system" : "build the submodels");
   // Like run_simulation, which gets its system built: the clock starts with the run.
   const auto start = Clock::now();
-  Eigen::VectorXd y = Eigen::VectorXd::Zero(global.size());  // the state as the sink sees it
-  if (whole) y = whole->initial_state();
+  // The gathered state, for the sink and checkpoints (then whole is built), and at the end.
+  Eigen::VectorXd y = whole ? whole->initial_state() : Eigen::VectorXd();
   std::optional<TightPoint> resumed;
   if (o.checkpoint && !o.checkpoint->resume.empty())
     resumed = restore_tight(*o.checkpoint, o, parts, *whole, sink, out);

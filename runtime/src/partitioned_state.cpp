@@ -72,26 +72,20 @@ namespace {
 // out: what own_elements lists, computed rather than held (8 bytes per number).
 void to_global(const Part& part, int block, const Eigen::VectorXd& v, Eigen::VectorXd& out) {
   const StateLayout global{out.size() / body_numbers};
-  const Eigen::Index first[4] = {global.position(0), global.orientation(0), global.velocity(0), global.angular_velocity(0)};
-  const int width = block == 1 ? 4 : 3;
+  const StateField& field = state_fields[block];
   for (Eigen::Index b = 0; b < part.own; ++b) {
-    const Eigen::Index at = first[block] + width * static_cast<Eigen::Index>(part.sub->own[static_cast<std::size_t>(b)]);
-    for (int c = 0; c < width; ++c) out[at + c] = v[width * b + c];
+    const Eigen::Index at = (global.*field.offset)(part.sub->own[static_cast<std::size_t>(b)]);
+    for (int c = 0; c < field.width; ++c) out[at + c] = v[field.width * b + c];
   }
 }
 }  // namespace
 
 std::vector<Eigen::Index> own_elements(const Submodel& sub, const StateLayout& global) {
-  const struct {
-    Eigen::Index (StateLayout::*offset)(Eigen::Index) const;
-    int n;
-  } fields[4] = {{&StateLayout::position, 3}, {&StateLayout::orientation, 4}, {&StateLayout::velocity, 3},
-                 {&StateLayout::angular_velocity, 3}};
   std::vector<Eigen::Index> out;
   out.reserve(sub.own.size() * body_numbers);
-  for (const auto& f : fields)
+  for (const StateField& f : state_fields)
     for (int body : sub.own)
-      for (int c = 0; c < f.n; ++c) out.push_back((global.*f.offset)(body) + c);
+      for (int c = 0; c < f.width; ++c) out.push_back((global.*f.offset)(body) + c);
   return out;
 }
 

@@ -51,18 +51,23 @@ constexpr int body_numbers = 13;
 void pack_bodies(const StateLayout& l, const Eigen::VectorXd& x, const std::vector<int>& bodies, void* out);
 void unpack_bodies(const StateLayout& l, Eigen::VectorXd& x, const std::vector<int>& bodies, const void* in);
 
-// The places in the global state of a submodel's own entries, field block by field block
-// (position, orientation, velocity, angular velocity), bodies in order within each.
+// A state's field blocks in order (position, orientation, velocity, angular velocity):
+// each one's offset in a layout and its numbers per body.
+struct StateField {
+  Eigen::Index (StateLayout::*offset)(Eigen::Index) const;
+  int width;
+};
+inline constexpr StateField state_fields[4] = {
+    {&StateLayout::position, 3}, {&StateLayout::orientation, 4}, {&StateLayout::velocity, 3}, {&StateLayout::angular_velocity, 3}};
+
+// The places in the global state of a submodel's own entries, field block by field block,
+// bodies in order within each.
 std::vector<Eigen::Index> own_elements(const Submodel& sub, const StateLayout& global);
 
 // Calls f(offset, length) for the own entries of each field block of the local state.
 template <class F>
 void for_own_blocks(const Part& part, F f) {
-  const StateLayout& l = part.system.layout();
-  f(l.position(0), 3 * part.own);
-  f(l.orientation(0), 4 * part.own);
-  f(l.velocity(0), 3 * part.own);
-  f(l.angular_velocity(0), 3 * part.own);
+  for (const StateField& field : state_fields) f((part.system.layout().*field.offset)(0), field.width * part.own);
 }
 
 // RK4 stage s of the step from t to t_next: k_s = f(x_s); then x_{s+1} = y + c h k_s for
