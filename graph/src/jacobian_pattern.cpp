@@ -18,7 +18,7 @@ Eigen::SparseMatrix<double> MultibodySystem::jacobian_pattern() const {
         for (int b : bodies)
           if (b >= 0 && b < n) reads[static_cast<std::size_t>(a)].push_back(b);
   };
-  for (const Joint& j : model().joints) couple({j.body1, j.body2});
+  for (const CompiledJoint& j : compiled_->joints) couple({j.a, j.b});  // ground is n: no state
   for (const auto& e : compiled_->elements) couple(e->bodies());
   // A rigid cluster's reactions come from one solve over the forces on all its bodies, so
   // each of its bodies reads whatever any of them reads.

@@ -1,6 +1,7 @@
 #pragma once
 // The state of one submodel in a partitioned run and the work of one of its stages, for
 // RK4 and DOPRI5. Own bodies are computed here; ghosts are pulled from their owners.
+#include <memory>
 #include <vector>
 
 #include "mbsflow/graph/decomposition.hpp"
@@ -13,6 +14,9 @@ struct Part {
   // rk4_folded (taken for RK4's 4 stages on a submodel with no borrowed bodies): three
   // state vectors and three derivatives instead of four each (input() and derivative()
   // below), 2 x 104 bytes per body less.
+  // The system is built from a copy of the submodel's part of the model, and then keeps
+  // only the copy's bodies, loads and drivers: the joints' records (names, parameters,
+  // 344 bytes each) have been compiled, and nothing reads them afterwards.
   Part(const Model& model, const Submodel& sub, int stages, bool rk4_folded = false);
   const Submodel* sub;
   MultibodySystem system;  // the local model: own bodies first, then ghosts
@@ -34,6 +38,9 @@ struct Part {
   // to a ghost (inner) and with one (edge), the ghosts, and the local joints that reach
   // no ghost and that do.
   std::vector<int> own_bodies, inner_bodies, edge_bodies, ghost_bodies, inner_joints, ghost_joints;
+
+ private:
+  Part(std::shared_ptr<Model> local, const Submodel& sub, int stages, bool rk4_folded);
 };
 
 // Copies the ghost bodies' values of stage input s of parts[p] from their owners in this

@@ -145,3 +145,26 @@ TEST_CASE("RK4 parts keep three state vectors and three derivatives, DOPRI5 part
   CHECK(dopri5.x.size() == 7);
   CHECK(dopri5.k.size() == 7);
 }
+
+TEST_CASE("a part lets its joints' records go: same Jacobian pattern and right-hand side as its local model's system",
+          "[runtime][identity]") {
+  ChainParams c;
+  c.bodies = 40;
+  const Model m = make_chain(c);
+  const Decomposition d = decompose(m, 3, Partitioner::band);
+  const Submodel& middle = d.submodels[1];  // ghosts on both sides
+  partitioned::Part part(m, middle, 4, true);
+  MultibodySystem local(submodel_model(m, middle), middle.integrated());
+  REQUIRE(local.model().joints.size() == middle.joints.size());
+  CHECK(part.system.model().joints.empty());
+  CHECK(part.system.model().bodies.size() == local.model().bodies.size());
+  const Eigen::SparseMatrix<double> a = part.system.jacobian_pattern(), b = local.jacobian_pattern();
+  REQUIRE(a.nonZeros() == b.nonZeros());
+  CHECK(Eigen::MatrixXd(a) == Eigen::MatrixXd(b));
+  Eigen::VectorXd y = local.initial_state();
+  y += 1e-3 * Eigen::VectorXd::LinSpaced(y.size(), -1.0, 1.0);  // deflected joints
+  Eigen::VectorXd fa = Eigen::VectorXd::Zero(y.size()), fb = fa;  // the ghosts' rows are not written
+  part.system.rhs(0.1, y, fa);
+  local.rhs(0.1, y, fb);
+  CHECK(fa == fb);
+}
