@@ -381,6 +381,13 @@ void check_cluster_run(const Model& model, const RunOptions& o, const ClusterCou
 RunSummary run_cluster(const Model& model, const std::string& model_json, const Decomposition& d,
                        const ClusterConfig& cluster, const RunOptions& o, ResultSink* sink, ClusterStats* stats,
                        ClusterCoupling coupling) {
+  return run_cluster(std::make_shared<const Model>(model), model_json, d, cluster, o, sink, stats, coupling);
+}
+
+RunSummary run_cluster(std::shared_ptr<const Model> shared, const std::string& model_json, const Decomposition& d,
+                       const ClusterConfig& cluster, const RunOptions& o, ResultSink* sink, ClusterStats* stats,
+                       ClusterCoupling coupling) {
+  const Model& model = *shared;
   check_cluster_run(model, o, coupling);
   check_cluster_security(cluster);
   if (coupling.loose) check_loose_options(*coupling.loose, d.submodels.size());
@@ -393,7 +400,7 @@ RunSummary run_cluster(const Model& model, const std::string& model_json, const 
     p.submodels += (p.submodels.empty() ? "" : ",") + std::to_string(q);
   }
   RunSummary out;
-  MultibodySystem whole(model);  // for the sink: layout, energies, joint forces
+  MultibodySystem whole(std::move(shared), static_cast<int>(model.bodies.size()));  // for the sink: layout, energies, joint forces
   auto start_clock = Clock::now();
   Eigen::VectorXd y = whole.initial_state();
   long evaluations = 0, steps = 0, rejected = 0;  // as the workers count them

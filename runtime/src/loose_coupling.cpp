@@ -121,13 +121,19 @@ struct LooseCheckpoint {
 
 RunSummary run_loose(const Model& model, const Decomposition& cut, const RunOptions& o, const LooseOptions& lo,
                      ResultSink* sink, LooseStats* stats) {
+  return run_loose(std::make_shared<const Model>(model), cut, o, lo, sink, stats);
+}
+
+RunSummary run_loose(std::shared_ptr<const Model> shared, const Decomposition& cut, const RunOptions& o,
+                     const LooseOptions& lo, ResultSink* sink, LooseStats* stats) {
+  const Model& model = *shared;
   check_options(o);
   check_loose_options(lo, cut.submodels.size());
   const Decomposition d = loose_decomposition(model, cut, lo);
   std::vector<std::unique_ptr<LoosePart>> parts;
   for (std::size_t q = 0; q < d.submodels.size(); ++q)
     parts.push_back(loose::make_part(model, d.submodels[q], o, lo, q));
-  MultibodySystem whole(model);
+  MultibodySystem whole(std::move(shared), static_cast<int>(model.bodies.size()));
   const StateLayout& global = whole.layout();
   RunSummary out;
   LooseStats local_stats;

@@ -34,20 +34,20 @@ std::string checkpoint_kind(const Checkpointing& c) {
 }
 
 // The run of either entry point: `shared` holds `model` when the caller shares it, else
-// null, and a copy is made only where a system is built (not for cluster or loose runs).
+// null, and then the model is copied once, for the systems to share.
 RunSummary run_plan(const Model& model, std::shared_ptr<const Model> shared, const RunPlan& plan, ResultSink* sink,
                     RunStats* stats) {
   check_plan(model, plan);
   RunStats local;
   RunStats& st = stats ? *stats : local;
   const LooseOptions* loose = plan.loose ? &*plan.loose : nullptr;
+  if (!shared) shared = std::make_shared<const Model>(model);
   if (plan.cluster)
-    return run_cluster(model, plan.model_json, *plan.partition, *plan.cluster, plan.options, sink, &st.cluster,
+    return run_cluster(shared, plan.model_json, *plan.partition, *plan.cluster, plan.options, sink, &st.cluster,
                        {loose, plan.exchange_delay_s});
   // Loose coupling of one submodel is a plain run (no macro steps to restart the method at).
   const bool one = plan.partition && plan.partition->submodels.size() == 1;
-  if (loose && !one) return run_loose(model, *plan.partition, plan.options, *loose, sink, &st.loose);
-  if (!shared) shared = std::make_shared<const Model>(model);
+  if (loose && !one) return run_loose(shared, *plan.partition, plan.options, *loose, sink, &st.loose);
   // A tight run's numbers do not depend on the partition, so a checkpoint goes on in
   // whichever loop wrote it, whatever partition (or none) the resumed run was given.
   const Checkpointing* c = plan.options.checkpoint;

@@ -6,6 +6,7 @@
 // protocol.
 #include <atomic>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -91,6 +92,10 @@ struct ClusterCoupling {
 };
 
 RunSummary run_cluster(const Model& model, const std::string& model_json, const Decomposition& d,
+                       const ClusterConfig& cluster, const RunOptions& options, ResultSink* sink,
+                       ClusterStats* stats = nullptr, ClusterCoupling coupling = {});
+// The same with a model the caller holds shared: the whole system (for the sink) shares it.
+RunSummary run_cluster(std::shared_ptr<const Model> model, const std::string& model_json, const Decomposition& d,
                        const ClusterConfig& cluster, const RunOptions& options, ResultSink* sink,
                        ClusterStats* stats = nullptr, ClusterCoupling coupling = {});
 // The checks run_cluster makes of its settings before it contacts anyone (InputError);

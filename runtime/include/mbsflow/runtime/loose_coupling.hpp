@@ -6,6 +6,7 @@
 // from the same samples, so a run is repeatable; with a lag they may run ahead of each
 // other. The difference between what a submodel extrapolated and what its neighbour then
 // sent is the coupling error, reported per macro step.
+#include <memory>
 #include <vector>
 
 #include "mbsflow/graph/decomposition.hpp"
@@ -85,5 +86,8 @@ double cut_joint_stable_step(const Model& model, const Decomposition& d);
 
 RunSummary run_loose(const Model& model, const Decomposition& d, const RunOptions& options, const LooseOptions& loose,
                      ResultSink* sink, LooseStats* stats = nullptr);
+// The same with a model the caller holds shared: the whole system (for the sink) shares it.
+RunSummary run_loose(std::shared_ptr<const Model> model, const Decomposition& d, const RunOptions& options,
+                     const LooseOptions& loose, ResultSink* sink, LooseStats* stats = nullptr);
 
 }  // namespace mbsflow
