@@ -96,7 +96,7 @@ void check_joint(const Joint& j, int bodies, const std::string& where) {
   rotation(j.frame2, where + " frame2");
   non_negative(j.stiffness, where + " stiffness");
   non_negative(j.damping, where + " damping");
-  finite(j.preload, where + " preload");
+  finite(j.preload.get(), where + " preload");
   non_negative(std::array<double, 1>{j.rest_length}, where + " rest_length");
   for (const ForceTable& t : j.tables)
     if (!t.empty()) {

@@ -64,7 +64,7 @@ struct KeyWords {
 inline std::array<std::uint64_t, 34> joint_law_key(const Joint& j) {
   KeyWords<34> k;
   k.put(std::array<double, 1>{j.type == JointType::spring ? 1.0 : 0.0});
-  k.put(j.point1).put(j.point2).put(j.frame1).put(j.frame2).put(j.stiffness).put(j.damping).put(j.preload);
+  k.put(j.point1).put(j.point2).put(j.frame1.get()).put(j.frame2.get()).put(j.stiffness).put(j.damping).put(j.preload.get());
   k.put(std::array<double, 1>{j.rest_length});
   return k.words;
 }

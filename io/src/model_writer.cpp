@@ -53,7 +53,7 @@ void write_body(std::string& out, const Body& b) {
 }
 
 void kinematic_fields(const Joint& jt, Object& o) {
-  o("frame2", jt.frame2);
+  o("frame2", jt.frame2.get());
   if (jt.type == JointType::distance) o("length", jt.rest_length);
   if (!jt.rigid) o("rigid", false)("stiffness", jt.stiffness)("damping", jt.damping);
   if (jt.motor->kind != JointMotor::Kind::none) {
@@ -76,7 +76,7 @@ void write_joint(std::string& out, const Model& m, const Joint& jt) {
   o("name", jt.name)("type", joint_type_name(jt.type))("body1", name(jt.body1))("body2", name(jt.body2));
   o("point1", jt.point1)("point2", jt.point2);
   if (is_kinematic(jt.type)) {
-    if (!identity(jt.frame1)) o("frame1", jt.frame1);
+    if (!identity(jt.frame1)) o("frame1", jt.frame1.get());
     kinematic_fields(jt, o);
     return;
   }
@@ -86,8 +86,8 @@ void write_joint(std::string& out, const Model& m, const Joint& jt) {
     o("rest_length", jt.rest_length);
     return;
   }
-  if (!identity(jt.frame1)) o("frame1", jt.frame1);
-  if (jt.frame2 != rest_frame2(m, jt)) o("frame2", jt.frame2);
+  if (!identity(jt.frame1)) o("frame1", jt.frame1.get());
+  if (jt.frame2 != rest_frame2(m, jt)) o("frame2", jt.frame2.get());
   o("stiffness", jt.stiffness);
   if (jt.damping != Vec6{}) o("damping", jt.damping);
   static const char* axes[6] = {"x", "y", "z", "rx", "ry", "rz"};
@@ -97,7 +97,7 @@ void write_joint(std::string& out, const Model& m, const Joint& jt) {
         if (!jt.tables[a].empty())
           tables.object(axes[a], [&](Object& t) { t("deflection", jt.tables[a].deflection)("force", jt.tables[a].force); });
     });
-  if (jt.preload != Vec6{}) o("preload", jt.preload);
+  if (jt.preload != Vec6{}) o("preload", jt.preload.get());
 }
 
 void write_load(std::string& out, const Model& m, const Load& l) {

@@ -18,6 +18,8 @@ namespace mbsflow {
 using Vec3 = std::array<double, 3>;
 using Quat = std::array<double, 4>;  // w, x, y, z
 using Vec6 = std::array<double, 6>;  // x, y, z, rx, ry, rz
+inline constexpr Quat identity_frame{1.0, 0.0, 0.0, 0.0};
+inline constexpr Vec6 no_preload{};
 
 inline constexpr int ground = -1;  // body index of the fixed world frame
 
@@ -74,12 +76,13 @@ struct Joint {
   int body2 = 0;
   Vec3 point1{};                    // in body1's frame (world frame for ground)
   Vec3 point2{};                    // in body2's frame
-  Quat frame1{1.0, 0.0, 0.0, 0.0};  // joint frame relative to body1
-  Quat frame2{1.0, 0.0, 0.0, 0.0};  // joint frame relative to body2 (at rest)
+  // Frames and preload are mostly at their defaults: each is a pointer until set (Defaulted).
+  Defaulted<Quat, identity_frame> frame1;  // joint frame relative to body1
+  Defaulted<Quat, identity_frame> frame2;  // joint frame relative to body2 (at rest)
   Vec6 stiffness{};                 // bushing: per axis; spring: stiffness[0]
   Vec6 damping{};                   // bushing: per axis; spring: damping[0]
   AxisTables tables;                // nonlinear force(deflection) per axis; empty = linear
-  Vec6 preload{};                   // force/torque on body2 at zero deflection, joint frame
+  Defaulted<Vec6, no_preload> preload;  // force/torque on body2 at zero deflection, joint frame
   double rest_length = 0.0;         // spring: rest length; distance: the rod's length
   bool rigid = true;                // kinematic joints: exact constraint, or compliant
   // Revolute and prismatic only; few joints have them, so each is behind a pointer.
