@@ -131,13 +131,6 @@ MultibodySystem::MultibodySystem(std::shared_ptr<const Model> shared, int active
   for (std::size_t k = 0; k < model.drivers.size(); ++k)
     compiled_->driver_of_body[static_cast<std::size_t>(model.drivers[k].body)] = static_cast<int>(k);
 
-  rot_.assign(static_cast<std::size_t>(n) + 1, Eigen::Matrix3d::Identity());
-  pos_ = Eigen::Matrix3Xd::Zero(3, n + 1);
-  vel_ = Eigen::Matrix3Xd::Zero(3, n + 1);
-  omega_ = Eigen::Matrix3Xd::Zero(3, n + 1);
-  quat_ = Eigen::Matrix4Xd::Zero(4, n + 1);
-  quat_(0, n) = 1.0;
-  joint_out_.setZero(9, nj);
   motor_effort_.setZero(nj);
   for (const auto& e : model.force_elements) add_force_element(e);
   compile_constraints();
@@ -200,7 +193,23 @@ void MultibodySystem::drive(const Driver& d, double t) {
 
 // The plain copies here, the rotations on lanes after: the AVX kernels touch no Eigen
 // double arithmetic (see lane_kernels.cpp), and a copy gains nothing from lanes.
+// The kinematics and joint wrenches of an evaluation (about 250 bytes a body). Made at the
+// first evaluation, not with the system: a system built for its layout, names and initial
+// state only (a partitioned run's whole system, for its results) never holds them, and its
+// copies (the results writer's) make their own when they first evaluate.
+void MultibodySystem::make_workspace() {
+  const Eigen::Index n = layout_.bodies;
+  rot_.assign(static_cast<std::size_t>(n) + 1, Eigen::Matrix3d::Identity());
+  pos_ = Eigen::Matrix3Xd::Zero(3, n + 1);
+  vel_ = Eigen::Matrix3Xd::Zero(3, n + 1);
+  omega_ = Eigen::Matrix3Xd::Zero(3, n + 1);
+  quat_ = Eigen::Matrix4Xd::Zero(4, n + 1);
+  quat_(0, n) = 1.0;  // ground, at index n
+  joint_out_.setZero(9, static_cast<Eigen::Index>(compiled_->joints.size()));
+}
+
 void MultibodySystem::kinematics_in(const int* list, std::size_t n, const Eigen::VectorXd& y) {
+  if (pos_.cols() == 0) make_workspace();
   for (std::size_t p = 0; p < n; ++p) {
     const Eigen::Index i = list ? list[p] : static_cast<Eigen::Index>(p);
     quat_.col(i) = y.segment<4>(layout_.orientation(i));

@@ -80,3 +80,28 @@ TEST_CASE("a force element added to a copy of a system stays its own", "[graph]"
   fresh.add_force_element(std::make_shared<Tether>(3, 30));
   CHECK(evaluations(fresh, 3) == tethered);
 }
+
+TEST_CASE("a system makes its workspace at its first evaluation: built and copied unevaluated, it holds none", "[graph]") {
+  const Model m = grid();
+  MultibodySystem unevaluated(m);
+  const std::size_t bodies = m.bodies.size();
+  const auto per_body = [&](const MultibodySystem& s) { return static_cast<double>(s.memory_use().workspace) / bodies; };
+  CHECK(per_body(unevaluated) < 40.0);  // motor efforts, 8 bytes a joint
+  MultibodySystem copy = unevaluated;
+  CHECK(per_body(copy) < 40.0);
+  MultibodySystem evaluated(m);
+  const std::vector<Eigen::VectorXd> reference = evaluations(evaluated, 3);
+  CHECK(per_body(evaluated) > 200.0);  // kinematics and joint wrenches
+  CHECK(evaluations(copy, 3) == reference);
+  CHECK(per_body(copy) == per_body(evaluated));
+  CHECK(per_body(unevaluated) < 40.0);  // the copy's workspace is its own
+  // Energy and joint wrenches need no evaluation before them.
+  MultibodySystem fresh(m);
+  const Eigen::VectorXd y = fresh.initial_state();
+  CHECK(fresh.energy(0.0, y).kinetic == evaluated.energy(0.0, y).kinetic);
+  MultibodySystem fresh2(m);
+  Eigen::VectorXd a, b;
+  fresh2.joint_wrenches(0.0, y, a);
+  evaluated.joint_wrenches(0.0, y, b);
+  CHECK(a == b);
+}

@@ -212,6 +212,7 @@ class MultibodySystem {
   void write_derivative(Eigen::Index i, double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt,
                         const Eigen::Vector3d& force, const Eigen::Vector3d& torque) const;
   void kinematics_in(const int* list, std::size_t n, const Eigen::VectorXd& y);  // list[0..n), or 0..n-1 when null
+  void make_workspace();  // at the first evaluation (kinematics_in)
   // Kernels on Lanes (lane_kernels.cpp), each for Lanes::width items: two (SSE2) or, with
   // the suffix _avx, four (AVX).
   void bushings_on_lanes(const int* joints);
