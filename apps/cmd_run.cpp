@@ -374,7 +374,7 @@ int run(const RunArgs& a, const CheckpointFile* resumed = nullptr, const std::st
   }
   progress.finish();
   if (!a.quiet && !sink) {
-    MultibodySystem sys(model, static_cast<int>(m.bodies.size()));  // shares the model: a copy is 536 B per body or more
+    MultibodySystem sys(model, static_cast<int>(m.bodies.size()));  // shares the model: a copy is 450 B per body or more
     print_summary(m, sys, o, r);
   }
   const double body_steps = static_cast<double>(r.steps) * static_cast<double>(m.bodies.size());

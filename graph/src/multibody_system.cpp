@@ -191,8 +191,6 @@ void MultibodySystem::drive(const Driver& d, double t) {
   omega_.col(i).setZero();
 }
 
-// The plain copies here, the rotations on lanes after: the AVX kernels touch no Eigen
-// double arithmetic (see lane_kernels.cpp), and a copy gains nothing from lanes.
 // The kinematics and joint wrenches of an evaluation (about 250 bytes a body). Made at the
 // first evaluation, not with the system: a system built for its layout, names and initial
 // state only (a partitioned run's whole system, for its results) never holds them, and its
@@ -208,6 +206,8 @@ void MultibodySystem::make_workspace() {
   joint_out_.setZero(9, static_cast<Eigen::Index>(compiled_->joints.size()));
 }
 
+// The plain copies here, the rotations on lanes after: the AVX kernels touch no Eigen
+// double arithmetic (see lane_kernels.cpp), and a copy gains nothing from lanes.
 void MultibodySystem::kinematics_in(const int* list, std::size_t n, const Eigen::VectorXd& y) {
   if (pos_.cols() == 0) make_workspace();
   for (std::size_t p = 0; p < n; ++p) {

@@ -53,8 +53,8 @@ Part::Part(std::shared_ptr<Model> local, const Submodel& s, int stages, bool fol
   }
   for (int i = n_own; i < static_cast<int>(system.layout().bodies); ++i) ghost_bodies.push_back(i);
   // The system shares `local` (made here, not const): its joints are compiled and read no
-  // more (the Jacobian's pattern comes from the compiled joints). The two submodels of a
-  // 10^6-body chain held 330 MB of them.
+  // more (the Jacobian's pattern comes from the compiled joints). The submodels of a
+  // 10^6-body chain held 256 MB of them.
   std::vector<Joint>().swap(local->joints);
   // The stage vectors after that, so that the joints' records and these are never held together.
   const auto vectors = static_cast<std::size_t>(rk4_folded ? 3 : stages);

@@ -16,7 +16,7 @@ struct Part {
   // below), 2 x 104 bytes per body less.
   // The system is built from a copy of the submodel's part of the model, and then keeps
   // only the copy's bodies, loads and drivers: the joints' records (names, parameters,
-  // 344 bytes each) have been compiled, and nothing reads them afterwards.
+  // 256 bytes each) have been compiled, and nothing reads them afterwards.
   Part(const Model& model, const Submodel& sub, int stages, bool rk4_folded = false);
   const Submodel* sub;
   MultibodySystem system;  // the local model: own bodies first, then ghosts
