@@ -58,15 +58,6 @@ constexpr int body_numbers = 13;
 void pack_bodies(const StateLayout& l, const Eigen::VectorXd& x, const std::vector<int>& bodies, void* out);
 void unpack_bodies(const StateLayout& l, Eigen::VectorXd& x, const std::vector<int>& bodies, const void* in);
 
-// A state's field blocks in order (position, orientation, velocity, angular velocity):
-// each one's offset in a layout and its numbers per body.
-struct StateField {
-  Eigen::Index (StateLayout::*offset)(Eigen::Index) const;
-  int width;
-};
-inline constexpr StateField state_fields[4] = {
-    {&StateLayout::position, 3}, {&StateLayout::orientation, 4}, {&StateLayout::velocity, 3}, {&StateLayout::angular_velocity, 3}};
-
 // The places in the global state of a submodel's own entries, field block by field block,
 // bodies in order within each.
 std::vector<Eigen::Index> own_elements(const Submodel& sub, const StateLayout& global);

@@ -15,6 +15,15 @@ struct StateLayout {
   Eigen::Index angular_velocity(Eigen::Index i) const { return 10 * bodies + 3 * i; }
 };
 
+// The state's field blocks in order (position, orientation, velocity, angular velocity):
+// each one's offset in a layout and its numbers per body.
+struct StateField {
+  Eigen::Index (StateLayout::*offset)(Eigen::Index) const;
+  int width;
+};
+inline constexpr StateField state_fields[4] = {
+    {&StateLayout::position, 3}, {&StateLayout::orientation, 4}, {&StateLayout::velocity, 3}, {&StateLayout::angular_velocity, 3}};
+
 // Largest distance between the centres of mass of the same body in two states.
 inline double largest_position_gap(const StateLayout& l, const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
   double gap = 0.0;

@@ -18,11 +18,13 @@ struct BodyField {
   Eigen::Index (StateLayout::*offset)(Eigen::Index) const;  // where body i's values start in the state
 };
 
+// In the state's order (state_fields), whose offsets and widths they take.
 inline constexpr std::array<BodyField, 4> body_fields{{
-    {"position", "/bodies/position", 3, {"x", "y", "z", ""}, "m", &StateLayout::position},
-    {"orientation", "/bodies/orientation", 4, {"qw", "qx", "qy", "qz"}, "1", &StateLayout::orientation},
-    {"velocity", "/bodies/velocity", 3, {"vx", "vy", "vz", ""}, "m/s", &StateLayout::velocity},
-    {"angular_velocity", "/bodies/angular_velocity", 3, {"wx", "wy", "wz", ""}, "rad/s", &StateLayout::angular_velocity},
+    {"position", "/bodies/position", state_fields[0].width, {"x", "y", "z", ""}, "m", state_fields[0].offset},
+    {"orientation", "/bodies/orientation", state_fields[1].width, {"qw", "qx", "qy", "qz"}, "1", state_fields[1].offset},
+    {"velocity", "/bodies/velocity", state_fields[2].width, {"vx", "vy", "vz", ""}, "m/s", state_fields[2].offset},
+    {"angular_velocity", "/bodies/angular_velocity", state_fields[3].width, {"wx", "wy", "wz", ""}, "rad/s",
+     state_fields[3].offset},
 }};
 
 inline constexpr const char* energy_dataset = "/energy";        // T x 3: kinetic, gravity, elastic
