@@ -229,10 +229,7 @@ void TirkStages::build(flow::graph& g) {
   for (int i = 0; i < si_; ++i) {
     if (tableau_.c(first_ + i) == 0) continue;  // f(t_n, x) is known
     for (Eigen::Index e = 0; e < f_nodes; ++e)
-      flow::make_edge(*predict_start_, node([this, i, range = f_node_range(e)] {
-                        const auto at = static_cast<std::size_t>(i);
-                        problem_.rhs(t_n_ + tableau_.c(first_ + i) * tau_, y_old_[at], f_old_[at], range);
-                      }));
+      flow::make_edge(*predict_start_, node([this, i, e] { predict(i, e); }));
   }
   for (int k = 0; k < systems(); ++k) flow::make_edge(*factor_start_, node([this, k] { factorize(k); }));
   if (full_newton()) {
@@ -300,13 +297,16 @@ void TirkStages::factorize_here() {
   for (int k = 0; k < systems(); ++k) factorize(k);
 }
 
+// The predictor's f at stage i of the last step's polynomial, evaluation e's rows.
+void TirkStages::predict(int i, Eigen::Index e) {
+  const auto at = static_cast<std::size_t>(i);
+  problem_.rhs(t_n_ + tableau_.c(first_ + i) * tau_, y_old_[at], f_old_[at], f_node_range(e));
+}
+
 void TirkStages::predict_here() {
   for (int i = 0; i < si_; ++i) {
     if (tableau_.c(first_ + i) == 0) continue;
-    for (Eigen::Index e = 0; e < f_nodes(); ++e) {
-      const auto at = static_cast<std::size_t>(i);
-      problem_.rhs(t_n_ + tableau_.c(first_ + i) * tau_, y_old_[at], f_old_[at], f_node_range(e));
-    }
+    for (Eigen::Index e = 0; e < f_nodes(); ++e) predict(i, e);
   }
 }
 

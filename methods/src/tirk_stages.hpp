@@ -113,6 +113,7 @@ class TirkStages {
   bool newton() const { return is_newton(kind_); }
   bool full_newton() const { return kind_ == TirkIteration::newton; }
   void factorize(int k);
+  void predict(int i, Eigen::Index e);
   void residual(Eigen::Index r);  // full Newton: R over slice r, loaded into the eigen split
   void update(Eigen::Index r);    // full Newton: Y_i += (T w)_i over slice r
   int layers() const { return newton() ? 1 : inner_; }
