@@ -150,8 +150,9 @@ void RigidCluster::factor() {
   }
 }
 
-// In the permuted numbering: y <- S_eps^-1 y.
-void RigidCluster::solve_shifted(Eigen::VectorXd& y) const {
+// In the permuted numbering: y <- S_eps^-1 y (each column).
+template <class X>
+void RigidCluster::solve_shifted(X& y) const {
   if (dense_)
     y = dense_ldlt_.solve(y);
   else
@@ -160,35 +161,44 @@ void RigidCluster::solve_shifted(Eigen::VectorXd& y) const {
 
 // Iterated regularisation (augmented-Lagrangian style): x <- x + S_eps^-1 (b - S x) a few
 // times removes the bias of eps where S is regular, while where S is (nearly) singular the
-// correction stays bounded by 1/eps.
-void RigidCluster::solve(Eigen::VectorXd& x) const {
-  const Eigen::Index m = x.size();
-  for (Eigen::Index r = 0; r < m; ++r) rhs_[position_[static_cast<std::size_t>(r)]] = x[r];
-  permuted_ = rhs_;
-  solve_shifted(permuted_);
+// correction stays bounded by 1/eps. Each column of x on its own; rhs, permuted and
+// residual are scratch of x's shape.
+template <class X>
+void RigidCluster::refined_solve(X& x, X& rhs, X& permuted, X& residual) const {
+  const Eigen::Index m = x.rows();
+  rhs.resize(m, x.cols());
+  for (Eigen::Index r = 0; r < m; ++r) rhs.row(position_[static_cast<std::size_t>(r)]) = x.row(r);
+  permuted = rhs;
+  solve_shifted(permuted);
   for (int k = 0; k < refinements; ++k) {
     if (dense_)
-      residual_.noalias() = dense_matrix_.selfadjointView<Eigen::Upper>() * permuted_;
+      residual.noalias() = dense_matrix_.selfadjointView<Eigen::Upper>() * permuted;
     else
-      residual_.noalias() = sparse_matrix_.selfadjointView<Eigen::Upper>() * permuted_;
+      residual.noalias() = sparse_matrix_.selfadjointView<Eigen::Upper>() * permuted;
     for (Eigen::Index r = 0; r < m; ++r) {
       const Eigen::Index p = position_[static_cast<std::size_t>(r)];
-      residual_[p] = rhs_[p] - residual_[p] + shift_[static_cast<std::size_t>(r)] * permuted_[p];
+      residual.row(p) = rhs.row(p) - residual.row(p) + shift_[static_cast<std::size_t>(r)] * permuted.row(p);
     }
-    solve_shifted(residual_);
-    permuted_ += residual_;
+    solve_shifted(residual);
+    permuted += residual;
   }
-  for (Eigen::Index r = 0; r < m; ++r) x[r] = permuted_[position_[static_cast<std::size_t>(r)]];
+  for (Eigen::Index r = 0; r < m; ++r) x.row(r) = permuted.row(position_[static_cast<std::size_t>(r)]);
 }
 
-void RigidCluster::wrenches(const Eigen::VectorXd& lambda, std::vector<Vector6d>& out) const {
+void RigidCluster::solve(Eigen::VectorXd& x) const { refined_solve(x, rhs_, permuted_, residual_); }
+
+void RigidCluster::solve(Eigen::MatrixXd& x) const {
+  refined_solve(x, rhs_columns_, permuted_columns_, residual_columns_);
+}
+
+void RigidCluster::wrenches(const Eigen::Ref<const Eigen::VectorXd>& lambda, std::vector<Vector6d>& out) const {
   out.assign(bodies_.size(), Vector6d::Zero());
   for (int r = 0; r < rows_count_; ++r)
     for (int side = 0; side < 2; ++side)
       if (const int b = slot(r, side); b >= 0) out[static_cast<std::size_t>(b)] += lambda[r] * part(r, side);
 }
 
-void RigidCluster::motion(const Eigen::VectorXd& lambda, std::vector<Vector6d>& out) const {
+void RigidCluster::motion(const Eigen::Ref<const Eigen::VectorXd>& lambda, std::vector<Vector6d>& out) const {
   wrenches(lambda, out);
   for (std::size_t b = 0; b < out.size(); ++b) out[b] = weighted(static_cast<int>(b), out[b]);
 }

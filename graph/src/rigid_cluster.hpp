@@ -52,12 +52,14 @@ class RigidCluster {
   std::vector<Eigen::Matrix3d> inv_inertia;
 
   void factor();
-  // x <- S^-1 x.
+  // x <- S^-1 x, for one right-hand side or for each column of x at once (the Jacobian's
+  // columns, cluster_jacobian.cpp: blocked triangular solves in place of one per column).
   void solve(Eigen::VectorXd& x) const;
+  void solve(Eigen::MatrixXd& x) const;
   // Per body slot, the wrench J^T lambda (force, torque; world).
-  void wrenches(const Eigen::VectorXd& lambda, std::vector<Vector6d>& out) const;
+  void wrenches(const Eigen::Ref<const Eigen::VectorXd>& lambda, std::vector<Vector6d>& out) const;
   // Per body slot, W J^T lambda: the velocity (or position) change the multipliers make.
-  void motion(const Eigen::VectorXd& lambda, std::vector<Vector6d>& out) const;
+  void motion(const Eigen::Ref<const Eigen::VectorXd>& lambda, std::vector<Vector6d>& out) const;
 
  private:
   int slot(int r, int side) const { return side == 0 ? row_a_[static_cast<std::size_t>(r)] : row_b_[static_cast<std::size_t>(r)]; }
@@ -85,7 +87,11 @@ class RigidCluster {
   Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor> block_j_, block_jw_;  // scratch
   std::vector<double> shift_;  // eps added to each row's diagonal entry
   mutable Eigen::VectorXd permuted_, rhs_, residual_;
-  void solve_shifted(Eigen::VectorXd& y) const;
+  mutable Eigen::MatrixXd permuted_columns_, rhs_columns_, residual_columns_;
+  template <class X>
+  void solve_shifted(X& y) const;
+  template <class X>
+  void refined_solve(X& x, X& rhs, X& permuted, X& residual) const;
 };
 
 }  // namespace mbsflow
