@@ -57,9 +57,8 @@ Part::Part(std::shared_ptr<Model> local, const Submodel& s, int stages, bool fol
   // 10^6-body chain held 256 MB of them.
   std::vector<Joint>().swap(local->joints);
   // The stage vectors after that, so that the joints' records and these are never held together.
-  const auto vectors = static_cast<std::size_t>(rk4_folded ? 3 : stages);
-  x.assign(vectors, y0);
-  k.assign(vectors, Eigen::VectorXd::Zero(system.dimension()));
+  x.assign(static_cast<std::size_t>(rk4_folded ? 3 : stages), y0);
+  k.assign(static_cast<std::size_t>(rk4_folded ? 2 : stages), Eigen::VectorXd::Zero(system.dimension()));
 }
 
 void copy_ghosts(const StateLayout& owner_layout, const Eigen::VectorXd& from, const Submodel::Exchange& e, Part& me, int s) {
@@ -135,7 +134,7 @@ void rk4_update_entries(Part& part, int s, double h, Eigen::Index at, Eigen::Ind
   auto seg = [&](Eigen::VectorXd& v) { return v.segment(at, n); };
   if (s < 3) {
     rk4::stage_input(seg(part.x[0]), seg(part.derivative(s)), h, s, seg(part.input(s + 1)));
-    if (part.rk4_folded && s == 2) rk4::fold(seg(part.k[0]), seg(part.k[1]), seg(part.k[2]));
+    if (part.rk4_folded && s > 0) rk4::accumulate(seg(part.k[0]), seg(part.k[1]));
   } else if (part.rk4_folded) {
     rk4::finish(seg(part.x[0]), seg(part.k[0]), seg(part.derivative(3)), h);
   } else {

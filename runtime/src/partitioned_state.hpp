@@ -12,8 +12,8 @@ namespace mbsflow::partitioned {
 
 struct Part {
   // rk4_folded (taken for RK4's 4 stages on a submodel with no borrowed bodies): three
-  // state vectors and three derivatives instead of four each (input() and derivative()
-  // below), 2 x 104 bytes per body less.
+  // state vectors and two derivatives instead of four each (input() and derivative()
+  // below), 3 x 104 bytes per body less.
   // The system is built from a copy of the submodel's part of the model, and then keeps
   // only the copy's bodies, loads and drivers: the joints' records (names, parameters,
   // 256 bytes each) have been compiled, and nothing reads them afterwards.
@@ -27,13 +27,17 @@ struct Part {
   // With rk4_folded, stage inputs 1 and 3 share x[1]: a neighbour takes stage input 1's
   // values before its stage 1, and this part writes input 3 in its stage 2, which waits
   // for that neighbour's stage 1 (a cut joint makes both sides each other's neighbours; the
-  // inner half of stage 2 writes no body a neighbour takes). Likewise k2 and k4 share k[1]:
-  // after stage 2, k[0] holds k1 + 2 (k2 + k3) (rk4::fold).
+  // inner half of stage 2 writes no body a neighbour takes). k2, k3 and k4 share k[1]: k[0]
+  // holds k1, and then the sum of those taken so far (rk4::accumulate). Only a body's own
+  // stage update reads its derivative, so the halves of two stages, which write other
+  // bodies, never meet in one.
   bool rk4_folded = false;
   Eigen::VectorXd& input(int s) { return x[slot(s)]; }
   const Eigen::VectorXd& input(int s) const { return x[slot(s)]; }
-  Eigen::VectorXd& derivative(int s) { return k[slot(s)]; }
+  Eigen::VectorXd& derivative(int s) { return k[derivative_slot(s)]; }
+  const Eigen::VectorXd& derivative(int s) const { return k[derivative_slot(s)]; }
   std::size_t slot(int s) const { return rk4_folded && s == 3 ? 1 : static_cast<std::size_t>(s); }
+  std::size_t derivative_slot(int s) const { return rk4_folded ? (s == 0 ? 0 : 1) : static_cast<std::size_t>(s); }
   // For a stage in two halves (rk4_inner_stage, rk4_edge_stage): own bodies with no joint
   // to a ghost (inner) and with one (edge), the ghosts, and the local joints that reach
   // no ghost and that do.
