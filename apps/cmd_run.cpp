@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "commands.hpp"
+#include "huge_pages.hpp"
 #include "mbsflow/error.hpp"
 #include "mbsflow/methods/stepper.hpp"
 #include "mbsflow/graph/stable_step.hpp"
@@ -275,6 +276,7 @@ int run(const RunArgs& a, const CheckpointFile* resumed = nullptr, const std::st
   const bool stage_split = o.method == Method::rk4 || o.method == Method::dopri5;
   const int default_k = cluster ? cluster_submodels(cc) : stage_split || loose ? default_partitions(m, threads) : 1;
   const std::optional<Decomposition> d = choose_decomposition(m, a, default_k, !cluster && !loose);
+  give_back_free_memory();  // what reading and cutting the model freed, before the submodels are built
   timings.mark("cut into submodels", bodies);
   if (cluster && !a.quiet) {
     char coupling[96] = "";
@@ -305,7 +307,12 @@ int run(const RunArgs& a, const CheckpointFile* resumed = nullptr, const std::st
   }
   ProgressLine progress(o.t_start, o.t_end, !a.quiet);
   o.progress = [&](double t, long steps) { progress.update(t, steps); };
-  if (a.timings) o.phase = [&](const char* phase) { timings.mark(phase, bodies); };
+  // After each of the run's phases: building the submodels frees the copies of their joints
+  // (on worker threads, in arenas the first evaluation's workspaces do not all reuse).
+  o.phase = [&](const char* phase) {
+    give_back_free_memory();
+    if (a.timings) timings.mark(phase, bodies);
+  };
   o.stop = install_stop_handlers();
   // Checkpoints: the file holds the arguments, folder and model text with the run's state.
   Checkpointing checkpointing;

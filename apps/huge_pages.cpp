@@ -1,5 +1,6 @@
 #include "huge_pages.hpp"
 
+#include <malloc.h>
 #include <unistd.h>
 
 #include <cstdlib>
@@ -50,5 +51,7 @@ void restart_with_huge_pages(char** argv) {
   else
     ::setenv("GLIBC_TUNABLES", before.c_str(), 1);
 }
+
+void give_back_free_memory() { ::malloc_trim(0); }
 
 }  // namespace mbsflow::cli
