@@ -116,10 +116,17 @@ void MultibodySystem::cluster_jacobian(int c, double t, const Eigen::VectorXd& y
 
   // The columns, (body, state number), in that order; a chunk of them at a time: their
   // right-hand sides z first, then one solve for all of them (blocked), then their rates.
-  std::vector<std::pair<int, int>> columns;
-  for (const int b : read)
-    if (free(b))
-      for (int q = 0; q < body_states; ++q) columns.emplace_back(b, q);
+  struct Column {
+    int b, q;    // the free body and its state number
+    int sb;      // b's slot in the cluster, -1 outside it
+    bool turns;  // a quaternion number of a body of the cluster
+  };
+  std::vector<Column> columns;
+  for (const int b : read) {
+    if (!free(b)) continue;
+    const int sb = slot_of(b);
+    for (int q = 0; q < body_states; ++q) columns.push_back({b, q, sb, sb >= 0 && q >= 3 && q < 7});
+  }
   const auto chunk = static_cast<std::size_t>(jacobian_columns_per_solve);
   std::vector<Vector6d> g(nb * std::min(chunk, columns.size())), nu(nb), moved;
   Eigen::MatrixXd z;
@@ -128,9 +135,7 @@ void MultibodySystem::cluster_jacobian(int c, double t, const Eigen::VectorXd& y
     const std::size_t count = std::min(chunk, columns.size() - first);
     z.setZero(rc.row_count(), static_cast<Eigen::Index>(count));
     for (std::size_t c = 0; c < count; ++c) {
-      const auto [b, q] = columns[first + c];
-      const int sb = slot_of(b);
-      const bool turns = sb >= 0 && q >= 3 && q < 7;  // a quaternion number of a body of the cluster
+      const auto [b, q, sb, turns] = columns[first + c];
       Vector6d* gc = g.data() + c * nb;
       std::fill(gc, gc + nb, Vector6d::Zero());
       std::fill(nu.begin(), nu.end(), Vector6d::Zero());
@@ -179,9 +184,7 @@ void MultibodySystem::cluster_jacobian(int c, double t, const Eigen::VectorXd& y
     }
     rc.solve(z);
     for (std::size_t c = 0; c < count; ++c) {
-      const auto [b, q] = columns[first + c];
-      const int sb = slot_of(b);
-      const bool turns = sb >= 0 && q >= 3 && q < 7;
+      const auto [b, q, sb, turns] = columns[first + c];
       const Vector6d* gc = g.data() + c * nb;
       rc.motion(z.col(static_cast<Eigen::Index>(c)), moved);
       for (std::size_t s = 0; s < nb; ++s) {

@@ -134,9 +134,9 @@ void rk4_update_entries(Part& part, int s, double h, Eigen::Index at, Eigen::Ind
   auto seg = [&](Eigen::VectorXd& v) { return v.segment(at, n); };
   if (s < 3) {
     rk4::stage_input(seg(part.x[0]), seg(part.derivative(s)), h, s, seg(part.input(s + 1)));
-    if (part.rk4_folded && s > 0) rk4::accumulate(seg(part.k[0]), seg(part.k[1]));
+    if (part.rk4_folded && s > 0) rk4::accumulate(seg(part.derivative(0)), seg(part.derivative(s)));
   } else if (part.rk4_folded) {
-    rk4::finish(seg(part.x[0]), seg(part.k[0]), seg(part.derivative(3)), h);
+    rk4::finish(seg(part.x[0]), seg(part.derivative(0)), seg(part.derivative(3)), h);
   } else {
     rk4::combine(seg(part.x[0]), seg(part.k[0]), seg(part.k[1]), seg(part.k[2]), seg(part.k[3]), h);
   }
