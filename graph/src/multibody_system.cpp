@@ -9,6 +9,7 @@
 
 #include "mbsflow/error.hpp"
 #include "mbsflow/graph/simd.hpp"
+#include "body_csr.hpp"
 #include "force_laws.hpp"
 #include "lanes.hpp"
 #include "rotation.hpp"
@@ -19,21 +20,6 @@ namespace {
 
 Eigen::Vector3d vec(const Vec3& a) { return {a[0], a[1], a[2]}; }
 Eigen::Vector4d quat(const Quat& a) { return {a[0], a[1], a[2], a[3]}; }
-
-// CSR lists of items per body, kept in item order.
-template <class BodyOf>
-void build_csr(int bodies, int items, BodyOf body_of, std::vector<int>& start, std::vector<int>& list) {
-  start.assign(static_cast<std::size_t>(bodies) + 1, 0);
-  std::vector<std::pair<int, int>> pairs;  // (body, item code)
-  for (int k = 0; k < items; ++k) body_of(k, pairs);
-  std::stable_sort(pairs.begin(), pairs.end(), [](auto& x, auto& y) { return x.first < y.first; });
-  list.resize(pairs.size());
-  for (std::size_t p = 0; p < pairs.size(); ++p) {
-    ++start[static_cast<std::size_t>(pairs[p].first) + 1];
-    list[p] = pairs[p].second;
-  }
-  for (std::size_t b = 0; b < static_cast<std::size_t>(bodies); ++b) start[b + 1] += start[b];
-}
 
 // in_lane_groups with the kernel of the CPU's instruction set (simd.hpp): four lanes on
 // AVX, else Lanes::width (two, SSE2).
@@ -117,13 +103,15 @@ MultibodySystem::MultibodySystem(std::shared_ptr<const Model> shared, int active
     compiled_->joints.push_back(c);
   }
   const int nj = static_cast<int>(model.joints.size());
-  build_csr(n, nj, [&](int k, auto& out) {
-    const Joint& j = model.joints[static_cast<std::size_t>(k)];
-    if (j.body1 != ground) out.emplace_back(j.body1, 2 * k);
-    out.emplace_back(j.body2, 2 * k + 1);
+  build_body_csr(static_cast<std::size_t>(n), [&](auto emit) {
+    for (int k = 0; k < nj; ++k) {
+      const Joint& j = model.joints[static_cast<std::size_t>(k)];
+      if (j.body1 != ground) emit(j.body1, 2 * k);
+      emit(j.body2, 2 * k + 1);
+    }
   }, compiled_->incidence_start, compiled_->incidence);
-  build_csr(n, static_cast<int>(model.loads.size()), [&](int k, auto& out) {
-    out.emplace_back(model.loads[static_cast<std::size_t>(k)].body, k);
+  build_body_csr(static_cast<std::size_t>(n), [&](auto emit) {
+    for (std::size_t k = 0; k < model.loads.size(); ++k) emit(model.loads[k].body, static_cast<int>(k));
   }, compiled_->load_start, compiled_->load_index);
   compiled_->element_start.assign(static_cast<std::size_t>(n) + 1, 0);
   compiled_->driver_of_body.assign(static_cast<std::size_t>(n), -1);
@@ -315,8 +303,8 @@ void MultibodySystem::add_force_element(std::shared_ptr<const ForceElement> elem
     const std::vector<int> b = compiled_->elements[e]->bodies();
     for (std::size_t i = 0; i < b.size(); ++i) body_of_slot[compiled_->element_first[e] + i] = b[i];
   }
-  build_csr(n, static_cast<int>(body_of_slot.size()), [&](int slot, auto& out) {
-    out.emplace_back(body_of_slot[static_cast<std::size_t>(slot)], slot);
+  build_body_csr(static_cast<std::size_t>(n), [&](auto emit) {
+    for (std::size_t slot = 0; slot < body_of_slot.size(); ++slot) emit(body_of_slot[slot], static_cast<int>(slot));
   }, compiled_->element_start, compiled_->element_slot);
 }
 

@@ -1,5 +1,6 @@
 #pragma once
 // What a submodel needs from the rest once its own (and borrowed) bodies are chosen.
+#include "body_csr.hpp"
 #include "mbsflow/graph/decomposition.hpp"
 
 namespace mbsflow {
@@ -7,7 +8,7 @@ namespace mbsflow {
 // Per body, the joints and force elements that reach it (ground joints included).
 struct BodyLinks {
   explicit BodyLinks(const Model& m);
-  std::vector<std::vector<int>> joints, elements;
+  BodyCsr joints, elements;
 };
 
 // Fills each submodel's joints, ghosts, cut_joints and exchanges from its own and borrowed
