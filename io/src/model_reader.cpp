@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <limits>
 #include <sstream>
@@ -13,6 +14,7 @@
 #include "json_list_stream.hpp"
 #include "json_depth.hpp"
 #include "json_node.hpp"
+#include "json_tape_list.hpp"
 #include "mbsflow/error.hpp"
 #include "mbsflow/io/file_text.hpp"
 #include "mbsflow/methods/stepper.hpp"
@@ -153,14 +155,27 @@ class Reader {
       waiting_[list].push_back(std::move(j));
   }
   // The fast reader's items (read_model_fast), which comes to a list of joints, loads or
-  // drivers only once the bodies are read.
-  void item(std::size_t list, std::size_t index, const JsonTape& tape) {
-    const JsonNode n(tape, list_names[list], index, src_);
-    if (list == bodies_list)
-      body(n);
-    else
-      dependent(list, n);
+  // drivers only once the bodies are read. A body or joint is made from its tape first, on
+  // any thread and beside others (reading only the bodies), then taken into the model in
+  // the list's order, where its name is checked against those before it. (The reference
+  // reader checks the name before the rest; the fast reader gives up at any error, so
+  // which error comes first does not matter to it.)
+  Body fast_body(std::size_t index, const JsonTape& tape) const {
+    return make_body(JsonNode(tape, list_names[bodies_list], index, src_), [](const std::string&, const JsonNode&) {});
   }
+  Joint fast_joint(std::size_t index, const JsonTape& tape) const {
+    return make_joint(JsonNode(tape, list_names[joints_list], index, src_), index, [](const std::string&, const JsonNode&) {});
+  }
+  void take_body(std::size_t index, const JsonTape& tape, Body&& b) {
+    enter_body_name(b.name, JsonNode(tape, list_names[bodies_list], index, src_)["name"]);
+    m_.bodies.push_back(std::move(b));
+  }
+  void take_joint(std::size_t index, const JsonTape& tape, Joint&& j) {
+    enter_joint_name(j.name, JsonNode(tape, list_names[joints_list], index, src_));
+    m_.joints.push_back(std::move(j));
+  }
+  // A load or a driver, read at once.
+  void item(std::size_t list, std::size_t index, const JsonTape& tape) { dependent(list, JsonNode(tape, list_names[list], index, src_)); }
 
   void end(std::size_t list, std::size_t count) {
     if (list != bodies_list) return;
@@ -174,6 +189,12 @@ class Reader {
       for (std::size_t i = 0; i < waiting_[l].size(); ++i) dependent(l, JsonNode(waiting_[l][i], item_path(list_names[l], i), src_));
       waiting_[l].clear();
     }
+  }
+
+  // Room for at most n items of a list, made before it is read (read_model_fast).
+  void expect(std::size_t list, std::size_t n) {
+    if (list == bodies_list) m_.bodies.reserve(n);
+    if (list == joints_list) m_.joints.reserve(n);
   }
 
   // The document less the streamed lists.
@@ -203,24 +224,36 @@ class Reader {
   }
 
   void body(const JsonNode& n) {
+    m_.bodies.push_back(make_body(n, [&](const std::string& name, const JsonNode& at) { enter_body_name(name, at); }));
+  }
+
+  // The body n describes; enter_name(name, node) is called where the reference reader
+  // checks the name against those before it.
+  template <class EnterName>
+  Body make_body(const JsonNode& n, EnterName enter_name) const {
     n.allow_only({"name", "mass", "inertia", "position", "orientation", "velocity", "angular_velocity"});
     Body b;
     const JsonNode name = n["name"];
     b.name = name.string();
     if (b.name.empty()) name.fail("must not be empty");
     if (b.name == "ground") name.fail("'ground' is reserved for the fixed world frame");
-    if (const int first = body_index_.insert(b.name, static_cast<int>(m_.bodies.size()), NamesOf<Body>{m_.bodies}); first >= 0)
-      name.fail("duplicate body name '" + b.name + "' (first at " + item_path(list_names[bodies_list], static_cast<std::size_t>(first)) + ")");
+    enter_name(b.name, name);
     b.mass = n["mass"].positive();
     b.inertia = inertia(n["inertia"]);
     b.position = vec3(n, "position");
     if (auto q = n.find("orientation")) b.orientation = unit_quat(*q);
     b.velocity = vec3(n, "velocity");
     b.angular_velocity = vec3(n, "angular_velocity");
-    m_.bodies.push_back(std::move(b));
+    return b;
   }
 
-  int body_ref(const JsonNode& n, bool ground_ok) {
+  // Enters the name of the body about to be added; at: its "name" node, for the message.
+  void enter_body_name(const std::string& name, const JsonNode& at) {
+    if (const int first = body_index_.insert(name, static_cast<int>(m_.bodies.size()), NamesOf<Body>{m_.bodies}); first >= 0)
+      at.fail("duplicate body name '" + name + "' (first at " + item_path(list_names[bodies_list], static_cast<std::size_t>(first)) + ")");
+  }
+
+  int body_ref(const JsonNode& n, bool ground_ok) const {
     const std::string name = n.string();
     if (name == "ground") {
       if (!ground_ok) n.fail("must name a body, not ground");
@@ -232,6 +265,13 @@ class Reader {
   }
 
   void joint(const JsonNode& n) {
+    m_.joints.push_back(make_joint(n, m_.joints.size(), [&](const std::string& name, const JsonNode& at) { enter_joint_name(name, at); }));
+  }
+
+  // The joint n describes, the index-th of its list; enter_name as for make_body (at: the
+  // joint's node).
+  template <class EnterName>
+  Joint make_joint(const JsonNode& n, std::size_t index, EnterName enter_name) const {
     n.expect_object();
     const JsonNode type = n["type"];
     const std::string t = type.string();
@@ -248,10 +288,8 @@ class Reader {
       type.fail("must be one of bushing, spring, revolute, spherical, prismatic, cylindrical, universal, planar, fixed, "
                 "distance (got '" + t + "')");
     }
-    const std::size_t index = m_.joints.size();
     j.name = n.find("name") ? n["name"].string() : "j" + std::to_string(index);
-    if (const int first = joint_index_.insert(j.name, static_cast<int>(index), NamesOf<Joint>{m_.joints}); first >= 0)
-      (n.find("name") ? n["name"] : n).fail("duplicate joint name '" + j.name + "' (first at " + item_path("joints", static_cast<std::size_t>(first)) + ")");
+    enter_name(j.name, n);
     j.body1 = body_ref(n["body1"], true);
     j.body2 = body_ref(n["body2"], false);
     if (j.body1 == j.body2) n["body2"].fail("joins body '" + m_.bodies[static_cast<std::size_t>(j.body2)].name + "' to itself");
@@ -263,10 +301,16 @@ class Reader {
       bushing(n, j);
     else
       read_kinematic_joint(n, m_, j);
-    m_.joints.push_back(std::move(j));
+    return j;
   }
 
-  void spring(const JsonNode& n, Joint& j) {
+  // Enters the name of the joint about to be added; at: the joint's node.
+  void enter_joint_name(const std::string& name, const JsonNode& at) {
+    if (const int first = joint_index_.insert(name, static_cast<int>(m_.joints.size()), NamesOf<Joint>{m_.joints}); first >= 0)
+      (at.find("name") ? at["name"] : at).fail("duplicate joint name '" + name + "' (first at " + item_path("joints", static_cast<std::size_t>(first)) + ")");
+  }
+
+  void spring(const JsonNode& n, Joint& j) const {
     j.stiffness[0] = n["stiffness"].non_negative();
     j.damping[0] = n.find("damping") ? n["damping"].non_negative() : 0.0;
     if (auto l = n.find("rest_length")) {
@@ -285,7 +329,7 @@ class Reader {
     return Eigen::Vector3d(b.position[0], b.position[1], b.position[2]) + q.normalized() * Eigen::Vector3d(p[0], p[1], p[2]);
   }
 
-  void bushing(const JsonNode& n, Joint& j) {
+  void bushing(const JsonNode& n, Joint& j) const {
     const bool by_stiffness = n.has("stiffness"), by_frequency = n.has("frequency");
     if (by_stiffness && by_frequency) n["frequency"].fail_at_key("give either stiffness/damping or frequency/damping_ratio, not both");
     if (n.has("damping_ratio") && !by_frequency) n["damping_ratio"].fail_at_key("needs 'frequency'");
@@ -379,26 +423,6 @@ class Reader {
   NameIndex body_index_, joint_index_;
 };
 
-// The items of the list whose '[' is at text[pos], each parsed into the tape and handed to
-// item(index, tape); the position after the list's ']', or npos where an item is outside
-// the fast reader's subset.
-template <class Item>
-std::size_t read_tape_list(std::string_view text, std::size_t pos, JsonTape& tape, Item item) {
-  constexpr int item_depth = max_json_depth - 2;  // inside the document and the list
-  pos = skip_json_space(text, pos + 1);
-  if (pos < text.size() && text[pos] == ']') return pos + 1;
-  for (std::size_t index = 0;; ++index) {
-    pos = parse_json_tape(text, pos, item_depth, tape);
-    if (pos == std::string_view::npos) return pos;
-    item(index, tape);
-    pos = skip_json_space(text, pos);
-    if (pos >= text.size()) return std::string_view::npos;
-    if (text[pos] == ']') return pos + 1;
-    if (text[pos] != ',') return std::string_view::npos;
-    pos = skip_json_space(text, pos + 1);
-  }
-}
-
 // Where the JSON value at text[pos] ends, by its first character and, for strings and
 // containers, quotes and brackets; npos if the text ends first. Not a check: nlohmann
 // parses what this delimits.
@@ -426,6 +450,17 @@ std::size_t value_end(std::string_view text, std::size_t pos) {
   return depth == 0 && !in_string ? text.size() : std::string_view::npos;
 }
 
+// The record of an item that is read as it is taken (a load, a driver) or not at all.
+struct Skipped {};
+
+// How many times c occurs in text.
+std::size_t count_of(char c, std::string_view text) {
+  std::size_t n = 0;
+  for (const char *p = text.data(), *end = p + text.size(); (p = static_cast<const char*>(std::memchr(p, c, static_cast<std::size_t>(end - p)))); ++p)
+    ++n;
+  return n;
+}
+
 // The model read by the fast reader (json_tape.hpp): the lists' items straight from the
 // text, the rest of the document (a few small members) by nlohmann. nullopt where the text
 // is outside the fast reader's subset or the model has an error: read_model_text then
@@ -433,18 +468,41 @@ std::size_t value_end(std::string_view text, std::size_t pos) {
 std::optional<Model> read_model_fast(std::string_view text, const JsonSource& src) try {
   constexpr std::size_t npos = std::string_view::npos;
   Reader reader(src);
-  JsonTape tape;
   nlohmann::json rest = nlohmann::json::object();
   std::vector<std::string_view> keys;
   std::array<std::size_t, Reader::list_count> deferred;  // lists before the bodies: their '['
   deferred.fill(npos);
   bool bodies_read = false;
+  constexpr int item_depth = max_json_depth - 2;  // inside the document and the list
   auto read_list = [&](std::size_t list, std::size_t pos) {
+    // Each item of a list is an object, so the braces that follow bound their number: the
+    // bodies and joints get room for that many first. Growing by doubling instead would
+    // move and touch a million large records again and again; room never used is only
+    // address space.
+    if (list == Reader::bodies_list || list == Reader::joints_list) reader.expect(list, count_of('{', text.substr(pos)));
     std::size_t count = 0;
-    pos = read_tape_list(text, pos, tape, [&](std::size_t index, const JsonTape& item) {
-      reader.item(list, index, item);
-      count = index + 1;
-    });
+    auto counted = [&](std::size_t index) { count = index + 1; };
+    if (list == Reader::bodies_list)
+      pos = read_tape_list<Body>(
+          text, pos, item_depth, [&](std::size_t i, const JsonTape& t) { return reader.fast_body(i, t); },
+          [&](std::size_t i, const JsonTape& t, Body&& b) {
+            reader.take_body(i, t, std::move(b));
+            counted(i);
+          });
+    else if (list == Reader::joints_list)
+      pos = read_tape_list<Joint>(
+          text, pos, item_depth, [&](std::size_t i, const JsonTape& t) { return reader.fast_joint(i, t); },
+          [&](std::size_t i, const JsonTape& t, Joint&& j) {
+            reader.take_joint(i, t, std::move(j));
+            counted(i);
+          });
+    else
+      pos = read_tape_list<Skipped>(
+          text, pos, item_depth, [](std::size_t, const JsonTape&) { return Skipped{}; },
+          [&](std::size_t i, const JsonTape& t, Skipped&&) {
+            reader.item(list, i, t);
+            counted(i);
+          });
     if (pos != npos) reader.end(list, count);
     return pos;
   };
@@ -465,7 +523,8 @@ std::optional<Model> read_model_fast(std::string_view text, const JsonSource& sr
       rest[std::string(key)] = nlohmann::json::array();
       if (l != Reader::bodies_list && !bodies_read) {
         deferred[l] = pos;
-        pos = read_tape_list(text, pos, tape, [](std::size_t, const JsonTape&) {});
+        pos = read_tape_list<Skipped>(
+            text, pos, item_depth, [](std::size_t, const JsonTape&) { return Skipped{}; }, [](std::size_t, const JsonTape&, Skipped&&) {});
       } else {
         pos = read_list(l, pos);
       }

@@ -177,3 +177,53 @@ TEST_CASE("a tape holds a value's entries in document order with their extents",
   CHECK(parse_json_tape("[1.]", 0, 3, tape) == std::string_view::npos);
   CHECK(parse_json_tape("[NaN]", 0, 3, tape) == std::string_view::npos);
 }
+
+TEST_CASE("the fast reader reads lists of many batches in order and stops at an error in a late one", "[io]") {
+  // 30 x 30 bodies and 1740 joints: lists of several batches, parsed on one thread while
+  // another reads the items (json_tape_list.hpp).
+  GridParams gp;
+  gp.rows = 30;
+  gp.cols = 30;
+  const Model grid = make_grid(gp);
+  const std::string text = model_to_json(grid);
+  check_same_model(text, true);
+  SECTION("joints get room for as many items as the rest of the text can hold, not twice the bodies' count") {
+    // A chain with a third more joints than bodies: room for the bodies' count, then
+    // doubling, would leave room for 1.5 times them.
+    ChainParams cp;
+    cp.bodies = 900;
+    Model chain = make_chain(cp);
+    for (int i = 0; i + 2 < cp.bodies; i += 3) {
+      Joint j;
+      j.name = "spring" + std::to_string(i);
+      j.type = JointType::spring;
+      j.body1 = i;
+      j.body2 = i + 2;
+      j.stiffness[0] = 1.0;
+      chain.joints.push_back(j);
+    }
+    const Model m = *read_model_fast(model_to_json(chain), "m.json");
+    REQUIRE(m.joints.size() == chain.joints.size());
+    CHECK(m.joints.capacity() < m.joints.size() + m.joints.size() / 5);
+  }
+  SECTION("the joints listed before the bodies, read once the bodies are") {
+    const auto comma = text.find(",\n  \"joints\"");  // model_writer's layout
+    REQUIRE(comma != std::string::npos);
+    REQUIRE(text.find("\"bodies\"") < comma);
+    const auto after = text.find("\n  ]", comma) + 4;  // after the joints list's ']'
+    const std::string list = text.substr(comma + 4, after - comma - 4);
+    std::string moved = text;
+    moved.erase(comma, after - comma);
+    moved.insert(moved.find('{') + 1, "\n  " + list + ",");
+    check_same_model(moved, true);
+  }
+  SECTION("an error or text outside the subset in the last batch") {
+    const std::string last_body = grid.bodies.back().name, last_joint = grid.joints.back().name;
+    const std::string unknown_body = replaced(text, "\"body2\":\"" + last_body + "\"", "\"body2\":\"nobody\"");
+    CHECK_FALSE(read_model_fast(unknown_body, "m.json").has_value());
+    const std::string error = reference_error(unknown_body);
+    REQUIRE_THAT(error, Catch::Contains("unknown body 'nobody'"));
+    CHECK_THROWS_WITH(read_model_text(unknown_body, "m.json"), Catch::Contains(error));
+    check_same_model(replaced(text, "\"name\":\"" + last_joint + "\"", "\"name\":\"\\u00e4\""), false);
+  }
+}
