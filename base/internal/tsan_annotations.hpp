@@ -25,15 +25,11 @@ inline void happens_after(const void* token) {
 #endif
 }
 
-// The same on the way out of a scope, exceptions included: a task's release of what it
-// wrote, and the waiting thread's acquire of what the tasks wrote.
+// happens_before on the way out of a scope, exceptions included: a task's release of
+// what it wrote.
 struct ReleaseOnExit {
   const void* token;
   ~ReleaseOnExit() { happens_before(token); }
-};
-struct AcquireOnExit {
-  const void* token;
-  ~AcquireOnExit() { happens_after(token); }
 };
 
 }  // namespace mbsflow

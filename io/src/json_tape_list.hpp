@@ -43,6 +43,10 @@ struct ListParser {
   bool next(JsonTape& tape);
 };
 
+// ThreadSanitizer's token for a pipeline's start: at namespace scope, so that a stage can
+// take it before it reads its captures (which the starting thread wrote).
+inline const char pipeline_start = 0;
+
 }  // namespace tape_list
 
 // Parses the list whose '[' is at text[pos], each item nested at most item_depth deep;
@@ -62,8 +66,9 @@ std::size_t read_tape_list(std::string_view text, std::size_t pos, int item_dept
   std::vector<Batch> batches(tokens);
   std::size_t next_batch = 0;
   tape_list::ListParser parser{text, item_depth, pos};
-  const char start = 0, parse_turn = 0, take_turn = 0;
+  const char parse_turn = 0, take_turn = 0;
   auto parse = [&](tbb::flow_control& fc) -> Batch* {
+    happens_after(&tape_list::pipeline_start);
     happens_after(&parse_turn);
     const ReleaseOnExit turn{&parse_turn};
     if (parser.done) {
@@ -79,27 +84,36 @@ std::size_t read_tape_list(std::string_view text, std::size_t pos, int item_dept
     return &b;
   };
   auto make_all = [&](Batch* b) {
-    happens_after(&start);
+    happens_after(&tape_list::pipeline_start);
     happens_after(&b->parsed);
     const ReleaseOnExit made{&b->made};
     for (std::size_t i = 0; i < b->size; ++i) b->records[i] = make(b->first + i, b->tapes[i]);
     return b;
   };
   auto take_all = [&](Batch* b) {
+    happens_after(&tape_list::pipeline_start);
     happens_after(&take_turn);
     happens_after(&b->made);
     const ReleaseOnExit turn{&take_turn}, taken{&b->taken};
     for (std::size_t i = 0; i < b->size; ++i) take(b->first + i, b->tapes[i], std::move(b->records[i]));
   };
-  happens_before(&start);
-  happens_before(&parse_turn);
-  happens_before(&take_turn);
+  const auto filters = tbb::make_filter<void, Batch*>(tbb::filter_mode::serial_in_order, parse) &
+                       tbb::make_filter<Batch*, Batch*>(tbb::filter_mode::parallel, make_all) &
+                       tbb::make_filter<Batch*, void>(tbb::filter_mode::serial_in_order, take_all);
+  happens_before(&tape_list::pipeline_start);
   {
-    // The last runs of the serial stages are seen here, also where make or take threw.
-    const AcquireOnExit parsed{&parse_turn}, taken{&take_turn};
-    tbb::parallel_pipeline(tokens, tbb::make_filter<void, Batch*>(tbb::filter_mode::serial_in_order, parse) &
-                                       tbb::make_filter<Batch*, Batch*>(tbb::filter_mode::parallel, make_all) &
-                                       tbb::make_filter<Batch*, void>(tbb::filter_mode::serial_in_order, take_all));
+    // All the stages' writes are seen here, also where make or take threw (then batches
+    // that make wrote may never have been taken).
+    struct Joined {
+      const char *parse, *take;
+      const std::vector<Batch>& batches;
+      ~Joined() {
+        happens_after(parse);
+        happens_after(take);
+        for (const Batch& b : batches) happens_after(&b.made);
+      }
+    } joined{&parse_turn, &take_turn, batches};
+    tbb::parallel_pipeline(tokens, filters);
   }
   return parser.pos;
 }
