@@ -110,27 +110,34 @@ RunSummary run_partitioned(std::shared_ptr<const Model> shared, const Decomposit
   {
     // ThreadSanitizer does not see oneTBB's orderings (tsan_annotations.hpp): the tasks
     // state that they see what this thread wrote before (a token at namespace scope, taken
-    // before any capture is read), and this thread that it sees what they built. The group
-    // lives on the heap: its completion count, which the tasks update after their last
-    // statement, would otherwise share stack addresses with what this thread writes next.
+    // before any capture is read), and this thread that it sees what they built, also where
+    // one threw. The tasks are made (their captures copied into them) before the token is
+    // released, and run after: a task made by run() could start before this thread could
+    // release anything after its captures. The group lives on the heap: its completion
+    // count, which the tasks update after their last statement, would otherwise share
+    // stack addresses with what this thread writes next.
     auto group = std::make_unique<tbb::task_group>();  // made before the token: the tasks update it
-    happens_before(&build_start);
+    struct Built {  // this thread's side, also where a task threw
+      ~Built() { happens_after(&build_done); }
+    } built_seen;
     arena.execute([&] {
+      std::vector<tbb::task_handle> tasks;
       for (std::size_t i = 0; i < built.size(); ++i)
-        group->run([&, i] {
+        tasks.push_back(group->defer([&, i] {
           happens_after(&build_start);
+          const ReleaseOnExit done{&build_done};
           built[i].emplace(model, d.submodels[i], stages, true);
-          happens_before(&build_done);
-        });
+        }));
       if (need_whole)
-        group->run([&] {
+        tasks.push_back(group->defer([&] {
           happens_after(&build_start);
+          const ReleaseOnExit done{&build_done};
           built_whole.emplace(std::move(shared), static_cast<int>(model.bodies.size()));
-          happens_before(&build_done);
-        });
+        }));
+      happens_before(&build_start);
+      for (tbb::task_handle& t : tasks) group->run(std::move(t));
       group->wait();
     });
-    happens_after(&build_done);
   }
   std::vector<Part> parts;
   parts.reserve(built.size());
