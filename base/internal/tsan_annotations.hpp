@@ -25,11 +25,15 @@ inline void happens_after(const void* token) {
 #endif
 }
 
-// happens_before on the way out of a scope, exceptions included: a task's release of
-// what it wrote.
+// The same on the way out of a scope, exceptions included: a task's release of what it
+// wrote, and the waiting thread's acquire of what the tasks wrote.
 struct ReleaseOnExit {
   const void* token;
   ~ReleaseOnExit() { happens_before(token); }
+};
+struct AcquireOnExit {
+  const void* token;
+  ~AcquireOnExit() { happens_after(token); }
 };
 
 }  // namespace mbsflow

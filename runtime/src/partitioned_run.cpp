@@ -117,9 +117,7 @@ RunSummary run_partitioned(std::shared_ptr<const Model> shared, const Decomposit
     // count, which the tasks update after their last statement, would otherwise share
     // stack addresses with what this thread writes next.
     auto group = std::make_unique<tbb::task_group>();  // made before the token: the tasks update it
-    struct Built {  // this thread's side, also where a task threw
-      ~Built() { happens_after(&build_done); }
-    } built_seen;
+    const AcquireOnExit built_seen{&build_done};  // also where a task threw
     arena.execute([&] {
       std::vector<tbb::task_handle> tasks;
       for (std::size_t i = 0; i < built.size(); ++i)
