@@ -5,6 +5,8 @@
 
 #include <oneapi/tbb/task_arena.h>
 
+#include <Eigen/LU>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -89,6 +91,7 @@ class TirkIntegrator::Driver {
   Driver(const OdeProblem& p, const TirkSettings& s, std::function<void(double, Eigen::VectorXd&)> project = {})
       : p_(p), s_(s), project_(std::move(project)),
         tableau_(rk_tableau(s.tableau)),
+        a_transposed_lu_(tableau_.implicit_block().transpose()),
         split_(ldu_splitting(tableau_.implicit_block())),
         embedded_(embedded_for(tableau_, split_, s.iteration)),
         t_matrix_(s.iteration == TirkIteration::newton ? tableau_.implicit_block() : splitting_matrix(split_, s.iteration)),
@@ -161,7 +164,8 @@ class TirkIntegrator::Driver {
   bool factorize(const Eigen::VectorXd& x, const Eigen::VectorXd& fx, double tau);
   bool iterate_once();
   bool iterate(int iterations);
-  Eigen::VectorXd step_end(const Eigen::VectorXd& x, double tau) const;
+  Eigen::VectorXd stage_sum(const Eigen::VectorXd& w, const Eigen::VectorXd& x, const Eigen::VectorXd& fx, double tau) const;
+  Eigen::VectorXd step_end(const Eigen::VectorXd& x, const Eigen::VectorXd& fx, double tau) const;
   double estimate(double t, const Eigen::VectorXd& x, const Eigen::VectorXd& x_new, const Eigen::VectorXd& fx, double tau,
                   bool first_or_rejected);
   [[noreturn]] void fail(const std::string& why, double tau, const char* hint = "") const;
@@ -170,6 +174,7 @@ class TirkIntegrator::Driver {
   const TirkSettings& s_;
   std::function<void(double, Eigen::VectorXd&)> project_;
   RkTableau tableau_;
+  Eigen::PartialPivLU<Eigen::MatrixXd> a_transposed_lu_;  // of A^T over the implicit stages (stage_sum)
   TriangularSplitting split_;
   EmbeddedFormula embedded_;
   Eigen::MatrixXd t_matrix_;
@@ -365,23 +370,47 @@ bool TirkIntegrator::Driver::iterate(int iterations) {
   }
 }
 
+// tau sum_j w_j K_j over the tableau's stages. The full Newton iteration has not evaluated
+// its last iterate (as Radau5): its K_j come from the stage values, through
+// Y_i = x + tau a_i0 fx + tau sum_j a_ij K_j over the implicit stages,
+// tau sum_j w_j K_j = tau w_0 fx + sum_i d_i (Y_i - x - tau a_i0 fx) with A^T d = w.
+Eigen::VectorXd TirkIntegrator::Driver::stage_sum(const Eigen::VectorXd& w, const Eigen::VectorXd& x,
+                                                  const Eigen::VectorXd& fx, double tau) const {
+  const int first = tableau_.first_implicit(), si = stages_.implicit();
+  Eigen::VectorXd out = Eigen::VectorXd::Zero(p_.size);
+  if (!full_newton()) {
+    for (int j = 0; j < tableau_.stages(); ++j)
+      if (w(j) != 0) out += (tau * w(j)) * stages_.stage_f(j);
+    return out;
+  }
+  const Eigen::VectorXd d = a_transposed_lu_.solve(w.tail(si));
+  double explicit_weight = 0;
+  for (int j = 0; j < first; ++j) explicit_weight += w(j);
+  for (int i = 0; i < si; ++i) {
+    if (d(i) == 0) continue;
+    double a_explicit = 0;
+    for (int j = 0; j < first; ++j) a_explicit += tableau_.a(first + i, j);
+    out += d(i) * (stages_.y()[static_cast<std::size_t>(i)] - x);
+    if (a_explicit != 0) out -= (d(i) * tau * a_explicit) * fx;
+  }
+  if (explicit_weight != 0) out += (tau * explicit_weight) * fx;
+  return out;
+}
+
 // x_{n+1}: the last stage for a stiffly accurate method (Y_s, whose f is known), else
 // x_n + tau sum b_i F_i.
-Eigen::VectorXd TirkIntegrator::Driver::step_end(const Eigen::VectorXd& x, double tau) const {
+Eigen::VectorXd TirkIntegrator::Driver::step_end(const Eigen::VectorXd& x, const Eigen::VectorXd& fx, double tau) const {
   if (stiffly_accurate_) return stages_.y().back();
-  Eigen::VectorXd out = x;
-  for (int j = 0; j < tableau_.stages(); ++j)
-    if (tableau_.b(j) != 0) out += (tau * tableau_.b(j)) * stages_.stage_f(j);
-  return out;
+  Eigen::VectorXd b(tableau_.stages());
+  for (int j = 0; j < tableau_.stages(); ++j) b(j) = tableau_.b(j);
+  return x + stage_sum(b, x, fx, tau);
 }
 
 double TirkIntegrator::Driver::estimate(double t, const Eigen::VectorXd& x, const Eigen::VectorXd& x_new, const Eigen::VectorXd& fx,
                                         double tau, bool first_or_rejected) {
-  Eigen::VectorXd combination = (tau * embedded_.gamma) * fx;
-  for (int j = 0; j < tableau_.stages(); ++j) {
-    const double w = embedded_.bhat(j) - tableau_.b(j);
-    if (w != 0) combination += (tau * w) * stages_.stage_f(j);
-  }
+  Eigen::VectorXd difference(tableau_.stages());
+  for (int j = 0; j < tableau_.stages(); ++j) difference(j) = embedded_.bhat(j) - tableau_.b(j);
+  Eigen::VectorXd combination = (tau * embedded_.gamma) * fx + stage_sum(difference, x, fx, tau);
   Eigen::VectorXd e = combination;
   if (newton()) stages_.solve_with(embedded_.gamma, e);  // the stiff filter
   const Eigen::ArrayXd w = tolerance_weights(s_, x.array().abs().max(x_new.array().abs()));
@@ -538,7 +567,7 @@ bool TirkIntegrator::Driver::advance() {
       after_rejection = true;
       continue;
     }
-    Eigen::VectorXd x_new = step_end(x, h);
+    Eigen::VectorXd x_new = step_end(x, fx, h);
     double err = 0, fac = s_.facmax;
     if (!fixed) {
       err = estimate(t, x, x_new, fx, h, st.accepted == 0 || after_rejection);
@@ -575,7 +604,7 @@ bool TirkIntegrator::Driver::advance() {
     t = lands ? t_end : t + h;
     x = std::move(x_new);
     if (project_) project_(t, x);
-    if (stiffly_accurate_ && !project_) {
+    if (stiffly_accurate_ && !project_ && !full_newton()) {  // else f of the last iterate is not known
       fx = stages_.f().back();
     } else {
       p_.evaluate(t, x, fx);

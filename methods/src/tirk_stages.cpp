@@ -134,6 +134,7 @@ void TirkStages::start_predictor() {
 void TirkStages::finished_predictor() { happens_after(&token_); }
 
 long TirkStages::predictor_evaluations() const {
+  if (full_newton()) return 0;
   long n = 0;
   for (int i = 0; i < si_; ++i) n += tableau_.c(first_ + i) != 0;
   return n;
@@ -202,12 +203,16 @@ void TirkStages::update(Eigen::Index r) {
   }
 }
 
+// F_i = f(Y_i): of the new iterate (the splittings, after their update), or of the
+// current one (the full Newton iteration, before its residuals).
 void TirkStages::evaluate(int i, Eigen::Index first_slice, Eigen::Index count) {
   const auto at = static_cast<std::size_t>(i);
+  const Eigen::VectorXd& y = full_newton() ? y_old_[at] : y_new_[at];
+  Eigen::VectorXd& f = full_newton() ? f_old_[at] : f_new_[at];
   const Eigen::Index begin = slice_begin(first_slice), end = slice_begin(first_slice + count - 1) + slice_length(first_slice + count - 1);
-  problem_.rhs(t_n_ + tableau_.c(first_ + i) * tau_, y_new_[at], f_new_[at], {begin, end});
+  problem_.rhs(t_n_ + tableau_.c(first_ + i) * tau_, y, f, {begin, end});
   for (Eigen::Index r = first_slice; r < first_slice + count; ++r)
-    f_bad_[static_cast<std::size_t>(i * slices() + r)] = !f_new_[at].segment(slice_begin(r), slice_length(r)).allFinite();
+    f_bad_[static_cast<std::size_t>(i * slices() + r)] = !f.segment(slice_begin(r), slice_length(r)).allFinite();
 }
 
 void TirkStages::measure(int i, Eigen::Index r, const Eigen::VectorXd& y_new, const Eigen::VectorXd& y_old) {
@@ -226,23 +231,27 @@ void TirkStages::build(flow::graph& g) {
   factor_start_ = std::make_unique<Start>(g);
   predict_start_ = std::make_unique<Start>(g);
   auto node = [&](auto body) -> Node& { return annotated_node(g, nodes_, &token_, body); };
-  for (int i = 0; i < si_; ++i) {
+  for (int i = 0; i < si_ && !full_newton(); ++i) {
     if (tableau_.c(first_ + i) == 0) continue;  // f(t_n, x) is known
     for (Eigen::Index e = 0; e < f_nodes; ++e)
       flow::make_edge(*predict_start_, node([this, i, e] { predict(i, e); }));
   }
   for (int k = 0; k < systems(); ++k) flow::make_edge(*factor_start_, node([this, k] { factorize(k); }));
   if (full_newton()) {
-    // residual(slice) -> solve(system) -> update(slice) -> f(stage, slice)
+    // f(stage, slice) -> residual(slice) -> solve(system) -> update(slice)
+    Node& evaluated = node([] {});
+    for (int i = 0; i < si_; ++i)
+      for (Eigen::Index e = 0; e < f_nodes; ++e) {
+        Node& ev = node([this, i, e, per_node] { evaluate(i, e * per_node, per_node); });
+        flow::make_edge(*start_, ev);
+        flow::make_edge(ev, evaluated);
+      }
     Node& residuals_done = node([] {});
-    fan(node, *start_, residuals_done, n_slices, [this](Eigen::Index r) { residual(r); });
+    fan(node, evaluated, residuals_done, n_slices, [this](Eigen::Index r) { residual(r); });
     Node& solved = node([] {});
     fan(node, residuals_done, solved, split_->systems(), [this](Eigen::Index e) { split_->solve(static_cast<int>(e)); });
     Node& written = node([] {});
     fan(node, solved, written, n_slices, [this](Eigen::Index r) { update(r); });
-    for (int i = 0; i < si_; ++i)
-      for (Eigen::Index e = 0; e < f_nodes; ++e)
-        flow::make_edge(written, node([this, i, e, per_node] { evaluate(i, e * per_node, per_node); }));
     captures_published();
     return;
   }
@@ -304,7 +313,7 @@ void TirkStages::predict(int i, Eigen::Index e) {
 }
 
 void TirkStages::predict_here() {
-  for (int i = 0; i < si_; ++i) {
+  for (int i = 0; i < si_ && !full_newton(); ++i) {
     if (tableau_.c(first_ + i) == 0) continue;
     for (Eigen::Index e = 0; e < f_nodes(); ++e) predict(i, e);
   }
@@ -313,11 +322,11 @@ void TirkStages::predict_here() {
 void TirkStages::iterate_here() {
   const Eigen::Index n_slices = slices(), per_node = slices_per_f();
   if (full_newton()) {
+    for (int i = 0; i < si_; ++i)
+      for (Eigen::Index e = 0; e < f_nodes(); ++e) evaluate(i, e * per_node, per_node);
     for (Eigen::Index r = 0; r < n_slices; ++r) residual(r);
     for (int e = 0; e < split_->systems(); ++e) split_->solve(e);
     for (Eigen::Index r = 0; r < n_slices; ++r) update(r);
-    for (int i = 0; i < si_; ++i)
-      for (Eigen::Index e = 0; e < f_nodes(); ++e) evaluate(i, e * per_node, per_node);
     return;
   }
   // Stage by stage: a stage waits for the earlier ones' last evaluations (triangular), or
@@ -341,7 +350,7 @@ void TirkStages::start() {
 void TirkStages::finished() {
   happens_after(&token_);
   std::swap(y_old_, y_new_);
-  std::swap(f_old_, f_new_);
+  if (!full_newton()) std::swap(f_old_, f_new_);  // the full Newton iteration's f is of the iterate before
 }
 
 double TirkStages::correction() const { return *std::max_element(norm_.begin(), norm_.end()); }
@@ -350,8 +359,10 @@ Eigen::Index TirkStages::worst_component() const {
   if (!scale_) return -1;
   // Where non-finite numbers came from: a derivative that is not finite at a finite
   // iterate (the linear solve then spreads them to every coupled unknown).
+  // (The full Newton iteration's f is of the iterate before the last, now in y_new_.)
   for (const auto* pair : {&y_new_, &y_old_}) {
-    const auto& f = pair == &y_new_ ? f_new_ : f_old_;
+    if (full_newton() && pair == &y_old_) break;
+    const auto& f = pair == &y_new_ && !full_newton() ? f_new_ : f_old_;
     for (int i = 0; i < si_; ++i) {
       const auto at = static_cast<std::size_t>(i);
       for (Eigen::Index k = 0; k < n_; ++k)

@@ -7,11 +7,14 @@
 //     Newton:     solve(i): (I - tau t_ii J) dY = G_i - Y_i^old, Y_i = Y_i^old + dY
 //   evaluate(i, r): F_i^new = f(t_n + c_i tau, Y_i)
 //
-// The full simplified Newton iteration ("newton", as Radau5) has no splitting: the
-// residuals R_i = Y_i - x_n - tau sum_j a_ij F_j of all stages go through the eigenvector
-// transform of A (eigen_split.hpp), one node per slice; every real eigenvalue and complex
-// pair of A solves its system in a node of its own; the corrections come back per slice,
-// and all stages evaluate f at once.
+// The full simplified Newton iteration ("newton", as Radau5) has no splitting: all stages
+// evaluate f at the current iterate at once, then the residuals
+// R_i = Y_i - x_n - tau sum_j a_ij F_j of all stages go through the eigenvector transform
+// of A (eigen_split.hpp), one node per slice; every real eigenvalue and complex pair of A
+// solves its system in a node of its own; the corrections come back per slice. So it has
+// no predictor evaluations, and the converged iterate is not evaluated (as in Radau5): the
+// driver takes the K_j it needs from the stage values (A^-1 Z / tau), which saves an
+// iteration's evaluations per step.
 //
 // With the triangular T, assemble(i, r) waits for evaluate(j, r) of the stages j < i with
 // t_ij != 0 (a pipelined DAG: slices of stage i start as soon as the same slices of the
@@ -60,7 +63,8 @@ class TirkStages {
   // A step from (t, x, fx = f(t, x)): the predictor Y_i = guess[i] (default: the trivial
   // Y_i = x), F_i = fx; then start_predictor() (and wait_for_all, finished_predictor())
   // evaluates F_i = f(t_n + c_i tau, Y_i) for the stages with c_i != 0, so that the first
-  // correction measures the iteration.
+  // correction measures the iteration (the full Newton iteration: nothing, each of its
+  // iterations evaluates its iterate first).
   void setup(double t, double tau, const Eigen::VectorXd& x, const Eigen::VectorXd& fx, const Eigen::VectorXd& scale,
              const std::vector<Eigen::VectorXd>* guess = nullptr);
   void start_predictor();
@@ -91,9 +95,11 @@ class TirkStages {
   const RkTableau& tableau() const { return tableau_; }
   int implicit() const { return si_; }
   // The current stage values and their f, implicit stages only (index 0 = first implicit).
+  // The full Newton iteration's f is of the iterate before the current one.
   const std::vector<Eigen::VectorXd>& y() const { return y_old_; }
   const std::vector<Eigen::VectorXd>& f() const { return f_old_; }
-  // K_j of tableau stage j (0-based over all stages): f(t_n, x_n) for an explicit first stage.
+  // K_j of tableau stage j (0-based over all stages): f(t_n, x_n) for an explicit first
+  // stage (as f(), of the iterate before for the full Newton iteration).
   const Eigen::VectorXd& stage_f(int j) const { return j < first_ ? *fx_ : f_old_[static_cast<std::size_t>(j - first_)]; }
 
  private:

