@@ -173,11 +173,11 @@ void ShiftedSolver<Scalar>::factorize(const Eigen::SparseMatrix<double>& j, Scal
   }
   switch (kind_) {
     case LinearSolverKind::dense: {
-      Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic> m =
-          Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>::Identity(n, n);
-      for (Eigen::Index c = 0; c < j.outerSize(); ++c)
-        for (Eigen::SparseMatrix<double>::InnerIterator it(j, c); it; ++it) m(it.row(), it.col()) -= gamma * it.value();
-      dense_.compute(m);
+      // Through matrix_, so that eliminable blocks go first here too: a multibody model's
+      // positions and quaternions leave its velocities (A05: 24 unknowns of 52, a tenth of
+      // the LU's work).
+      fill_sparse(j, gamma);
+      dense_.compute(Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>(matrix_));
       if (!(std::abs(dense_.determinant()) > 0)) throw RunError("Newton matrix is singular");
       break;
     }
@@ -279,23 +279,20 @@ long ShiftedSolver<Scalar>::refactorizations() const {
 
 template <class Scalar>
 void ShiftedSolver<Scalar>::solve(Vector& b) const {
-  switch (kind_) {
-    case LinearSolverKind::dense: b = dense_.solve(b); break;
-    case LinearSolverKind::banded: band_.solve(b); break;
-    default: {  // the sparse kinds: matrix_ is I - gamma J or its Schur complement
-      auto solve_matrix = [this](Vector& x) {
-        if (kind_ == LinearSolverKind::klu)
-          klu_->solve(x);
-        else
-          x = sparse_->solve(x);
-      };
-      if (schur_pattern_)
-        schur_->solve(b, solve_matrix);
-      else
-        solve_matrix(b);
-      break;
-    }
-  }
+  if (kind_ == LinearSolverKind::banded) return band_.solve(b);
+  // The other kinds factorised matrix_: I - gamma J or its Schur complement.
+  auto solve_matrix = [this](Vector& x) {
+    if (kind_ == LinearSolverKind::dense)
+      x = dense_.solve(x);
+    else if (kind_ == LinearSolverKind::klu)
+      klu_->solve(x);
+    else
+      x = sparse_->solve(x);
+  };
+  if (schur_pattern_)
+    schur_->solve(b, solve_matrix);
+  else
+    solve_matrix(b);
 }
 
 std::shared_ptr<Elimination> make_elimination(const std::vector<RowRange>& blocks) {

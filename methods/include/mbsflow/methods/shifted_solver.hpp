@@ -47,11 +47,11 @@ template <class Scalar>
 class ShiftedSolver {
  public:
   using Vector = Eigen::Matrix<Scalar, Eigen::Dynamic, 1>;
-  // Blocks of unknowns (OdeProblem::eliminable) that the sparse kinds eliminate before the
-  // LU where J's pattern allows (else they factorise the whole matrix). Set before factorize;
-  // solvers of one integrator share one (make_elimination).
+  // Blocks of unknowns (OdeProblem::eliminable) that the dense and sparse kinds eliminate
+  // before the LU where J's pattern allows (else they factorise the whole matrix). Set
+  // before factorize; solvers of one integrator share one (make_elimination).
   void eliminate_first(std::shared_ptr<Elimination> e) { elimination_ = std::move(e); }
-  // Whether the last sparse factorisation was of the Schur complement.
+  // Whether the last factorisation was of the Schur complement.
   bool reduced() const { return schur_pattern_ != nullptr; }
   // Throws RunError when the matrix is singular.
   void factorize(const Eigen::SparseMatrix<double>& j, Scalar gamma, LinearSolverKind kind);
@@ -70,7 +70,7 @@ class ShiftedSolver {
   LinearSolverKind kind_ = LinearSolverKind::dense;
   Eigen::PartialPivLU<Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>> dense_;
   BandedLU<Scalar> band_;
-  Eigen::SparseMatrix<Scalar> matrix_;  // I - gamma J, sparse kinds
+  Eigen::SparseMatrix<Scalar> matrix_;  // I - gamma J or its Schur complement, all kinds but banded
   std::vector<int> j_outer_, j_inner_;   // the pattern of the last J (note_pattern)
   std::optional<LinearSolverKind> chosen_;  // the automatic kind for that pattern, once asked for
   bool laid_out_ = false;                             // matrix_ is laid out for that pattern
