@@ -14,23 +14,59 @@ namespace {
 
 constexpr const char* views_group = "/xdmf";
 
-// A series that views show rows of: its name and space, read once.
+// A series that views show rows of: its name and space, read once; and, where the whole
+// series is at most copy_limit_bytes, its values (views_are_copies).
 struct Source {
   const char* path;
   h5::Handle space;
   std::vector<hsize_t> extent;
+  std::vector<double> values;  // row-major T x item, when its views are copies
   Source(hid_t file, const char* p) : path(p) {
     const h5::Handle set(H5Dopen2(file, p, H5P_DEFAULT), H5Dclose, std::string("open ") + p);
     space = h5::Handle(H5Dget_space(set.get()), H5Sclose, std::string("get the space of ") + p);
     extent.resize(static_cast<std::size_t>(H5Sget_simple_extent_ndims(space.get())));
     H5Sget_simple_extent_dims(space.get(), extent.data(), nullptr);
+    hsize_t count = 1;
+    for (hsize_t e : extent) count *= e;
+    if (count == 0 || count * sizeof(double) > xdmf_copy_limit_bytes) return;
+    values.resize(count);
+    h5::check(H5Dread(set.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()), std::string("read ") + p);
   }
 };
 
-// A virtual dataset `name` in `group`, of shape `dims`, showing row `row` of `source`
-// (T x item), columns [column, column + columns) of its last dimension.
+// A copy of row `row` of `source` (T x item), columns [column, column + columns) of its
+// last dimension, as a dataset `name` in `group` of shape `dims`: compact (in its object
+// header) where it fits.
+void make_copy(hid_t group, const char* name, const std::vector<hsize_t>& dims, const h5::Handle& view_space,
+               const Source& source, hsize_t row, hsize_t column, hsize_t columns) {
+  const hsize_t last = source.extent.back();
+  hsize_t items = 1;  // per row, before the last dimension
+  for (std::size_t d = 1; d + 1 < source.extent.size(); ++d) items *= source.extent[d];
+  std::vector<double> out;
+  out.reserve(items * columns);
+  for (hsize_t k = 0; k < items; ++k) {
+    const double* at = source.values.data() + (row * items + k) * last + column;
+    out.insert(out.end(), at, at + columns);
+  }
+  hsize_t size = 1;
+  for (hsize_t d : dims) size *= d;
+  if (size != out.size()) throw Error(std::string("the view ") + name + " does not fit its row");
+  const h5::Handle dcpl(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, "create a dataset property list");
+  if (out.size() * sizeof(double) <= 32768) h5::check(H5Pset_layout(dcpl.get(), H5D_COMPACT), "make a view compact");
+  const h5::Handle set(H5Dcreate2(group, name, H5T_IEEE_F64LE, view_space.get(), H5P_DEFAULT, dcpl.get(), H5P_DEFAULT),
+                       H5Dclose, std::string("create the view ") + name);
+  h5::check(H5Dwrite(set.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, out.data()),
+            std::string("write the view ") + name);
+}
+
+// A view `name` in `group`, of shape `dims`, of row `row` of `source` (T x item), columns
+// [column, column + columns) of its last dimension: a copy where the source was read, else
+// a virtual dataset.
 void make_view(hid_t group, const char* name, const std::vector<hsize_t>& dims, const Source& source, hsize_t row,
                hsize_t column, hsize_t columns) {
+  const h5::Handle view_space(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr), H5Sclose,
+                              "create a view's space");
+  if (!source.values.empty()) return make_copy(group, name, dims, view_space, source, row, column, columns);
   std::vector<hsize_t> start(source.extent.size(), 0), count = source.extent;
   start[0] = row;
   count[0] = 1;
@@ -38,8 +74,6 @@ void make_view(hid_t group, const char* name, const std::vector<hsize_t>& dims, 
   count.back() = columns;
   h5::check(H5Sselect_hyperslab(source.space.get(), H5S_SELECT_SET, start.data(), nullptr, count.data(), nullptr),
             std::string("select a row of ") + source.path);
-  const h5::Handle view_space(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr), H5Sclose,
-                              "create a view's space");
   const h5::Handle dcpl(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, "create a dataset property list");
   h5::check(H5Pset_virtual(dcpl.get(), view_space.get(), ".", source.path, source.space.get()),
             std::string("map the view ") + name);

@@ -3,7 +3,10 @@
 names exists with as many values as the XML says, every time step's view holds the
 values of its row of the series it shows, and the time steps match /time.
 
-usage: check_xdmf.py FILE.xdmf      (exit 0 when consistent)
+usage: check_xdmf.py FILE.xdmf [--position-views compact|virtual]   (exit 0 when consistent)
+
+--position-views also checks how the views of /bodies/position are stored: copies of their
+rows in the dataset's header (a small series) or HDF5 virtual datasets (a large one).
 """
 import math
 import os
@@ -33,8 +36,13 @@ def source_row(h5, name, t):
     return h5["bodies/" + name][t]
 
 
+LAYOUTS = {h5py.h5d.COMPACT: "compact", h5py.h5d.CONTIGUOUS: "contiguous", h5py.h5d.CHUNKED: "chunked",
+           h5py.h5d.VIRTUAL: "virtual"}
+
+
 def main():
     xdmf = sys.argv[1]
+    want_layout = sys.argv[3] if len(sys.argv) > 3 and sys.argv[2] == "--position-views" else None
     root = ET.parse(xdmf).getroot()
     folder = os.path.dirname(os.path.abspath(xdmf))
     steps = root.findall("./Domain/Grid/Grid")
@@ -59,6 +67,9 @@ def main():
                 expected = source_row(h5, parts[2], int(parts[1]))
                 if not np.array_equal(h5[path][()], expected):
                     fail(f"{path} differs from its row of the series")
+                layout = LAYOUTS.get(h5[path].id.get_create_plist().get_layout(), "?")
+                if want_layout and parts[2] == "position" and layout != want_layout:
+                    fail(f"{path} is {layout}, not {want_layout}")
             checked += 1
     for h5 in files.values():
         if [h5["time"][r] for r in rows] != times:
