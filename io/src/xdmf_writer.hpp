@@ -21,7 +21,7 @@
 namespace mbsflow {
 
 // The sidecar shows at most this many snapshots, evenly spread with the first and last:
-// each view costs about 70 us to make (HDF5 1.10), so a run of 12 000 snapshots would
+// each virtual view costs about 70 us to make (HDF5 1.10), so a run of 12 000 snapshots would
 // spend 4 s on them. The results file keeps every snapshot.
 inline constexpr std::size_t xdmf_max_steps = 1000;
 
