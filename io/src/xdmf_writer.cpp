@@ -13,9 +13,10 @@ namespace mbsflow {
 namespace {
 
 constexpr const char* views_group = "/xdmf";
+constexpr std::size_t compact_limit_bytes = 32768;  // a compact dataset's data: within HDF5's 64 KiB header
 
 // A series that views show rows of: its name and space, read once; and, where the whole
-// series is at most copy_limit_bytes, its values (views_are_copies).
+// series is at most xdmf_copy_limit_bytes, its values (its views are then copies).
 struct Source {
   const char* path;
   h5::Handle space;
@@ -52,7 +53,7 @@ void make_copy(hid_t group, const char* name, const std::vector<hsize_t>& dims, 
   for (hsize_t d : dims) size *= d;
   if (size != out.size()) throw Error(std::string("the view ") + name + " does not fit its row");
   const h5::Handle dcpl(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, "create a dataset property list");
-  if (out.size() * sizeof(double) <= 32768) h5::check(H5Pset_layout(dcpl.get(), H5D_COMPACT), "make a view compact");
+  if (out.size() * sizeof(double) <= compact_limit_bytes) h5::check(H5Pset_layout(dcpl.get(), H5D_COMPACT), "make a view compact");
   const h5::Handle set(H5Dcreate2(group, name, H5T_IEEE_F64LE, view_space.get(), H5P_DEFAULT, dcpl.get(), H5P_DEFAULT),
                        H5Dclose, std::string("create the view ") + name);
   h5::check(H5Dwrite(set.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, out.data()),
