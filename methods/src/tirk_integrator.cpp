@@ -91,7 +91,6 @@ class TirkIntegrator::Driver {
   Driver(const OdeProblem& p, const TirkSettings& s, std::function<void(double, Eigen::VectorXd&)> project = {})
       : p_(p), s_(s), project_(std::move(project)),
         tableau_(rk_tableau(s.tableau)),
-        a_transposed_lu_(tableau_.implicit_block().transpose()),
         split_(ldu_splitting(tableau_.implicit_block())),
         embedded_(embedded_for(tableau_, split_, s.iteration)),
         t_matrix_(s.iteration == TirkIteration::newton ? tableau_.implicit_block() : splitting_matrix(split_, s.iteration)),
@@ -113,6 +112,18 @@ class TirkIntegrator::Driver {
     monitor_.predict_failure = full_newton();
     monitor_.max_iterations = s.max_iterations > 0 ? s.max_iterations : newton() ? 10 : 50;
     stiffly_accurate_ = stiffly_accurate(tableau_);
+    const int stages = tableau_.stages(), si = stages_.implicit();
+    end_weights_.resize(stages);
+    error_weights_.resize(stages);
+    for (int j = 0; j < stages; ++j) {
+      end_weights_(j) = tableau_.b(j);
+      error_weights_(j) = embedded_.bhat(j) - tableau_.b(j);
+    }
+    if (full_newton()) {  // (its A is regular: the eigen split needs that too)
+      const Eigen::PartialPivLU<Eigen::MatrixXd> a_transposed(tableau_.implicit_block().transpose());
+      end_d_ = a_transposed.solve(end_weights_.tail(si));
+      error_d_ = a_transposed.solve(error_weights_.tail(si));
+    }
     result_.stats.contraction_m = contraction_constant(tableau_.implicit_block(), t_matrix_);
     nodes_ = {0.0};
     node_stage_ = {-1};
@@ -164,7 +175,8 @@ class TirkIntegrator::Driver {
   bool factorize(const Eigen::VectorXd& x, const Eigen::VectorXd& fx, double tau);
   bool iterate_once();
   bool iterate(int iterations);
-  Eigen::VectorXd stage_sum(const Eigen::VectorXd& w, const Eigen::VectorXd& x, const Eigen::VectorXd& fx, double tau) const;
+  Eigen::VectorXd stage_sum(const Eigen::VectorXd& w, const Eigen::VectorXd& d, const Eigen::VectorXd& x, const Eigen::VectorXd& fx,
+                            double tau) const;
   Eigen::VectorXd step_end(const Eigen::VectorXd& x, const Eigen::VectorXd& fx, double tau) const;
   double estimate(double t, const Eigen::VectorXd& x, const Eigen::VectorXd& x_new, const Eigen::VectorXd& fx, double tau,
                   bool first_or_rejected);
@@ -174,9 +186,11 @@ class TirkIntegrator::Driver {
   const TirkSettings& s_;
   std::function<void(double, Eigen::VectorXd&)> project_;
   RkTableau tableau_;
-  Eigen::PartialPivLU<Eigen::MatrixXd> a_transposed_lu_;  // of A^T over the implicit stages (stage_sum)
   TriangularSplitting split_;
   EmbeddedFormula embedded_;
+  // stage_sum()'s weights over all stages, and A^-T of their implicit part: b (the step's
+  // end) and bhat - b (the error estimate).
+  Eigen::VectorXd end_weights_, end_d_, error_weights_, error_d_;
   Eigen::MatrixXd t_matrix_;
   tbb::task_arena arena_;
   std::unique_ptr<tbb::flow::graph> graph_;  // declared before the stages: destroyed after their nodes
@@ -374,7 +388,8 @@ bool TirkIntegrator::Driver::iterate(int iterations) {
 // its last iterate (as Radau5): its K_j come from the stage values, through
 // Y_i = x + tau a_i0 fx + tau sum_j a_ij K_j over the implicit stages,
 // tau sum_j w_j K_j = tau w_0 fx + sum_i d_i (Y_i - x - tau a_i0 fx) with A^T d = w.
-Eigen::VectorXd TirkIntegrator::Driver::stage_sum(const Eigen::VectorXd& w, const Eigen::VectorXd& x,
+// d: A^-T w over the implicit stages (weights_of()), computed once per tableau.
+Eigen::VectorXd TirkIntegrator::Driver::stage_sum(const Eigen::VectorXd& w, const Eigen::VectorXd& d, const Eigen::VectorXd& x,
                                                   const Eigen::VectorXd& fx, double tau) const {
   const int first = tableau_.first_implicit(), si = stages_.implicit();
   Eigen::VectorXd out = Eigen::VectorXd::Zero(p_.size);
@@ -383,7 +398,6 @@ Eigen::VectorXd TirkIntegrator::Driver::stage_sum(const Eigen::VectorXd& w, cons
       if (w(j) != 0) out += (tau * w(j)) * stages_.stage_f(j);
     return out;
   }
-  const Eigen::VectorXd d = a_transposed_lu_.solve(w.tail(si));
   double explicit_weight = 0;
   for (int j = 0; j < first; ++j) explicit_weight += w(j);
   for (int i = 0; i < si; ++i) {
@@ -401,16 +415,12 @@ Eigen::VectorXd TirkIntegrator::Driver::stage_sum(const Eigen::VectorXd& w, cons
 // x_n + tau sum b_i F_i.
 Eigen::VectorXd TirkIntegrator::Driver::step_end(const Eigen::VectorXd& x, const Eigen::VectorXd& fx, double tau) const {
   if (stiffly_accurate_) return stages_.y().back();
-  Eigen::VectorXd b(tableau_.stages());
-  for (int j = 0; j < tableau_.stages(); ++j) b(j) = tableau_.b(j);
-  return x + stage_sum(b, x, fx, tau);
+  return x + stage_sum(end_weights_, end_d_, x, fx, tau);
 }
 
 double TirkIntegrator::Driver::estimate(double t, const Eigen::VectorXd& x, const Eigen::VectorXd& x_new, const Eigen::VectorXd& fx,
                                         double tau, bool first_or_rejected) {
-  Eigen::VectorXd difference(tableau_.stages());
-  for (int j = 0; j < tableau_.stages(); ++j) difference(j) = embedded_.bhat(j) - tableau_.b(j);
-  Eigen::VectorXd combination = (tau * embedded_.gamma) * fx + stage_sum(difference, x, fx, tau);
+  Eigen::VectorXd combination = (tau * embedded_.gamma) * fx + stage_sum(error_weights_, error_d_, x, fx, tau);
   Eigen::VectorXd e = combination;
   if (newton()) stages_.solve_with(embedded_.gamma, e);  // the stiff filter
   const Eigen::ArrayXd w = tolerance_weights(s_, x.array().abs().max(x_new.array().abs()));
