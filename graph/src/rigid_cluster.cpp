@@ -6,6 +6,8 @@
 
 #include <Eigen/OrderingMethods>
 
+#include "small_cholesky.hpp"
+
 namespace mbsflow {
 namespace {
 constexpr int dense_limit = 48;        // rows up to which the dense factorisation is used
@@ -89,9 +91,13 @@ RigidCluster::RigidCluster(const RigidCluster& o)
     : rows(o.rows), inv_mass(o.inv_mass), inv_inertia(o.inv_inertia), bodies_(o.bodies_), joints_(o.joints_),
       rows_count_(o.rows_count_), row_a_(o.row_a_), row_b_(o.row_b_), on_body_(o.on_body_), scatter_(o.scatter_),
       diagonal_(o.diagonal_), position_(o.position_), dense_(o.dense_), dense_matrix_(o.dense_matrix_),
-      dense_factored_(o.dense_factored_), sparse_matrix_(o.sparse_matrix_), shift_(o.shift_), permuted_(o.permuted_),
+      dense_factors_(o.dense_factors_), sparse_matrix_(o.sparse_matrix_), shift_(o.shift_), permuted_(o.permuted_),
       rhs_(o.rhs_), residual_(o.residual_) {
-  if (dense_factored_) dense_ldlt_ = o.dense_ldlt_;
+  if (dense_factors_ == DenseFactors::cholesky) {
+    dense_cholesky_ = o.dense_cholesky_;
+    cholesky_inverse_diagonal_ = o.cholesky_inverse_diagonal_;
+  }
+  if (dense_factors_ == DenseFactors::ldlt) dense_ldlt_ = o.dense_ldlt_;
   if (!dense_) analyse();
 }
 
@@ -143,8 +149,13 @@ void RigidCluster::factor() {
     value[diagonal_[r]] += shift_[r];
   }
   if (dense_) {
-    dense_ldlt_.compute(dense_matrix_);
-    dense_factored_ = true;
+    dense_cholesky_ = dense_matrix_;
+    dense_factors_ = DenseFactors::cholesky;
+    cholesky_inverse_diagonal_.resize(dense_cholesky_.rows());
+    if (!small_cholesky::factor(dense_cholesky_.data(), static_cast<int>(dense_cholesky_.rows()), cholesky_inverse_diagonal_.data())) {
+      dense_ldlt_.compute(dense_matrix_);
+      dense_factors_ = DenseFactors::ldlt;
+    }
   } else {
     sparse_ldlt_->factorize(sparse_matrix_);
   }
@@ -153,7 +164,10 @@ void RigidCluster::factor() {
 // In the permuted numbering: y <- S_eps^-1 y (each column).
 template <class X>
 void RigidCluster::solve_shifted(X& y) const {
-  if (dense_)
+  if (dense_ && dense_factors_ == DenseFactors::cholesky) {
+    for (Eigen::Index c = 0; c < y.cols(); ++c)
+      small_cholesky::solve(dense_cholesky_.data(), static_cast<int>(y.rows()), cholesky_inverse_diagonal_.data(), y.col(c).data());
+  } else if (dense_)
     y = dense_ldlt_.solve(y);
   else
     y = sparse_ldlt_->solve(y);

@@ -2,7 +2,7 @@
 // The rigid joints of one cluster of bodies (bodies joined by rigid joints, ground and
 // the rest of the model outside), solved together: the constraint matrix
 //   S = J W J^T + eps I,  W = blockdiag(1/m I, R J^-1 R^T) per body (0 for a driven body),
-// assembled from the rows and factored (dense LDLT for small clusters, sparse LDLT with
+// assembled from the rows and factored (dense Cholesky for small clusters, sparse LDLT with
 // AMD ordering otherwise, so that chains and trees cost in proportion to their bodies).
 // eps = 1e-6 times each diagonal entry makes S positive definite also when rows are
 // redundant (a planar loop modelled in 3D) or the mechanism is at a singular position
@@ -79,8 +79,13 @@ class RigidCluster {
   std::vector<int> position_;  // sparse: row -> its index in the permuted matrix
   bool dense_ = true;
   Eigen::MatrixXd dense_matrix_;
+  // Cholesky factors of S + eps (positive definite; small_cholesky.hpp), or a pivoted
+  // LDLT where rounding leaves a pivot of the Cholesky not positive.
+  Eigen::MatrixXd dense_cholesky_;
+  Eigen::VectorXd cholesky_inverse_diagonal_;
   Eigen::LDLT<Eigen::MatrixXd, Eigen::Upper> dense_ldlt_;
-  bool dense_factored_ = false;  // an LDLT not yet computed must not be copied (its state is unset)
+  enum class DenseFactors { none, cholesky, ldlt };
+  DenseFactors dense_factors_ = DenseFactors::none;  // which is current (none: not yet computed, not to be copied)
   Eigen::SparseMatrix<double> sparse_matrix_;  // upper triangle, permuted
   using SparseLdlt = Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Upper, Eigen::NaturalOrdering<int>>;
   std::unique_ptr<SparseLdlt> sparse_ldlt_;
