@@ -191,7 +191,6 @@ void MultibodySystem::make_workspace() {
   omega_ = Eigen::Matrix3Xd::Zero(3, n + 1);
   quat_ = Eigen::Matrix4Xd::Zero(4, n + 1);
   quat_(0, n) = 1.0;  // ground, at index n
-  joint_out_.setZero(9, static_cast<Eigen::Index>(compiled_->joints.size()));
 }
 
 // The plain copies here, the rotations on lanes after: the AVX kernels touch no Eigen
@@ -262,6 +261,9 @@ MultibodySystem::MemoryUse MultibodySystem::memory_use() const {
 bool MultibodySystem::on_lanes(const CompiledJoint& j) const { return j.kinematic < 0 && !law_of(j).spring && j.tables < 0; }
 
 void MultibodySystem::joint_forces_in(const int* list, std::size_t n) {
+  // Made here, not with the kinematics: a system that only computes energies (the results
+  // writer's copy) never needs the joints' wrenches.
+  if (const auto joints = static_cast<Eigen::Index>(compiled_->joints.size()); joint_out_.cols() != joints) joint_out_.setZero(9, joints);
   lane_groups_for_cpu<4>(
       list, n,
       [&](int k) {

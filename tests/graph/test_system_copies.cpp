@@ -105,3 +105,18 @@ TEST_CASE("a system makes its workspace at its first evaluation: built and copie
   evaluated.joint_wrenches(0.0, y, b);
   CHECK(a == b);
 }
+
+TEST_CASE("a system that only computes energies makes no joint wrench workspace", "[graph]") {
+  // The results writer's copy computes energies; the 9 numbers per joint of the joints'
+  // wrenches (72 bytes a joint, two joints a body on the grid) come with the first
+  // joint-force evaluation.
+  const Model m = grid();
+  MultibodySystem sys(m);
+  const Eigen::VectorXd y = sys.initial_state();
+  const Energy e = sys.energy(0.0, y);
+  const std::size_t after_energy = sys.memory_use().workspace;
+  Eigen::VectorXd dydt(sys.dimension());
+  sys.rhs(0.0, y, dydt);
+  CHECK(sys.memory_use().workspace >= after_energy + 72 * m.joints.size());
+  CHECK(sys.energy(0.0, y).elastic == e.elastic);
+}
