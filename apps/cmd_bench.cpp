@@ -39,7 +39,7 @@ Action add_bench(CLI::App& app) {
   sub->add_option("--t-end", a->t_end, "stiff: model time in s (default: chain 0.2, train 1, A05 its file's 10)")->check(CLI::PositiveNumber);
   sub->add_option("--reference-tol", a->reference_tol, "stiff: tolerance of the tirk reference run (default 1e-6); ivp: of the colloc "
                   "reference run where a problem has neither exact solution nor published value (default 1e-12)")->check(CLI::PositiveNumber);
-  sub->add_option("--target-error", a->target_error, "stiff: the position error (m) at which the summary compares methods")
+  sub->add_option("--target-error", a->target_error, "stiff: the position error (m) at which the summary compares methods (default 1e-3); an adaptive method none of whose runs reaches it on one thread runs again at tolerances ten times tighter than the tightest of --tolerances, down to 1e-9, until one does")
       ->check(CLI::PositiveNumber);
   sub->add_option("--methods", a->methods,
                   "stiff: the methods compared with the reference: rk4, dopri5, tirk-newton, tirk-newton-triangular, colloc, "

@@ -2,6 +2,7 @@
 // each row has a finite error against the reference, and the work-precision plot draws it.
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <map>
 #include <cstdlib>
 #include <sstream>
 #include <string>
@@ -11,31 +12,48 @@
 
 using namespace mbsflow::test;
 
+namespace {
+
+// bench stiff on a 6-body chain at Omega = 1e4 over 0.02 s, one thread, in a scratch folder
+// of its own: the output, and the CSV's header and rows cell by cell.
+struct StiffBench {
+  std::string dir;
+  Result result;
+  std::string header;
+  std::vector<std::vector<std::string>> rows;
+};
+
+StiffBench bench_stiff_chain(const std::string& name, const std::string& options) {
+  StiffBench b;
+  b.dir = scratch(name.c_str()).string();
+  b.result = run("bench stiff --problems chain --bodies 6 --frequencies 1e4 --t-end 0.02 --threads 1 --csv stiff.csv " + options,
+                 b.dir, true);
+  if (b.result.code != 0) return b;
+  std::istringstream csv(read_text(fs::path(b.dir) / "stiff.csv"));
+  std::getline(csv, b.header);
+  for (std::string line; std::getline(csv, line);) b.rows.push_back(csv_cells(line));
+  return b;
+}
+
+}  // namespace
+
 TEST_CASE("cli bench stiff: a stiff chain against RK4, DOPRI5 and CVODE, CSV and plot", "[cli][bench]") {
-  const std::string dir = scratch("bench_stiff").string();
-  const Result r = run("bench stiff --problems chain --bodies 6 --frequencies 1e4 --t-end 0.02 --tolerances 1e-3 "
-                       "--threads 1 --csv stiff.csv",
-                       dir, true);
-  INFO(r.err << r.out);
-  REQUIRE(r.code == 0);
-  CHECK(r.out.find("fastest run on 1 thread with error <= 1e-03 m") != std::string::npos);
-  std::istringstream csv(read_text(fs::path(dir) / "stiff.csv"));
-  std::string line;
-  std::getline(csv, line);
-  CHECK(line == "model,method,threads,tol,steps,evaluations,jacobians,factorizations,wall_s,error_m,note");
-  int rows = 0;
+  const StiffBench b = bench_stiff_chain("bench_stiff", "--tolerances 1e-3");
+  const std::string& dir = b.dir;
+  INFO(b.result.err << b.result.out);
+  REQUIRE(b.result.code == 0);
+  CHECK(b.result.out.find("fastest run on 1 thread with error <= 1e-03 m") != std::string::npos);
+  CHECK(b.header == "model,method,threads,tol,steps,evaluations,jacobians,factorizations,wall_s,error_m,note");
   std::string methods;
-  while (std::getline(csv, line)) {
-    ++rows;
-    const std::vector<std::string> cells = csv_cells(line);
+  for (const std::vector<std::string>& cells : b.rows) {
     REQUIRE(cells.size() >= 10);
     methods += cells[1] + " ";
     const double error = std::stod(cells[9]);
-    INFO(line);
+    INFO(cells[1] << " " << cells[3]);
     CHECK(error < 1e-2);  // every method at 1e-3 lands well within a centimetre on this chain
     if (cells[1].rfind("tirk", 0) == 0 || cells[1] == "colloc") CHECK(std::stol(cells[6]) >= 1);  // Jacobians counted
   }
-  CHECK(rows == 7);
+  CHECK(b.rows.size() == 7);
   CHECK(methods == "reference rk4 dopri5 tirk-newton tirk-newton-triangular colloc cvode-klu ");
   const std::string python = MBSFLOW_PYTHON;
   const int plot = std::system((python + " '" + MBSFLOW_SOURCE + "/scripts/plot_work_precision.py' '" + dir +
@@ -44,6 +62,37 @@ TEST_CASE("cli bench stiff: a stiff chain against RK4, DOPRI5 and CVODE, CSV and
   CHECK(plot == 0);
   CHECK(fs::file_size(fs::path(dir) / "stiff.png") > 10000);
   fs::remove_all(fs::path(dir).parent_path());
+}
+
+TEST_CASE("cli bench stiff: a method that misses the target error runs again at tighter tolerances", "[cli][bench]") {
+  // At tol 1e-1 no method lands within 1e-5 m on this chain; each is run again at 1e-2,
+  // 1e-3, ... (one thread) until one run does, and stops there.
+  const StiffBench b = bench_stiff_chain("bench_stiff_tighten",
+                                         "--tolerances 1e-1 --target-error 1e-5 --methods dopri5 tirk-newton cvode-klu");
+  const Result& r = b.result;
+  INFO(r.err << r.out);
+  REQUIRE(r.code == 0);
+  std::map<std::string, std::vector<std::pair<double, double>>> runs;  // method -> (tol, error) in order
+  for (const std::vector<std::string>& cells : b.rows) {
+    REQUIRE(cells.size() >= 10);
+    if (cells[1] != "reference") runs[cells[1]].emplace_back(std::stod(cells[3]), std::stod(cells[9]));
+  }
+  REQUIRE(runs.size() == 3);
+  for (const auto& [method, list] : runs) {
+    INFO(method);
+    REQUIRE(list.size() >= 2);
+    for (std::size_t k = 0; k < list.size(); ++k) {
+      CHECK(list[k].first == Approx(0.1 * std::pow(0.1, static_cast<double>(k))));  // tenfold tighter each time
+      if (k + 1 < list.size()) CHECK(list[k].second > 1e-5);                       // it stops at the first that lands
+    }
+    CHECK(list.back().second <= 1e-5);
+  }
+  // Every method has its line in the summary.
+  const std::size_t summary = r.out.find("fastest run on 1 thread with error <= 1e-05 m");
+  REQUIRE(summary != std::string::npos);
+  for (const char* method : {"dopri5 ", "tirk-newton ", "cvode-klu "})
+    CHECK(r.out.find(std::string("chain6 W=1e+04           ") + method, summary) != std::string::npos);
+  fs::remove_all(fs::path(b.dir).parent_path());
 }
 
 TEST_CASE("cli bench ivp: work-precision against CVODE on Robertson and eq. 11, CSV, summary and plot", "[cli][bench]") {
