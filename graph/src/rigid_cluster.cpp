@@ -13,6 +13,10 @@ namespace {
 constexpr int dense_limit = 48;        // rows up to which the dense factorisation is used
 constexpr double relative_shift = 1e-6;  // eps / diagonal entry (A02 error vs eps: docs/joints.md)
 constexpr int refinements = 2;          // iterative refinement steps against the unshifted S
+// Smallest ratio of a Cholesky pivot of the unshifted S to its diagonal entry at which S is
+// solved as it is (dense path): below it S is near singular (a redundant row gives 1e-8 or
+// less, or no Cholesky at all) and gets the shift and refinements.
+constexpr double regular_pivot_ratio = 1e-8;
 }  // namespace
 
 RigidCluster::RigidCluster(std::vector<int> bodies, std::vector<ClusterJoint> joints)
@@ -91,7 +95,7 @@ RigidCluster::RigidCluster(const RigidCluster& o)
     : rows(o.rows), inv_mass(o.inv_mass), inv_inertia(o.inv_inertia), bodies_(o.bodies_), joints_(o.joints_),
       rows_count_(o.rows_count_), row_a_(o.row_a_), row_b_(o.row_b_), on_body_(o.on_body_), scatter_(o.scatter_),
       diagonal_(o.diagonal_), position_(o.position_), dense_(o.dense_), dense_matrix_(o.dense_matrix_),
-      dense_factors_(o.dense_factors_), sparse_matrix_(o.sparse_matrix_), shift_(o.shift_), permuted_(o.permuted_),
+      dense_factors_(o.dense_factors_), shifted_(o.shifted_), sparse_matrix_(o.sparse_matrix_), shift_(o.shift_), permuted_(o.permuted_),
       rhs_(o.rhs_), residual_(o.residual_) {
   if (dense_factors_ == DenseFactors::cholesky) {
     dense_cholesky_ = o.dense_cholesky_;
@@ -142,8 +146,30 @@ void RigidCluster::factor() {
     for (Eigen::Index p = 0; p < k; ++p)
       for (Eigen::Index q = 0; q <= p; ++q) value[*to++] += block_jw_.row(p).dot(block_j_.row(q));
   }
-  // Each diagonal entry grows by eps of itself: the same relative regularisation for rows
-  // in metres and in radians, and for light and heavy bodies alike.
+  // A small S that is regular is solved as it is: its Cholesky succeeds with no pivot below
+  // regular_pivot_ratio of its diagonal entry. Then no refinement is needed, and the
+  // multipliers are S^-1 b to rounding, where the shift's two refinements leave
+  // (eps / ratio)^3 of it (A05's smallest ratio is about 1e-5). More rows than the free
+  // bodies' 6 coordinates each are redundant for sure (a planar loop in 3D): then the
+  // attempt is not made, as it would only fail.
+  const auto free_bodies = std::count_if(inv_mass.begin(), inv_mass.end(), [](double w) { return w != 0.0; });
+  if (dense_ && rows_count_ <= 6 * free_bodies) {
+    dense_cholesky_ = dense_matrix_;
+    cholesky_inverse_diagonal_.resize(dense_cholesky_.rows());
+    bool regular = small_cholesky::factor(dense_cholesky_.data(), static_cast<int>(dense_cholesky_.rows()), cholesky_inverse_diagonal_.data());
+    for (std::size_t r = 0; regular && r < diagonal_.size(); ++r) {
+      const double pivot = dense_cholesky_(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(r));
+      regular = pivot * pivot >= regular_pivot_ratio * value[diagonal_[r]];
+    }
+    if (regular) {
+      dense_factors_ = DenseFactors::cholesky;
+      shifted_ = false;
+      return;
+    }
+  }
+  // Else each diagonal entry grows by eps of itself: the same relative regularisation for
+  // rows in metres and in radians, and for light and heavy bodies alike.
+  shifted_ = true;
   for (std::size_t r = 0; r < diagonal_.size(); ++r) {
     shift_[r] = relative_shift * value[diagonal_[r]] + 1e-300;
     value[diagonal_[r]] += shift_[r];
@@ -161,7 +187,7 @@ void RigidCluster::factor() {
   }
 }
 
-// In the permuted numbering: y <- S_eps^-1 y (each column).
+// In the permuted numbering: y <- S_eps^-1 y (each column); S^-1 y where S is not shifted.
 template <class X>
 void RigidCluster::solve_shifted(X& y) const {
   if (dense_ && dense_factors_ == DenseFactors::cholesky) {
@@ -184,7 +210,7 @@ void RigidCluster::refined_solve(X& x, X& rhs, X& permuted, X& residual) const {
   for (Eigen::Index r = 0; r < m; ++r) rhs.row(position_[static_cast<std::size_t>(r)]) = x.row(r);
   permuted = rhs;
   solve_shifted(permuted);
-  for (int k = 0; k < refinements; ++k) {
+  for (int k = 0; k < (shifted_ ? refinements : 0); ++k) {
     if (dense_)
       residual.noalias() = dense_matrix_.selfadjointView<Eigen::Upper>() * permuted;
     else

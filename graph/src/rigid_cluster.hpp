@@ -7,8 +7,10 @@
 // eps = 1e-6 times each diagonal entry makes S positive definite also when rows are
 // redundant (a planar loop modelled in 3D) or the mechanism is at a singular position
 // (the redundant part of the multipliers lies in the null space of J^T and exerts no
-// force); two steps of iterative refinement against the unshifted S remove the bias
+// force); two steps of iterative refinement against the unshifted S reduce the bias
 // where S is regular, and keep the multipliers bounded where it is (nearly) singular.
+// A small S (dense path) whose Cholesky shows it regular is solved as it is, unshifted
+// and unrefined (factor()).
 // S is assembled body by body (J_b W_b J_b^T over the rows on body b) straight into its
 // AMD-permuted upper triangle, so the factorisation needs no copy.
 // Everything about a cluster is numbered inside it (bodies ascending, joints ascending),
@@ -86,6 +88,7 @@ class RigidCluster {
   Eigen::LDLT<Eigen::MatrixXd, Eigen::Upper> dense_ldlt_;
   enum class DenseFactors { none, cholesky, ldlt };
   DenseFactors dense_factors_ = DenseFactors::none;  // which is current (none: not yet computed, not to be copied)
+  bool shifted_ = true;  // the factors are of S + eps (refined in solves), not of S itself
   Eigen::SparseMatrix<double> sparse_matrix_;  // upper triangle, permuted
   using SparseLdlt = Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Upper, Eigen::NaturalOrdering<int>>;
   std::unique_ptr<SparseLdlt> sparse_ldlt_;
