@@ -146,23 +146,35 @@ void RigidCluster::factor() {
     for (Eigen::Index p = 0; p < k; ++p)
       for (Eigen::Index q = 0; q <= p; ++q) value[*to++] += block_jw_.row(p).dot(block_j_.row(q));
   }
-  // A small S that is regular is solved as it is: its Cholesky succeeds with no pivot below
+  // An S that is regular is solved as it is: its Cholesky succeeds with no pivot below
   // regular_pivot_ratio of its diagonal entry. Then no refinement is needed, and the
   // multipliers are S^-1 b to rounding, where the shift's two refinements leave
   // (eps / ratio)^3 of it (A05's smallest ratio is about 1e-5). More rows than the free
   // bodies' 6 coordinates each are redundant for sure (a planar loop in 3D): then the
   // attempt is not made, as it would only fail.
+  // The sparse LDLT is tried the same way, its D holding the pivots (permuted numbering).
   const auto free_bodies = std::count_if(inv_mass.begin(), inv_mass.end(), [](double w) { return w != 0.0; });
-  if (dense_ && rows_count_ <= 6 * free_bodies) {
-    dense_cholesky_ = dense_matrix_;
-    cholesky_inverse_diagonal_.resize(dense_cholesky_.rows());
-    bool regular = small_cholesky::factor(dense_cholesky_.data(), static_cast<int>(dense_cholesky_.rows()), cholesky_inverse_diagonal_.data());
-    for (std::size_t r = 0; regular && r < diagonal_.size(); ++r) {
-      const double pivot = dense_cholesky_(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(r));
-      regular = pivot * pivot >= regular_pivot_ratio * value[diagonal_[r]];
+  if (rows_count_ <= 6 * free_bodies) {
+    bool regular = true;
+    if (dense_) {
+      dense_cholesky_ = dense_matrix_;
+      cholesky_inverse_diagonal_.resize(dense_cholesky_.rows());
+      regular = small_cholesky::factor(dense_cholesky_.data(), static_cast<int>(dense_cholesky_.rows()), cholesky_inverse_diagonal_.data());
+      for (std::size_t r = 0; regular && r < diagonal_.size(); ++r) {
+        const double pivot = dense_cholesky_(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(r));
+        regular = pivot * pivot >= regular_pivot_ratio * value[diagonal_[r]];
+      }
+    } else {
+      sparse_ldlt_->factorize(sparse_matrix_);
+      regular = sparse_ldlt_->info() == Eigen::Success;
+      const Eigen::VectorXd& pivots = sparse_ldlt_->vectorD();  // a copy: Eigen returns D by value
+      for (std::size_t r = 0; regular && r < diagonal_.size(); ++r) {
+        const double pivot = pivots[position_[r]];
+        regular = pivot > 0.0 && pivot >= regular_pivot_ratio * value[diagonal_[r]];
+      }
     }
     if (regular) {
-      dense_factors_ = DenseFactors::cholesky;
+      if (dense_) dense_factors_ = DenseFactors::cholesky;
       shifted_ = false;
       return;
     }

@@ -9,8 +9,8 @@
 // (the redundant part of the multipliers lies in the null space of J^T and exerts no
 // force); two steps of iterative refinement against the unshifted S reduce the bias
 // where S is regular, and keep the multipliers bounded where it is (nearly) singular.
-// A small S (dense path) whose Cholesky shows it regular is solved as it is, unshifted
-// and unrefined (factor()).
+// An S whose factorisation shows it regular is solved as it is, unshifted and unrefined
+// (factor()).
 // S is assembled body by body (J_b W_b J_b^T over the rows on body b) straight into its
 // AMD-permuted upper triangle, so the factorisation needs no copy.
 // Everything about a cluster is numbered inside it (bodies ascending, joints ascending),
