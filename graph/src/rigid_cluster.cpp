@@ -13,8 +13,8 @@ namespace {
 constexpr int dense_limit = 48;        // rows up to which the dense factorisation is used
 constexpr double relative_shift = 1e-6;  // eps / diagonal entry (A02 error vs eps: docs/joints.md)
 constexpr int refinements = 2;          // iterative refinement steps against the unshifted S
-// Smallest ratio of a Cholesky pivot of the unshifted S to its diagonal entry at which S is
-// solved as it is (dense path): below it S is near singular (a redundant row gives 1e-8 or
+// Smallest ratio of a pivot of the unshifted S (dense Cholesky or sparse LDLT) to its
+// diagonal entry at which S is solved as it is: below it S is near singular (a redundant row gives 1e-8 or
 // less, or no Cholesky at all) and gets the shift and refinements.
 constexpr double regular_pivot_ratio = 1e-8;
 }  // namespace
@@ -157,9 +157,7 @@ void RigidCluster::factor() {
   if (rows_count_ <= 6 * free_bodies) {
     bool regular = true;
     if (dense_) {
-      dense_cholesky_ = dense_matrix_;
-      cholesky_inverse_diagonal_.resize(dense_cholesky_.rows());
-      regular = small_cholesky::factor(dense_cholesky_.data(), static_cast<int>(dense_cholesky_.rows()), cholesky_inverse_diagonal_.data());
+      regular = factor_dense_cholesky();
       for (std::size_t r = 0; regular && r < diagonal_.size(); ++r) {
         const double pivot = dense_cholesky_(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(r));
         regular = pivot * pivot >= regular_pivot_ratio * value[diagonal_[r]];
@@ -187,16 +185,22 @@ void RigidCluster::factor() {
     value[diagonal_[r]] += shift_[r];
   }
   if (dense_) {
-    dense_cholesky_ = dense_matrix_;
     dense_factors_ = DenseFactors::cholesky;
-    cholesky_inverse_diagonal_.resize(dense_cholesky_.rows());
-    if (!small_cholesky::factor(dense_cholesky_.data(), static_cast<int>(dense_cholesky_.rows()), cholesky_inverse_diagonal_.data())) {
+    if (!factor_dense_cholesky()) {
       dense_ldlt_.compute(dense_matrix_);
       dense_factors_ = DenseFactors::ldlt;
     }
   } else {
     sparse_ldlt_->factorize(sparse_matrix_);
   }
+}
+
+// dense_cholesky_ <- the Cholesky factors of dense_matrix_ as it is; false where a pivot is
+// not positive.
+bool RigidCluster::factor_dense_cholesky() {
+  dense_cholesky_ = dense_matrix_;
+  cholesky_inverse_diagonal_.resize(dense_cholesky_.rows());
+  return small_cholesky::factor(dense_cholesky_.data(), static_cast<int>(dense_cholesky_.rows()), cholesky_inverse_diagonal_.data());
 }
 
 // In the permuted numbering: y <- S_eps^-1 y (each column); S^-1 y where S is not shifted.

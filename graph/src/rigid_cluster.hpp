@@ -68,6 +68,7 @@ class RigidCluster {
   Vector6d part(int r, int side) const { return rows[static_cast<std::size_t>(r)].j.segment<6>(6 * side); }
   Vector6d weighted(int slot, const Vector6d& j) const;
   void analyse();
+  bool factor_dense_cholesky();
 
   std::vector<int> bodies_;
   std::vector<ClusterJoint> joints_;

@@ -388,7 +388,7 @@ bool TirkIntegrator::Driver::iterate(int iterations) {
 // its last iterate (as Radau5): its K_j come from the stage values, through
 // Y_i = x + tau a_i0 fx + tau sum_j a_ij K_j over the implicit stages,
 // tau sum_j w_j K_j = tau w_0 fx + sum_i d_i (Y_i - x - tau a_i0 fx) with A^T d = w.
-// d: A^-T w over the implicit stages (weights_of()), computed once per tableau.
+// d: A^-T w over the implicit stages (end_d_ or error_d_, computed in the constructor).
 Eigen::VectorXd TirkIntegrator::Driver::stage_sum(const Eigen::VectorXd& w, const Eigen::VectorXd& d, const Eigen::VectorXd& x,
                                                   const Eigen::VectorXd& fx, double tau) const {
   const int first = tableau_.first_implicit(), si = stages_.implicit();
