@@ -112,31 +112,44 @@ std::vector<double> read_rows(const Series& s, hsize_t rows) {
   return v;
 }
 
+// Rows [first_row, first_row + rows) of s, whole, as the dataset's extent once they are
+// written, the start and the count of their block.
+struct RowBlock {
+  std::vector<hsize_t> dims, start, count;
+};
+RowBlock row_block(const Series& s, hsize_t first_row, hsize_t rows) {
+  RowBlock b{{first_row + rows}, {first_row}, {rows}};
+  for (hsize_t d : s.item) {
+    b.dims.push_back(d);
+    b.start.push_back(0);
+    b.count.push_back(d);
+  }
+  return b;
+}
+
+// Extends s to b.dims and writes data (row-major, b.count's shape) at b.start.
+void write_block(Series& s, const RowBlock& b, const double* data) {
+  h5::check(H5Dset_extent(s.set.get(), b.dims.data()), "extend " + s.path);
+  const h5::Handle file_space(H5Dget_space(s.set.get()), H5Sclose, "get the space of " + s.path);
+  h5::check(H5Sselect_hyperslab(file_space.get(), H5S_SELECT_SET, b.start.data(), nullptr, b.count.data(), nullptr),
+            "select rows of " + s.path);
+  const h5::Handle mem(H5Screate_simple(static_cast<int>(b.count.size()), b.count.data(), nullptr), H5Sclose,
+                       "create a memory space");
+  h5::check(H5Dwrite(s.set.get(), H5T_NATIVE_DOUBLE, mem.get(), file_space.get(), H5P_DEFAULT, data), "write " + s.path);
+}
+
 // Appends the buffered rows to the dataset.
 void append(Series& s, hsize_t first_row) {
   const std::size_t row = s.row_size();
   if (row == 0 || s.buffer.empty()) return;
-  const hsize_t rows = s.buffer.size() / row;
-  std::vector<hsize_t> dims{first_row + rows}, start{first_row}, count{rows};
-  for (hsize_t d : s.item) {
-    dims.push_back(d);
-    start.push_back(0);
-    count.push_back(d);
-  }
-  h5::check(H5Dset_extent(s.set.get(), dims.data()), "extend " + s.path);
-  const h5::Handle file_space(H5Dget_space(s.set.get()), H5Sclose, "get the space of " + s.path);
-  h5::check(H5Sselect_hyperslab(file_space.get(), H5S_SELECT_SET, start.data(), nullptr, count.data(), nullptr),
-            "select rows of " + s.path);
-  const h5::Handle mem(H5Screate_simple(static_cast<int>(count.size()), count.data(), nullptr), H5Sclose,
-                       "create a memory space");
-  h5::check(H5Dwrite(s.set.get(), H5T_NATIVE_DOUBLE, mem.get(), file_space.get(), H5P_DEFAULT, s.buffer.data()),
-            "write " + s.path);
+  write_block(s, row_block(s, first_row, s.buffer.size() / row), s.buffer.data());
   s.buffer.clear();
 }
 
-// Each joint's attachment points in the world at state y: body position + R(q) point, or the
-// point itself on the ground.
-void append_attachment_points(const Model& m, const StateLayout& l, const Eigen::VectorXd& y, std::vector<double>& out) {
+// Joints [first, last)'s attachment points in the world at state y: body position + R(q)
+// point, or the point itself on the ground.
+void append_attachment_points(const Model& m, const StateLayout& l, const Eigen::VectorXd& y, std::size_t first,
+                              std::size_t last, std::vector<double>& out) {
   auto world = [&](int body, const Vec3& p) {
     const Eigen::Vector3d local(p[0], p[1], p[2]);
     if (body == ground) return local;
@@ -144,7 +157,8 @@ void append_attachment_points(const Model& m, const StateLayout& l, const Eigen:
     const Eigen::Quaterniond r(q[0], q[1], q[2], q[3]);
     return Eigen::Vector3d(y.segment<3>(l.position(body)) + r.normalized() * local);
   };
-  for (const Joint& j : m.joints) {
+  for (std::size_t k = first; k < last; ++k) {
+    const Joint& j = m.joints[k];
     const Eigen::Vector3d a = world(j.body1, j.point1), b = world(j.body2, j.point2);
     out.insert(out.end(), {a.x(), a.y(), a.z(), b.x(), b.y(), b.z()});
   }
@@ -181,16 +195,38 @@ h5::Handle file_access() {
   return fapl;
 }
 
-// Each body's kinetic energy (translation and rotation, the angular velocity and inertia
-// in the body frame) and potential of gravity, -m g . r, as MultibodySystem::energy sums them.
-void append_body_energies(const Model& m, const StateLayout& l, const Eigen::VectorXd& y, std::vector<double>& out) {
+// Bodies [first, last)'s kinetic energy (translation and rotation, the angular velocity and
+// inertia in the body frame) and potential of gravity, -m g . r, as MultibodySystem::energy
+// sums them.
+void append_body_energies(const Model& m, const StateLayout& l, const Eigen::VectorXd& y, Eigen::Index first,
+                          Eigen::Index last, std::vector<double>& out) {
   const Eigen::Vector3d g(m.gravity[0], m.gravity[1], m.gravity[2]);
-  for (Eigen::Index i = 0; i < l.bodies; ++i) {
+  for (Eigen::Index i = first; i < last; ++i) {
     const Body& b = m.bodies[static_cast<std::size_t>(i)];
     const Eigen::Vector3d w = y.segment<3>(l.angular_velocity(i));
     const double kinetic = 0.5 * b.mass * y.segment<3>(l.velocity(i)).squaredNorm() + 0.5 * w.dot(inertia_matrix(b.inertia) * w);
     out.insert(out.end(), {kinetic, -b.mass * g.dot(y.segment<3>(l.position(i)))});
   }
+}
+
+// A row of a series with one item per body or joint, written as it is made, slab by slab:
+// fill(first, last, out) appends items [first, last). A million bodies' row would
+// otherwise be held whole (a grid's attachment points alone are 96 MB). The slabs are
+// whole chunks (a file with one row per chunk has chunk_samples items per chunk), so that
+// none is read back to be completed.
+template <class Fill>
+void write_row_in_slabs(Series& s, hsize_t row, Fill&& fill) {
+  constexpr hsize_t slab = 16 * chunk_samples;
+  RowBlock b = row_block(s, row, 1);
+  const hsize_t items = s.item[0];
+  for (hsize_t first = 0; first < items; first += slab) {
+    b.start[1] = first;
+    b.count[1] = std::min(slab, items - first);
+    s.buffer.clear();
+    fill(first, first + b.count[1], s.buffer);
+    write_block(s, b, s.buffer.data());
+  }
+  s.buffer.clear();
 }
 
 }  // namespace
@@ -366,23 +402,47 @@ void Hdf5Sink::sync() {
 void Hdf5Sink::write(Snapshot&& s) {
   File& f = *file_;
   const StateLayout& l = system_->layout();
+  const Model& m = system_->model();
+  // A series with an item per body or joint: buffered until its chunk row is full, or, with
+  // one row per chunk (large models), written at once in slabs. Each row lands before
+  // flush() appends its time.
+  const auto row = static_cast<hsize_t>(rows_written_) + f.time.buffer.size();
+  auto put = [&](Series& series, auto fill) {
+    if (f.rows_per_chunk == 1)
+      write_row_in_slabs(series, row, fill);
+    else
+      fill(hsize_t{0}, series.item[0], series.buffer);
+  };
+  auto copy = [](const double* from, std::size_t per_item) {
+    return [=](hsize_t first, hsize_t last, std::vector<double>& out) {
+      out.insert(out.end(), from + first * per_item, from + last * per_item);
+    };
+  };
   f.time.buffer.push_back(s.t);
   f.times.push_back(s.t);
   for (auto& [i, series] : f.bodies) {
     const BodyField& field = body_fields[i];
-    for (Eigen::Index b = 0; b < l.bodies; ++b) {
-      const double* p = s.state.data() + (l.*field.offset)(b);
-      series.buffer.insert(series.buffer.end(), p, p + field.components);
-    }
+    put(series, [&](hsize_t first, hsize_t last, std::vector<double>& out) {
+      for (auto b = static_cast<Eigen::Index>(first); b < static_cast<Eigen::Index>(last); ++b) {
+        const double* p = s.state.data() + (l.*field.offset)(b);
+        out.insert(out.end(), p, p + field.components);
+      }
+    });
   }
   if (f.energy) {
     const Energy e = s.energy.value_or(Energy{});
     f.energy->buffer.insert(f.energy->buffer.end(), {e.kinetic, e.gravity, e.elastic});
   }
-  if (f.body_energy) append_body_energies(system_->model(), l, s.state, f.body_energy->buffer);
-  if (f.joint_force) f.joint_force->buffer.insert(f.joint_force->buffer.end(), s.joint_wrench.data(), s.joint_wrench.data() + s.joint_wrench.size());
-  if (f.motor_effort) f.motor_effort->buffer.insert(f.motor_effort->buffer.end(), s.motor_effort.data(), s.motor_effort.data() + s.motor_effort.size());
-  if (f.attachment) append_attachment_points(system_->model(), l, s.state, f.attachment->buffer);
+  if (f.body_energy)
+    put(*f.body_energy, [&](hsize_t first, hsize_t last, std::vector<double>& out) {
+      append_body_energies(m, l, s.state, static_cast<Eigen::Index>(first), static_cast<Eigen::Index>(last), out);
+    });
+  if (f.joint_force) put(*f.joint_force, copy(s.joint_wrench.data(), 6));
+  if (f.motor_effort) put(*f.motor_effort, copy(s.motor_effort.data(), 1));
+  if (f.attachment)
+    put(*f.attachment, [&](hsize_t first, hsize_t last, std::vector<double>& out) {
+      append_attachment_points(m, l, s.state, first, last, out);
+    });
   if (static_cast<hsize_t>(f.time.buffer.size()) >= f.rows_per_chunk || now_seconds() - last_flush_ >= flush_interval_s)
     flush();
 }

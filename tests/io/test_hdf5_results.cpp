@@ -54,19 +54,12 @@ std::pair<test::MemorySink, fs::path> run_both(const Model& m, const FieldSet& f
   return {std::move(memory), file};
 }
 
-}  // namespace
-
-TEST_CASE("HDF5 results read back bitwise equal to what was simulated", "[io]") {
-  const Model m = small_train();
-  const FieldSet all = parse_fields("all");
-  auto [memory, file] = run_both(m, all);
-  const ResultsFile r(file.string());
+// Every series of the file equals what the run handed to the memory sink, bit for bit.
+void check_bitwise_equal(const Model& m, const test::MemorySink& memory, const ResultsFile& r) {
   const std::vector<double> t = r.time();
   REQUIRE(t.size() == memory.times.size());
-  REQUIRE(t.size() == 101);
   CHECK(t == memory.times);
   CHECK(r.body_names().size() == m.bodies.size());
-  CHECK(r.body_names()[0] == "car0");
   CHECK(r.joint_names().size() == m.joints.size());
   const StateLayout layout{static_cast<Eigen::Index>(m.bodies.size())};
   for (const BodyField& f : body_fields) {
@@ -89,9 +82,85 @@ TEST_CASE("HDF5 results read back bitwise equal to what was simulated", "[io]") 
     for (Eigen::Index k = 0; k < w.size(); ++k) equal = equal && forces[i * static_cast<std::size_t>(w.size()) + static_cast<std::size_t>(k)] == w[k];
   }
   CHECK(equal);
+}
+
+
+// Each end at its body's position plus the rotated attachment point (the ground's fixed).
+void check_attachment_points(const Model& m, const ResultsFile& r) {
+  const std::vector<double> t = r.time();
+  const std::vector<std::uint64_t> shape = r.shape(joint_attachment_dataset);
+  REQUIRE(shape == std::vector<std::uint64_t>{t.size(), m.joints.size(), 6});
+  double worst = 0;
+  for (std::size_t row : {std::size_t{0}, t.size() / 2, t.size() - 1}) {
+    const std::vector<double> ends = r.read_row(joint_attachment_dataset, row);
+    const std::vector<double> pos = r.read_row("/bodies/position", row), quat = r.read_row("/bodies/orientation", row);
+    for (std::size_t j = 0; j < m.joints.size(); ++j) {
+      const Joint& joint = m.joints[j];
+      for (int end = 0; end < 2; ++end) {
+        const int body = end == 0 ? joint.body1 : joint.body2;
+        const Vec3& p = end == 0 ? joint.point1 : joint.point2;
+        Eigen::Vector3d expected(p[0], p[1], p[2]);
+        if (body != ground) {
+          const auto b = static_cast<std::size_t>(body);
+          const Eigen::Quaterniond q(quat[4 * b], quat[4 * b + 1], quat[4 * b + 2], quat[4 * b + 3]);
+          expected = Eigen::Vector3d(pos[3 * b], pos[3 * b + 1], pos[3 * b + 2]) + q * expected;
+        }
+        const Eigen::Vector3d written(ends.data() + 6 * j + 3 * end);
+        worst = std::max(worst, (written - expected).norm());
+      }
+    }
+  }
+  CHECK(worst < 1e-12);
+}
+
+// The bodies' energies sum to the run's kinetic and gravity energies.
+void check_body_energies(const Model& m, const ResultsFile& r) {
+  REQUIRE(r.shape(body_energy_dataset) == std::vector<std::uint64_t>{r.time().size(), m.bodies.size(), 2});
+  CHECK(r.dataset_string_attribute(body_energy_dataset, "units") == "J");
+  double worst = 0;
+  for (std::size_t row = 0; row < r.time().size(); ++row) {
+    const std::vector<double> per_body = r.read_row(body_energy_dataset, row), total = r.read_row(energy_dataset, row);
+    double kinetic = 0, gravity = 0, scale = 1;
+    for (std::size_t i = 0; i < m.bodies.size(); ++i) {
+      kinetic += per_body[2 * i];
+      gravity += per_body[2 * i + 1];
+      scale += std::abs(per_body[2 * i]) + std::abs(per_body[2 * i + 1]);
+    }
+    worst = std::max({worst, std::abs(kinetic - total[0]) / scale, std::abs(gravity - total[1]) / scale});
+  }
+  CHECK(worst < 1e-13);
+}
+
+}  // namespace
+
+TEST_CASE("HDF5 results read back bitwise equal to what was simulated", "[io]") {
+  const Model m = small_train();
+  auto [memory, file] = run_both(m, parse_fields("all"));
+  const ResultsFile r(file.string());
+  REQUIRE(r.time().size() == 101);
+  check_bitwise_equal(m, memory, r);
+  CHECK(r.body_names()[0] == "car0");
   CHECK(r.string_attribute("method").value() == "rk4");
   CHECK(r.number_attribute("step").value() == 0.005);
-  CHECK(r.read_item("/bodies/position", 3).size() == 3 * t.size());
+  CHECK(r.read_item("/bodies/position", 3).size() == 3 * r.time().size());
+  fs::remove_all(file.parent_path());
+}
+
+// A row of more than 16 MiB is not buffered: each series' row is written as it is made, in
+// slabs of 65536 items (the last one shorter), and must read back the same.
+TEST_CASE("a model too large to buffer its rows writes them in slabs with the same content", "[io]") {
+  ChainParams p;
+  p.bodies = 150000;  // 19 numbers per body and joint: 22 MB a row, 3 slabs
+  Model m = make_chain(p);
+  m.simulation.step = 1e-5;
+  m.simulation.t_end = 2e-5;
+  m.simulation.output_every = 1;
+  auto [memory, file] = run_both(m, parse_fields("all"));
+  const ResultsFile r(file.string());
+  REQUIRE(r.time().size() == 3);
+  check_bitwise_equal(m, memory, r);
+  check_attachment_points(m, r);
+  check_body_energies(m, r);
   fs::remove_all(file.parent_path());
 }
 
@@ -150,31 +219,7 @@ TEST_CASE("every series carries its unit and the joints' attachment points follo
   CHECK(r.dataset_string_attribute(energy_dataset, "units") == "J");
   CHECK(r.dataset_string_attribute(joint_force_dataset, "units") == "N, N m");
   CHECK(r.dataset_string_attribute(joint_attachment_dataset, "units") == "m");
-  // Each end at its body's position plus the rotated attachment point (the ground's fixed).
-  const std::vector<double> t = r.time();
-  const std::vector<std::uint64_t> shape = r.shape(joint_attachment_dataset);
-  REQUIRE(shape == std::vector<std::uint64_t>{t.size(), m.joints.size(), 6});
-  double worst = 0;
-  for (std::size_t row : {std::size_t{0}, t.size() / 2, t.size() - 1}) {
-    const std::vector<double> ends = r.read_row(joint_attachment_dataset, row);
-    const std::vector<double> pos = r.read_row("/bodies/position", row), quat = r.read_row("/bodies/orientation", row);
-    for (std::size_t j = 0; j < m.joints.size(); ++j) {
-      const Joint& joint = m.joints[j];
-      for (int end = 0; end < 2; ++end) {
-        const int body = end == 0 ? joint.body1 : joint.body2;
-        const Vec3& p = end == 0 ? joint.point1 : joint.point2;
-        Eigen::Vector3d expected(p[0], p[1], p[2]);
-        if (body != ground) {
-          const auto b = static_cast<std::size_t>(body);
-          const Eigen::Quaterniond q(quat[4 * b], quat[4 * b + 1], quat[4 * b + 2], quat[4 * b + 3]);
-          expected = Eigen::Vector3d(pos[3 * b], pos[3 * b + 1], pos[3 * b + 2]) + q * expected;
-        }
-        const Eigen::Vector3d written(ends.data() + 6 * j + 3 * end);
-        worst = std::max(worst, (written - expected).norm());
-      }
-    }
-  }
-  CHECK(worst < 1e-12);
+  check_attachment_points(m, r);
 }
 
 TEST_CASE("the bodies' energies sum to the run's kinetic and gravity energies", "[io]") {
@@ -186,20 +231,7 @@ TEST_CASE("the bodies' energies sum to the run's kinetic and gravity energies", 
   inertia[5] = 0.5 * small;
   auto [memory, file] = run_both(m, parse_fields("all"));
   const ResultsFile r(file.string());
-  REQUIRE(r.shape(body_energy_dataset) == std::vector<std::uint64_t>{r.time().size(), m.bodies.size(), 2});
-  CHECK(r.dataset_string_attribute(body_energy_dataset, "units") == "J");
-  double worst = 0;
-  for (std::size_t row = 0; row < r.time().size(); ++row) {
-    const std::vector<double> per_body = r.read_row(body_energy_dataset, row), total = r.read_row(energy_dataset, row);
-    double kinetic = 0, gravity = 0, scale = 1;
-    for (std::size_t i = 0; i < m.bodies.size(); ++i) {
-      kinetic += per_body[2 * i];
-      gravity += per_body[2 * i + 1];
-      scale += std::abs(per_body[2 * i]) + std::abs(per_body[2 * i + 1]);
-    }
-    worst = std::max({worst, std::abs(kinetic - total[0]) / scale, std::abs(gravity - total[1]) / scale});
-  }
-  CHECK(worst < 1e-13);
+  check_body_energies(m, r);
 }
 
 TEST_CASE("the model text is kept whole in /model and files with the old model attribute still read", "[io]") {
