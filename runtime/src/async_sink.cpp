@@ -29,7 +29,7 @@ void AsyncSink::start_writer(const MultibodySystem& system) {
   const SnapshotContent want = inner_->content();
   if (want.energy || want.joint_wrench) system_ = std::make_unique<MultibodySystem>(system);
   const std::size_t bytes = static_cast<std::size_t>(system.dimension()) * sizeof(double) + 64;
-  capacity_ = std::max<std::size_t>(2, capacity_bytes_ / bytes);
+  capacity_ = std::max<std::size_t>(1, capacity_bytes_ / bytes);
   writer_ = std::thread([this] { run(); });
 }
 

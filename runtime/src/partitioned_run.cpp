@@ -36,8 +36,9 @@ class SinkOutput final : public TightOutput {
     if (auto dv = partitioned::check(parts_)) throw RunError(divergence_message(model_, *dv, t, o_.method, o_.step));
     check_stop(o_, t);
     if (sink_ && snapshot >= 0) {
+      // Every body is some part's own, so y_ is gathered whole again whenever it is needed.
       partitioned::gather(parts_, whole_->layout(), y_);
-      emit(*whole_, sink_, t, y_, out_);
+      emit(*whole_, sink_, t, std::move(y_), out_);
     }
     if (o_.progress) o_.progress(t, steps);
   }

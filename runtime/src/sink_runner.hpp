@@ -13,19 +13,26 @@
 
 namespace mbsflow {
 
-inline void emit(MultibodySystem& sys, ResultSink* sink, double t, const Eigen::VectorXd& y, RunSummary& out) {
+// A snapshot of state y at t to the sink, with what the sink asked for. y is moved into
+// the snapshot: a run that gathers its state afresh for each snapshot holds no copy of a
+// million bodies' state beside the queued ones.
+inline void emit(MultibodySystem& sys, ResultSink* sink, double t, Eigen::VectorXd&& y, RunSummary& out) {
   const SnapshotContent want = sink->content();
   Snapshot s;
   s.t = t;
-  s.state = y;
+  s.state = std::move(y);
   if (want.joint_wrench) {
-    sys.joint_wrenches(t, y, s.joint_wrench);
+    sys.joint_wrenches(t, s.state, s.joint_wrench);
     s.motor_effort = sys.motor_efforts();
   }
-  if (want.energy) s.energy = sys.energy(t, y);
+  if (want.energy) s.energy = sys.energy(t, s.state);
   sink->write(std::move(s));
   ++out.snapshots;
   out.t_last_snapshot = t;
+}
+
+inline void emit(MultibodySystem& sys, ResultSink* sink, double t, const Eigen::VectorXd& y, RunSummary& out) {
+  emit(sys, sink, t, Eigen::VectorXd(y), out);
 }
 
 // "; results keep N snapshots up to t = T s", after what a stop dropped unwritten.

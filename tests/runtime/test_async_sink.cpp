@@ -47,7 +47,7 @@ void run_free_fall(AsyncSink& sink) {
 TEST_CASE("asynchronous sink keeps every snapshot in order and waits only when full", "[runtime]") {
   auto inner = std::make_unique<SlowSink>();
   SlowSink* seen = inner.get();
-  AsyncSink sink(std::move(inner), 1);  // room for 2 snapshots only
+  AsyncSink sink(std::move(inner), 1);  // room for 1 snapshot only
   seen->owner = &sink;
   run_free_fall(sink);
   REQUIRE(seen->times.size() == 201);

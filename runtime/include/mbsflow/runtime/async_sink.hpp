@@ -25,8 +25,9 @@ struct AsyncSinkStats {
 
 class AsyncSink : public ResultSink {
  public:
-  // capacity_bytes bounds the memory the queued snapshots take (at least 2 are queued).
-  explicit AsyncSink(std::unique_ptr<ResultSink> inner, std::size_t capacity_bytes = std::size_t{256} << 20);
+  // capacity_bytes bounds the memory the queued snapshots take (at least one is queued,
+  // besides the one being written). A million bodies' state is 104 MB: one queued.
+  explicit AsyncSink(std::unique_ptr<ResultSink> inner, std::size_t capacity_bytes = std::size_t{128} << 20);
   ~AsyncSink() override;
 
   SnapshotContent content() const override { return {}; }  // the writer computes the rest
