@@ -119,18 +119,19 @@ void write_driver(std::string& out, const Model& m, const Driver& d) {
   });
 }
 
-}  // namespace
-
 // One body or joint per line: readable, and error line numbers stay meaningful. The text
 // is written directly, item by item: no document of the model is ever built (a
-// million-body model's document tree would take gigabytes).
-std::string model_to_json(const Model& m) {
-  std::string out;
-  // About 250 characters per body and per joint; one reservation spares the copies of growth.
-  out.reserve(1024 + 256 * (m.bodies.size() + m.joints.size()));
+// million-body model's document tree would take gigabytes). After each item, once out
+// holds more than a megabyte, spill(out) takes it (and empties it), so that a file
+// is written without the whole text in memory (a million-body grid's is 690 MB).
+template <class Spill>
+void write_model_json(const Model& m, std::string& out, Spill spill) {
+  constexpr std::size_t spill_at = std::size_t{1} << 20;
+  bool first_key = true;
   out += "{\n";
-  auto key = [&out](const char* k) {
-    out += out.size() > 2 ? ",\n  " : "  ";
+  auto key = [&](const char* k) {
+    out += first_key ? "  " : ",\n  ";
+    first_key = false;
     json_text::write(out, k);
     out += ": ";
   };
@@ -145,6 +146,7 @@ std::string model_to_json(const Model& m) {
       out += "    ";
       write_item(items[i]);
       out += i + 1 < items.size() ? ",\n" : "\n";
+      if (out.size() > spill_at) spill(out);
     }
     out += "  ]";
   };
@@ -167,13 +169,28 @@ std::string model_to_json(const Model& m) {
     if (s.output_interval) sim("output_interval", *s.output_interval);
   }
   out += "\n}\n";
+}
+
+}  // namespace
+
+std::string model_to_json(const Model& m) {
+  std::string out;
+  // About 250 characters per body and per joint; one reservation spares the copies of growth.
+  out.reserve(1024 + 256 * (m.bodies.size() + m.joints.size()));
+  write_model_json(m, out, [](std::string&) {});
   return out;
 }
 
 void write_model_file(const Model& model, const std::string& path) {
   std::ofstream out(path, std::ios::binary);
   if (!out) throw InputError(path + ": cannot write the model file");
-  out << model_to_json(model);
+  std::string text;
+  auto spill = [&](std::string& t) {
+    out.write(t.data(), static_cast<std::streamsize>(t.size()));
+    t.clear();
+  };
+  write_model_json(model, text, spill);
+  spill(text);
   if (!out) throw InputError(path + ": error while writing the model file");
 }
 

@@ -1,5 +1,9 @@
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <unistd.h>
 #include <nlohmann/json.hpp>
 
 #include "mbsflow/error.hpp"
@@ -74,6 +78,23 @@ TEST_CASE("models written and read back are the same model", "[io]") {
       CHECK(back.joints[j].frame2 == m.joints[j].frame2);
     }
   }
+}
+
+// write_model_file hands the text to the file a megabyte at a time; the file must hold
+// exactly model_to_json's text, cut wherever the megabytes fall (this train's text is
+// over 5 MB, with drivers after the joints).
+TEST_CASE("a model file written in pieces holds exactly the model's text", "[io]") {
+  TrainParams tp;
+  tp.wagons = 3000;
+  const Model m = make_train(tp);
+  const std::filesystem::path file = std::filesystem::temp_directory_path() / ("mbsflow_writer_" + std::to_string(::getpid()) + ".json");
+  write_model_file(m, file.string());
+  std::ifstream in(file, std::ios::binary);
+  const std::string written((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string text = model_to_json(m);
+  CHECK(text.size() > (std::size_t{5} << 20));
+  CHECK(written == text);
+  std::filesystem::remove(file);
 }
 
 TEST_CASE("input errors carry file, line, column and field path", "[io]") {
