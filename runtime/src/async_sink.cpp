@@ -33,19 +33,30 @@ void AsyncSink::start_writer(const MultibodySystem& system) {
   writer_ = std::thread([this] { run(); });
 }
 
+// Lock held. Waits while capacity_ snapshots are queued or being written (unless the writer
+// failed), in slices: a stop request does not signal the condition. False: still full,
+// and stopping.
+bool AsyncSink::wait_for_room(std::unique_lock<std::mutex>& lock) {
+  const auto full = [&] { return queue_.size() + (writing_ ? 1 : 0) >= capacity_ && !error_; };
+  if (!full()) return true;
+  const auto start = std::chrono::steady_clock::now();
+  ++stats_.waits;
+  while (!not_full_.wait_for(lock, std::chrono::milliseconds(50), [&] { return !full(); }))
+    if (stopping()) break;
+  stats_.wait_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return !full();
+}
+
+void AsyncSink::make_room() {
+  std::unique_lock lock(mutex_);
+  wait_for_room(lock);
+}
+
 void AsyncSink::write(Snapshot&& snapshot) {
   std::unique_lock lock(mutex_);
-  if (queue_.size() >= capacity_ && !error_) {
-    const auto start = std::chrono::steady_clock::now();
-    ++stats_.waits;
-    // Waits in slices: a stop request does not signal the condition.
-    while (!not_full_.wait_for(lock, std::chrono::milliseconds(50), [&] { return queue_.size() < capacity_ || error_; }))
-      if (stopping()) break;
-    stats_.wait_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    if (queue_.size() >= capacity_ && !error_) {  // stopping: this one is not kept
-      ++dropped_;
-      return;
-    }
+  if (!wait_for_room(lock)) {  // stopping: this one is not kept
+    ++dropped_;
+    return;
   }
   if (error_) {
     lock.unlock();

@@ -36,7 +36,9 @@ class SinkOutput final : public TightOutput {
     if (auto dv = partitioned::check(parts_)) throw RunError(divergence_message(model_, *dv, t, o_.method, o_.step));
     check_stop(o_, t);
     if (sink_ && snapshot >= 0) {
-      // Every body is some part's own, so y_ is gathered whole again whenever it is needed.
+      // Every body is some part's own, so y_ is gathered whole again whenever it is needed;
+      // here once the writer has room for it.
+      sink_->make_room();
       partitioned::gather(parts_, whole_->layout(), y_);
       emit(*whole_, sink_, t, std::move(y_), out_);
     }
@@ -160,7 +162,7 @@ RunSummary run_partitioned(std::shared_ptr<const Model> shared, const Decomposit
   LocalExchange exchange(local);
   SinkOutput output(model, o, parts, whole, sink, out, y);
   run_with_sink(sink, out, [&] {
-    if (sink && !resumed) emit(*whole, sink, o.t_start, y, out);
+    if (sink && !resumed) emit(*whole, sink, o.t_start, std::move(y), out);  // gathered again when needed
     arena.execute([&] {
       const TightCounts counts = run_tight_coupling(
           {d, local, o, exchange, output, par.executor == Executor::barrier, &clock, resumed ? &*resumed : nullptr});

@@ -32,6 +32,7 @@ inline void emit(MultibodySystem& sys, ResultSink* sink, double t, Eigen::Vector
 }
 
 inline void emit(MultibodySystem& sys, ResultSink* sink, double t, const Eigen::VectorXd& y, RunSummary& out) {
+  sink->make_room();  // before the copy
   emit(sys, sink, t, Eigen::VectorXd(y), out);
 }
 

@@ -148,3 +148,37 @@ TEST_CASE("a checkpoint through an asynchronous sink finds every snapshot before
   REQUIRE(seen->at_sync.size() == counted.size());
   for (std::size_t i = 0; i < counted.size(); ++i) CHECK(static_cast<long>(seen->at_sync[i]) == counted[i]);
 }
+
+TEST_CASE("with room for one snapshot a run may gather the next only once the writer is done with the last", "[runtime]") {
+  // The writer holds its first snapshot until released.
+  struct HeldSink : test::MemorySink {
+    std::atomic<bool> release{false};
+    void write(Snapshot&& s) override {
+      while (!release) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+      test::MemorySink::write(std::move(s));
+    }
+  };
+  auto inner = std::make_unique<HeldSink>();
+  HeldSink* seen = inner.get();
+  AsyncSink sink(std::move(inner), 1);  // room for one: queued or being written
+  MultibodySystem sys(falling_body());
+  sink.begin(sys);
+  sink.make_room();  // nothing in flight: returns at once
+  CHECK(sink.waits() == 0);
+  Snapshot s;
+  s.state = sys.initial_state();
+  sink.write(std::move(s));
+  std::atomic<bool> returned{false};
+  std::thread run([&] {
+    sink.make_room();
+    returned = true;
+  });
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  CHECK_FALSE(returned);  // the writer still holds the first
+  seen->release = true;
+  run.join();
+  CHECK(returned);
+  CHECK(sink.waits() == 1);
+  sink.end();
+  CHECK(seen->times.size() == 1);
+}

@@ -25,14 +25,16 @@ struct AsyncSinkStats {
 
 class AsyncSink : public ResultSink {
  public:
-  // capacity_bytes bounds the memory the queued snapshots take (at least one is queued,
-  // besides the one being written). A million bodies' state is 104 MB: one queued.
+  // capacity_bytes bounds the memory of the snapshots queued and being written (at least
+  // one). A million bodies' state is 104 MB: the run hands over the next snapshot once the
+  // writer is done with the last.
   explicit AsyncSink(std::unique_ptr<ResultSink> inner, std::size_t capacity_bytes = std::size_t{128} << 20);
   ~AsyncSink() override;
 
   SnapshotContent content() const override { return {}; }  // the writer computes the rest
   void begin(const MultibodySystem& system) override;
   void write(Snapshot&& snapshot) override;
+  void make_room() override;  // waits until write() would not
   void write_coupling(const std::vector<CouplingRecord>& records) override;  // handed on at end()
   void end() override;
   void sync() override;  // waits until the queue is written, then syncs the inner sink
@@ -50,12 +52,13 @@ class AsyncSink : public ResultSink {
   void run();
   void start_writer(const MultibodySystem& system);
   void rethrow_writer_error();
+  bool wait_for_room(std::unique_lock<std::mutex>& lock);
   bool stopping() const;
 
   std::unique_ptr<ResultSink> inner_;
   std::unique_ptr<MultibodySystem> system_;  // the writer's copy, for energies and joint wrenches
   std::size_t capacity_bytes_;
-  std::size_t capacity_ = 2;
+  std::size_t capacity_ = 1;  // snapshots queued and being written
   mutable std::mutex mutex_;
   std::condition_variable not_empty_, not_full_;
   std::deque<Snapshot> queue_;

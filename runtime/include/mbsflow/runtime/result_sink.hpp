@@ -48,6 +48,10 @@ class ResultSink {
   virtual SnapshotContent content() const { return {}; }
   virtual void begin(const MultibodySystem& system) = 0;
   virtual void write(Snapshot&& snapshot) = 0;
+  // Returns once write() would take a snapshot without waiting (AsyncSink: the writer has
+  // room), so that a run gathers the state it will hand over only then; a million bodies'
+  // state is 104 MB.
+  virtual void make_room() {}
   // Loosely coupled runs: the macro steps' records, once, before end() (failed runs too).
   virtual void write_coupling(const std::vector<CouplingRecord>& records) { (void)records; }
   // Flushes and closes; called on every way out of a run, failed runs included.
