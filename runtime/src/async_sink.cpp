@@ -153,6 +153,7 @@ void AsyncSink::run() {
         s.motor_effort = system_->motor_efforts();
       }
       inner_->write(std::move(s));
+      s = Snapshot();  // its memory goes before the run is told that there is room
       const double spent = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       {
         std::lock_guard lock(mutex_);
