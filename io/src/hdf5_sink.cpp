@@ -127,10 +127,14 @@ RowBlock row_block(const Series& s, hsize_t first_row, hsize_t rows) {
   return b;
 }
 
-// Extends s to b.dims and writes data (row-major, b.count's shape) at b.start.
-void write_block(Series& s, const RowBlock& b, const double* data) {
+// Extends s to b.dims; its file space then, for write_block.
+h5::Handle extend(Series& s, const RowBlock& b) {
   h5::check(H5Dset_extent(s.set.get(), b.dims.data()), "extend " + s.path);
-  const h5::Handle file_space(H5Dget_space(s.set.get()), H5Sclose, "get the space of " + s.path);
+  return h5::Handle(H5Dget_space(s.set.get()), H5Sclose, "get the space of " + s.path);
+}
+
+// Writes data (row-major, b.count's shape) at b.start of s, already extended.
+void write_block(Series& s, const h5::Handle& file_space, const RowBlock& b, const double* data) {
   h5::check(H5Sselect_hyperslab(file_space.get(), H5S_SELECT_SET, b.start.data(), nullptr, b.count.data(), nullptr),
             "select rows of " + s.path);
   const h5::Handle mem(H5Screate_simple(static_cast<int>(b.count.size()), b.count.data(), nullptr), H5Sclose,
@@ -142,7 +146,8 @@ void write_block(Series& s, const RowBlock& b, const double* data) {
 void append(Series& s, hsize_t first_row) {
   const std::size_t row = s.row_size();
   if (row == 0 || s.buffer.empty()) return;
-  write_block(s, row_block(s, first_row, s.buffer.size() / row), s.buffer.data());
+  const RowBlock b = row_block(s, first_row, s.buffer.size() / row);
+  write_block(s, extend(s, b), b, s.buffer.data());
   s.buffer.clear();
 }
 
@@ -218,13 +223,14 @@ template <class Fill>
 void write_row_in_slabs(Series& s, hsize_t row, Fill&& fill) {
   constexpr hsize_t slab = 16 * chunk_samples;
   RowBlock b = row_block(s, row, 1);
+  const h5::Handle file_space = extend(s, b);  // once for the row
   const hsize_t items = s.item[0];
   for (hsize_t first = 0; first < items; first += slab) {
     b.start[1] = first;
     b.count[1] = std::min(slab, items - first);
     s.buffer.clear();
     fill(first, first + b.count[1], s.buffer);
-    write_block(s, b, s.buffer.data());
+    write_block(s, file_space, b, s.buffer.data());
   }
   s.buffer.clear();
 }
