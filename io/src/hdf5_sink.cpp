@@ -169,8 +169,12 @@ void append_attachment_points(const Model& m, const StateLayout& l, const Eigen:
   }
 }
 
-// The coupling records as columns of /coupling (in a file not in SWMR mode).
+// The coupling records as columns of /coupling (in a file not in SWMR mode), in place of
+// any there: a resumed run's file holds its predecessor's if that was killed after it
+// wrote them, while it closed the file.
 void write_coupling_records(hid_t file, const std::vector<CouplingRecord>& records) {
+  if (H5Lexists(file, "/coupling", H5P_DEFAULT) > 0)
+    h5::check(H5Ldelete(file, "/coupling", H5P_DEFAULT), "remove the coupling records of the run resumed");
   if (records.empty()) return;
   const hsize_t n = records.size();
   const h5::Handle lcpl(H5Pcreate(H5P_LINK_CREATE), H5Pclose, "create a link property list");

@@ -302,3 +302,45 @@ TEST_CASE("a prepared results file holds the model's text before the run begins 
   }
   fs::remove(file);
 }
+
+TEST_CASE("a run resumed from a file whose run was killed as it closed writes its coupling records in their place", "[io]") {
+  // A checkpointed run killed after end() wrote /coupling leaves it in the file; the
+  // resumed run writes them again at its end.
+  ChainParams p;
+  p.bodies = 3;
+  const Model m = make_chain(p);
+  const MultibodySystem sys(m);
+  const fs::path file = temp_file("coupling_resumed.h5");
+  fs::remove(file);
+  const RunInfo info{"{}", "rk4", 0.1, 0.0, 1.0, 1, "test"};
+  const auto snapshot = [&](double t) {
+    Snapshot s;
+    s.t = t;
+    s.state = sys.initial_state();
+    s.energy = Energy{};
+    return s;
+  };
+  const auto records = [](long n) {
+    std::vector<CouplingRecord> r(static_cast<std::size_t>(n));
+    for (long i = 0; i < n; ++i) r[static_cast<std::size_t>(i)] = {i + 1, 0.1 * i, 0.1 * (i + 1), 1e-9, 1e-8, 0};
+    return r;
+  };
+  std::string identity;
+  {
+    Hdf5Sink first(file.string(), FieldSet{}, info);
+    first.begin(sys);
+    for (double t : {0.0, 0.1, 0.2}) first.write(snapshot(t));
+    first.write_coupling(records(2));
+    first.end();
+    identity = first.identity();
+  }
+  Hdf5Sink resumed(file.string(), FieldSet{}, info);
+  resumed.resume(sys, 2, identity);
+  for (double t : {0.2, 0.3}) resumed.write(snapshot(t));
+  resumed.write_coupling(records(3));
+  REQUIRE_NOTHROW(resumed.end());
+  const ResultsFile r(file.string());
+  CHECK(r.time() == std::vector<double>{0.0, 0.1, 0.2, 0.3});
+  CHECK(r.read("/coupling/index") == std::vector<double>{1.0, 2.0, 3.0});
+  CHECK(r.read("/coupling/t_end").back() == 0.1 * 3);
+}
