@@ -440,16 +440,15 @@ void MultibodySystem::after_step_of(double t, Eigen::VectorXd& y, std::span<cons
   for (int c : clusters_of(bodies)) project_cluster(c, t, y);
 }
 
-double MultibodySystem::elastic_energy(const CompiledJoint& j) const {
-  if (j.kinematic >= 0) return kinematic_energy(j);
+template <class Frame>
+double MultibodySystem::elastic_energy(const CompiledJoint& j, const Frame& a, const Frame& b) const {
   const JointLaw& law = law_of(j);
   if (law.spring) {
-    const Eigen::Vector3d delta = pos_.col(j.b) + rot_[static_cast<std::size_t>(j.b)] * law.pb - pos_.col(j.a) -
-                                  rot_[static_cast<std::size_t>(j.a)] * law.pa;
+    const Eigen::Vector3d delta = b.pos + b.rot * law.pb - a.pos - a.rot * law.pa;
     const double e = delta.norm() - law.rest_length;
     return 0.5 * law.kt[0] * e * e;
   }
-  const DeflectionT<double> def = bushing_deflection<double>(law, body_frame_at(j.a), body_frame_at(j.b));
+  const DeflectionT<double> def = bushing_deflection<double>(law, a, b);
   const Eigen::Vector3d& theta = def.rotation.theta;
   double e = -law.preload_force.dot(def.d) - law.preload_torque.dot(theta);
   for (int axis = 0; axis < 6; ++axis) {
@@ -461,17 +460,47 @@ double MultibodySystem::elastic_energy(const CompiledJoint& j) const {
   return e;
 }
 
+// A body's frame from its state alone (ground at index n), bit for bit as an evaluation's
+// kinematics hold it: the rotation matrix is the same arithmetic as on the lanes.
+BodyFrameT<double> MultibodySystem::frame_from_state(int i, const Eigen::VectorXd& y) const {
+  if (i == layout_.bodies) {
+    BodyFrameT<double> ground_frame;
+    ground_frame.rot.setIdentity();
+    ground_frame.pos.setZero();
+    ground_frame.vel.setZero();
+    ground_frame.omega.setZero();
+    ground_frame.quat = Eigen::Vector4d(1.0, 0.0, 0.0, 0.0);
+    return ground_frame;
+  }
+  return body_frame<double>(y.segment<3>(layout_.position(i)), y.segment<4>(layout_.orientation(i)),
+                            y.segment<3>(layout_.velocity(i)), y.segment<3>(layout_.angular_velocity(i)));
+}
+
 Energy MultibodySystem::energy(double t, const Eigen::VectorXd& y) {
-  update_kinematics(t, y);
+  const std::vector<CompiledJoint>& joints = compiled_->joints;
+  // Without drivers, force elements and kinematic joints the energies need only the state,
+  // and no workspace is made: the results writer's copy of a million-body system, which
+  // evaluates nothing else, would otherwise hold 176 MB of kinematics.
+  const bool from_state = model().drivers.empty() && compiled_->elements.empty() &&
+                          std::none_of(joints.begin(), joints.end(), [](const CompiledJoint& j) { return j.kinematic >= 0; });
+  if (!from_state) update_kinematics(t, y);
   Energy e;
   for (Eigen::Index i = 0; i < layout_.bodies; ++i) {
     const auto bi = static_cast<std::size_t>(i);
     const double m = model().bodies[bi].mass;
     const Eigen::Vector3d w = y.segment<3>(layout_.angular_velocity(i));
-    e.kinetic += 0.5 * m * vel_.col(i).squaredNorm() + 0.5 * w.dot(body_law(bi).inertia * w);
-    e.gravity -= m * gravity_.dot(pos_.col(i));
+    // The kinematics copy a free body's position and velocity from y; a driven body's follow its driver.
+    const bool driven = compiled_->driver_of_body[bi] >= 0;
+    const Eigen::Vector3d v = driven ? Eigen::Vector3d(vel_.col(i)) : Eigen::Vector3d(y.segment<3>(layout_.velocity(i)));
+    const Eigen::Vector3d r = driven ? Eigen::Vector3d(pos_.col(i)) : Eigen::Vector3d(y.segment<3>(layout_.position(i)));
+    e.kinetic += 0.5 * m * v.squaredNorm() + 0.5 * w.dot(body_law(bi).inertia * w);
+    e.gravity -= m * gravity_.dot(r);
   }
-  for (const CompiledJoint& j : compiled_->joints) e.elastic += elastic_energy(j);
+  for (const CompiledJoint& j : joints)
+    e.elastic += from_state        ? elastic_energy(j, frame_from_state(j.a, y), frame_from_state(j.b, y))
+                 : j.kinematic >= 0 ? kinematic_energy(j)
+                                    : elastic_energy(j, body_frame_at(j.a), body_frame_at(j.b));
+  if (from_state) return e;
   const Kinematics k = kinematics();
   for (const auto& element : compiled_->elements) e.elastic += element->energy(t, k);
   return e;

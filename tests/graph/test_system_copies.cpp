@@ -106,17 +106,45 @@ TEST_CASE("a system makes its workspace at its first evaluation: built and copie
   CHECK(a == b);
 }
 
-TEST_CASE("a system that only computes energies makes no joint wrench workspace", "[graph]") {
-  // The results writer's copy computes energies; the 9 numbers per joint of the joints'
-  // wrenches (72 bytes a joint, two joints a body on the grid) come with the first
-  // joint-force evaluation.
+TEST_CASE("a system that only computes energies makes no workspace", "[graph]") {
+  // The results writer's copy computes energies. Without drivers, force elements and
+  // kinematic joints they come from the state alone; the kinematics (176 bytes a body)
+  // and the joints' wrenches (72 bytes a joint, two joints a body on the grid) come with
+  // the first evaluation.
   const Model m = grid();
   MultibodySystem sys(m);
   const Eigen::VectorXd y = sys.initial_state();
   const Energy e = sys.energy(0.0, y);
   const std::size_t after_energy = sys.memory_use().workspace;
+  CHECK(static_cast<double>(after_energy) / static_cast<double>(m.bodies.size()) < 40.0);
   Eigen::VectorXd dydt(sys.dimension());
   sys.rhs(0.0, y, dydt);
-  CHECK(sys.memory_use().workspace >= after_energy + 72 * m.joints.size());
+  CHECK(sys.memory_use().workspace >= after_energy + 176 * m.bodies.size() + 72 * m.joints.size());
   CHECK(sys.energy(0.0, y).elastic == e.elastic);
+}
+
+TEST_CASE("energies from the state alone are bit for bit those through an evaluation's kinematics", "[graph]") {
+  // The same grid with a force element that stores no energy takes the kinematics' way.
+  Model plain = grid();
+  plain.joints[3].type = JointType::spring;  // one spring among the bushings
+  plain.joints[3].rest_length = 0.07;
+  Model with_element = plain;
+  with_element.force_elements.push_back(std::make_shared<Tether>(2, 9));
+  MultibodySystem a(plain), b(with_element);
+  Eigen::VectorXd y = a.initial_state();
+  // Turned, moved and moving bodies: every rotation matrix and deflection non-trivial.
+  const StateLayout& l = a.layout();
+  for (Eigen::Index i = 0; i < l.bodies; ++i) {
+    const double s = 0.1 * static_cast<double>(i + 1);
+    y.segment<4>(l.orientation(i)) = Eigen::Vector4d(1.0, 0.1 * std::sin(s), 0.2 * std::cos(3 * s), 0.05 * s).normalized();
+    y.segment<3>(l.position(i)) += Eigen::Vector3d(0.01 * std::sin(7 * s), 0.02 * std::cos(5 * s), 0.003 * s);
+    y.segment<3>(l.velocity(i)) = Eigen::Vector3d(std::sin(s), 0.5, -s);
+    y.segment<3>(l.angular_velocity(i)) = Eigen::Vector3d(0.3, std::cos(s), 2 * s);
+  }
+  const Energy ea = a.energy(0.25, y), eb = b.energy(0.25, y);
+  CHECK(a.memory_use().workspace < b.memory_use().workspace);  // only b made the kinematics
+  CHECK(ea.elastic > 0.0);
+  CHECK(ea.kinetic == eb.kinetic);
+  CHECK(ea.gravity == eb.gravity);
+  CHECK(ea.elastic == eb.elastic);
 }

@@ -31,6 +31,8 @@ struct BodyMotionT;  // constraint_rows.hpp
 using BodyMotion = BodyMotionT<double>;
 struct JointGeometry;  // constraint_rows.hpp
 struct BodyFrameView;  // force_laws.hpp
+template <class S>
+struct BodyFrameT;  // force_laws.hpp
 
 namespace detail {
 // Owns a T that this header does not define and copies it deeply (the copy and destroy
@@ -229,7 +231,9 @@ class MultibodySystem {
   const std::array<ForceTable, 6>* tables_of(const CompiledJoint& j) const {
     return j.tables >= 0 ? &compiled_->tables[static_cast<std::size_t>(j.tables)] : nullptr;
   }
-  double elastic_energy(const CompiledJoint& j) const;
+  template <class Frame>
+  double elastic_energy(const CompiledJoint& j, const Frame& a, const Frame& b) const;  // not a kinematic joint
+  BodyFrameT<double> frame_from_state(int i, const Eigen::VectorXd& y) const;
 
   std::shared_ptr<const Model> model_;
   StateLayout layout_;
