@@ -66,7 +66,10 @@ mbsflow::Model build_model() {
     j.point1 = i == 0 ? mbsflow::Vec3{0.15, 1.0, 0.0} : mbsflow::Vec3{0.15, 0.0, 0.0};
     j.point2 = {-0.15, 0.0, 0.0};
     mbsflow::set_bushing_from_frequency(m, j, 150.0, 0.05);  // the seed's (Omega, mu) form
-    for (std::size_t a = 3; a < 6; ++a) j.stiffness[a] = j.damping[a] = 0.0;  // free to swing
+    for (std::size_t a = 3; a < 6; ++a) {  // free to swing
+      j.stiffness.set(a, 0.0);
+      j.damping.set(a, 0.0);
+    }
     m.joints.push_back(j);
   }
   m.simulation.t_end = 3.0;

@@ -24,8 +24,9 @@ Body body(std::string name, double mass, Vec6 inertia, Vec3 position, Vec3 veloc
 }
 
 // Bushing with per-axis stiffness; damping from a damping ratio on each axis with the
-// joined reduced mass (translation) or reduced inertia (rotation).
-Joint bushing(const Model& m, std::string name, int b1, int b2, Vec3 p1, Vec3 p2, Vec6 k, double zeta) {
+// joined reduced mass (translation) or reduced inertia (rotation). Its values are shared
+// with the generator's joints before it where they repeat (JointValueSharing).
+Joint bushing(const Model& m, JointValueSharing& shared, std::string name, int b1, int b2, Vec3 p1, Vec3 p2, Vec6 k, double zeta) {
   Joint j;
   j.name = std::move(name);
   j.body1 = b1;
@@ -33,14 +34,17 @@ Joint bushing(const Model& m, std::string name, int b1, int b2, Vec3 p1, Vec3 p2
   j.point1 = p1;
   j.point2 = p2;
   j.stiffness = k;
+  Vec6 c;
   for (std::size_t a = 0; a < 6; ++a) {
     const std::size_t ia = a < 3 ? 0 : a - 3;
     auto inert = [&](int b) { return a < 3 ? m.bodies[static_cast<std::size_t>(b)].mass
                                            : m.bodies[static_cast<std::size_t>(b)].inertia[ia]; };
     const double x2 = inert(b2);
     const double red = b1 == ground ? x2 : inert(b1) * x2 / (inert(b1) + x2);
-    j.damping[a] = 2.0 * zeta * std::sqrt(k[a] * red);
+    c[a] = 2.0 * zeta * std::sqrt(k[a] * red);
   }
+  j.damping = c;
+  shared(j);
   return j;
 }
 
@@ -53,6 +57,7 @@ void require(bool ok, const char* what) {
 Model make_chain(const ChainParams& p) {
   require(p.bodies >= 1, "chain: {bodies} must be >= 1");
   Model m;
+  JointValueSharing shared;
   m.name = "chain-" + std::to_string(p.bodies);
   m.gravity = {0.0, -9.81, 0.0};
   const double l = p.link_length, r = 0.1 * l;
@@ -60,9 +65,9 @@ Model make_chain(const ChainParams& p) {
   const Vec6 k{p.stiffness, p.stiffness, p.stiffness, p.rotational_stiffness, p.rotational_stiffness,
                p.rotational_stiffness};
   for (int i = 0; i < p.bodies; ++i) m.bodies.push_back(body("link" + std::to_string(i), p.mass, inertia, {(i + 0.5) * l, 0, 0}));
-  m.joints.push_back(bushing(m, "pin", ground, 0, {0, 0, 0}, {-0.5 * l, 0, 0}, k, p.damping_ratio));
+  m.joints.push_back(bushing(m, shared, "pin", ground, 0, {0, 0, 0}, {-0.5 * l, 0, 0}, k, p.damping_ratio));
   for (int i = 1; i < p.bodies; ++i)
-    m.joints.push_back(bushing(m, "j" + std::to_string(i), i - 1, i, {0.5 * l, 0, 0}, {-0.5 * l, 0, 0}, k, p.damping_ratio));
+    m.joints.push_back(bushing(m, shared, "j" + std::to_string(i), i - 1, i, {0.5 * l, 0, 0}, {-0.5 * l, 0, 0}, k, p.damping_ratio));
   m.simulation.t_end = 1.0;
   m.simulation.output_every = 100;
   return m;
@@ -71,6 +76,7 @@ Model make_chain(const ChainParams& p) {
 Model make_grid(const GridParams& p) {
   require(p.rows >= 1 && p.cols >= 1, "grid: {rows} and {cols} must be >= 1");
   Model m;
+  JointValueSharing shared;
   m.name = "grid-" + std::to_string(p.rows) + "x" + std::to_string(p.cols);
   m.gravity = {0.0, -9.81, 0.0};
   const double s = p.spacing;
@@ -83,11 +89,11 @@ Model make_grid(const GridParams& p) {
       m.bodies.push_back(body("p" + std::to_string(r) + "_" + std::to_string(c), p.mass, inertia, {(c + 0.5) * s, 0, r * s}));
   const double h = 0.5 * s;
   for (int r = 0; r < p.rows; ++r) {
-    m.joints.push_back(bushing(m, "clamp" + std::to_string(r), ground, id(r, 0), {0, 0, r * s}, {-h, 0, 0}, k, p.damping_ratio));
+    m.joints.push_back(bushing(m, shared, "clamp" + std::to_string(r), ground, id(r, 0), {0, 0, r * s}, {-h, 0, 0}, k, p.damping_ratio));
     for (int c = 0; c < p.cols; ++c) {
       const std::string tag = std::to_string(r) + "_" + std::to_string(c);
-      if (c + 1 < p.cols) m.joints.push_back(bushing(m, "x" + tag, id(r, c), id(r, c + 1), {h, 0, 0}, {-h, 0, 0}, k, p.damping_ratio));
-      if (r + 1 < p.rows) m.joints.push_back(bushing(m, "z" + tag, id(r, c), id(r + 1, c), {0, 0, h}, {0, 0, -h}, k, p.damping_ratio));
+      if (c + 1 < p.cols) m.joints.push_back(bushing(m, shared, "x" + tag, id(r, c), id(r, c + 1), {h, 0, 0}, {-h, 0, 0}, k, p.damping_ratio));
+      if (r + 1 < p.rows) m.joints.push_back(bushing(m, shared, "z" + tag, id(r, c), id(r + 1, c), {0, 0, h}, {0, 0, -h}, k, p.damping_ratio));
     }
   }
   m.simulation.t_end = 1.0;
@@ -98,6 +104,7 @@ Model make_grid(const GridParams& p) {
 Model make_train(const TrainParams& p) {
   require(p.wagons >= 1, "train: {wagons} must be >= 1");
   Model m;
+  JointValueSharing shared;
   m.name = "train-" + std::to_string(p.wagons);
   const double g = 9.81;
   m.gravity = {0.0, -g, 0.0};
@@ -120,7 +127,7 @@ Model make_train(const TrainParams& p) {
       const std::string btag = tag + (s == 0 ? "f" : "r");
       const int bogie = static_cast<int>(m.bodies.size());
       m.bodies.push_back(body("bogie" + btag, bogie_mass, box_inertia(bogie_mass, 3.0, 0.8, 2.5), {x0 + bx, y_bogie, 0}, v));
-      Joint sec = bushing(m, "secondary" + btag, bogie, car, {0, 0.3, 0}, {bx, y_bogie + 0.3 - y_car, 0}, secondary, 0.2);
+      Joint sec = bushing(m, shared, "secondary" + btag, bogie, car, {0, 0.3, 0}, {bx, y_bogie + 0.3 - y_car, 0}, secondary, 0.2);
       sec.preload = {0, secondary_load, 0, 0, 0, 0};
       m.joints.push_back(sec);
       for (int a = 0; a < 2; ++a) {
@@ -137,14 +144,14 @@ Model make_train(const TrainParams& p) {
         d.displacement[2] = TimeFunction::random(p.lateral_roughness, 5.0, p.seed + 7919u, 48);
         d.displacement[1].delay = d.displacement[2].delay = -x / p.speed;
         m.drivers.push_back(d);
-        Joint pri = bushing(m, "primary" + btag + std::to_string(a), ws, bogie, {0, 0, 0}, {ax, y_wheel - y_bogie, 0},
+        Joint pri = bushing(m, shared, "primary" + btag + std::to_string(a), ws, bogie, {0, 0, 0}, {ax, y_wheel - y_bogie, 0},
                             primary, 0.1);
         pri.preload = {0, primary_load, 0, 0, 0, 0};
         m.joints.push_back(pri);
       }
     }
     if (w > 0)
-      m.joints.push_back(bushing(m, "coupler" + tag, car - 7, car, {-0.5 * (pitch), 0, 0}, {0.5 * pitch, 0, 0}, coupler, 0.1));
+      m.joints.push_back(bushing(m, shared, "coupler" + tag, car - 7, car, {-0.5 * (pitch), 0, 0}, {0.5 * pitch, 0, 0}, coupler, 0.1));
   }
   m.simulation.t_end = 2.0;
   m.simulation.output_every = 10;
@@ -155,6 +162,7 @@ Model make_random_tree(const RandomTreeParams& p) {
   require(p.bodies >= 1, "random: {bodies} must be >= 1");
   require(p.cycles >= 0, "random: {cycles} must be >= 0");
   Model m;
+  JointValueSharing shared;
   m.name = "random-" + std::to_string(p.bodies) + "-" + std::to_string(p.cycles);
   m.gravity = {0.0, -9.81, 0.0};
   std::mt19937_64 rng(p.seed);  // its raw output is the same everywhere
@@ -168,7 +176,7 @@ Model make_random_tree(const RandomTreeParams& p) {
     const Vec3& ra = m.bodies[static_cast<std::size_t>(a)].position;
     const Vec3& rb = m.bodies[static_cast<std::size_t>(b)].position;
     const Vec3 mid{0.5 * (ra[0] + rb[0]), 0.5 * (ra[1] + rb[1]), 0.5 * (ra[2] + rb[2])};
-    m.joints.push_back(bushing(m, std::move(name), a, b, {mid[0] - ra[0], mid[1] - ra[1], mid[2] - ra[2]},
+    m.joints.push_back(bushing(m, shared, std::move(name), a, b, {mid[0] - ra[0], mid[1] - ra[1], mid[2] - ra[2]},
                                {mid[0] - rb[0], mid[1] - rb[1], mid[2] - rb[2]}, k, 0.05));
   };
   for (int i = 0; i < p.bodies; ++i) {
@@ -181,7 +189,7 @@ Model make_random_tree(const RandomTreeParams& p) {
     }
     m.bodies.push_back(body("r" + std::to_string(i), mass, inertia, at));
     if (parent == ground)
-      m.joints.push_back(bushing(m, "root", ground, 0, {0, 0, 0}, {0, len, 0}, k, 0.05));
+      m.joints.push_back(bushing(m, shared, "root", ground, 0, {0, 0, 0}, {0, len, 0}, k, 0.05));
     else
       join("t" + std::to_string(i), parent, i);
   }

@@ -19,6 +19,7 @@ double reduced(std::optional<double> a, double b) { return a ? (*a * b) / (*a + 
 void set_bushing_from_frequency(const Model& model, Joint& joint, double omega, double mu) {
   const Body& b2 = model.bodies.at(static_cast<std::size_t>(joint.body2));
   const Body* b1 = joint.body1 == ground ? nullptr : &model.bodies.at(static_cast<std::size_t>(joint.body1));
+  Vec6 k, c;
   for (int axis = 0; axis < 6; ++axis) {
     double m;
     if (axis < 3) {
@@ -27,9 +28,11 @@ void set_bushing_from_frequency(const Model& model, Joint& joint, double omega, 
       const auto i = static_cast<std::size_t>(axis - 3);
       m = reduced(b1 ? std::optional<double>(b1->inertia[i]) : std::nullopt, b2.inertia[i]);
     }
-    joint.stiffness[static_cast<std::size_t>(axis)] = m * omega * omega;
-    joint.damping[static_cast<std::size_t>(axis)] = 2.0 * mu * omega * m;
+    k[static_cast<std::size_t>(axis)] = m * omega * omega;
+    c[static_cast<std::size_t>(axis)] = 2.0 * mu * omega * m;
   }
+  joint.stiffness = k;
+  joint.damping = c;
 }
 
 }  // namespace mbsflow

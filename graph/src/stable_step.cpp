@@ -62,7 +62,7 @@ StableStep estimate_stable_step(const Model& model) {
     const Joint& j = model.joints[k];
     const JointRates r = rates(j);
     const int ends[2] = {j.body1, j.body2};
-    const Vec3* points[2] = {&j.point1, &j.point2};
+    const Vec3* points[2] = {&j.point1.get(), &j.point2.get()};
     for (int s = 0; s < 2; ++s) {
       const int b = ends[s], o = ends[1 - s];
       if (b == ground || driven[static_cast<std::size_t>(b)]) continue;
@@ -109,7 +109,7 @@ std::vector<double> joint_rates(const Model& model) {
     }
     const JointRates r = rates(j);
     const int ends[2] = {j.body1, j.body2};
-    const Vec3* points[2] = {&j.point1, &j.point2};
+    const Vec3* points[2] = {&j.point1.get(), &j.point2.get()};
     double trans = 0.0, rot[3] = {0.0, 0.0, 0.0};
     for (int s = 0; s < 2; ++s) {
       if (held(ends[s])) continue;

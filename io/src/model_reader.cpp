@@ -172,6 +172,7 @@ class Reader {
   }
   void take_joint(std::size_t index, const JsonTape& tape, Joint&& j) {
     enter_joint_name(j.name, JsonNode(tape, list_names[joints_list], index, src_));
+    shared_(j);
     m_.joints.push_back(std::move(j));
   }
   // A load or a driver, read at once.
@@ -266,6 +267,7 @@ class Reader {
 
   void joint(const JsonNode& n) {
     m_.joints.push_back(make_joint(n, m_.joints.size(), [&](const std::string& name, const JsonNode& at) { enter_joint_name(name, at); }));
+    shared_(m_.joints.back());
   }
 
   // The joint n describes, the index-th of its list; enter_name as for make_body (at: the
@@ -311,8 +313,8 @@ class Reader {
   }
 
   void spring(const JsonNode& n, Joint& j) const {
-    j.stiffness[0] = n["stiffness"].non_negative();
-    j.damping[0] = n.find("damping") ? n["damping"].non_negative() : 0.0;
+    j.stiffness.set(0, n["stiffness"].non_negative());
+    j.damping.set(0, n.find("damping") ? n["damping"].non_negative() : 0.0);
     if (auto l = n.find("rest_length")) {
       j.rest_length = l->non_negative();
     } else {  // default: the initial distance of the two points
@@ -416,6 +418,7 @@ class Reader {
 
   const JsonSource& src_;
   Model m_;
+  JointValueSharing shared_;  // joints' repeated values stored once
   bool bodies_read_ = false;
   std::array<std::vector<nlohmann::json>, list_count> waiting_;
   // Names to indices, so that each reference is found in constant time (a model of a

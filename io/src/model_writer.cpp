@@ -55,7 +55,7 @@ void write_body(std::string& out, const Body& b) {
 void kinematic_fields(const Joint& jt, Object& o) {
   o("frame2", jt.frame2.get());
   if (jt.type == JointType::distance) o("length", jt.rest_length);
-  if (!jt.rigid) o("rigid", false)("stiffness", jt.stiffness)("damping", jt.damping);
+  if (!jt.rigid) o("rigid", false)("stiffness", jt.stiffness.get())("damping", jt.damping.get());
   if (jt.motor->kind != JointMotor::Kind::none) {
     const char* kind = jt.motor->kind == JointMotor::Kind::position ? "position"
                        : jt.motor->kind == JointMotor::Kind::velocity ? "velocity" : "effort";
@@ -74,7 +74,7 @@ void write_joint(std::string& out, const Model& m, const Joint& jt) {
   };
   Object o(out);
   o("name", jt.name)("type", joint_type_name(jt.type))("body1", name(jt.body1))("body2", name(jt.body2));
-  o("point1", jt.point1)("point2", jt.point2);
+  o("point1", jt.point1.get())("point2", jt.point2.get());
   if (is_kinematic(jt.type)) {
     if (!identity(jt.frame1)) o("frame1", jt.frame1.get());
     kinematic_fields(jt, o);
@@ -88,8 +88,8 @@ void write_joint(std::string& out, const Model& m, const Joint& jt) {
   }
   if (!identity(jt.frame1)) o("frame1", jt.frame1.get());
   if (jt.frame2 != rest_frame2(m, jt)) o("frame2", jt.frame2.get());
-  o("stiffness", jt.stiffness);
-  if (jt.damping != Vec6{}) o("damping", jt.damping);
+  o("stiffness", jt.stiffness.get());
+  if (jt.damping != Vec6{}) o("damping", jt.damping.get());
   static const char* axes[6] = {"x", "y", "z", "rx", "ry", "rz"};
   if (jt.tables.any())
     o.object("tables", [&](Object& tables) {

@@ -235,7 +235,7 @@ TEST_CASE("the analytic Jacobian covers rigid joints of every kind through their
   const Eigen::Quaterniond f2(m.joints[4].frame2[0], m.joints[4].frame2[1], m.joints[4].frame2[2], m.joints[4].frame2[3]);
   const Eigen::Quaterniond turned = f2 * Eigen::Quaterniond(Eigen::AngleAxisd(0.5 * std::numbers::pi, Eigen::Vector3d::UnitX()));
   m.joints[4].frame2 = {turned.w(), turned.x(), turned.y(), turned.z()};
-  m.joints[7].point2[0] -= m.joints[7].rest_length;
+  m.joints[7].point2.set(0, m.joints[7].point2[0] - m.joints[7].rest_length);
   m.joints.push_back(test::make_bushing(ground, 4, {2.4, 0.3, 0}, {0, 0.3, 0}, {5e4, 4e4, 3e4, 90, 80, 70}, {3, 2, 1, 0.1, 0.1, 0.1}));
   Body outside = test::make_body("outside", 2.0, {0.05, 0.06, 0.07, 0, 0, 0}, {3.0, -1.0, 0.2});
   m.bodies.push_back(outside);

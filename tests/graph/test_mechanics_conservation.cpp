@@ -105,7 +105,7 @@ TEST_CASE("elastic spring pendulum and a nonlinear table bushing conserve energy
   s.body1 = ground;
   s.body2 = 0;
   s.point2 = {0.0, 0.05, 0.0};
-  s.stiffness[0] = 200.0;
+  s.stiffness.set(0, 200.0);
   s.rest_length = 0.9;
   model.joints.push_back(s);
   Joint t = make_bushing(0, 1, {0, -0.25, 0}, {0, 0.25, 0}, {500, 0, 500, 1, 2, 3});

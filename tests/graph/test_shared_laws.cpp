@@ -44,7 +44,7 @@ TEST_CASE("a chain's bushings share one law: its compiled model is a few dozen b
 
   // Each joint its own stiffness and each body its own mass: every law is held.
   Model own = same;
-  for (std::size_t k = 0; k < own.joints.size(); ++k) own.joints[k].stiffness[0] *= 1.0 + 1e-9 * static_cast<double>(k);
+  for (std::size_t k = 0; k < own.joints.size(); ++k) own.joints[k].stiffness.set(0, own.joints[k].stiffness[0] * (1.0 + 1e-9 * static_cast<double>(k)));
   for (std::size_t i = 0; i < own.bodies.size(); ++i) own.bodies[i].mass *= 1.0 + 1e-9 * static_cast<double>(i);
   const MultibodySystem distinct(own);
   CHECK(static_cast<double>(distinct.memory_use().compiled) / 2000.0 > per_body + 300.0);
@@ -62,11 +62,11 @@ TEST_CASE("a joint or body that differs in one bit keeps its own law and only it
 
   // Joint 17's stiffness along x and body 30's mass each with the top bit of its mantissa
   // flipped.
-  const auto flip = [](double& x) { x = std::bit_cast<double>(std::bit_cast<std::uint64_t>(x) ^ (std::uint64_t{1} << 51)); };
+  const auto flipped = [](double x) { return std::bit_cast<double>(std::bit_cast<std::uint64_t>(x) ^ (std::uint64_t{1} << 51)); };
   Model changed = base;
   const int joint = 17, body = 30;
-  flip(changed.joints[joint].stiffness[0]);
-  flip(changed.bodies[body].mass);
+  changed.joints[joint].stiffness.set(0, flipped(changed.joints[joint].stiffness[0]));
+  changed.bodies[body].mass = flipped(changed.bodies[body].mass);
   MultibodySystem b(changed);
   b.rhs(0.0, y, db);
   const StateLayout l = a.layout();

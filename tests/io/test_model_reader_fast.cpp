@@ -199,7 +199,7 @@ TEST_CASE("the fast reader reads lists of many batches in order and stops at an 
       j.type = JointType::spring;
       j.body1 = i;
       j.body2 = i + 2;
-      j.stiffness[0] = 1.0;
+      j.stiffness.set(0, 1.0);
       chain.joints.push_back(j);
     }
     const Model m = *read_model_fast(model_to_json(chain), "m.json");
@@ -225,5 +225,23 @@ TEST_CASE("the fast reader reads lists of many batches in order and stops at an 
     REQUIRE_THAT(error, Catch::Contains("unknown body 'nobody'"));
     CHECK_THROWS_WITH(read_model_text(unknown_body, "m.json"), Catch::Contains(error));
     check_same_model(replaced(text, "\"name\":\"" + last_joint + "\"", "\"name\":\"\\u00e4\""), false);
+  }
+}
+
+TEST_CASE("both readers store a value that the joints of a file repeat once", "[io]") {
+  ChainParams cp;
+  cp.bodies = 50;
+  const std::string text = model_to_json(make_chain(cp));
+  for (bool fast : {true, false}) {
+    INFO((fast ? "fast" : "reference"));
+    const Model m = fast ? *read_model_fast(text, "m.json") : read_model_reference(text, "m.json");
+    REQUIRE(m.joints.size() == 50);
+    for (std::size_t k = 2; k < m.joints.size(); ++k) {
+      CHECK(&m.joints[k].stiffness.get() == &m.joints[1].stiffness.get());
+      CHECK(&m.joints[k].damping.get() == &m.joints[1].damping.get());
+      CHECK(&m.joints[k].point1.get() == &m.joints[1].point1.get());
+      CHECK(&m.joints[k].point2.get() == &m.joints[1].point2.get());
+    }
+    CHECK(m.joints[1].stiffness == make_chain(cp).joints[1].stiffness);
   }
 }

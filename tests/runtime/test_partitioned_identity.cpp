@@ -38,7 +38,7 @@ Model disconnected() {
   for (Joint j : b.joints) {
     if (j.body1 != ground) j.body1 += offset;
     j.body2 += offset;
-    if (j.body1 == ground) j.point1[2] += 5.0;
+    if (j.body1 == ground) j.point1.set(2, j.point1[2] + 5.0);
     a.joints.push_back(j);
   }
   Body free_body = b.bodies[0];

@@ -19,7 +19,8 @@ using Vec3 = std::array<double, 3>;
 using Quat = std::array<double, 4>;  // w, x, y, z
 using Vec6 = std::array<double, 6>;  // x, y, z, rx, ry, rz
 inline constexpr Quat identity_frame{1.0, 0.0, 0.0, 0.0};
-inline constexpr Vec6 no_preload{};
+inline constexpr Vec3 zeros3{};
+inline constexpr Vec6 zeros6{};
 
 inline constexpr int ground = -1;  // body index of the fixed world frame
 
@@ -74,20 +75,39 @@ struct Joint {
   JointType type = JointType::bushing;
   int body1 = ground;
   int body2 = 0;
-  Vec3 point1{};                    // in body1's frame (world frame for ground)
-  Vec3 point2{};                    // in body2's frame
-  // Frames and preload are mostly at their defaults: each is a pointer until set (Defaulted).
+  bool rigid = true;  // kinematic joints: exact constraint, or compliant
+  // Each of the values below is one pointer (Defaulted): null at its default, else a value
+  // that joints with the same one may share (RecentValues), so that a million joints stay
+  // small (136 bytes; 256 as values).
+  Defaulted<Vec3, zeros3> point1;  // in body1's frame (world frame for ground)
+  Defaulted<Vec3, zeros3> point2;  // in body2's frame
   Defaulted<Quat, identity_frame> frame1;  // joint frame relative to body1
   Defaulted<Quat, identity_frame> frame2;  // joint frame relative to body2 (at rest)
-  Vec6 stiffness{};                 // bushing: per axis; spring: stiffness[0]
-  Vec6 damping{};                   // bushing: per axis; spring: damping[0]
-  AxisTables tables;                // nonlinear force(deflection) per axis; empty = linear
-  Defaulted<Vec6, no_preload> preload;  // force/torque on body2 at zero deflection, joint frame
-  double rest_length = 0.0;         // spring: rest length; distance: the rod's length
-  bool rigid = true;                // kinematic joints: exact constraint, or compliant
+  Defaulted<Vec6, zeros6> stiffness;  // bushing: per axis; spring: stiffness[0]
+  Defaulted<Vec6, zeros6> damping;    // bushing: per axis; spring: damping[0]
+  AxisTables tables;                  // nonlinear force(deflection) per axis; empty = linear
+  Defaulted<Vec6, zeros6> preload;    // force/torque on body2 at zero deflection, joint frame
+  double rest_length = 0.0;           // spring: rest length; distance: the rod's length
   // Revolute and prismatic only; few joints have them, so each is behind a pointer.
   RareValue<JointMotor> motor;
   RareValue<JointLimits> limits;
+};
+
+// Offers each joint's values to the next joints' (RecentValues): a reader or generator
+// passes its joints through one of these in order.
+struct JointValueSharing {
+  RecentValues<Defaulted<Vec3, zeros3>> points;
+  RecentValues<Defaulted<Quat, identity_frame>> frames;
+  RecentValues<Defaulted<Vec6, zeros6>> laws;  // stiffness, damping and preload
+  void operator()(Joint& j) {
+    points.share(j.point1);
+    points.share(j.point2);
+    frames.share(j.frame1);
+    frames.share(j.frame2);
+    laws.share(j.stiffness);
+    laws.share(j.damping);
+    laws.share(j.preload);
+  }
 };
 
 struct Load {
