@@ -16,7 +16,7 @@ struct Thruster : mbsflow::ForceElement {  // pushes body 0 up with `command` ne
 int main() {
   mbsflow::Model m;
   m.gravity = {0.0, -9.81, 0.0};
-  m.bodies.push_back({.name = "block", .mass = 2.0, .inertia = {0.1, 0.1, 0.1, 0, 0, 0}});
+  m.bodies.push_back({.name = "block", .mass = 2.0, .inertia = mbsflow::Vec6{0.1, 0.1, 0.1, 0, 0, 0}});
   mbsflow::Joint j{.name = "mount", .body2 = 0};
   mbsflow::set_bushing_from_frequency(m, j, 20.0, 0.05);  // 20 rad/s, lightly damped
   m.joints.push_back(j);

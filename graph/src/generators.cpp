@@ -13,20 +13,21 @@ Vec6 box_inertia(double m, double lx, double ly, double lz) {
   return {m * (ly * ly + lz * lz) / 12.0, m * (lx * lx + lz * lz) / 12.0, m * (lx * lx + ly * ly) / 12.0, 0, 0, 0};
 }
 
-Body body(std::string name, double mass, Vec6 inertia, Vec3 position, Vec3 velocity = {}) {
+Body body(ValueSharing& shared, std::string name, double mass, Vec6 inertia, Vec3 position, Vec3 velocity = {}) {
   Body b;
   b.name = std::move(name);
   b.mass = mass;
   b.inertia = inertia;
   b.position = position;
   b.velocity = velocity;
+  shared(b);
   return b;
 }
 
 // Bushing with per-axis stiffness; damping from a damping ratio on each axis with the
 // joined reduced mass (translation) or reduced inertia (rotation). Its values are shared
-// with the generator's joints before it where they repeat (JointValueSharing).
-Joint bushing(const Model& m, JointValueSharing& shared, std::string name, int b1, int b2, Vec3 p1, Vec3 p2, Vec6 k, double zeta) {
+// with the generator's joints before it where they repeat (ValueSharing).
+Joint bushing(const Model& m, ValueSharing& shared, std::string name, int b1, int b2, Vec3 p1, Vec3 p2, Vec6 k, double zeta) {
   Joint j;
   j.name = std::move(name);
   j.body1 = b1;
@@ -57,14 +58,14 @@ void require(bool ok, const char* what) {
 Model make_chain(const ChainParams& p) {
   require(p.bodies >= 1, "chain: {bodies} must be >= 1");
   Model m;
-  JointValueSharing shared;
+  ValueSharing shared;
   m.name = "chain-" + std::to_string(p.bodies);
   m.gravity = {0.0, -9.81, 0.0};
   const double l = p.link_length, r = 0.1 * l;
   const Vec6 inertia{0.5 * p.mass * r * r, p.mass * l * l / 12.0, p.mass * l * l / 12.0, 0, 0, 0};
   const Vec6 k{p.stiffness, p.stiffness, p.stiffness, p.rotational_stiffness, p.rotational_stiffness,
                p.rotational_stiffness};
-  for (int i = 0; i < p.bodies; ++i) m.bodies.push_back(body("link" + std::to_string(i), p.mass, inertia, {(i + 0.5) * l, 0, 0}));
+  for (int i = 0; i < p.bodies; ++i) m.bodies.push_back(body(shared, "link" + std::to_string(i), p.mass, inertia, {(i + 0.5) * l, 0, 0}));
   m.joints.push_back(bushing(m, shared, "pin", ground, 0, {0, 0, 0}, {-0.5 * l, 0, 0}, k, p.damping_ratio));
   for (int i = 1; i < p.bodies; ++i)
     m.joints.push_back(bushing(m, shared, "j" + std::to_string(i), i - 1, i, {0.5 * l, 0, 0}, {-0.5 * l, 0, 0}, k, p.damping_ratio));
@@ -76,7 +77,7 @@ Model make_chain(const ChainParams& p) {
 Model make_grid(const GridParams& p) {
   require(p.rows >= 1 && p.cols >= 1, "grid: {rows} and {cols} must be >= 1");
   Model m;
-  JointValueSharing shared;
+  ValueSharing shared;
   m.name = "grid-" + std::to_string(p.rows) + "x" + std::to_string(p.cols);
   m.gravity = {0.0, -9.81, 0.0};
   const double s = p.spacing;
@@ -86,7 +87,7 @@ Model make_grid(const GridParams& p) {
   auto id = [&](int r, int c) { return r * p.cols + c; };
   for (int r = 0; r < p.rows; ++r)
     for (int c = 0; c < p.cols; ++c)
-      m.bodies.push_back(body("p" + std::to_string(r) + "_" + std::to_string(c), p.mass, inertia, {(c + 0.5) * s, 0, r * s}));
+      m.bodies.push_back(body(shared, "p" + std::to_string(r) + "_" + std::to_string(c), p.mass, inertia, {(c + 0.5) * s, 0, r * s}));
   const double h = 0.5 * s;
   for (int r = 0; r < p.rows; ++r) {
     m.joints.push_back(bushing(m, shared, "clamp" + std::to_string(r), ground, id(r, 0), {0, 0, r * s}, {-h, 0, 0}, k, p.damping_ratio));
@@ -104,7 +105,7 @@ Model make_grid(const GridParams& p) {
 Model make_train(const TrainParams& p) {
   require(p.wagons >= 1, "train: {wagons} must be >= 1");
   Model m;
-  JointValueSharing shared;
+  ValueSharing shared;
   m.name = "train-" + std::to_string(p.wagons);
   const double g = 9.81;
   m.gravity = {0.0, -g, 0.0};
@@ -121,12 +122,12 @@ Model make_train(const TrainParams& p) {
     const std::string tag = std::to_string(w);
     const double x0 = -w * pitch;
     const int car = static_cast<int>(m.bodies.size());
-    m.bodies.push_back(body("car" + tag, car_mass, box_inertia(car_mass, 2 * car_half, 3.0, 3.0), {x0, y_car, 0}, v));
+    m.bodies.push_back(body(shared, "car" + tag, car_mass, box_inertia(car_mass, 2 * car_half, 3.0, 3.0), {x0, y_car, 0}, v));
     for (int s = 0; s < 2; ++s) {
       const double bx = s == 0 ? bogie_x : -bogie_x;
       const std::string btag = tag + (s == 0 ? "f" : "r");
       const int bogie = static_cast<int>(m.bodies.size());
-      m.bodies.push_back(body("bogie" + btag, bogie_mass, box_inertia(bogie_mass, 3.0, 0.8, 2.5), {x0 + bx, y_bogie, 0}, v));
+      m.bodies.push_back(body(shared, "bogie" + btag, bogie_mass, box_inertia(bogie_mass, 3.0, 0.8, 2.5), {x0 + bx, y_bogie, 0}, v));
       Joint sec = bushing(m, shared, "secondary" + btag, bogie, car, {0, 0.3, 0}, {bx, y_bogie + 0.3 - y_car, 0}, secondary, 0.2);
       sec.preload = {0, secondary_load, 0, 0, 0, 0};
       m.joints.push_back(sec);
@@ -134,7 +135,7 @@ Model make_train(const TrainParams& p) {
         const double ax = a == 0 ? axle_x : -axle_x;
         const int ws = static_cast<int>(m.bodies.size());
         const double x = x0 + bx + ax;
-        m.bodies.push_back(body("wheelset" + btag + std::to_string(a), wheelset_mass,
+        m.bodies.push_back(body(shared, "wheelset" + btag + std::to_string(a), wheelset_mass,
                                 box_inertia(wheelset_mass, 0.9, 0.9, 2.0), {x, y_wheel, 0}, v));
         Driver d;
         d.body = ws;
@@ -162,7 +163,7 @@ Model make_random_tree(const RandomTreeParams& p) {
   require(p.bodies >= 1, "random: {bodies} must be >= 1");
   require(p.cycles >= 0, "random: {cycles} must be >= 0");
   Model m;
-  JointValueSharing shared;
+  ValueSharing shared;
   m.name = "random-" + std::to_string(p.bodies) + "-" + std::to_string(p.cycles);
   m.gravity = {0.0, -9.81, 0.0};
   std::mt19937_64 rng(p.seed);  // its raw output is the same everywhere
@@ -187,7 +188,7 @@ Model make_random_tree(const RandomTreeParams& p) {
       const double a = 2.0 * M_PI * uniform(), z = 0.6 * uniform() - 0.3;
       at = {pp[0] + len * std::cos(a), pp[1] - len * (0.5 + 0.5 * uniform()), pp[2] + len * z};
     }
-    m.bodies.push_back(body("r" + std::to_string(i), mass, inertia, at));
+    m.bodies.push_back(body(shared, "r" + std::to_string(i), mass, inertia, at));
     if (parent == ground)
       m.joints.push_back(bushing(m, shared, "root", ground, 0, {0, 0, 0}, {0, len, 0}, k, 0.05));
     else

@@ -98,7 +98,7 @@ void check_function(const TimeFunction& f, const Place& where) {
 
 void check_body(const Body& b, const Place& where) {
   positive(b.mass, where / "mass");
-  finite(b.inertia, where / "inertia");
+  finite(b.inertia.get(), where / "inertia");
   const Vec6& i = b.inertia;
   Eigen::Matrix3d m;
   m << i[0], i[3], i[4], i[3], i[1], i[5], i[4], i[5], i[2];

@@ -168,6 +168,7 @@ class Reader {
   }
   void take_body(std::size_t index, const JsonTape& tape, Body&& b) {
     enter_body_name(b.name, JsonNode(tape, list_names[bodies_list], index, src_)["name"]);
+    shared_(b);
     m_.bodies.push_back(std::move(b));
   }
   void take_joint(std::size_t index, const JsonTape& tape, Joint&& j) {
@@ -226,6 +227,7 @@ class Reader {
 
   void body(const JsonNode& n) {
     m_.bodies.push_back(make_body(n, [&](const std::string& name, const JsonNode& at) { enter_body_name(name, at); }));
+    shared_(m_.bodies.back());
   }
 
   // The body n describes; enter_name(name, node) is called where the reference reader
@@ -418,7 +420,7 @@ class Reader {
 
   const JsonSource& src_;
   Model m_;
-  JointValueSharing shared_;  // joints' repeated values stored once
+  ValueSharing shared_;  // repeated values of joints and bodies stored once
   bool bodies_read_ = false;
   std::array<std::vector<nlohmann::json>, list_count> waiting_;
   // Names to indices, so that each reference is found in constant time (a model of a

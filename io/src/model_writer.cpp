@@ -45,7 +45,7 @@ void write_body(std::string& out, const Body& b) {
   if (b.inertia[3] == 0.0 && b.inertia[4] == 0.0 && b.inertia[5] == 0.0)
     o("inertia", std::array<double, 3>{b.inertia[0], b.inertia[1], b.inertia[2]});
   else
-    o("inertia", b.inertia);
+    o("inertia", b.inertia.get());
   o("position", b.position);
   if (!identity(b.orientation)) o("orientation", b.orientation);
   if (!zero(b.velocity)) o("velocity", b.velocity);

@@ -69,8 +69,8 @@ TEST_CASE("values are shared only when equal bit for bit", "[graph]") {
   CHECK_FALSE(b.point2.is_default());
 }
 
-TEST_CASE("joints passed through JointValueSharing store each repeated value once", "[graph]") {
-  JointValueSharing shared;
+TEST_CASE("joints passed through ValueSharing store each repeated value once", "[graph]") {
+  ValueSharing shared;
   std::vector<Joint> joints;
   for (int i = 0; i < 10; ++i) {
     Joint j;
@@ -93,11 +93,15 @@ TEST_CASE("joints passed through JointValueSharing store each repeated value onc
   CHECK(joints[8].damping[0] == 1.0);
 }
 
-TEST_CASE("a joint record stays small", "[graph]") {
+TEST_CASE("joint and body records stay small", "[graph]") {
   STATIC_REQUIRE(sizeof(Joint) <= 136);
+  STATIC_REQUIRE(sizeof(Body) <= 152);
+  Body b;
+  CHECK(b.inertia == unit_inertia);
+  CHECK(b.inertia.is_default());
 }
 
-TEST_CASE("a generated grid's joints share their stiffness and damping and points", "[graph]") {
+TEST_CASE("a generated grid's joints share their stiffness and damping and points and its bodies their inertia", "[graph]") {
   GridParams p;
   p.rows = 4;
   p.cols = 5;
@@ -120,6 +124,7 @@ TEST_CASE("a generated grid's joints share their stiffness and damping and point
   }
   REQUIRE(x);
   REQUIRE(z);
+  for (const Body& b : m.bodies) CHECK(&b.inertia.get() == &m.bodies[0].inertia.get());
   CHECK(x->point1 == Vec3{0.5 * p.spacing, 0.0, 0.0});
   CHECK(z->point2 == Vec3{0.0, 0.0, -0.5 * p.spacing});
 }

@@ -224,11 +224,12 @@ TEST_CASE("every series carries its unit and the joints' attachment points follo
 
 TEST_CASE("the bodies' energies sum to the run's kinetic and gravity energies", "[io]") {
   Model m = small_train();
-  Vec6& inertia = m.bodies[1].inertia;  // products of inertia too
+  Vec6 inertia = m.bodies[1].inertia;  // products of inertia too
   const double small = 0.01 * std::min({inertia[0], inertia[1], inertia[2]});
   inertia[3] = small;
   inertia[4] = -small;
   inertia[5] = 0.5 * small;
+  m.bodies[1].inertia = inertia;
   auto [memory, file] = run_both(m, parse_fields("all"));
   const ResultsFile r(file.string());
   check_body_energies(m, r);

@@ -228,7 +228,7 @@ TEST_CASE("the fast reader reads lists of many batches in order and stops at an 
   }
 }
 
-TEST_CASE("both readers store a value that the joints of a file repeat once", "[io]") {
+TEST_CASE("both readers store a value that the joints or bodies of a file repeat once", "[io]") {
   ChainParams cp;
   cp.bodies = 50;
   const std::string text = model_to_json(make_chain(cp));
@@ -243,5 +243,6 @@ TEST_CASE("both readers store a value that the joints of a file repeat once", "[
       CHECK(&m.joints[k].point2.get() == &m.joints[1].point2.get());
     }
     CHECK(m.joints[1].stiffness == make_chain(cp).joints[1].stiffness);
+    for (const Body& b : m.bodies) CHECK(&b.inertia.get() == &m.bodies[0].inertia.get());
   }
 }

@@ -21,6 +21,7 @@ using Vec6 = std::array<double, 6>;  // x, y, z, rx, ry, rz
 inline constexpr Quat identity_frame{1.0, 0.0, 0.0, 0.0};
 inline constexpr Vec3 zeros3{};
 inline constexpr Vec6 zeros6{};
+inline constexpr Vec6 unit_inertia{1.0, 1.0, 1.0, 0.0, 0.0, 0.0};
 
 inline constexpr int ground = -1;  // body index of the fixed world frame
 
@@ -29,7 +30,8 @@ struct Body {
   double mass = 1.0;
   // Inertia tensor about the centre of mass in the body frame:
   // Ixx, Iyy, Izz, Ixy, Ixz, Iyz (tensor entries, i.e. Ixy = -integral of x*y dm).
-  Vec6 inertia{1.0, 1.0, 1.0, 0.0, 0.0, 0.0};
+  // One pointer, shared by bodies with the same (Defaulted, ValueSharing).
+  Defaulted<Vec6, unit_inertia> inertia;
   Vec3 position{};                     // world, centre of mass
   Quat orientation{1.0, 0.0, 0.0, 0.0};  // body to world
   Vec3 velocity{};                     // world
@@ -93,12 +95,13 @@ struct Joint {
   RareValue<JointLimits> limits;
 };
 
-// Offers each joint's values to the next joints' (RecentValues): a reader or generator
-// passes its joints through one of these in order.
-struct JointValueSharing {
+// Offers each joint's and body's values to the next ones' (RecentValues): a reader or
+// generator passes its joints and bodies through one of these in order.
+struct ValueSharing {
   RecentValues<Defaulted<Vec3, zeros3>> points;
   RecentValues<Defaulted<Quat, identity_frame>> frames;
   RecentValues<Defaulted<Vec6, zeros6>> laws;  // stiffness, damping and preload
+  RecentValues<Defaulted<Vec6, unit_inertia>> inertias;
   void operator()(Joint& j) {
     points.share(j.point1);
     points.share(j.point2);
@@ -108,6 +111,7 @@ struct JointValueSharing {
     laws.share(j.damping);
     laws.share(j.preload);
   }
+  void operator()(Body& b) { inertias.share(b.inertia); }
 };
 
 struct Load {
