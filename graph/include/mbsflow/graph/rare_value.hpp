@@ -119,8 +119,8 @@ class Defaulted {
 // The last few distinct values of one field over the items made so far, each offered to
 // the next item's field (Defaulted::share): items written one after another with the same
 // value (a generated chain's joints, a file's) then share one node. A value found moves one
-// place up, and a new one takes the first free place or else the last, so that the values most items repeat stay
-// while one-off values (a grid's clamps) replace each other.
+// place up, and a new one takes the first free place or else the last, so that the values
+// most items repeat stay while one-off values (a grid's clamps) replace each other.
 template <class D, int N = 8>
 class RecentValues {
  public:
