@@ -10,6 +10,7 @@
 #include "mbsflow/error.hpp"
 #include "mbsflow/graph/simd.hpp"
 #include "body_csr.hpp"
+#include "multibody_constraints.hpp"
 #include "force_laws.hpp"
 #include "lanes.hpp"
 #include "rotation.hpp"
@@ -477,12 +478,10 @@ BodyFrameT<double> MultibodySystem::frame_from_state(int i, const Eigen::VectorX
 }
 
 Energy MultibodySystem::energy(double t, const Eigen::VectorXd& y) {
-  const std::vector<CompiledJoint>& joints = compiled_->joints;
   // Without drivers, force elements and kinematic joints the energies need only the state,
   // and no workspace is made: the results writer's copy of a million-body system, which
   // evaluates nothing else, would otherwise hold 176 MB of kinematics.
-  const bool from_state = model().drivers.empty() && compiled_->elements.empty() &&
-                          std::none_of(joints.begin(), joints.end(), [](const CompiledJoint& j) { return j.kinematic >= 0; });
+  const bool from_state = model().drivers.empty() && compiled_->elements.empty() && constraints_->geometry.empty();
   if (!from_state) update_kinematics(t, y);
   Energy e;
   for (Eigen::Index i = 0; i < layout_.bodies; ++i) {
@@ -496,7 +495,7 @@ Energy MultibodySystem::energy(double t, const Eigen::VectorXd& y) {
     e.kinetic += 0.5 * m * v.squaredNorm() + 0.5 * w.dot(body_law(bi).inertia * w);
     e.gravity -= m * gravity_.dot(r);
   }
-  for (const CompiledJoint& j : joints)
+  for (const CompiledJoint& j : compiled_->joints)
     e.elastic += from_state        ? elastic_energy(j, frame_from_state(j.a, y), frame_from_state(j.b, y))
                  : j.kinematic >= 0 ? kinematic_energy(j)
                                     : elastic_energy(j, body_frame_at(j.a), body_frame_at(j.b));

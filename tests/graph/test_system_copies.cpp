@@ -148,3 +148,13 @@ TEST_CASE("energies from the state alone are bit for bit those through an evalua
   CHECK(ea.gravity == eb.gravity);
   CHECK(ea.elastic == eb.elastic);
 }
+
+TEST_CASE("a model with a kinematic joint computes its energies through the kinematics", "[graph]") {
+  Model m = grid();
+  m.joints[5].type = JointType::revolute;  // compliant: its energy needs the joint's geometry
+  m.joints[5].rigid = false;
+  MultibodySystem sys(m);
+  const Eigen::VectorXd y = sys.initial_state();
+  sys.energy(0.0, y);
+  CHECK(sys.memory_use().workspace >= 176 * m.bodies.size());
+}
