@@ -171,9 +171,10 @@ template <class S>
 
 // A free body's angular acceleration (body frame) from the world torque on it:
 // J w' = R^T T - w x J w.
-template <class S>
+// (inertia and inv_inertia: 3 x 3, in double or in S.)
+template <class S, class Inertia>
 [[gnu::always_inline]] inline Vector3T<S> angular_acceleration(const Matrix3T<S>& rot, const Vector3T<S>& w, const Vector3T<S>& torque,
-                                 const Eigen::Matrix3d& inertia, const Eigen::Matrix3d& inv_inertia) {
+                                 const Inertia& inertia, const Inertia& inv_inertia) {
   const Vector3T<S> tb = rot.transpose() * torque;
   return as_scalar<S>(inv_inertia) * (tb - w.cross(as_scalar<S>(inertia) * w));
 }

@@ -39,7 +39,12 @@ void MultibodySystem::LANE_KERNEL(bushings_on_lanes)(const int* k) {
     j[l] = &compiled_->joints[static_cast<std::size_t>(k[l])];
     law[l] = &law_of(*j[l]);
   }
-  const auto from_law = [&](auto field) { return gather([&](int l) -> auto& { return law[l]->*field; }); };
+  // Repeated bushings (a chain's, a grid's) share one law: its numbers go to every lane.
+  bool one_law = true;
+  for (int l = 1; l < Lanes::width; ++l) one_law = one_law && law[l] == law[0];
+  const auto from_law = [&](auto field) {
+    return one_law ? broadcast(law[0]->*field) : gather([&](int l) -> auto& { return law[l]->*field; });
+  };
   BushingParams<Lanes> p;
   p.frame1_identity = law[0]->frame1_identity;
   p.frame2_identity = law[0]->frame2_identity;
@@ -72,12 +77,39 @@ void MultibodySystem::LANE_KERNEL(bushings_on_lanes)(const int* k) {
 }
 
 
-void MultibodySystem::LANE_KERNEL(kinematics_on_lanes)(const int* k, const Eigen::VectorXd& y) {
+void MultibodySystem::LANE_KERNEL(kinematics_on_lanes)(const int* k, const Eigen::VectorXd& y, bool rotations) {
   const Vector4T<Lanes> q = gather([&](int l) { return y.segment<4>(layout_.orientation(k[l])); });
   const Vector3T<Lanes> w = gather([&](int l) { return y.segment<3>(layout_.angular_velocity(k[l])); });
   const Matrix3T<Lanes> r = rotation_matrix<Lanes>(q);
-  scatter(r, [&](int l) -> auto& { return rot_[static_cast<std::size_t>(k[l])]; });
+  if (rotations) scatter(r, [&](int l) -> auto& { return rot_[static_cast<std::size_t>(k[l])]; });
   scatter(Vector3T<Lanes>(r * w), [&](int l) { return omega_.col(k[l]); });
+}
+
+// The free bodies' rates, as write_derivative computes them but on lanes (so to rounding,
+// not bit for bit, its numbers); the position rates, plain copies, are the caller's.
+void MultibodySystem::LANE_KERNEL(rates_on_lanes)(const int* k, const double* wrench, const Eigen::VectorXd& y,
+                                                  Eigen::VectorXd& dydt) const {
+  const BodyLaw* law[Lanes::width];
+  bool one_law = true;
+  for (int l = 0; l < Lanes::width; ++l) {
+    law[l] = &body_law(static_cast<std::size_t>(k[l]));
+    one_law = one_law && law[l] == law[0];
+  }
+  const auto from_law = [&](auto field) {
+    return one_law ? broadcast(law[0]->*field) : gather([&](int l) -> auto& { return law[l]->*field; });
+  };
+  Lanes inv_mass;
+  for (int l = 0; l < Lanes::width; ++l) inv_mass.v[l] = law[l]->inv_mass;
+  const Vector4T<Lanes> q = gather([&](int l) { return y.segment<4>(layout_.orientation(k[l])); });
+  const Vector3T<Lanes> w = gather([&](int l) { return y.segment<3>(layout_.angular_velocity(k[l])); });
+  const Vector3T<Lanes> force = gather([&](int l) { return Eigen::Map<const Eigen::Vector3d>(wrench + 6 * l); });
+  const Vector3T<Lanes> torque = gather([&](int l) { return Eigen::Map<const Eigen::Vector3d>(wrench + 6 * l + 3); });
+  const Matrix3T<Lanes> inertia = from_law(&BodyLaw::inertia), inv_inertia = from_law(&BodyLaw::inv_inertia);
+  const Matrix3T<Lanes> r = rotation_matrix<Lanes>(q);
+  scatter(Vector3T<Lanes>(inv_mass * force), [&](int l) { return dydt.segment<3>(layout_.velocity(k[l])); });
+  scatter(angular_acceleration<Lanes>(r, w, torque, inertia, inv_inertia),
+          [&](int l) { return dydt.segment<3>(layout_.angular_velocity(k[l])); });
+  scatter(quaternion_rate<Lanes>(q, w), [&](int l) { return dydt.segment<4>(layout_.orientation(k[l])); });
 }
 
 }  // namespace mbsflow

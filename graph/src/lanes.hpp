@@ -154,6 +154,17 @@ auto gather(Of&& of) {
   return out;
 }
 
+// The matrix whose coefficients hold m's in every lane (what gather gives when of(l) is
+// the same matrix for every l, in fewer instructions).
+template <class M>
+auto broadcast(const M& m) {
+  using P = typename M::PlainObject;
+  Eigen::Matrix<Lanes, P::RowsAtCompileTime, P::ColsAtCompileTime> out;
+  for (Eigen::Index c = 0; c < out.cols(); ++c)
+    for (Eigen::Index r = 0; r < out.rows(); ++r) out(r, c) = Lanes(m(r, c));
+  return out;
+}
+
 // The other way: lane l of m into to(l), an Eigen block of m's size.
 template <class M, class To>
 void scatter(const M& m, To&& to) {

@@ -123,6 +123,8 @@ MultibodySystem::MultibodySystem(std::shared_ptr<const Model> shared, int active
   motor_effort_.setZero(nj);
   for (const auto& e : model.force_elements) add_force_element(e);
   compile_constraints();
+  compiled_->rotations_read = !model.loads.empty() || !compiled_->elements.empty() ||
+                              std::any_of(compiled_->joints.begin(), compiled_->joints.end(), [&](const CompiledJoint& j) { return !on_lanes(j); });
 }
 
 Eigen::VectorXd MultibodySystem::initial_state() const {
@@ -176,17 +178,17 @@ void MultibodySystem::drive(const Driver& d, double t) {
     vel_(k, i) = d.velocity[static_cast<std::size_t>(k)] + memo.rate[slot](k);
   }
   quat_.col(i) = quat(b.orientation).normalized();
-  rot_[static_cast<std::size_t>(i)] = rotation_matrix(quat_.col(i));
+  if (!rot_.empty()) rot_[static_cast<std::size_t>(i)] = rotation_matrix(quat_.col(i));
   omega_.col(i).setZero();
 }
 
-// The kinematics and joint wrenches of an evaluation (about 250 bytes a body). Made at the
-// first evaluation, not with the system: a system built for its layout, names and initial
-// state only (a partitioned run's whole system, for its results) never holds them, and its
-// copies (the results writer's) make their own when they first evaluate.
+// The kinematics and joint wrenches of an evaluation (about 180 bytes a body, and 72 more
+// where the rotation matrices are kept). Made at the first evaluation, not with the
+// system: a system built for its layout, names and initial state only (a partitioned run's
+// whole system, for its results) never holds them, and its copies (the results writer's)
+// make their own when they first evaluate.
 void MultibodySystem::make_workspace() {
   const Eigen::Index n = layout_.bodies;
-  rot_.assign(static_cast<std::size_t>(n) + 1, Eigen::Matrix3d::Identity());
   pos_ = Eigen::Matrix3Xd::Zero(3, n + 1);
   vel_ = Eigen::Matrix3Xd::Zero(3, n + 1);
   omega_ = Eigen::Matrix3Xd::Zero(3, n + 1);
@@ -196,28 +198,45 @@ void MultibodySystem::make_workspace() {
 
 // The plain copies here, the rotations on lanes after: the AVX kernels touch no Eigen
 // double arithmetic (see lane_kernels.cpp), and a copy gains nothing from lanes.
-void MultibodySystem::kinematics_in(const int* list, std::size_t n, const Eigen::VectorXd& y) {
+void MultibodySystem::kinematics_in(const int* list, std::size_t n, const Eigen::VectorXd& y, bool all_rotations) {
   if (pos_.cols() == 0) make_workspace();
-  for (std::size_t p = 0; p < n; ++p) {
-    const Eigen::Index i = list ? list[p] : static_cast<Eigen::Index>(p);
-    quat_.col(i) = y.segment<4>(layout_.orientation(i));
-    pos_.col(i) = y.segment<3>(layout_.position(i));
-    vel_.col(i) = y.segment<3>(layout_.velocity(i));
+  const bool rotations = all_rotations || compiled_->rotations_read;
+  if (rotations && rot_.empty()) rot_.assign(static_cast<std::size_t>(layout_.bodies) + 1, Eigen::Matrix3d::Identity());
+  // The workspace's columns are laid out as the state's blocks, so each run of consecutive
+  // bodies is three block copies.
+  for (std::size_t a = 0; a < n;) {
+    const Eigen::Index first = list ? list[a] : static_cast<Eigen::Index>(a);
+    std::size_t b = a + 1;
+    if (list)
+      while (b < n && list[b] == list[b - 1] + 1) ++b;
+    else
+      b = n;
+    const auto count = static_cast<Eigen::Index>(b - a);
+    std::copy_n(y.data() + layout_.orientation(first), 4 * count, quat_.col(first).data());
+    std::copy_n(y.data() + layout_.position(first), 3 * count, pos_.col(first).data());
+    std::copy_n(y.data() + layout_.velocity(first), 3 * count, vel_.col(first).data());
+    a = b;
   }
   lane_groups_for_cpu<1>(
-      list, n, [](int) { return 0; }, [](int) {}, [&](const int* k) { kinematics_on_lanes(k, y); },
-      [&](const int* k) { kinematics_on_lanes_avx(k, y); });
+      list, n, [](int) { return 0; }, [](int) {}, [&](const int* k) { kinematics_on_lanes(k, y, rotations); },
+      [&](const int* k) { kinematics_on_lanes_avx(k, y, rotations); });
 }
 
 void MultibodySystem::update_kinematics(double t, const Eigen::VectorXd& y) {
   time_ = t;
-  kinematics_in(nullptr, static_cast<std::size_t>(layout_.bodies), y);
+  kinematics_in(nullptr, static_cast<std::size_t>(layout_.bodies), y, true);
+  for (const Driver& d : model().drivers) drive(d, t);
+}
+
+void MultibodySystem::kinematics_for_rhs(double t, const Eigen::VectorXd& y) {
+  time_ = t;
+  kinematics_in(nullptr, static_cast<std::size_t>(layout_.bodies), y, false);
   for (const Driver& d : model().drivers) drive(d, t);
 }
 
 void MultibodySystem::kinematics_of(double t, const Eigen::VectorXd& y, std::span<const int> bodies) {
   time_ = t;
-  kinematics_in(bodies.data(), bodies.size(), y);
+  kinematics_in(bodies.data(), bodies.size(), y, false);
   // The last driver of a body wins, as in update_kinematics.
   for (int i : bodies)
     if (const int d = compiled_->driver_of_body[static_cast<std::size_t>(i)]; d >= 0) drive(model().drivers[static_cast<std::size_t>(d)], t);
@@ -299,6 +318,7 @@ void MultibodySystem::add_force_element(std::shared_ptr<const ForceElement> elem
   element_out_.resize(first + bodies.size());
   compiled_->element_first.push_back(element_out_.size());
   compiled_->elements.push_back(std::move(element));
+  compiled_->rotations_read = true;
   // Rebuild the per-body slot lists, in element order.
   const int n = static_cast<int>(layout_.bodies);
   std::vector<int> body_of_slot(element_out_.size());
@@ -335,12 +355,11 @@ void MultibodySystem::joint_wrenches(double t, const Eigen::VectorXd& y, Eigen::
 // the centre of mass), summed in the fixed order of the class comment.
 void MultibodySystem::applied_wrench(Eigen::Index i, double t, Eigen::Vector3d& force, Eigen::Vector3d& torque) const {
   const auto bi = static_cast<std::size_t>(i);
-  const Eigen::Matrix3d& r = rot_[bi];
   force = body_law(bi).mass * gravity_;
   torque = Eigen::Vector3d::Zero();
   for (int p = compiled_->load_start[bi]; p < compiled_->load_start[bi + 1]; ++p) {
     const Load& l = model().loads[static_cast<std::size_t>(compiled_->load_index[static_cast<std::size_t>(p)])];
-    add_load<double>(l, evaluate(l.function, t).value, r, force, torque);
+    add_load<double>(l, evaluate(l.function, t).value, rot_[bi], force, torque);  // loads: rotations kept
   }
   for (int p = compiled_->incidence_start[bi]; p < compiled_->incidence_start[bi + 1]; ++p) {
     const int code = compiled_->incidence[static_cast<std::size_t>(p)];
@@ -392,24 +411,55 @@ void MultibodySystem::write_derivative(Eigen::Index i, double t, const Eigen::Ve
   write_derivative(i, t, y, dydt, force, torque);
 }
 
+// Width free bodies: their applied wrenches in double, in the fixed order, then their rates
+// on lanes. Every free body takes this way whatever the list it comes in (a driven or
+// clustered one never does), so a partition's grouping leaves its numbers unchanged.
+template <int Width>
+void MultibodySystem::free_bodies_on_lanes(const int* k, double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const {
+  double wrench[6 * Width];
+  for (int l = 0; l < Width; ++l) {
+    Eigen::Vector3d force, torque;
+    applied_wrench(k[l], t, force, torque);
+    Eigen::Map<Eigen::Vector3d>(wrench + 6 * l) = force;
+    Eigen::Map<Eigen::Vector3d>(wrench + 6 * l + 3) = torque;
+    dydt.segment<3>(layout_.position(k[l])) = y.segment<3>(layout_.velocity(k[l]));
+  }
+  if constexpr (Width == 4)
+    rates_on_lanes_avx(k, wrench, y, dydt);
+  else
+    rates_on_lanes(k, wrench, y, dydt);
+}
+
+// The bodies list[0..n) (0..n-1 when null) but those of rigid clusters.
+void MultibodySystem::derivatives_in(const int* list, std::size_t n, double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const {
+  const bool any = clusters() > 0;
+  lane_groups_for_cpu<1>(
+      list, n,
+      [&](int i) {
+        if (any && cluster_of(i) >= 0) return -1;
+        return compiled_->driver_of_body[static_cast<std::size_t>(i)] >= 0 ? -1 : 0;
+      },
+      [&](int i) {
+        if (!any || cluster_of(i) < 0) body_derivative(i, t, y, dydt);
+      },
+      [&](const int* k) { free_bodies_on_lanes<Lanes::width>(k, t, y, dydt); },
+      [&](const int* k) { free_bodies_on_lanes<4>(k, t, y, dydt); });
+}
+
 void MultibodySystem::compute_derivatives(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const {
-  const int n_clusters = clusters();
-  for (Eigen::Index i = 0; i < active_; ++i)
-    if (n_clusters == 0 || cluster_of(static_cast<int>(i)) < 0) body_derivative(i, t, y, dydt);
-  for (int c = 0; c < n_clusters; ++c) solve_cluster(c, t, y, dydt);
+  derivatives_in(nullptr, static_cast<std::size_t>(active_), t, y, dydt);
+  for (int c = 0; c < clusters(); ++c) solve_cluster(c, t, y, dydt);
 }
 
 // A listed body of a cluster brings in its whole cluster: the caller lists whole clusters.
 void MultibodySystem::derivatives_of(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt,
                                      std::span<const int> bodies) const {
-  const bool any = clusters() > 0;
-  for (int i : bodies)
-    if (!any || cluster_of(i) < 0) body_derivative(i, t, y, dydt);
+  derivatives_in(bodies.data(), bodies.size(), t, y, dydt);
   for (int c : clusters_of(bodies)) solve_cluster(c, t, y, dydt);
 }
 
 void MultibodySystem::rhs(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) {
-  update_kinematics(t, y);
+  kinematics_for_rhs(t, y);
   compute_joint_forces();
   compute_derivatives(t, y, dydt);
 }

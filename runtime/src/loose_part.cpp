@@ -33,7 +33,7 @@ void lagrange_weights(const Samples& s, double t, double* w) {
 void LoosePart::ghosted_rhs(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) {
   extrapolate_ghosts(t, work_);
   MultibodySystem& s = part.system;
-  s.update_kinematics(t, y);
+  s.kinematics_for_rhs(t, y);
   s.kinematics_of(t, work_, ghost_bodies_);
   s.compute_joint_forces();
   dydt.resize(y.size());

@@ -109,6 +109,23 @@ Model mixed_model(std::mt19937& g) {
   return m;
 }
 
+// mixed_model's bodies and driver with bushings only, no frame turned, no spring or table:
+// nothing reads a stored rotation matrix. Bodies come four to a mass and inertia, so that
+// lane groups hold one body law or several.
+Model bushings_only(std::mt19937& g) {
+  Model m = mixed_model(g);
+  for (std::size_t i = 0; i < m.bodies.size(); ++i) {
+    m.bodies[i].mass = 1.0 + 0.1 * static_cast<double>(i / 4);
+    m.bodies[i].inertia = {0.1 + 0.01 * static_cast<double>(i / 4), 0.2, 0.15, 0.01, -0.02, 0.005};
+  }
+  for (Joint& j : m.joints) {
+    j.type = JointType::bushing;
+    j.frame1 = j.frame2 = {1.0, 0.0, 0.0, 0.0};
+    j.tables = {};
+  }
+  return m;
+}
+
 
 }  // namespace
 
@@ -208,7 +225,7 @@ TEST_CASE("lanes: a system evaluated at once and item by item in shuffled groups
       continue;
     }
     std::mt19937 g(5);
-    const Model m = mixed_model(g);
+    for (const Model& m : {mixed_model(g), bushings_only(g)}) {
     const int n = static_cast<int>(m.bodies.size());
     MultibodySystem whole(m), items(m);
     Eigen::VectorXd y = whole.initial_state(), expected(whole.dimension()), got(whole.dimension());
@@ -230,6 +247,51 @@ TEST_CASE("lanes: a system evaluated at once and item by item in shuffled groups
       items.derivatives_of(0.3, y, got, b.subspan(cut));
       items.derivatives_of(0.3, y, got, b.first(cut));
       for (Eigen::Index k = 0; k < got.size(); ++k) REQUIRE(same_bits(got[k], expected[k]));
+    }
+    }
+  }
+  set_simd(before);
+}
+
+TEST_CASE("lanes: free bodies' rates agree with the rigid-body equations to rounding", "[graph]") {
+  // Tumbling bodies without joints, two inertias among them: v' = g, J w' = -w x J w,
+  // q' = q (x) (0, w) / 2, computed here in double.
+  const Simd before = simd();
+  for (const Simd kind : {Simd::sse2, Simd::avx}) {
+    if (!set_simd(kind)) continue;
+    std::mt19937 g(11);
+    Model m;
+    m.gravity = {0.3, -0.2, -9.81};
+    for (int i = 0; i < 7; ++i) {
+      Body b;
+      b.name = "b" + std::to_string(i);
+      b.mass = i % 3 == 0 ? 2.0 : 0.5;
+      b.inertia = i % 3 == 0 ? Vec6{0.3, 0.2, 0.1, 0.01, 0.02, -0.03} : Vec6{0.05, 0.07, 0.09, 0.0, 0.0, 0.0};
+      const Eigen::Vector4d q = random_rotation(g, 3);
+      b.orientation = {q[0], q[1], q[2], q[3]};
+      const Eigen::Vector3d w = random_vector(g, 4);
+      b.angular_velocity = {w[0], w[1], w[2]};
+      b.velocity = {0.1 * i, 0.0, 0.0};
+      m.bodies.push_back(b);
+    }
+    MultibodySystem sys(m);
+    const Eigen::VectorXd y = sys.initial_state();
+    Eigen::VectorXd dydt(sys.dimension());
+    sys.rhs(0.0, y, dydt);
+    const StateLayout& l = sys.layout();
+    for (Eigen::Index i = 0; i < l.bodies; ++i) {
+      const Body& b = m.bodies[static_cast<std::size_t>(i)];
+      Eigen::Matrix3d inertia;
+      inertia << b.inertia[0], b.inertia[3], b.inertia[4], b.inertia[3], b.inertia[1], b.inertia[5], b.inertia[4], b.inertia[5],
+          b.inertia[2];
+      const Eigen::Vector3d w = y.segment<3>(l.angular_velocity(i));
+      const Eigen::Vector4d q = y.segment<4>(l.orientation(i));
+      const Eigen::Vector3d w_rate = inertia.inverse() * (-w.cross(inertia * w));
+      const Eigen::Vector4d q_rate = 0.5 * quat_multiply(q, Eigen::Vector4d(0.0, w[0], w[1], w[2]));
+      CHECK((dydt.segment<3>(l.position(i)) - y.segment<3>(l.velocity(i))).norm() == 0.0);
+      CHECK((dydt.segment<3>(l.velocity(i)) - Eigen::Vector3d(0.3, -0.2, -9.81)).norm() <= 1e-15 * 9.81);
+      CHECK((dydt.segment<3>(l.angular_velocity(i)) - w_rate).norm() <= 1e-13 * (1.0 + w_rate.norm()));
+      CHECK((dydt.segment<4>(l.orientation(i)) - q_rate).norm() <= 1e-15 * (1.0 + q_rate.norm()));
     }
   }
   set_simd(before);

@@ -108,9 +108,9 @@ TEST_CASE("a system makes its workspace at its first evaluation: built and copie
 
 TEST_CASE("a system that only computes energies makes no workspace", "[graph]") {
   // The results writer's copy computes energies. Without drivers, force elements and
-  // kinematic joints they come from the state alone; the kinematics (176 bytes a body)
-  // and the joints' wrenches (72 bytes a joint, two joints a body on the grid) come with
-  // the first evaluation.
+  // kinematic joints they come from the state alone; the kinematics (104 bytes a body:
+  // the grid's bushings read no stored rotation matrix) and the joints' wrenches (72 bytes
+  // a joint, two joints a body on the grid) come with the first evaluation.
   const Model m = grid();
   MultibodySystem sys(m);
   const Eigen::VectorXd y = sys.initial_state();
@@ -119,7 +119,7 @@ TEST_CASE("a system that only computes energies makes no workspace", "[graph]") 
   CHECK(static_cast<double>(after_energy) / static_cast<double>(m.bodies.size()) < 40.0);
   Eigen::VectorXd dydt(sys.dimension());
   sys.rhs(0.0, y, dydt);
-  CHECK(sys.memory_use().workspace >= after_energy + 176 * m.bodies.size() + 72 * m.joints.size());
+  CHECK(sys.memory_use().workspace >= after_energy + 104 * m.bodies.size() + 72 * m.joints.size());
   CHECK(sys.energy(0.0, y).elastic == e.elastic);
 }
 

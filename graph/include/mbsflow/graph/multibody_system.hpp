@@ -147,7 +147,12 @@ class MultibodySystem {
   };
   MemoryUse memory_use() const;
 
-  // The three phases of rhs(), public so the benchmark can time them apart.
+  // The three phases of rhs(), public so the benchmark can time them apart. The first
+  // keeps the bodies' rotation matrices only where the model has something that reads them
+  // other than the lane kernels (which compute their own from the quaternions): a joint off
+  // the lanes, a load, a force element. update_kinematics keeps all of them (energies,
+  // Jacobians and joint reactions read them).
+  void kinematics_for_rhs(double t, const Eigen::VectorXd& y);
   void update_kinematics(double t, const Eigen::VectorXd& y);
   void compute_joint_forces();  // joints and force elements
   void compute_derivatives(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const;
@@ -213,14 +218,21 @@ class MultibodySystem {
   void applied_wrench(Eigen::Index i, double t, Eigen::Vector3d& force, Eigen::Vector3d& torque) const;
   void write_derivative(Eigen::Index i, double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt,
                         const Eigen::Vector3d& force, const Eigen::Vector3d& torque) const;
-  void kinematics_in(const int* list, std::size_t n, const Eigen::VectorXd& y);  // list[0..n), or 0..n-1 when null
+  // list[0..n), or 0..n-1 when null; every rotation matrix, or those the model reads.
+  void kinematics_in(const int* list, std::size_t n, const Eigen::VectorXd& y, bool all_rotations);
   void make_workspace();  // at the first evaluation (kinematics_in)
   // Kernels on Lanes (lane_kernels.cpp), each for Lanes::width items: two (SSE2) or, with
   // the suffix _avx, four (AVX).
   void bushings_on_lanes(const int* joints);
   void bushings_on_lanes_avx(const int* joints);
-  void kinematics_on_lanes(const int* bodies, const Eigen::VectorXd& y);
-  void kinematics_on_lanes_avx(const int* bodies, const Eigen::VectorXd& y);
+  void kinematics_on_lanes(const int* bodies, const Eigen::VectorXd& y, bool rotations);
+  void kinematics_on_lanes_avx(const int* bodies, const Eigen::VectorXd& y, bool rotations);
+  // A free body's rates from its applied force and torque (wrench: 6 per lane).
+  void rates_on_lanes(const int* bodies, const double* wrench, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const;
+  void rates_on_lanes_avx(const int* bodies, const double* wrench, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const;
+  template <int Width>
+  void free_bodies_on_lanes(const int* bodies, double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const;
+  void derivatives_in(const int* list, std::size_t n, double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const;
   void drive(const Driver& d, double t);
   void impose(const Driver& d, double t, Eigen::VectorXd& y) const;
   void joint_force(std::size_t k);
@@ -257,6 +269,9 @@ class MultibodySystem {
     std::vector<std::shared_ptr<const ForceElement>> elements;
     std::vector<std::size_t> element_first;  // first slot of each element
     std::vector<int> element_start, element_slot;
+    // Whether an evaluation reads rotation matrices from the workspace (rot_): not where
+    // every joint is a lane kernel's bushing and no load or force element acts.
+    bool rotations_read = true;
   };
   std::shared_ptr<Compiled> compiled_ = std::make_shared<Compiled>();
   // The prescribed displacement, rate and acceleration of each driver at its last few
