@@ -43,9 +43,11 @@ struct Lanes {
   Vec v;
 
   Lanes() = default;  // uninitialised, as a double is
-  Lanes(double x) {
-    for (int l = 0; l < width; ++l) v[l] = x;
-  }
+#ifdef __AVX__
+  Lanes(double x) : v(Vec(_mm256_set1_pd(x))) {}
+#else
+  Lanes(double x) : v(Vec(_mm_set1_pd(x))) {}
+#endif
   Lanes(Vec x) : v(x) {}
 
   Lanes& operator+=(Lanes o) { v += o.v; return *this; }

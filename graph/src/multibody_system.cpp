@@ -354,29 +354,32 @@ void MultibodySystem::joint_wrenches(double t, const Eigen::VectorXd& y, Eigen::
 // Gravity, loads, joints and force elements on body i: force and torque (world, about
 // the centre of mass), summed in the fixed order of the class comment.
 void MultibodySystem::applied_wrench(Eigen::Index i, double t, Eigen::Vector3d& force, Eigen::Vector3d& torque) const {
+  // Summed in locals, stored once: sums through the references went to memory and back at
+  // every term (they might alias what is summed).
   const auto bi = static_cast<std::size_t>(i);
-  force = body_law(bi).mass * gravity_;
-  torque = Eigen::Vector3d::Zero();
+  Eigen::Vector3d f = body_law(bi).mass * gravity_, m = Eigen::Vector3d::Zero();
   for (int p = compiled_->load_start[bi]; p < compiled_->load_start[bi + 1]; ++p) {
     const Load& l = model().loads[static_cast<std::size_t>(compiled_->load_index[static_cast<std::size_t>(p)])];
-    add_load<double>(l, evaluate(l.function, t).value, rot_[bi], force, torque);  // loads: rotations kept
+    add_load<double>(l, evaluate(l.function, t).value, rot_[bi], f, m);  // loads: rotations kept
   }
   for (int p = compiled_->incidence_start[bi]; p < compiled_->incidence_start[bi + 1]; ++p) {
     const int code = compiled_->incidence[static_cast<std::size_t>(p)];
     const auto col = joint_out_.col(code / 2);
     if (code & 1) {
-      force += col.segment<3>(0);
-      torque += col.segment<3>(6);
+      f += col.segment<3>(0);
+      m += col.segment<3>(6);
     } else {
-      force -= col.segment<3>(0);
-      torque += col.segment<3>(3);
+      f -= col.segment<3>(0);
+      m += col.segment<3>(3);
     }
   }
   for (int p = compiled_->element_start[bi]; p < compiled_->element_start[bi + 1]; ++p) {
     const Wrench& w = element_out_[static_cast<std::size_t>(compiled_->element_slot[static_cast<std::size_t>(p)])];
-    force += w.force;
-    torque += w.torque;
+    f += w.force;
+    m += w.torque;
   }
+  force = f;
+  torque = m;
 }
 
 void MultibodySystem::write_derivative(Eigen::Index i, double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt,
