@@ -93,6 +93,12 @@ class Object {
     write(out_, value);
     return *this;
   }
+  // A value whose JSON text is already written (by write()).
+  Object& raw(std::string_view key, std::string_view text) {
+    write_key(key);
+    out_ += text;
+    return *this;
+  }
   // A nested object, filled by fill(Object&).
   template <class Fill>
   Object& object(std::string_view key, Fill&& fill) {

@@ -1,6 +1,8 @@
 #include "mbsflow/io/model_writer.hpp"
 
+#include <array>
 #include <fstream>
+#include <string_view>
 
 #include "json_text.hpp"
 #include "mbsflow/error.hpp"
@@ -39,13 +41,51 @@ auto function_of(const TimeFunction& f) {
 
 bool is_zero_constant(const TimeFunction& f) { return f.kind == TimeFunction::Kind::constant && f.value == 0.0 && f.delay == 0.0; }
 
-void write_body(std::string& out, const Body& b) {
+// The text of the values that records share (a Defaulted field's node, or its default:
+// every bushing of a generated grid holds the same points, stiffness and damping),
+// written once per value: while the model is written, one address holds one value. Most
+// of the writer's time went to formatting numbers, two thirds of them such repeats.
+class SharedText {
+ public:
+  template <class T, class Write>
+  std::string_view operator()(int field, const T& value, Write&& write) {
+    const void* at = &value;
+    for (const Slot& s : slots_)
+      if (s.at == at && s.field == field) return s.text;
+    Slot& s = slots_[next_];
+    next_ = (next_ + 1) % slots_.size();
+    s.at = at;
+    s.field = field;
+    s.text.clear();
+    write(s.text, value);
+    return s.text;
+  }
+  template <class T>
+  std::string_view operator()(int field, const T& value) {
+    return (*this)(field, value, [](std::string& out, const T& v) { json_text::write(out, v); });
+  }
+
+ private:
+  struct Slot {
+    const void* at = nullptr;
+    int field = -1;
+    std::string text;
+  };
+  std::array<Slot, 16> slots_;
+  std::size_t next_ = 0;
+};
+
+enum SharedField { inertia_text, point1_text, point2_text, stiffness_text, damping_text, preload_text };
+
+void write_body(std::string& out, const Body& b, SharedText& shared) {
   Object o(out);
   o("name", b.name)("mass", b.mass);
-  if (b.inertia[3] == 0.0 && b.inertia[4] == 0.0 && b.inertia[5] == 0.0)
-    o("inertia", std::array<double, 3>{b.inertia[0], b.inertia[1], b.inertia[2]});
-  else
-    o("inertia", b.inertia.get());
+  o.raw("inertia", shared(inertia_text, b.inertia.get(), [](std::string& text, const Vec6& i) {
+    if (i[3] == 0.0 && i[4] == 0.0 && i[5] == 0.0)
+      json_text::write(text, std::array<double, 3>{i[0], i[1], i[2]});
+    else
+      json_text::write(text, i);
+  }));
   o("position", b.position);
   if (!identity(b.orientation)) o("orientation", b.orientation);
   if (!zero(b.velocity)) o("velocity", b.velocity);
@@ -67,14 +107,14 @@ void kinematic_fields(const Joint& jt, Object& o) {
     });
 }
 
-void write_joint(std::string& out, const Model& m, const Joint& jt) {
+void write_joint(std::string& out, const Model& m, const Joint& jt, SharedText& shared) {
   auto name = [&](int b) -> const std::string& {
     static const std::string ground_name = "ground";
     return b == ground ? ground_name : m.bodies[static_cast<std::size_t>(b)].name;
   };
   Object o(out);
   o("name", jt.name)("type", joint_type_name(jt.type))("body1", name(jt.body1))("body2", name(jt.body2));
-  o("point1", jt.point1.get())("point2", jt.point2.get());
+  o.raw("point1", shared(point1_text, jt.point1.get())).raw("point2", shared(point2_text, jt.point2.get()));
   if (is_kinematic(jt.type)) {
     if (!identity(jt.frame1)) o("frame1", jt.frame1.get());
     kinematic_fields(jt, o);
@@ -88,8 +128,8 @@ void write_joint(std::string& out, const Model& m, const Joint& jt) {
   }
   if (!identity(jt.frame1)) o("frame1", jt.frame1.get());
   if (jt.frame2 != rest_frame2(m, jt)) o("frame2", jt.frame2.get());
-  o("stiffness", jt.stiffness.get());
-  if (jt.damping != Vec6{}) o("damping", jt.damping.get());
+  o.raw("stiffness", shared(stiffness_text, jt.stiffness.get()));
+  if (jt.damping != Vec6{}) o.raw("damping", shared(damping_text, jt.damping.get()));
   static const char* axes[6] = {"x", "y", "z", "rx", "ry", "rz"};
   if (jt.tables.any())
     o.object("tables", [&](Object& tables) {
@@ -97,7 +137,7 @@ void write_joint(std::string& out, const Model& m, const Joint& jt) {
         if (!jt.tables[a].empty())
           tables.object(axes[a], [&](Object& t) { t("deflection", jt.tables[a].deflection)("force", jt.tables[a].force); });
     });
-  if (jt.preload != Vec6{}) o("preload", jt.preload.get());
+  if (jt.preload != Vec6{}) o.raw("preload", shared(preload_text, jt.preload.get()));
 }
 
 void write_load(std::string& out, const Model& m, const Load& l) {
@@ -154,8 +194,9 @@ void write_model_json(const Model& m, std::string& out, Spill spill) {
   json_text::write(out, m.name);
   key("gravity");
   json_text::write(out, m.gravity);
-  list("bodies", m.bodies, [&](const Body& b) { write_body(out, b); });
-  list("joints", m.joints, [&](const Joint& j) { write_joint(out, m, j); });
+  SharedText shared;
+  list("bodies", m.bodies, [&](const Body& b) { write_body(out, b, shared); });
+  list("joints", m.joints, [&](const Joint& j) { write_joint(out, m, j, shared); });
   if (!m.loads.empty()) list("loads", m.loads, [&](const Load& l) { write_load(out, m, l); });
   if (!m.drivers.empty()) list("drivers", m.drivers, [&](const Driver& d) { write_driver(out, m, d); });
   const SimulationSettings& s = m.simulation;

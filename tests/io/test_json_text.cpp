@@ -64,3 +64,42 @@ TEST_CASE("a model with names that need escaping is written and read back unchan
   CHECK(back.joints[1].body1 == m.joints[1].body1);
   CHECK(model_to_json(back) == once);
 }
+
+TEST_CASE("the model text writes values that records share as each record's own", "[io]") {
+  // The writer formats a shared value once and reuses its text for the records that hold
+  // the same node. Here forty stiffness nodes and twenty inertia nodes (more than it keeps)
+  // are shared in turn, so that texts are reused and evicted: every record's text must
+  // still hold its own numbers.
+  GridParams gp;
+  gp.rows = 10;
+  gp.cols = 12;
+  Model m = make_grid(gp);
+  std::vector<Joint> joint_pool(40, m.joints[1]);
+  for (std::size_t p = 0; p < joint_pool.size(); ++p) {
+    joint_pool[p].stiffness.set(0, 1e5 + static_cast<double>(p));
+    joint_pool[p].point1 = Vec3{0.01 * static_cast<double>(p), 0.0, 0.0};
+  }
+  std::vector<Body> body_pool(20, m.bodies[0]);
+  for (std::size_t p = 0; p < body_pool.size(); ++p)
+    body_pool[p].inertia = Vec6{0.1, 0.2, 0.3, p % 2 ? 0.001 * static_cast<double>(p) : 0.0, 0.0, 0.0};
+  std::mt19937 g(3);
+  for (Joint& j : m.joints) {
+    const Joint& from = joint_pool[g() % joint_pool.size()];
+    j.stiffness = from.stiffness;
+    j.point1 = from.point1;
+  }
+  for (Body& b : m.bodies) b.inertia = body_pool[g() % body_pool.size()].inertia;
+  const nlohmann::json doc = nlohmann::json::parse(model_to_json(m));
+  for (std::size_t k = 0; k < m.joints.size(); ++k) {
+    const nlohmann::json& j = doc["joints"][k];
+    for (std::size_t a = 0; a < 6; ++a) REQUIRE(j["stiffness"][a].get<double>() == m.joints[k].stiffness[a]);
+    for (std::size_t a = 0; a < 3; ++a) REQUIRE(j["point1"][a].get<double>() == m.joints[k].point1[a]);
+  }
+  for (std::size_t i = 0; i < m.bodies.size(); ++i) {
+    const nlohmann::json& inertia = doc["bodies"][i]["inertia"];
+    const Vec6& expected = m.bodies[i].inertia.get();
+    REQUIRE(inertia.size() == (expected[3] == 0.0 ? 3u : 6u));
+    for (std::size_t a = 0; a < inertia.size(); ++a) REQUIRE(inertia[a].get<double>() == expected[a]);
+  }
+  CHECK(model_to_json(read_model_text(model_to_json(m), "shared.json")) == model_to_json(m));
+}
