@@ -40,11 +40,8 @@ void MultibodySystem::LANE_KERNEL(bushings_on_lanes)(const int* k) {
     law[l] = &law_of(*j[l]);
   }
   // Repeated bushings (a chain's, a grid's) share one law: its numbers go to every lane.
-  bool one_law = true;
-  for (int l = 1; l < Lanes::width; ++l) one_law = one_law && law[l] == law[0];
-  const auto from_law = [&](auto field) {
-    return one_law ? broadcast(law[0]->*field) : gather([&](int l) -> auto& { return law[l]->*field; });
-  };
+  const bool one_law = one_item(law);
+  const auto from_law = [&](auto field) { return lanes_of(law, one_law, field); };
   BushingParams<Lanes> p;
   p.frame1_identity = law[0]->frame1_identity;
   p.frame2_identity = law[0]->frame2_identity;
@@ -90,21 +87,16 @@ void MultibodySystem::LANE_KERNEL(kinematics_on_lanes)(const int* k, const Eigen
 void MultibodySystem::LANE_KERNEL(rates_on_lanes)(const int* k, const double* wrench, const Eigen::VectorXd& y,
                                                   Eigen::VectorXd& dydt) const {
   const BodyLaw* law[Lanes::width];
-  bool one_law = true;
-  for (int l = 0; l < Lanes::width; ++l) {
-    law[l] = &body_law(static_cast<std::size_t>(k[l]));
-    one_law = one_law && law[l] == law[0];
-  }
-  const auto from_law = [&](auto field) {
-    return one_law ? broadcast(law[0]->*field) : gather([&](int l) -> auto& { return law[l]->*field; });
-  };
+  for (int l = 0; l < Lanes::width; ++l) law[l] = &body_law(static_cast<std::size_t>(k[l]));
+  const bool one_law = one_item(law);
   Lanes inv_mass;
   for (int l = 0; l < Lanes::width; ++l) inv_mass.v[l] = law[l]->inv_mass;
   const Vector4T<Lanes> q = gather([&](int l) { return y.segment<4>(layout_.orientation(k[l])); });
   const Vector3T<Lanes> w = gather([&](int l) { return y.segment<3>(layout_.angular_velocity(k[l])); });
   const Vector3T<Lanes> force = gather([&](int l) { return Eigen::Map<const Eigen::Vector3d>(wrench + 6 * l); });
   const Vector3T<Lanes> torque = gather([&](int l) { return Eigen::Map<const Eigen::Vector3d>(wrench + 6 * l + 3); });
-  const Matrix3T<Lanes> inertia = from_law(&BodyLaw::inertia), inv_inertia = from_law(&BodyLaw::inv_inertia);
+  const Matrix3T<Lanes> inertia = lanes_of(law, one_law, &BodyLaw::inertia);
+  const Matrix3T<Lanes> inv_inertia = lanes_of(law, one_law, &BodyLaw::inv_inertia);
   const Matrix3T<Lanes> r = rotation_matrix<Lanes>(q);
   scatter(Vector3T<Lanes>(inv_mass * force), [&](int l) { return dydt.segment<3>(layout_.velocity(k[l])); });
   scatter(angular_acceleration<Lanes>(r, w, torque, inertia, inv_inertia),

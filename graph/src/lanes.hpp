@@ -167,6 +167,19 @@ auto broadcast(const M& m) {
   return out;
 }
 
+// Field `field` of the items item[0..width) on lanes: broadcast when every lane holds the
+// same item (one_item: repeated laws of a chain or grid), else gathered lane by lane.
+template <class Item>
+[[gnu::always_inline]] inline bool one_item(const Item* const* item) {
+  for (int l = 1; l < Lanes::width; ++l)
+    if (item[l] != item[0]) return false;
+  return true;
+}
+template <class Item, class M>
+[[gnu::always_inline]] inline auto lanes_of(const Item* const* item, bool one, M Item::*field) {
+  return one ? broadcast(item[0]->*field) : gather([&](int l) -> auto& { return item[l]->*field; });
+}
+
 // The other way: lane l of m into to(l), an Eigen block of m's size.
 template <class M, class To>
 void scatter(const M& m, To&& to) {

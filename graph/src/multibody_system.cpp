@@ -204,19 +204,11 @@ void MultibodySystem::kinematics_in(const int* list, std::size_t n, const Eigen:
   if (rotations && rot_.empty()) rot_.assign(static_cast<std::size_t>(layout_.bodies) + 1, Eigen::Matrix3d::Identity());
   // The workspace's columns are laid out as the state's blocks, so each run of consecutive
   // bodies is three block copies.
-  for (std::size_t a = 0; a < n;) {
-    const Eigen::Index first = list ? list[a] : static_cast<Eigen::Index>(a);
-    std::size_t b = a + 1;
-    if (list)
-      while (b < n && list[b] == list[b - 1] + 1) ++b;
-    else
-      b = n;
-    const auto count = static_cast<Eigen::Index>(b - a);
+  for_body_runs(list, n, [&](Eigen::Index first, Eigen::Index count) {
     std::copy_n(y.data() + layout_.orientation(first), 4 * count, quat_.col(first).data());
     std::copy_n(y.data() + layout_.position(first), 3 * count, pos_.col(first).data());
     std::copy_n(y.data() + layout_.velocity(first), 3 * count, vel_.col(first).data());
-    a = b;
-  }
+  });
   lane_groups_for_cpu<1>(
       list, n, [](int) { return 0; }, [](int) {}, [&](const int* k) { kinematics_on_lanes(k, y, rotations); },
       [&](const int* k) { kinematics_on_lanes_avx(k, y, rotations); });

@@ -158,16 +158,12 @@ namespace {
 template <class F>
 void for_bodies(const Part& part, const std::vector<int>& bodies, F f) {
   const StateLayout& l = part.system.layout();
-  for (std::size_t a = 0; a < bodies.size();) {
-    std::size_t b = a + 1;
-    while (b < bodies.size() && bodies[b] == bodies[b - 1] + 1) ++b;
-    const Eigen::Index first = bodies[a], n = static_cast<Eigen::Index>(b - a);
+  for_body_runs(bodies.data(), bodies.size(), [&](Eigen::Index first, Eigen::Index n) {
     f(l.position(first), 3 * n);
     f(l.orientation(first), 4 * n);
     f(l.velocity(first), 3 * n);
     f(l.angular_velocity(first), 3 * n);
-    a = b;
-  }
+  });
 }
 
 // The stage update of rk4_stage, for some own bodies: the next stage input, or after

@@ -15,6 +15,19 @@ struct StateLayout {
   Eigen::Index angular_velocity(Eigen::Index i) const { return 10 * bodies + 3 * i; }
 };
 
+// Calls f(first, count) for each run of consecutive bodies in list[0..n) (0..n-1, one run,
+// when list is null): the layout keeps each field of consecutive bodies together, so a
+// run's numbers of one field are one block.
+template <class F>
+void for_body_runs(const int* list, std::size_t n, F&& f) {
+  for (std::size_t a = 0; a < n;) {
+    std::size_t b = list ? a + 1 : n;
+    while (b < n && list[b] == list[b - 1] + 1) ++b;
+    f(static_cast<Eigen::Index>(list ? list[a] : static_cast<int>(a)), static_cast<Eigen::Index>(b - a));
+    a = b;
+  }
+}
+
 // The state's field blocks in order (position, orientation, velocity, angular velocity):
 // each one's offset in a layout and its numbers per body.
 struct StateField {
