@@ -11,7 +11,7 @@
 namespace mbsflow::cli {
 
 struct BenchArgs {
-  std::string what = "rhs";
+  std::string what;
   std::vector<int> bodies;  // default per benchmark
   double seconds = 1.0;     // rhs: time per measurement
   int steps = 1000;         // output: steps per run

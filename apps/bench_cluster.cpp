@@ -108,7 +108,7 @@ int bench_cluster(const BenchArgs& a) {
   const Hockney gbe = gigabit_ethernet(local);
   const double message = boundary_message_bytes(1);  // from each of two neighbours: one body and a header
   std::printf("\npredicted speedup on P hosts over Gigabit Ethernet (assumed: alpha = measured tcp alpha + %.0f us = %.1f us,"
-              " beta = %.0f MB/s),\nfrom this host's one-thread time per step; the seed's measured speedups (16/24/32 "
+              " beta = %.0f MB/s),\nfrom this host's one-thread time per step; the published cluster's measured speedups (16/24/32 "
               "processes on 7 nodes) in brackets\n",
               1e6 * gbe_extra_latency_s, 1e6 * gbe.alpha, gbe.beta / 1e6);
   const int hosts[] = {2, 4, 8, 16, 24, 32};

@@ -32,9 +32,9 @@ int bench_iftomm(const BenchArgs& a) {
     }
     MultibodySystem sys(m);
     const IftommCheck c = check_iftomm(p.id, sys, keep.t, keep.y);
-    std::printf("%-28s %-7s %-8.2g %8ld %11.3g %11.3g %-20s %8.3f   %s\n", p.title, method_name(m.simulation.method),
+    std::printf("%-28s %-7s %-8.2g %8ld %11.3g %11.3g %-20s %8.3f   %s\n", p.title, method_name(m.simulation.method.value_or(Method::rk4)),
                 m.simulation.rtol, summary.steps, c.error, c.drift, p.drift_of, best, p.published);
-    csv.out << '"' << p.title << "\"," << method_name(m.simulation.method) << ',' << m.simulation.rtol << ','
+    csv.out << '"' << p.title << "\"," << method_name(m.simulation.method.value_or(Method::rk4)) << ',' << m.simulation.rtol << ','
             << summary.steps << ',' << c.error << ',' << c.drift << ",\"" << p.drift_of << "\"," << best << '\n';
   }
   std::printf("wrote %s\n", csv.path.c_str());

@@ -16,13 +16,15 @@ Action add_bench(CLI::App& app) {
                   "processes, against the efficiency mbsflow plan predicts; "
                   "cluster: 2 threads vs 2 processes over tcp and ipc, exchange cost, predicted speedup on a cluster; "
                   "latency: tight vs loose coupling on 2 processes as the network gets slower; "
-                  "ode: work-precision of the block and tirk methods against CVODE and Boost.Odeint on the seed's problems; "
-                  "iterations: iteration error after 1, 2, ... iterations of the tirk schemes (seed 004's claim); "
+                  "ode: work-precision of the block and tirk methods against CVODE and Boost.Odeint on the standard test problems; "
+                  "iterations: iteration error after 1, 2, ... iterations of the tirk schemes (the claimed convergence); "
                   "iftomm: the IFToMM examples against their reduced equations; "
                   "stiff: work-precision on stiff multibody models (chain at several bushing frequencies, train, A05) "
                   "against RK4 at its stable step, DOPRI5 and CVODE with KLU; "
                   "ivp: work-precision (correct digits at the end vs CPU time, rtol 1e-3..1e-10) of the implicit methods against "
-                  "CVODE on Van der Pol (mu 1e3, 1e6), Robertson and the seed's problems")
+                  "CVODE on Van der Pol (mu 1e3, 1e6), Robertson and the standard test problems; "
+                  "load: time and memory to read, check, set up and start a large chain or grid (docs/parallel.md)")
+      ->required()
       ->check(CLI::IsMember({"rhs", "output", "parallel", "cluster", "latency", "ode", "iterations", "iftomm", "stiff", "ivp", "load"}));
   sub->add_option("--problems", a->problems,
                   "ode, iterations: hnw, b1, heatN (default ode: hnw,b1,heat1000,heat100000,heat1000000; iterations: hnw,b1,heat200); "

@@ -27,7 +27,7 @@ Action add_export(CLI::App& app) {
   CLI::App* sub = app.add_subcommand("export", "Write results as CSV: one file per body with a header row");
   sub->add_option("file", a->file, "Results file (.h5)")->required();
   sub->add_option("--csv", a->csv, "Folder for the CSV files (created if missing)")->required();
-  sub->add_option("--bodies", a->bodies, "Bodies to export (default: all)")->delimiter(',');
+  sub->add_option("--bodies", a->bodies, "Bodies to export, comma-separated or one per option (default: all)")->delimiter(',');
   return [a] { return export_results(*a); };
 }
 

@@ -6,6 +6,8 @@
 #include "commands.hpp"
 #include "mbsflow/graph/generators.hpp"
 #include "mbsflow/io/model_writer.hpp"
+#include "mbsflow/io/output_path.hpp"
+#include "mbsflow/words.hpp"
 
 namespace mbsflow::cli {
 namespace {
@@ -43,9 +45,12 @@ int generate(const GenerateArgs& a) {
   if (a.t_end) m.simulation.t_end = *a.t_end;
   if (a.step) m.simulation.step = *a.step;
   const std::string path = a.output.empty() ? a.kind + ".json" : a.output;
+  check_output_path(path, {{}, true});  // a model replaces a file, never a folder or a device
   write_model_file(m, path);
-  std::fprintf(stderr, "mbsflow: wrote %s: model %s, %zu bodies, %zu joints, %zu drivers\n", path.c_str(), m.name.c_str(),
-               m.bodies.size(), m.joints.size(), m.drivers.size());
+  std::fprintf(stderr, "mbsflow: wrote %s: model %s, %s, %s, %s\n", path.c_str(), m.name.c_str(),
+               count_of(static_cast<long long>(m.bodies.size()), "body", "bodies").c_str(),
+               count_of(static_cast<long long>(m.joints.size()), "joint").c_str(),
+               count_of(static_cast<long long>(m.drivers.size()), "driver").c_str());
   return 0;
 }
 

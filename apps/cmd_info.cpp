@@ -7,6 +7,7 @@
 #include "commands.hpp"
 #include "mbsflow/io/result_fields.hpp"
 #include "mbsflow/io/results_file.hpp"
+#include "mbsflow/words.hpp"
 
 namespace mbsflow::cli {
 namespace {
@@ -56,10 +57,23 @@ int info(const std::string& path) {
   auto number = [&](const char* name) { return r.number_attribute(name).value_or(std::nan("")); };
   std::printf("file          %s (%ju bytes)\n", path.c_str(), r.size_bytes());
   const std::size_t joints = r.has(joint_force_dataset) ? r.joint_names().size() : 0;
-  std::printf("model         %s: %zu bodies%s\n", text("model_name").c_str(), r.body_names().size(),
-              joints ? (", " + std::to_string(joints) + " joints with forces").c_str() : "");
+  std::printf("model         %s: %s%s\n", text("model_name").c_str(),
+              count_of(static_cast<long long>(r.body_names().size()), "body", "bodies").c_str(),
+              joints ? (", " + count_of(static_cast<long long>(joints), "joint") + " with forces").c_str() : "");
   std::printf("method        %s, step %.6g s, output every %g\n", text("method").c_str(), number("step"),
               number("output_every"));
+  if (r.has("/coupling/t_end")) {  // a loosely coupled run: its macro steps and coupling errors
+    const std::vector<double> start = r.read("/coupling/t_start"), end = r.read("/coupling/t_end");
+    const std::vector<double> error = r.read("/coupling/position_error");
+    double shortest = INFINITY, longest = 0.0, worst = 0.0;
+    for (std::size_t i = 0; i < end.size() && i < start.size(); ++i) {
+      shortest = std::min(shortest, end[i] - start[i]);
+      longest = std::max(longest, end[i] - start[i]);
+    }
+    for (double e : error) worst = std::max(worst, e);
+    std::printf("coupling      loose: %s of %.4g .. %.4g s, coupling error at most %.3g m\n",
+                count_of(static_cast<long long>(end.size()), "macro step").c_str(), end.empty() ? 0.0 : shortest, longest, worst);
+  }
   std::printf("run           t = %.6g .. %.6g s requested\n", number("t_start"), number("t_end"));
   if (t.empty())
     std::printf("snapshots     none\n");

@@ -8,6 +8,7 @@
 
 #include "commands.hpp"
 #include "ode_common.hpp"
+#include "mbsflow/io/output_path.hpp"
 #include "mbsflow/error.hpp"
 #include "mbsflow/io/ode_results.hpp"
 #include "mbsflow/methods/block_integrator.hpp"
@@ -99,6 +100,7 @@ int stability_table() {
 
 int run(const OdeArgs& a) {
   if (a.problem.empty()) throw InputError(std::string("ode: --problem is required (") + builtin_problem_names + ")");
+  if (a.output_given || !a.output.empty()) check_output_path(a.output, {{}, a.force});
   if (a.method == "tirk") return run_tirk(a);
   OdeProblem p;
   BlockSettings s;
@@ -156,17 +158,17 @@ Action add_ode(CLI::App& app) {
                   "hnw (eq. 10, Hairer-Wanner), b1 (eq. 11, DETEST B1), heat (eq. 12, --n equations) or heatN, vdp (Van der Pol, "
                   "mu = 1e3, scaled form on [0, 2]) or vdpMU (e.g. vdp1e6), robertson (kinetics on [0, 1e11], per-component atol)");
   sub->add_option("--n", a->n, "heat: number of equations")->check(CLI::PositiveNumber)->capture_default_str();
-  sub->add_option("--method", a->method, "colloc (block methods, seed 001) or tirk (Runge-Kutta iterated through T, seed 004)")
+  sub->add_option("--method", a->method, "colloc (collocation block methods) or tirk (implicit Runge-Kutta iterated through a triangular T)")
       ->check(CLI::IsMember({"colloc", "tirk"}))->capture_default_str();
   sub->add_option("--s", a->s, "colloc: points per block (the controller also runs s+1)")->check(CLI::Range(1, 12))->capture_default_str();
   sub->add_option("--m", a->m, "colloc: steps (1: one-step methods)")->check(CLI::Range(1, 8))->capture_default_str();
   sub->add_option("--order", a->order, "colloc: order of an equidistant s-point method (0: maximal, 2m+s-1)")->check(CLI::NonNegativeNumber);
   sub->add_option("--nodes", a->nodes,
                   "colloc: radau (blocks at the Radau points, L-stable, order 2s-1; the default for one-step methods) or "
-                  "equidistant (the seed's blocks; the default with --m > 1 or --order)")
+                  "equidistant (the classical blocks; the default with --m > 1 or --order)")
       ->check(CLI::IsMember({"radau", "equidistant"}));
   sub->add_option("--tableau", a->tableau,
-                  "tirk: radau1..radau12 (Radau IIA, s stages), gauss2, gauss3, lobatto3c, block1..block6 (seed 001's one-step "
+                  "tirk: radau1..radau12 (Radau IIA, s stages), gauss2, gauss3, lobatto3c, block1..block6 (the one-step collocation "
                   "block methods)")
       ->capture_default_str();
   sub->add_option("--tol", a->tol, "relative (and, without --atol, absolute) tolerance")->check(CLI::PositiveNumber)->capture_default_str();
@@ -179,21 +181,26 @@ Action add_ode(CLI::App& app) {
       ->delimiter(',')
       ->check(CLI::PositiveNumber);
   sub->add_option("--iteration", a->iteration,
-                  "colloc: newton (default) or functional; tirk: newton (default, as Radau5: one real and one complex LU for radau3), newton-triangular (the seed's PTIRK), newton-diagonal, triangular, "
+                  "colloc: newton (default) or functional; tirk: newton (default, as Radau5: one real and one complex LU for radau3), newton-triangular (PTIRK, the parallel triangular iteration), newton-diagonal, triangular, "
                   "diagonal or jacobi")
       ->check(CLI::IsMember({"newton", "functional", "jacobi", "triangular", "diagonal", "newton-triangular", "newton-diagonal"}));
   sub->add_option("--iterations", a->iterations, "tirk: exactly this many iterations per step, no convergence test (0: until converged)")
       ->check(CLI::NonNegativeNumber);
   sub->add_option("--inner", a->inner, "tirk, functional triangular/diagonal: substitutions for a stage's own term per iteration")
       ->check(CLI::Range(1, 50))->capture_default_str();
-  sub->add_option("--jacobian", a->jacobian, "exact (the problem's) or fd (finite differences)")
-      ->check(CLI::IsMember({"exact", "fd"}))->capture_default_str();
+  sub->add_option("--jacobian", a->jacobian,
+                  "auto (the problem's exact Jacobian) or differences (finite differences), as for mbsflow run; exact and fd "
+                  "are the older names")
+      ->check(CLI::IsMember({"auto", "differences", "exact", "fd"}))->capture_default_str();
   sub->add_option("--linear-solver", a->solver, "auto, dense, banded, klu (SuiteSparse) or sparselu (Eigen)")
       ->check(CLI::IsMember({"auto", "dense", "banded", "klu", "sparselu"}))->capture_default_str();
   sub->add_option("--fixed-step", a->fixed_step, "no step control: this step (colloc: the point spacing of equidistant blocks, the block length at Radau points)")->check(CLI::PositiveNumber);
   sub->add_option("--initial-step", a->initial_step, "first step (default: chosen from the problem)")->check(CLI::PositiveNumber);
   sub->add_option("--threads", a->threads, "threads (0: all cores; 1: sequential, the same numbers)")->check(CLI::NonNegativeNumber);
-  sub->add_option("-o,--output", a->output, "HDF5 file for the solution and the step record");
+  sub->add_option("-o,--output", a->output,
+                  "HDF5 file for the solution and the step record (replaces only an earlier results file, else --force)")
+      ->each([a](const std::string&) { a->output_given = true; });
+  sub->add_flag("--force", a->force, "With -o: replace the file there even if it is not an mbsflow results file");
   auto describe_name = std::make_shared<std::string>();
   CLI::Option* describe_opt = sub->add_option("--describe", *describe_name,
                                           "print a method's coefficients and properties and exit: a tableau name, or without one the "

@@ -64,7 +64,7 @@ Action add_partition(CLI::App& app) {
   sub->add_option("model", a->model, "Model file (JSON)")->required();
   sub->add_option("-k,--partitions", a->k, "Number of submodels")->required();
   sub->add_option("--partitioner", a->partitioner,
-                  "best: whichever of band and metis gives the faster slowest submodel; band: the seed's band cuts; "
+                  "best: whichever of band and metis gives the faster slowest submodel; band: band cuts of the reverse Cuthill-McKee order; "
                   "metis: METIS k-way")
       ->check(CLI::IsMember({"best", "band", "metis"}))
       ->capture_default_str();

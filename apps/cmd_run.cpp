@@ -14,6 +14,7 @@
 #include "commands.hpp"
 #include "huge_pages.hpp"
 #include "mbsflow/error.hpp"
+#include "mbsflow/words.hpp"
 #include "mbsflow/methods/stepper.hpp"
 #include "mbsflow/graph/stable_step.hpp"
 #include "local_workers.hpp"
@@ -24,6 +25,7 @@
 #include "mbsflow/io/hdf5_sink.hpp"
 #include "mbsflow/io/model_reader.hpp"
 #include "mbsflow/io/model_writer.hpp"
+#include "mbsflow/io/output_path.hpp"
 #include "mbsflow/io/partition_file.hpp"
 #include "mbsflow/runtime/async_sink.hpp"
 #include "mbsflow/runtime/cluster.hpp"
@@ -48,6 +50,8 @@ struct RunArgs {
   std::string jacobian = "auto";
   std::optional<int> every;
   std::string output;
+  bool output_given = false;  // -o "" is refused, not taken as no -o
+  bool force = false;         // -o may replace a regular file that is not a results file
   std::string fields = "position,orientation,velocity,angular_velocity,energy";
   bool quiet = false;
   bool timings = false;
@@ -74,6 +78,7 @@ struct RunArgs {
   std::string submodel_methods;  // comma-separated, one per submodel
   double checkpoint_every = 0.0;  // wall-clock s; 0: no checkpoints
   std::string checkpoint;         // the checkpoint file; default OUTPUT.ckpt
+  bool assemble = false;          // move bodies onto violated rigid joints
   std::string resume;             // a checkpoint file to go on from
 };
 
@@ -147,44 +152,88 @@ std::string human_bytes(double b) {
   return buf;
 }
 
-// The run's options from the model and the flags; says which step was chosen (a warning
-// for a given RK4 step above the stability estimate s of the model).
+// The run's options from the model and the flags; says in one line which method and step
+// were chosen where the model and the flags leave them open (a warning for a given RK4
+// step above the stability estimate s of the model).
 RunOptions choose_options(Model& m, const RunArgs& a, const StableStep& s) {
   RunOptions o = options_from_model(m, s.step);
   o.linear_solver = a.linear_solver;
   o.jacobian = a.jacobian;
+  const char* name = method_name(o.method);
   if (m.simulation.step) {
-    if (m.simulation.method == Method::rk4 && *m.simulation.step > s.step)
+    if (o.method == Method::rk4 && *m.simulation.step > s.step)
       std::fprintf(stderr, "mbsflow: warning: step %.3g s is above the estimated RK4 stability limit %s\n",
                    *m.simulation.step, s.describe(m).c_str());
     return o;
   }
-  if (!std::isfinite(o.step)) throw InputError(a.model + ": no joints to estimate a step from; give --step");
   if (a.quiet) return o;
-  char use[96] = "";
-  if (!std::isfinite(s.step))
-    std::snprintf(use, sizeof use, "; %s starts with %.4g s", o.method.name(), o.step);
-  else if (o.step != s.step)
-    std::snprintf(use, sizeof use, ", shortened to %.4g s to fit the output interval", o.step);
-  else if (find_stepper(o.method.name())->adaptive)
-    std::snprintf(use, sizeof use, " as the first step");
-  if (o.method == Method::tirk || o.method == Method::colloc) {
-    std::fprintf(stderr, "mbsflow: no step given; %s picks its first step from the tolerances\n", o.method.name());
-    return o;
+  char tolerances[64];
+  std::snprintf(tolerances, sizeof tolerances, "rtol %.3g, atol %.3g", o.rtol, o.atol);
+  if (o.method_chosen && o.method != Method::rk4) {
+    std::fprintf(stderr,
+                 "mbsflow: no joint gives RK4 a stable step (no compliant joint): %s, adaptive, %s (--method, --step, "
+                 "--rtol and --atol choose)\n", name, tolerances);
+  } else if (o.method == Method::tirk || o.method == Method::colloc) {
+    std::fprintf(stderr, "mbsflow: no step given: %s picks its first step from the tolerances (%s)\n", name, tolerances);
+  } else if (find_stepper(name)->adaptive) {
+    std::fprintf(stderr, "mbsflow: no step given: %s starts with %.4g s (%s) and adapts it to %s\n", name, o.step,
+                 std::isfinite(s.step) ? "the RK4 stability estimate" : "a thousandth of the run", tolerances);
+  } else {
+    char fit[96] = "", every[64] = "";
+    if (o.step != s.step) std::snprintf(fit, sizeof fit, ", shortened to %.4g s to fit the output interval", o.step);
+    if (!m.simulation.output_every && o.output_interval <= 0.0 && o.output_every > 1)
+      std::snprintf(every, sizeof every, "; a snapshot every %d steps", o.output_every);
+    std::fprintf(stderr, "mbsflow: no step given: RK4 with the stability estimate %s%s%s\n", s.describe(m).c_str(), fit,
+                 every);
   }
-  std::fprintf(stderr, "mbsflow: no step given; using the RK4 stability estimate %s%s\n", s.describe(m).c_str(), use);
   return o;
+}
+
+// InputError naming the file for rigid joints that the initial positions violate (unless
+// assembly was asked for) or that cannot be assembled; with `report`, which bodies the
+// assembly moves, and how far (--assemble).
+void check_assembly(const std::shared_ptr<Model>& model, const std::string& file, bool report) {
+  const Model& m = *model;
+  MultibodySystem sys(model, static_cast<int>(m.bodies.size()));
+  Eigen::VectorXd y;
+  try {
+    y = sys.initial_state();
+  } catch (const ModelError& e) {
+    throw InputError(file + ": " + e.text());
+  }
+  if (!report) return;
+  const StateLayout& l = sys.layout();
+  std::string moved;
+  int count = 0;
+  for (std::size_t i = 0; i < m.bodies.size(); ++i) {
+    const auto k = static_cast<Eigen::Index>(i);
+    const Eigen::Vector3d given(m.bodies[i].position[0], m.bodies[i].position[1], m.bodies[i].position[2]);
+    const double d = (y.segment<3>(l.position(k)) - given).norm();
+    if (!(d > SimulationSettings::assembly_tolerance)) continue;
+    if (++count <= 10) {
+      char buf[160];
+      std::snprintf(buf, sizeof buf, "%s%s by %.3g m", count > 1 ? ", " : "", m.bodies[i].name.c_str(), d);
+      moved += buf;
+    }
+  }
+  if (count == 0)
+    std::fprintf(stderr, "mbsflow: --assemble: the rigid joints hold as given; no body moved\n");
+  else
+    std::fprintf(stderr, "mbsflow: --assemble moved %d %s onto the rigid joints: %s%s\n", count,
+                 count == 1 ? "body" : "bodies", moved.c_str(), count > 10 ? ", ..." : "");
 }
 
 void print_summary(const Model& m, MultibodySystem& sys, const RunOptions& o, const RunSummary& r) {
   const Energy e0 = sys.energy(o.t_start, sys.initial_state());
   const Energy e1 = sys.energy(o.t_end, r.final_state);
   const StateLayout& l = sys.layout();
-  std::printf("model %s: %zu bodies, %zu joints; %s, step %.4g s, t = %g..%g s\n", m.name.c_str(), m.bodies.size(),
-              m.joints.size(), method_name(o.method), o.step, o.t_start, o.t_end);
+  std::printf("model %s: %s, %s; %s, step %.4g s, t = %g..%g s\n", m.name.c_str(),
+              count_of(static_cast<long long>(m.bodies.size()), "body", "bodies").c_str(),
+              count_of(static_cast<long long>(m.joints.size()), "joint").c_str(), method_name(o.method), o.step, o.t_start, o.t_end);
   std::printf("energy (kinetic + gravity + elastic): initial %.10g J, final %.10g J\n", e0.total(), e1.total());
   const std::size_t shown = std::min<std::size_t>(m.bodies.size(), 10);
-  std::printf("final state of %s%zu bodies:\n", shown < m.bodies.size() ? "the first " : "", shown);
+  std::printf("final state of %s%s:\n", shown < m.bodies.size() ? "the first " : "",
+              shown == 1 ? "the body" : count_of(static_cast<long long>(shown), "body", "bodies").c_str());
   std::printf("  %-16s %14s %14s %14s %14s %14s %14s\n", "body", "x", "y", "z", "vx", "vy", "vz");
   for (std::size_t i = 0; i < shown; ++i) {
     const auto k = static_cast<Eigen::Index>(i);
@@ -217,6 +266,10 @@ int run(const RunArgs& a, const CheckpointFile* resumed = nullptr, const std::st
     if (slurm->step.rank > 0) return serve_slurm_task(*slurm, a.threads, a.quiet);  // reads no model
   }
   const bool slurm_workers = slurm && slurm->step.tasks() > 1;
+  // Before anything is read or started: a results path that would write over the model,
+  // a folder, a device or another file is refused (a resumed run writes on in its own file).
+  if (a.output_given || !a.output.empty())
+    check_output_path(a.output, {{a.model, a.partition_file, a.cluster, resumed_path}, a.force});
   PhaseTimings timings(a.timings);
   // The file is mapped, not copied, and let go once parsed; only checkpoints keep its text.
   std::optional<FileText> file;
@@ -230,9 +283,12 @@ int run(const RunArgs& a, const CheckpointFile* resumed = nullptr, const std::st
   timings.mark("parse and check the model", bodies);
   std::string model_text = a.checkpoint_every > 0.0 ? std::string(source) : std::string();
   file.reset();
-  ModelOverrides overrides{a.t_end, a.step, a.rtol, a.atol, a.output_interval, a.every, std::nullopt, a.variant};
+  ModelOverrides overrides{a.t_end, a.step, a.rtol, a.atol, a.output_interval, a.every, std::nullopt, a.variant, a.assemble};
   if (!a.method.empty()) overrides.method = *find_method(a.method);
   apply_overrides(m, overrides);
+  // Rigid joints that the bodies do not meet are refused before anything else is said.
+  if (std::any_of(m.joints.begin(), m.joints.end(), [](const Joint& j) { return is_kinematic(j.type) && j.rigid; }))
+    check_assembly(model, resumed ? resumed_path : a.model, m.simulation.assemble && !a.quiet);
   const StableStep stable = estimate_stable_step(m);
   RunOptions o = choose_options(m, a, stable);
   timings.mark("stable step and options", bodies);
@@ -266,16 +322,29 @@ int run(const RunArgs& a, const CheckpointFile* resumed = nullptr, const std::st
   } else if (slurm && !a.quiet) {
     std::fprintf(stderr, "mbsflow: --slurm with one task: a run on this process's threads\n");
   }
+  // Loose coupling cuts the model even into one submodel (then it is a plain run).
+  // The implicit methods integrate a tight run whole: their stages are parallel inside the step.
+  const bool stage_split = o.method == Method::rk4 || o.method == Method::dopri5;
+  // Local workers take a submodel each; the model is cut before they are started, so that a
+  // model that cannot be cut so far is refused before any process exists.
+  const int default_k = a.processes > 0 ? a.processes
+                        : cluster         ? cluster_submodels(cc)
+                        : stage_split || loose ? default_partitions(m, threads)
+                                               : 1;
+  std::optional<Decomposition> d;
+  try {
+    d = choose_decomposition(m, a, default_k, !cluster && !loose);
+  } catch (const InputError& e) {
+    if (a.processes == 0) throw;
+    throw InputError("--processes " + std::to_string(a.processes) + " needs as many submodels: " + e.text() +
+                     "; or run on threads (no --processes)");
+  }
   if (a.processes > 0) {
     // Each worker gets its share of the cores unless --threads says how many.
     local.emplace(a.processes, a.transport, a.threads > 0 ? a.threads : std::max(1, threads / a.processes));
     cc = local->cluster();
   }
-  // Loose coupling cuts the model even into one submodel (then it is a plain run).
-  // The implicit methods integrate a tight run whole: their stages are parallel inside the step.
-  const bool stage_split = o.method == Method::rk4 || o.method == Method::dopri5;
-  const int default_k = cluster ? cluster_submodels(cc) : stage_split || loose ? default_partitions(m, threads) : 1;
-  const std::optional<Decomposition> d = choose_decomposition(m, a, default_k, !cluster && !loose);
+
   give_back_free_memory();  // what reading and cutting the model freed, before the submodels are built
   timings.mark("cut into submodels", bodies);
   if (cluster && !a.quiet) {
@@ -285,7 +354,8 @@ int run(const RunArgs& a, const CheckpointFile* resumed = nullptr, const std::st
                  d->submodels.size(), cc.workers.size(), cc.transport.c_str(), d->cut_joints, 100.0 * d->imbalance, coupling);
   }
   else if (loose && !a.quiet && d->submodels.size() == 1)
-    std::fprintf(stderr, "mbsflow: 1 submodel: nothing to couple loosely, a plain run\n");
+    std::fprintf(stderr, "mbsflow: 1 submodel: nothing to couple loosely, a plain run (--partitions N cuts the model "
+                         "into N submodels)\n");
   else if (loose && !a.quiet)
     std::fprintf(stderr,
                  "mbsflow: %zu submodels on %d threads, loosely coupled: macro step %.4g s (%.3g x the cut joints' "
@@ -373,6 +443,9 @@ int run(const RunArgs& a, const CheckpointFile* resumed = nullptr, const std::st
     }
     if (loose && !a.quiet && d->submodels.size() > 1) print_coupling(stats.loose, lo.coupling_tol > 0.0, a.max_lag,
                                               a.coupling_tol.value_or(default_coupling_tol), cluster);
+  } catch (const ModelError& e) {
+    progress.finish();
+    throw InputError((resumed ? resumed_path : a.model) + ": " + e.text());
   } catch (const RunError& e) {
     progress.finish();
     const int sig = stop_signal();
@@ -405,8 +478,12 @@ int run(const RunArgs& a, const CheckpointFile* resumed = nullptr, const std::st
   // worker processes, theirs are their own).
   if (const double peak = memory_use().peak_bytes; peak > 0.0) {
     char mem[96];
-    std::snprintf(mem, sizeof mem, "; peak memory %s (%.0f B per body)", human_bytes(peak).c_str(),
-                  peak / static_cast<double>(m.bodies.size()));
+    // Per body only where the bodies, not the program, take most of it.
+    if (m.bodies.size() >= 1000)
+      std::snprintf(mem, sizeof mem, "; peak memory %s (%.0f B per body)", human_bytes(peak).c_str(),
+                    peak / static_cast<double>(m.bodies.size()));
+    else
+      std::snprintf(mem, sizeof mem, "; peak memory %s", human_bytes(peak).c_str());
     output += mem;
   }
   std::fprintf(stderr, "mbsflow: done: %ld steps (%ld rejected), %ld evaluations%s, %.3f s wall, %.3g body-steps/s%s\n",
@@ -494,22 +571,28 @@ void add_run_options(CLI::App* sub, RunArgs& args) {
   sub->add_option("--rtol", a->rtol, "Adaptive methods (dopri5, colloc, tirk): relative tolerance")->check(CLI::PositiveNumber);
   sub->add_option("--atol", a->atol, "Adaptive methods (dopri5, colloc, tirk): absolute tolerance")->check(CLI::PositiveNumber);
   sub->add_option("-o,--output", a->output,
-                  "Results file (HDF5, with an XDMF sidecar for ParaView); without it a final-state summary is printed");
+                  "Results file (HDF5, with an XDMF sidecar for ParaView); without it a final-state summary is printed. "
+                  "Replaces only an earlier results file (else --force)")
+      ->each([a](const std::string&) { a->output_given = true; });
+  sub->add_flag("--force", a->force, "With -o: replace the file there even if it is not an mbsflow results file");
+  sub->add_flag("--assemble", a->assemble,
+                "Move the bodies onto rigid joints that their initial positions violate (reported); without it such a "
+                "model is refused with the joint and its violation");
   sub->add_option("--fields", a->fields,
                   "What to write: position, orientation, velocity, angular_velocity, energy, joint_force, or all")
       ->capture_default_str();
   sub->add_flag("-q,--quiet", a->quiet, "Print only warnings, errors and the closing line");
   sub->add_flag("--timings", a->timings,
                 "Print each set-up phase's time and the memory held after it (resident, peak, bytes per body)");
-  sub->add_option("--threads", a->threads, "Threads (default: all cores)")->check(CLI::Range(1, 4096));
+  sub->add_option("--threads", a->threads, "Threads (0, the default: all cores)")->check(CLI::Range(0, 4096));
   sub->add_option("--partitions", a->partitions,
                   "Submodels (default: one per thread, fewer for small models); results are the same bit for bit")
       ->check(CLI::Range(1, 1 << 30));
-  sub->add_option("--executor", a->executor, "flow: oneTBB flow graph, neighbours only; barrier: the seed's barrier per stage")
+  sub->add_option("--executor", a->executor, "flow: oneTBB flow graph, neighbours only; barrier: a barrier per stage (the classical scheme)")
       ->check(CLI::IsMember({"flow", "barrier"}))
       ->capture_default_str();
   sub->add_option("--partition-file", a->partition_file, "Use the assignment written by mbsflow partition -o");
-  sub->add_option("--partitioner", a->partitioner, "best, band (the seed's band cuts) or metis; see mbsflow partition")
+  sub->add_option("--partitioner", a->partitioner, "best, band (band cuts of the reverse Cuthill-McKee order) or metis; see mbsflow partition")
       ->check(CLI::IsMember({"best", "band", "metis"}))
       ->capture_default_str();
   sub->add_option("--cluster", a->cluster,
@@ -538,10 +621,10 @@ void add_run_options(CLI::App* sub, RunArgs& args) {
       ->needs(sub->get_option("--slurm"));
   sub->add_flag("--insecure", a->insecure,
                 "With --cluster: run without the cluster file's keys, on this host only (loopback endpoints): any local user "
-                "who can reach the ports could join the run")
+                "who can reach the ports could join the run.")
       ->needs(sub->get_option("--cluster"));
   sub->add_flag("--insecure-network", a->insecure_network,
-                "With --cluster: run without keys on any network: only where everyone who can reach the ports is trusted")
+                "With --cluster: run without keys on any network: only where everyone who can reach the ports is trusted.")
       ->needs(sub->get_option("--cluster"));
   sub->add_option("--coupling", a->coupling,
                   "tight: neighbours exchange every stage (bitwise the one-thread run); loose: each submodel integrates a "

@@ -7,6 +7,8 @@
 
 #include "commands.hpp"
 #include "mbsflow/error.hpp"
+#include "mbsflow/io/output_path.hpp"
+#include "mbsflow/words.hpp"
 #include "mbsflow/io/results_file.hpp"
 #include "page_server.hpp"
 #include "mbsflow/runtime/stop_signals.hpp"
@@ -45,12 +47,13 @@ int view(const ViewArgs& a) {
   const ResultsFile r(a.file);
   const ViewerPage page = viewer_page(r, a.settings);
   const std::string out = a.output.empty() ? a.file.substr(0, a.file.find_last_of('.')) + ".html" : a.output;
+  check_output_path(out, {{a.file}, true});  // a page replaces a file, never the results, a folder or a device
   std::ofstream o(out);
   o << page.html;
   if (!o.flush()) throw Error(out + ": cannot write the page");
   std::fprintf(stderr, "mbsflow: wrote %s (%.1f MB): %ld frames%s; open it in a browser\n", out.c_str(),
                static_cast<double>(page.html.size()) / 1e6, page.frames,
-               page.stride > 1 ? (", every " + std::to_string(page.stride) + "th snapshot").c_str() : "");
+               page.stride > 1 ? (", every " + ordinal(page.stride) + " snapshot").c_str() : "");
   return 0;
 }
 

@@ -74,8 +74,8 @@ Action add_worker(CLI::App& app) {
                   "Control endpoint to bind, e.g. tcp://*:5560, tcp://127.0.0.1:* (any free port) or ipc:///tmp/w0; "
                   "the bound endpoint is printed on stdout")
       ->required();
-  sub->add_option("--threads", a->threads, "Threads (default: all cores; the cluster file may set it)")
-      ->check(CLI::Range(1, 4096));
+  sub->add_option("--threads", a->threads, "Threads (0, the default: all cores; the cluster file may set it)")
+      ->check(CLI::Range(0, 4096));
   sub->add_option("--idle-timeout", a->idle_timeout, "Give up after this many seconds without a coordinator (default: wait)")
       ->check(CLI::PositiveNumber);
   sub->add_flag("-q,--quiet", a->quiet, "Print only errors");

@@ -30,6 +30,8 @@ int serve_worker_command(WorkerOptions options, bool quiet);
 // How the CLI names a setting that a library message mentions (mbsflow/error.hpp): its
 // flag, "--step 1e-05"; the per-submodel methods are --submodel-methods.
 std::string flag_for(const std::string& setting, const std::string* value);
+// " (did you mean NAME?)" for the command nearest to a mistyped one, or "".
+std::string closest_name(const std::string& given, const std::vector<std::pair<CLI::App*, Action>>& commands);
 
 // The command line as typed, for the results file.
 const std::string& invocation();

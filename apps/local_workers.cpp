@@ -111,15 +111,31 @@ LocalWorkers::LocalWorkers(int n, const std::string& transport, int threads) {
   }
 }
 
+namespace {
+// Whether the process is stopped (state T or t in /proc/PID/stat).
+bool stopped(pid_t pid) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::size_t close = text.rfind(')');  // the command name may hold spaces and parentheses
+  return close != std::string::npos && close + 2 < text.size() && (text[close + 2] == 'T' || text[close + 2] == 't');
+}
+}  // namespace
+
 LocalWorkers::~LocalWorkers() {
   // The run is over (finished, failed or never started): SIGTERM asks a worker that still
   // waits for its coordinator to give up; anything still there after 5 s is killed, so
   // that no process is left behind.
+  // A stopped worker (SIGSTOP, a debugger) cannot take the SIGTERM: it is killed at once,
+  // so that the run ends when its loss is noticed, not 5 s later.
   for (pid_t pid : pids_) ::kill(pid, SIGTERM);
   const auto start = std::chrono::steady_clock::now();
   for (pid_t pid : pids_) {
-    while (::waitpid(pid, nullptr, WNOHANG) == 0) {
-      if (std::chrono::steady_clock::now() - start > std::chrono::seconds(5)) {
+    while (true) {
+      int status = 0;
+      const pid_t got = ::waitpid(pid, &status, WNOHANG | WUNTRACED);
+      if (got < 0 || (got == pid && !WIFSTOPPED(status))) break;  // ended (or not ours to wait for)
+      const bool stuck = got == pid || stopped(pid);
+      if (stuck || std::chrono::steady_clock::now() - start > std::chrono::seconds(5)) {
         ::kill(pid, SIGKILL);
         ::waitpid(pid, nullptr, 0);
         break;

@@ -32,6 +32,21 @@ int main(int argc, char** argv) {
   add(mbsflow::cli::add_ode);
   add(mbsflow::cli::add_keygen);
   mbsflow::cli::set_invocation(argc, argv);
+  // A mistyped command is named, with the commands there are (CLI11 would say only that a
+  // subcommand is required).
+  if (argc > 1 && argv[1][0] != '-') {
+    std::string names;
+    bool known = false;
+    for (const auto& [sub, action] : commands) {
+      known = known || sub->get_name() == argv[1];
+      names += (names.empty() ? "" : ", ") + sub->get_name();
+    }
+    if (!known) {
+      std::cerr << "mbsflow: unknown command '" << argv[1] << "'" << mbsflow::cli::closest_name(argv[1], commands)
+                << "; the commands are " << names << " (mbsflow --help)\n";
+      return 2;
+    }
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -60,6 +75,35 @@ std::vector<std::string> arguments;
 }  // namespace
 const std::string& invocation() { return command_line; }
 const std::vector<std::string>& invocation_arguments() { return arguments; }
+std::string closest_name(const std::string& given,
+                         const std::vector<std::pair<CLI::App*, Action>>& commands) {
+  // Levenshtein distance; a name within two edits of the given one is suggested.
+  auto distance = [](const std::string& a, const std::string& b) {
+    std::vector<std::size_t> row(b.size() + 1);
+    for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+    for (std::size_t i = 1; i <= a.size(); ++i) {
+      std::size_t diagonal = row[0];
+      row[0] = i;
+      for (std::size_t j = 1; j <= b.size(); ++j) {
+        const std::size_t up = row[j];
+        row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
+        diagonal = up;
+      }
+    }
+    return row[b.size()];
+  };
+  std::string best;
+  std::size_t best_distance = 3;
+  for (const auto& c : commands) {
+    const std::size_t d = distance(given, c.first->get_name());
+    if (d < best_distance) {
+      best_distance = d;
+      best = c.first->get_name();
+    }
+  }
+  return best.empty() ? "" : " (did you mean " + best + "?)";
+}
+
 std::string flag_for(const std::string& setting, const std::string* value) {
   std::string flag = setting == "methods" ? "submodel-methods" : setting;
   std::replace(flag.begin(), flag.end(), '_', '-');

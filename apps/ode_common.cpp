@@ -49,7 +49,7 @@ void OdeRecorder::write(const std::string& path, std::vector<BlockStepRecord> st
   out_.numbers = std::move(numbers);
   out_.numbers.emplace_back("max_error", max_error_);
   write_ode_results(path, out_);
-  if (!quiet) std::cerr << "results: " << path << " (plot: /usr/bin/python3 scripts/plot.py " << path << ")\n";
+  if (!quiet) std::cerr << "results: " << path << " (plot: mbsflow plot " << path << ")\n";
 }
 
 }  // namespace mbsflow::cli

@@ -12,13 +12,14 @@
 namespace mbsflow::cli {
 
 struct OdeArgs {
-  std::string problem, method = "colloc", tableau = "radau3", iteration, jacobian = "exact", solver = "auto", output;
+  std::string problem, method = "colloc", tableau = "radau3", iteration, jacobian = "auto", solver = "auto", output;
   std::string nodes;  // colloc: radau or equidistant; empty: radau unless --m > 1 or --order is given
   long n = 1000;
   int s = 3, m = 1, order = 0, threads = 0, iterations = 0, inner = 3;
   double tol = 1e-6, fixed_step = 0, initial_step = 0;
   std::vector<double> rtols, atols;  // one value, or one per equation; empty: --tol (atol: --tol times the problem's absolute scale)
   bool stability_table = false, quiet = false;
+  bool output_given = false, force = false;  // -o "" is refused; --force: -o may replace any regular file
 };
 
 // The accepted points of a run: the error against the exact solution (all components) and,
@@ -47,7 +48,7 @@ void set_tolerance(const std::vector<double>& given, double& scalar, Eigen::Vect
 template <class Settings>
 void apply_common_options(const OdeArgs& a, const OdeProblem& p, Settings& s) {
   s.linear_solver = linear_solver_from_string(a.solver);
-  s.finite_difference_jacobian = a.jacobian == "fd";
+  s.finite_difference_jacobian = a.jacobian == "differences" || a.jacobian == "fd";
   s.rtol = s.atol = a.tol;
   if (a.atols.empty() && p.absolute_scale.size() > 0) s.atols = a.tol * p.absolute_scale;
   set_tolerance(a.rtols, s.rtol, s.rtols);

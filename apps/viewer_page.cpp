@@ -86,14 +86,29 @@ ViewerPage viewer_page(const ResultsFile& r, const ViewerSettings& s) {
       if (energies) kinetic.push_back(static_cast<float>(e[2 * i]));
     }
   }
-  // Bodies without a usable inertia are drawn as spheres of 2 % of the model's extent at the start.
-  const Eigen::Map<const Eigen::Matrix<float, 3, Eigen::Dynamic>> start(position.data(), 3, static_cast<Eigen::Index>(n));
-  const double extent = n > 1 ? static_cast<double>((start.rowwise().maxCoeff() - start.rowwise().minCoeff()).maxCoeff()) : 1.0;
-  // Thin bodies (rods) are drawn at least 0.4 % of that extent thick, to be seen at all.
-  const double scale = extent > 0 ? extent : 1.0;
+  // The extent of the motion: every body and joint point over the frames shown (a single
+  // pendulum bob sweeps its circle; its pivot is a joint point).
+  Eigen::Vector3f lo = Eigen::Vector3f::Constant(INFINITY), hi = -lo;
+  for (const std::vector<float>* points : {&position, &attachment})
+    for (std::size_t k = 0; k + 2 < points->size(); k += 3) {
+      const Eigen::Vector3f x((*points)[k], (*points)[k + 1], (*points)[k + 2]);
+      lo = lo.cwiseMin(x);
+      hi = hi.cwiseMax(x);
+    }
+  const double extent = static_cast<double>((hi - lo).maxCoeff());
+  const double scale = extent > 0 && std::isfinite(extent) ? extent : 1.0;
+  // Bodies without a usable inertia are drawn as spheres of 2 % of the extent, and every
+  // body at least 1 % of it across (a point mass, a thin rod), so all are seen at any scale.
   std::vector<float> size;
   for (const Body& b : model.bodies)
-    for (double a : ellipsoid(b, 0.02 * scale)) size.push_back(static_cast<float>(std::max(a, 0.004 * scale)));
+    for (double a : ellipsoid(b, 0.02 * scale)) size.push_back(static_cast<float>(std::max(a, 0.01 * scale)));
+  // The bodies of each joint's two ends (-1: ground), for the links drawn from a body's
+  // centre to its joint points.
+  std::vector<int> joint_bodies;
+  if (ends && model.joints.size() == joints)
+    for (const Joint& j : model.joints) joint_bodies.insert(joint_bodies.end(), {j.body1 == ground ? -1 : j.body1, j.body2});
+  const Eigen::Vector3d g(model.gravity[0], model.gravity[1], model.gravity[2]);
+  const Eigen::Vector3d up = g.norm() > 0 ? Eigen::Vector3d(-g.normalized()) : Eigen::Vector3d(0, 1, 0);
 
   nlohmann::json data;
   data["name"] = model.name;
@@ -105,6 +120,9 @@ ViewerPage viewer_page(const ResultsFile& r, const ViewerSettings& s) {
   data["orientation"] = orientation ? nlohmann::json(base64(quaternion)) : nlohmann::json();
   data["attachment"] = ends ? nlohmann::json(base64(attachment)) : nlohmann::json();
   data["size"] = base64(size);
+  data["joint_bodies"] = joint_bodies;
+  data["up"] = {up.x(), up.y(), up.z()};
+  data["extent"] = scale;
   data["quantities"] = nlohmann::json::object();
   if (!speed.empty()) data["quantities"]["speed [m/s]"] = base64(speed);
   if (!angular_speed.empty()) data["quantities"]["angular speed [rad/s]"] = base64(angular_speed);

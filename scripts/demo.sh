@@ -6,7 +6,11 @@ cd "$(dirname "$0")/.."
 ./scripts/install-deps.sh
 jobs=$(nproc 2>/dev/null || echo 2)
 cmake --preset release >/dev/null
-cmake --build --preset release -j "$jobs"
+# Only what the demo needs: the program and the Python package (test.sh builds the rest
+# with the same configuration, so nothing built here is compiled again).
+targets=(mbsflow_cli)
+grep -q '^MBSFLOW_PYTHON_MODULE:BOOL=ON' build/release/CMakeCache.txt && targets+=(mbsflow_python)
+cmake --build --preset release -j "$jobs" --target "${targets[@]}"
 exe=build/release/apps/mbsflow
 out=results/demo
 mkdir -p "$out"

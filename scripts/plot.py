@@ -185,4 +185,7 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    try:
+        main()
+    except (OSError, KeyError, ValueError) as e:  # one line, as mbsflow's other commands say it
+        sys.exit(f"mbsflow plot: {e}")

@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "mbsflow/error.hpp"
+#include "mbsflow/words.hpp"
 #include "mbsflow/graph/force_element.hpp"
 #include "metis_partition.hpp"
 #include "submodel_links.hpp"
@@ -156,15 +157,15 @@ Decomposition decompose(const Model& m, int k, Partitioner partitioner) {
   const int n = static_cast<int>(m.bodies.size());
   if (k < 1) throw InputError("partitions: must be >= 1 (got " + std::to_string(k) + ")");
   if (k > n)
-    throw InputError("partitions: " + std::to_string(k) + " is more than the model's " + std::to_string(n) + " bodies");
+    throw InputError("partitions: " + std::to_string(k) + " is more than the model's " + count_of(n, "body", "bodies"));
   // Rigid pieces are never cut: the partitioners cut the model with each piece contracted
   // to one vertex (the model itself when there are no rigid joints), then each body goes
   // where its piece went.
   const std::vector<int> piece = rigid_pieces(m);
   const int pieces = piece.empty() ? 0 : *std::max_element(piece.begin(), piece.end()) + 1;
   if (k > pieces)
-    throw InputError("partitions: " + std::to_string(k) + " submodels, but rigid joints leave only " + std::to_string(pieces) +
-                     " pieces that may be cut apart (bodies per piece: " + piece_sizes(piece, pieces) +
+    throw InputError("partitions: " + count_of(k, "submodel") + ", but rigid joints leave only " +
+                     count_of(pieces, "piece") + " that may be cut apart (bodies per piece: " + piece_sizes(piece, pieces) +
                      "); use fewer submodels or make joints between clusters compliant");
   const std::vector<double> body_cost = body_costs(m);
   std::vector<double> cost(static_cast<std::size_t>(pieces), 0.0);

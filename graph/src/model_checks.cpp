@@ -145,7 +145,8 @@ void check_settings(const SimulationSettings& s) {
   if (!(s.t_end > s.t_start)) bad({"simulation"}, "t_end must be > t_start (" + text(s.t_start) + ", got " + text(s.t_end) + ")");
   if (s.step) positive(*s.step, {"simulation step"});
   if (s.output_interval) positive(*s.output_interval, {"simulation output_interval"});
-  if (s.output_every < 1) bad({"simulation output_every"}, "must be >= 1 (got " + std::to_string(s.output_every) + ")");
+  if (s.output_every && *s.output_every < 1)
+    bad({"simulation output_every"}, "must be >= 1 (got " + std::to_string(*s.output_every) + ")");
   positive(s.rtol, {"simulation rtol"});
   positive(s.atol, {"simulation atol"});
 }

@@ -139,12 +139,22 @@ Eigen::VectorXd MultibodySystem::initial_state() const {
   const double t0 = model().simulation.t_start;
   int given_joint = -1, worst_joint = -1;
   const double given = constraint_violation(t0, y, &given_joint);
+  // A model is not changed behind its author's back: a joint that its bodies do not meet
+  // is refused unless assembly was asked for.
+  if (!(given <= SimulationSettings::assembly_tolerance) && !model().simulation.assemble && given_joint >= 0) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.3g", given);
+    throw ModelError("rigid joint '" + model().joints[static_cast<std::size_t>(given_joint)].name +
+                     "' is violated by " + buf + " (m or rad) in the initial positions: correct the bodies' positions "
+                     "and orientations, or ask for assembly (mbsflow run --assemble, or \"assemble\": true in the "
+                     "simulation block) to move the bodies onto the joints");
+  }
   after_step(t0, y);
   // The projection assembles the rigid joints; if it cannot, no loop closes there.
   if (const double v = constraint_violation(t0, y, &worst_joint); !(v <= 1e-6)) {
     char buf[64];
     std::snprintf(buf, sizeof buf, "%.3g", given);
-    throw InputError("rigid joint '" + model().joints[static_cast<std::size_t>(given_joint >= 0 ? given_joint : worst_joint)].name +
+    throw ModelError("rigid joint '" + model().joints[static_cast<std::size_t>(given_joint >= 0 ? given_joint : worst_joint)].name +
                      "' cannot be assembled with the others (violation " + buf +
                      " as given, and no projection removes it): the rigid joints over-constrain a loop in a way that "
                      "no position satisfies, or the initial positions are far from one that does");

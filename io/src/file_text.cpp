@@ -21,6 +21,10 @@ FileText::FileText(const std::string& path, const std::string& what, std::size_t
     read_ = read_input_file(path, what, max_bytes);  // its error: cannot open
     return;
   }
+  if (S_ISDIR(st.st_mode)) {
+    ::close(fd);
+    throw InputError(path + ": is a folder, not a " + what);
+  }
   const auto size = static_cast<std::size_t>(st.st_size);
   if (S_ISREG(st.st_mode) && size > max_bytes) {
     ::close(fd);

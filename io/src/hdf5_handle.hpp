@@ -6,6 +6,7 @@
 #include <optional>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "mbsflow/error.hpp"
 
@@ -108,6 +109,28 @@ inline void write_number_attribute(hid_t obj, const char* name, double value) {
   const Handle attr(H5Acreate2(obj, name, H5T_IEEE_F64LE, space.get(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose,
                     std::string("create attribute ") + name);
   check(H5Awrite(attr.get(), H5T_NATIVE_DOUBLE, &value), std::string("write attribute ") + name);
+}
+
+// A whole dataset of the given shape, written at once (not extendible).
+template <class T>
+void write_array(hid_t parent, const char* name, hid_t type, const std::vector<T>& data, std::vector<hsize_t> dims) {
+  const Handle space(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr), H5Sclose,
+                     std::string("create the space of ") + name);
+  const Handle set(H5Dcreate2(parent, name, type, space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Dclose,
+                   std::string("create ") + name);
+  if (!data.empty()) check(H5Dwrite(set.get(), type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data.data()), std::string("write ") + name);
+}
+
+// A list of strings as a dataset of variable-length strings.
+inline void write_names(hid_t parent, const char* name, const std::vector<std::string>& names) {
+  const Handle type = string_type();
+  const hsize_t n = names.size();
+  const Handle space(H5Screate_simple(1, &n, nullptr), H5Sclose, "create a names space");
+  const Handle set(H5Dcreate2(parent, name, type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Dclose,
+                   std::string("create ") + name);
+  std::vector<const char*> p;
+  for (const auto& s : names) p.push_back(s.c_str());
+  if (n > 0) check(H5Dwrite(set.get(), type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, p.data()), "write names");
 }
 
 }  // namespace mbsflow::h5

@@ -29,17 +29,6 @@ double now_seconds() {
 constexpr std::size_t buffer_bytes = std::size_t{32} << 20;  // bounds the chunk row kept in memory
 constexpr hsize_t chunk_samples = 4096;                       // time rows x bodies per chunk
 
-void write_names(hid_t parent, const char* name, const std::vector<std::string>& names) {
-  const h5::Handle type = h5::string_type();
-  const hsize_t n = names.size();
-  const h5::Handle space(H5Screate_simple(1, &n, nullptr), H5Sclose, "create a names space");
-  const h5::Handle set(H5Dcreate2(parent, name, type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
-                       H5Dclose, std::string("create ") + name);
-  std::vector<const char*> p;
-  for (const auto& s : names) p.push_back(s.c_str());
-  if (n > 0) h5::check(H5Dwrite(set.get(), type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, p.data()), "write names");
-}
-
 // An extendible float64 dataset of shape (0, dims...) chunked as (rows, chunk dims...).
 struct Series {
   std::string path;
@@ -305,6 +294,19 @@ std::unique_ptr<Hdf5Sink::File> Hdf5Sink::create() {
   WriterLock::check_free(path_);
   const std::string making = part_path();
   f->lock = WriterLock(making);  // before H5Fcreate, which truncates
+  try {
+    write_header(*f, making);
+  } catch (...) {
+    f.reset();
+    std::remove(making.c_str());  // ours since the lock was taken: no stray .part
+    throw;
+  }
+  return f;
+}
+
+// The new file's model text and run settings.
+void Hdf5Sink::write_header(File& file, const std::string& making) {
+  File* f = &file;
   // File format 1.10: dense attribute storage, so that large model texts fit as
   // attributes, and single-writer/multiple-reader access (SWMR).
   const h5::Handle fapl = file_access();
@@ -322,7 +324,6 @@ std::unique_ptr<Hdf5Sink::File> Hdf5Sink::create() {
   if (info_.output_interval > 0.0) h5::write_number_attribute(root, "output_interval", info_.output_interval);
   h5::write_string_attribute(root, "command_line", info_.command_line);
   h5::write_string_attribute(root, "fields", fields_text(fields_));
-  return f;
 }
 
 void Hdf5Sink::prepare() {
@@ -331,18 +332,27 @@ void Hdf5Sink::prepare() {
 
 void Hdf5Sink::begin(const MultibodySystem& system) {
   system_ = &system;
-  const Model& m = system.model();
   std::unique_ptr<File> f = created_ ? std::move(created_) : create();
+  try {
+    lay_out_and_publish(std::move(f), system);
+  } catch (...) {
+    std::remove(part_path().c_str());  // no stray .part: the path keeps what it held
+    throw;
+  }
+}
+
+void Hdf5Sink::lay_out_and_publish(std::unique_ptr<File> f, const MultibodySystem& system) {
+  const Model& m = system.model();
   lay_out(*f, system, true);
   std::vector<std::string> names;
   for (const Body& b : m.bodies) names.push_back(b.name);
   const h5::Handle bodies(H5Gopen2(f->file.get(), "/bodies", H5P_DEFAULT), H5Gclose, "open /bodies");
-  write_names(bodies.get(), "names", names);
+  h5::write_names(bodies.get(), "names", names);
   if (f->joint_force || f->attachment) {
     names.clear();
     for (const Joint& j : m.joints) names.push_back(j.name);
     const h5::Handle group(H5Gopen2(f->file.get(), "/joints", H5P_DEFAULT), H5Gclose, "open /joints");
-    write_names(group.get(), "names", names);
+    h5::write_names(group.get(), "names", names);
   }
   const hid_t root = f->file.get();
   identity_ = id_text(random_id());

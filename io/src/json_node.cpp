@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -66,6 +67,9 @@ auto parse_checked(std::string_view text, const std::string& name, Parse parse) 
 }  // namespace
 
 std::string read_input_file(const std::string& path, const std::string& what, std::size_t max_bytes) {
+  // A folder opens as a stream whose size reads as 2^63 - 1: said as what it is.
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw InputError(path + ": is a folder, not a " + what);
   std::ifstream in(path, std::ios::binary | std::ios::ate);
   if (!in) throw InputError(path + ": cannot open the " + what);
   const auto size = static_cast<std::streamoff>(in.tellg());

@@ -398,7 +398,7 @@ class Reader {
   }
 
   void simulation(const JsonNode& n) {
-    n.allow_only({"t_start", "t_end", "step", "method", "variant", "output_every", "output_interval", "rtol", "atol"});
+    n.allow_only({"t_start", "t_end", "step", "method", "variant", "output_every", "output_interval", "rtol", "atol", "assemble"});
     SimulationSettings& s = m_.simulation;
     if (auto v = n.find("t_start")) s.t_start = v->number();
     if (auto v = n.find("t_end")) {
@@ -416,6 +416,7 @@ class Reader {
     if (auto v = n.find("output_interval")) s.output_interval = v->positive();
     if (auto v = n.find("rtol")) s.rtol = v->positive();
     if (auto v = n.find("atol")) s.atol = v->positive();
+    if (auto v = n.find("assemble")) s.assemble = v->boolean();
   }
 
   const JsonSource& src_;

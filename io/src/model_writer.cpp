@@ -203,11 +203,14 @@ void write_model_json(const Model& m, std::string& out, Spill spill) {
   key("simulation");
   {
     Object sim(out);
-    sim("t_start", s.t_start)("t_end", s.t_end)("method", method_name(s.method))("output_every", s.output_every);
+    sim("t_start", s.t_start)("t_end", s.t_end);
+    if (s.method) sim("method", method_name(*s.method));  // none: chosen at the run, as for the model read
+    if (s.output_every) sim("output_every", *s.output_every);
     sim("rtol", s.rtol)("atol", s.atol);
     if (s.step) sim("step", *s.step);
     if (!s.variant.empty()) sim("variant", s.variant);
     if (s.output_interval) sim("output_interval", *s.output_interval);
+    if (s.assemble) sim("assemble", true);
   }
   out += "\n}\n";
 }

@@ -1,27 +1,17 @@
 #include "mbsflow/io/ode_results.hpp"
 
+
 #include "hdf5_handle.hpp"
+#include "part_file.hpp"
 
 namespace mbsflow {
 namespace {
 
-template <class T>
-void write_array(hid_t parent, const char* name, hid_t type, const std::vector<T>& data, std::vector<hsize_t> dims) {
-  const h5::Handle space(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr), H5Sclose,
-                         std::string("create the space of ") + name);
-  const h5::Handle set(H5Dcreate2(parent, name, type, space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Dclose,
-                       std::string("create ") + name);
-  if (!data.empty())
-    h5::check(H5Dwrite(set.get(), type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data.data()), std::string("write ") + name);
-}
-
 void write_vector(hid_t parent, const char* name, const std::vector<double>& v) {
-  write_array(parent, name, H5T_NATIVE_DOUBLE, v, {v.size()});
+  h5::write_array(parent, name, H5T_NATIVE_DOUBLE, v, {v.size()});
 }
 
-}  // namespace
-
-void write_ode_results(const std::string& path, const OdeResults& r) {
+void write_file(const std::string& path, const OdeResults& r) {
   const h5::Handle file(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose, "create " + path);
   const hid_t root = file.get();
   for (const auto& [k, v] : r.texts) h5::write_string_attribute(root, k.c_str(), v);
@@ -30,8 +20,8 @@ void write_ode_results(const std::string& path, const OdeResults& r) {
   const h5::Handle solution(H5Gcreate2(root, "solution", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose,
                             "create /solution");
   write_vector(solution.get(), "time", r.time);
-  write_array(solution.get(), "components", H5T_NATIVE_LONG, r.components, {r.components.size()});
-  write_array(solution.get(), "values", H5T_NATIVE_DOUBLE, r.values, {r.time.size(), r.components.size()});
+  h5::write_array(solution.get(), "components", H5T_NATIVE_LONG, r.components, {r.components.size()});
+  h5::write_array(solution.get(), "values", H5T_NATIVE_DOUBLE, r.values, {r.time.size(), r.components.size()});
   if (!r.error.empty()) write_vector(solution.get(), "error", r.error);
 
   const h5::Handle steps(H5Gcreate2(root, "steps", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose, "create /steps");
@@ -48,6 +38,11 @@ void write_ode_results(const std::string& path, const OdeResults& r) {
   column("iterations_s", [](const BlockStepRecord& s) { return s.iterations_s; });
   column("iterations_s1", [](const BlockStepRecord& s) { return s.iterations_s1; });
   column("iteration_failed", [](const BlockStepRecord& s) { return s.iteration_failed ? 1 : 0; });
+}
+}  // namespace
+
+void write_ode_results(const std::string& path, const OdeResults& r) {
+  write_through_part(path, [&](const std::string& making) { write_file(making, r); });
 }
 
 }  // namespace mbsflow

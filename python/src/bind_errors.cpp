@@ -11,6 +11,7 @@ namespace {
 PyObject* error_type = nullptr;
 PyObject* input_error_type = nullptr;
 PyObject* run_error_type = nullptr;
+PyObject* model_error_type = nullptr;
 
 std::string keyword_for(const std::string& setting, const std::string* value) {
   const std::string name = setting == "methods" ? "submodel_methods" : setting;
@@ -31,12 +32,18 @@ void bind_errors(py::module_& m) {
                               py::make_tuple(py::handle(error_type), py::handle(PyExc_ValueError)).ptr());
   run_error_type = new_type("mbsflow.RunError", "A run that could not be completed: diverged, step too small, interrupted.",
                             py::make_tuple(py::handle(error_type), py::handle(PyExc_RuntimeError)).ptr());
+  model_error_type = new_type("mbsflow.ModelError", "Bad input in a model that shows once it is set up (a rigid joint its "
+                              "bodies do not meet); a run of a model file names the file.",
+                              py::make_tuple(py::handle(input_error_type)).ptr());
   m.attr("Error") = py::handle(error_type);
+  m.attr("ModelError") = py::handle(model_error_type);
   m.attr("InputError") = py::handle(input_error_type);
   m.attr("RunError") = py::handle(run_error_type);
   py::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);
+    } catch (const ModelError& e) {
+      PyErr_SetString(model_error_type, render(e.text(), keyword_for).c_str());
     } catch (const InputError& e) {
       PyErr_SetString(input_error_type, render(e.text(), keyword_for).c_str());
     } catch (const RunError& e) {

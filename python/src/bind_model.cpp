@@ -56,7 +56,10 @@ void bind_model(py::module_& m) {
       .def_property_readonly("n_joints", [](const Model& self) { return self.joints.size(); })
       .def_property_readonly("t_start", [](const Model& self) { return self.simulation.t_start; })
       .def_property_readonly("t_end", [](const Model& self) { return self.simulation.t_end; })
-      .def_property_readonly("method", [](const Model& self) { return std::string(self.simulation.method.name()); })
+      .def_property_readonly("method", [](const Model& self) -> std::optional<std::string> {
+        if (!self.simulation.method) return std::nullopt;  // chosen at the run (rk4, or dopri5 where no joint gives a step)
+        return std::string(self.simulation.method->name());
+      })
       .def("__repr__", [](const Model& self) {
         return "<mbsflow.Model '" + self.name + "': " + std::to_string(self.bodies.size()) + " bodies, " +
                std::to_string(self.joints.size()) + " joints>";

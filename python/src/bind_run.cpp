@@ -7,6 +7,7 @@
 #include "bindings.hpp"
 #include "mbsflow/graph/stable_step.hpp"
 #include "mbsflow/io/hdf5_sink.hpp"
+#include "mbsflow/io/output_path.hpp"
 #include "mbsflow/io/model_writer.hpp"
 #include "mbsflow/io/partition_file.hpp"
 #include "mbsflow/methods/stepper.hpp"
@@ -55,7 +56,6 @@ py::dict run_model(const Model& model, const std::string& output, const std::str
   RunOptions o = options_from_model(m, stable.step);
   o.linear_solver = linear_solver;
   o.jacobian = jacobian;
-  if (!std::isfinite(o.step)) throw InputError(m.name + ": no joints to estimate a step from; give {step}");
   const int threads = threads_given > 0 ? threads_given : static_cast<int>(std::thread::hardware_concurrency());
   const bool loose = coupling == "loose";
   check_loose_request(loose, loose_request);
@@ -73,6 +73,7 @@ py::dict run_model(const Model& model, const std::string& output, const std::str
     };
   std::unique_ptr<AsyncSink> sink;
   if (!output.empty()) {
+    check_output_path(output, {{}, false, "output"});
     RunInfo info{model_to_json(m), method_name(o.method), o.step, o.t_start, o.t_end, o.output_every, "python: mbsflow.run"};
     info.output_interval = o.output_interval;
     sink = std::make_unique<AsyncSink>(std::make_unique<Hdf5Sink>(output, parse_fields(fields), std::move(info)));
@@ -126,8 +127,8 @@ void bind_run(py::module_& m) {
          const py::object& partition, const std::string& partitioner, const std::string& coupling,
          std::optional<double> macro_step, std::optional<double> coupling_tol, std::optional<double> overlap,
          int extrapolation, int max_lag, bool exact_lag, const std::vector<std::string>& submodel_methods,
-         const std::string& executor, const py::object& progress) {
-        ModelOverrides ov{t_end, step, rtol, atol, output_interval, output_every, std::nullopt, variant};
+         const std::string& executor, const py::object& progress, bool assemble) {
+        ModelOverrides ov{t_end, step, rtol, atol, output_interval, output_every, std::nullopt, variant, assemble};
         if (method) ov.method = method_named(*method, "method");
         LooseRequest lr{macro_step, coupling_tol, overlap, extrapolation, max_lag, exact_lag, {}};
         for (const std::string& s : submodel_methods) lr.methods.push_back(method_named(s, "methods"));
@@ -138,7 +139,8 @@ void bind_run(py::module_& m) {
       py::arg("atol"), py::arg("output_interval"), py::arg("output_every"), py::arg("method"), py::arg("variant"),
       py::arg("linear_solver"), py::arg("jacobian"), py::arg("threads"), py::arg("partition"), py::arg("partitioner"),
       py::arg("coupling"), py::arg("macro_step"), py::arg("coupling_tol"), py::arg("overlap"), py::arg("extrapolation"),
-      py::arg("max_lag"), py::arg("exact_lag"), py::arg("submodel_methods"), py::arg("executor"), py::arg("progress"));
+      py::arg("max_lag"), py::arg("exact_lag"), py::arg("submodel_methods"), py::arg("executor"), py::arg("progress"),
+      py::arg("assemble") = false);
 }
 
 }  // namespace mbsflow::python

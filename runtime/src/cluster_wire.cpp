@@ -1,6 +1,7 @@
 #include "cluster_wire.hpp"
 
 #include <algorithm>
+#include <charconv>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -133,10 +134,61 @@ bool send_json(zmq::socket_t& s, const nlohmann::json& j, zmq::send_flags flags)
   return send(s, zmq::buffer(text), flags).has_value();
 }
 
+std::string integer_list_text(const std::vector<int>& v) {
+  std::string out;
+  out.reserve(v.size() * 3);
+  char buf[16];
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    if (i) out += ',';
+    const auto r = std::to_chars(buf, buf + sizeof buf, v[i]);
+    out.append(buf, r.ptr);
+  }
+  return out;
+}
+
+std::optional<std::vector<int>> integer_list(std::string_view text, int lo, int hi) {
+  std::vector<int> out;
+  if (text.empty()) return out;
+  const char* at = text.data();
+  const char* end = at + text.size();
+  while (true) {
+    int v = 0;
+    const auto r = std::from_chars(at, end, v);
+    if (r.ec != std::errc() || v < lo || v > hi) return std::nullopt;
+    out.push_back(v);
+    if (r.ptr == end) return out;
+    if (*r.ptr != ',') return std::nullopt;
+    at = r.ptr + 1;
+  }
+}
+
+std::size_t parsed_bytes_bound(std::string_view text) {
+  // Each value, member or element of nlohmann::json costs at most about 48 bytes beyond
+  // its text (the value, a map node and its key, a vector's slack); each starts after one
+  // of these characters outside a string (or is the first).
+  std::size_t values = 1;
+  bool in_string = false;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (in_string) {
+      if (c == '\\') ++i;
+      else if (c == '"') in_string = false;
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == ',' || c == '[' || c == '{' || c == ':') {
+      ++values;
+    }
+  }
+  return text.size() + 48 * values;
+}
+
 std::optional<nlohmann::json> parse_control(const zmq::message_t& m, std::optional<std::uint64_t> run) {
   const char* text = static_cast<const char*>(m.data());
   // The control messages nest 4 levels: deeper text is not parsed at all.
   if (json_too_deep({text, m.size()}, 16) != std::string_view::npos) return std::nullopt;
+  // Nor text whose parse would cost more than a small multiple of its size (a list of
+  // small integers takes about 25 bytes a byte: long ones travel as text).
+  if (parsed_bytes_bound({text, m.size()}) > max_parse_factor * m.size() + (std::size_t{64} << 20)) return std::nullopt;
   nlohmann::json j = nlohmann::json::parse(text, text + m.size(), nullptr, false);
   if (!j.is_object() || !j.contains("type") || !j["type"].is_string()) return std::nullopt;
   if (run && wire::text(j, "run") != id_text(*run)) return std::nullopt;

@@ -118,6 +118,14 @@ bool send_json(zmq::socket_t& s, const nlohmann::json& j, zmq::send_flags flags 
 // A control message: a JSON object with a string "type"; nullopt for anything else. With
 // a run id, also nullopt unless the message carries that run's id ("run").
 std::optional<nlohmann::json> parse_control(const zmq::message_t& m, std::optional<std::uint64_t> run = std::nullopt);
+// An upper bound of the memory a parse of text takes (its text and its values): a
+// message whose bound is over max_parse_factor times its size, plus 64 MiB, is not parsed.
+std::size_t parsed_bytes_bound(std::string_view text);
+constexpr std::size_t max_parse_factor = 8;
+// A long list of integers as one JSON string ("0,0,1,..."), which costs its size to parse;
+// and back: nullopt unless every item is an integer in [lo, hi].
+std::string integer_list_text(const std::vector<int>& v);
+std::optional<std::vector<int>> integer_list(std::string_view text, int lo, int hi);
 // Fields of a control message that may be anything: a string (else `otherwise`), a
 // number in [lo, hi] (else nullopt).
 std::string text(const nlohmann::json& j, const char* key, const std::string& otherwise = "");

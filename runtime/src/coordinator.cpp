@@ -240,7 +240,7 @@ json setup_message(std::size_t model_bytes, const Decomposition& d, const std::v
   // The model's text follows in parts (Coordinator::send_model).
   json j = {{"type", "setup"},
           {"model_bytes", model_bytes},
-          {"part_of_body", d.part_of_body},
+          {"part_of_body", wire::integer_list_text(d.part_of_body)},  // text: a list of a million values would cost 25 bytes a byte
           {"submodels", d.submodels.size()},
           {"worker_of", worker_of},
           {"worker", w},

@@ -1,6 +1,10 @@
 #include "options_json.hpp"
 
+#include <limits>
+
 #include "mbsflow/error.hpp"
+#include "mbsflow/runtime/loose_coupling.hpp"
+#include "sink_runner.hpp"
 
 namespace mbsflow {
 namespace {
@@ -11,6 +15,16 @@ Method method_of(const std::string& name) {
   const std::optional<Method> m = find_method(name);
   if (!m) throw InputError("the coordinator asked for an unknown method " + name);
   return *m;
+}
+
+// An integer of the message in [lo, hi]: a number that is not one (1e300, 2.5) is refused,
+// never converted.
+int integer(const json& j, const char* key, int lo = std::numeric_limits<int>::min(), int hi = std::numeric_limits<int>::max()) {
+  const json& v = j.at(key);
+  if (!v.is_number_integer() || v.get<long long>() < lo || v.get<long long>() > hi)
+    throw InputError(std::string("run options from the coordinator: ") + key + " is not an integer in [" +
+                     std::to_string(lo) + ", " + std::to_string(hi) + "]");
+  return static_cast<int>(v.get<long long>());
 }
 
 }  // namespace
@@ -33,12 +47,17 @@ RunOptions options_from_json(const json& j) {
     o.step = j.at("step").get<double>();
     o.step_given = j.at("step_given").get<bool>();
     o.fixed_step = j.at("fixed_step").get<bool>();
-    o.output_every = j.at("output_every").get<int>();
+    o.output_every = integer(j, "output_every", 1);
     o.output_interval = j.at("output_interval").get<double>();
     o.rtol = j.at("rtol").get<double>();
     o.atol = j.at("atol").get<double>();
   } catch (const json::exception& e) {
     throw InputError(std::string("run options from the coordinator: ") + e.what());
+  }
+  try {
+    check_options(o);  // as a run started here checks them
+  } catch (const InputError& e) {
+    throw InputError("run options from the coordinator: " + e.text());
   }
   return o;
 }
@@ -55,14 +74,19 @@ LooseOptions loose_from_json(const json& j) {
   LooseOptions l;
   try {
     l.macro_step = j.at("macro_step").get<double>();
-    l.extrapolation = j.at("extrapolation").get<int>();
-    l.max_lag = j.at("max_lag").get<int>();
+    l.extrapolation = integer(j, "extrapolation", 0, 2);
+    l.max_lag = integer(j, "max_lag", 0, 1000);
     l.exact_lag = j.at("exact_lag").get<bool>();
     l.overlap = j.at("overlap").get<double>();
     l.coupling_tol = j.at("coupling_tol").get<double>();
     for (const std::string& name : j.at("methods").get<std::vector<std::string>>()) l.methods.push_back(method_of(name));
   } catch (const json::exception& e) {
     throw InputError(std::string("loose-coupling options from the coordinator: ") + e.what());
+  }
+  try {
+    check_loose_options(l);
+  } catch (const InputError& e) {
+    throw InputError("loose-coupling options from the coordinator: " + e.text());
   }
   return l;
 }

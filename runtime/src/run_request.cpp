@@ -9,7 +9,7 @@ void apply_overrides(Model& m, const ModelOverrides& o) {
     if (!(*o.t_end > m.simulation.t_start)) throw InputError("{t_end}: must be > t_start of the model");
     m.simulation.t_end = *o.t_end;
   }
-  if (o.method && *o.method != m.simulation.method) {
+  if (o.method && m.simulation.method != *o.method) {
     m.simulation.method = *o.method;
     m.simulation.variant.clear();  // the model's variant belongs to its own method
   }
@@ -22,6 +22,7 @@ void apply_overrides(Model& m, const ModelOverrides& o) {
     m.simulation.output_interval.reset();
   }
   if (o.output_interval) m.simulation.output_interval = *o.output_interval;
+  if (o.assemble) m.simulation.assemble = true;
 }
 
 void check_loose_request(bool loose, const LooseRequest& r) {

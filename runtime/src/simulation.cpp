@@ -1,5 +1,6 @@
 #include "mbsflow/runtime/simulation.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -89,17 +90,21 @@ void run_adaptive(MultibodySystem& sys, Stepper& stepper, const RunOptions& o, R
 RunOptions options_from_model(const Model& model, std::optional<double> stable_step) {
   RunOptions o;
   const SimulationSettings& s = model.simulation;
-  o.method = s.method;
+  const double stable = s.step ? 0.0 : stable_step ? *stable_step : estimate_stable_step(model).step;
+  // No method named: RK4 where a step is given or a joint gives a stable one, else an
+  // adaptive method (a pendulum on a rigid revolute has no stiffness to take a step from).
+  o.method = s.method ? *s.method : s.step || std::isfinite(stable) ? Method::rk4 : Method::dopri5;
+  o.method_chosen = !s.method;
   o.variant = s.variant;
   o.t_start = s.t_start;
   o.t_end = s.t_end;
   const bool adaptive = stepper_entry(o.method).adaptive;
-  o.output_every = s.output_every;
+  o.output_every = s.output_every.value_or(1);
   if (s.step) {
     o.step = *s.step;
   } else {
     o.step_given = false;
-    o.step = stable_step ? *stable_step : estimate_stable_step(model).step;
+    o.step = stable;
     // Nothing stiff to estimate from (rigid joints only, say): an adaptive method starts
     // with a step of one output interval, or a thousandth of the run, and adapts.
     if (adaptive && !std::isfinite(o.step))
@@ -110,9 +115,16 @@ RunOptions options_from_model(const Model& model, std::optional<double> stable_s
   if (s.output_interval)
     o.output_interval = *s.output_interval;
   else if (adaptive && !s.step)
-    o.output_interval = s.output_every * (s.t_end - s.t_start) / 1000.0;
+    o.output_interval = o.output_every * (s.t_end - s.t_start) / 1000.0;
+  else if (!adaptive && !s.output_every && std::isfinite(o.step) && o.step > 0.0)
+    // About a thousand snapshots, on the grid of whole steps: the step stays as it is.
+    o.output_every = static_cast<int>(std::clamp(std::ceil((s.t_end - s.t_start) / o.step / 1000.0 - 1e-9), 1.0, 1e9));
   o.rtol = s.rtol;
   o.atol = s.atol;
+  if (!std::isfinite(o.step))
+    throw InputError(model.name + ": " + method_name(o.method) + " needs a step, and no compliant joint gives one to "
+                     "estimate from; give {step}, or leave out {method} (an adaptive method is then chosen), or "
+                     "{method=dopri5}");
   return o;
 }
 

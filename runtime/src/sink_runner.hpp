@@ -134,11 +134,20 @@ inline int output_steps(const RunOptions& o) {
   return static_cast<int>(std::llround(o.output_interval / o.step));
 }
 
-// The checks every run loop makes of its options before it starts.
+// The checks every run loop makes of its options before it starts, and a worker of the
+// options a coordinator sends: one validation of each setting, wherever it comes from.
 inline void check_options(const RunOptions& o) {
+  if (!std::isfinite(o.t_start) || !std::isfinite(o.t_end)) throw InputError("t_start and t_end must be finite");
   if (!(o.t_end > o.t_start)) throw InputError("t_end must be greater than t_start");
   if (!(o.step > 0.0) || !std::isfinite(o.step)) throw InputError("the step must be a positive finite number");
   if (o.output_every < 1) throw InputError("output_every must be >= 1");
+  // Tolerances: those of an adaptive method positive, any finite and not negative.
+  if (!(o.rtol >= 0.0) || !std::isfinite(o.rtol) || !(o.atol >= 0.0) || !std::isfinite(o.atol) ||
+      (stepper_entry(o.method).adaptive && !o.fixed_step && (o.rtol == 0.0 || o.atol == 0.0)))
+    throw InputError("rtol and atol must be positive finite numbers");
+  if (o.linear_solver != "auto" && o.linear_solver != "dense" && o.linear_solver != "banded" && o.linear_solver != "klu" &&
+      o.linear_solver != "sparselu")
+    throw InputError("unknown linear solver '" + o.linear_solver + "' (auto, dense, banded, klu or sparselu)");
   if (o.jacobian != "auto" && o.jacobian != "differences")
     throw InputError("the Jacobian must be auto (analytic where the model has one) or differences, not '" + o.jacobian + "'");
   if (o.fixed_step && o.method != Method::tirk && o.method != Method::colloc)

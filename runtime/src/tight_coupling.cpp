@@ -182,7 +182,8 @@ int tight_stages(Method m) {
   throw InputError(std::string("a tightly coupled run of several submodels exchanges RK4 or DOPRI5 stages; ") +
                    method_name(m) +
                    " integrates a whole model (its stages run in parallel inside the step) or each submodel of a "
-                   "loosely coupled run");
+                   "loosely coupled run: give {coupling=loose}, or {method=rk4} or {method=dopri5}, or run it in one "
+                   "process on threads");
 }
 
 void save_tight_point(StateWriter& w, const TightPoint& p, const Eigen::VectorXd& y) {

@@ -16,15 +16,20 @@ namespace {
 using nlohmann::json;
 
 // The next command, which must be of type `want`; RunError for an abort, a lost
-// coordinator, a stop request, silence beyond timeout_s (> 0) or anything else.
-json expect(WorkerIo& io, const std::string& want, double timeout_s, const std::atomic<bool>* stop) {
+// coordinator, a stop request, silence beyond timeout_s (> 0; the clock stops once
+// `begun` is set: a set-up whose model is on its way) or anything else.
+json expect(WorkerIo& io, const std::string& want, double timeout_s, const std::atomic<bool>* stop,
+            const std::atomic<bool>* begun = nullptr) {
   const auto start = wire::Clock::now();
   std::optional<json> j;
   while (!j) {
     if (stop && stop->load()) throw RunError("interrupted while waiting for the coordinator");
-    if (timeout_s > 0.0 && wire::seconds_since(start) > timeout_s) {
+    if (timeout_s > 0.0 && !(begun && begun->load()) && wire::seconds_since(start) > timeout_s) {
       char buf[96];
-      std::snprintf(buf, sizeof buf, "no coordinator called within %.3g s", timeout_s);
+      if (want == "hello")
+        std::snprintf(buf, sizeof buf, "no coordinator called within %.3g s", timeout_s);
+      else
+        std::snprintf(buf, sizeof buf, "the coordinator sent no %s within %.3g s", want.c_str(), timeout_s);
       throw RunError(buf);
     }
     j = io.next_command(0.1);
@@ -54,6 +59,13 @@ int setup_integer(const json& v, const char* what, int lo, int hi) {
 }
 
 std::vector<int> setup_integers(const json& v, const char* what, int lo, int hi) {
+  if (v.is_string()) {  // a long list comes as text (wire::integer_list_text)
+    std::optional<std::vector<int>> out = wire::integer_list(v.get_ref<const std::string&>(), lo, hi);
+    if (!out)
+      throw RunError(std::string("the set-up's ") + what + " is not a list of integers in [" + std::to_string(lo) + ", " +
+                     std::to_string(hi) + "]");
+    return std::move(*out);
+  }
   if (!v.is_array()) throw RunError(std::string("the set-up's ") + what + " is not a list");
   std::vector<int> out;
   out.reserve(v.size());
@@ -157,8 +169,11 @@ void serve_worker(const WorkerOptions& wo) {
   io.send({{"type", "hello_ok"}, {"program", MBSFLOW_PROGRAM_VERSION}, {"protocol", wo.protocol_version}});
   log("coordinator " + wire::text(hello, "coordinator", "?") + " connected; this is worker " +
       wire::text(hello, "name", "?"));
-  // Setup: the model can be large; the coordinator's heartbeats tell it is still there.
-  const json setup = expect(io, "setup", 0.0, wo.stop);
+  // Setup: the model can be large; the coordinator's heartbeats tell it is still there. It
+  // must begin within connect_s + lost_s of the hello: a peer that says hello and nothing
+  // more (an --insecure worker's first caller) does not hold the worker.
+  const ClusterTimeouts asked = io.timeouts();
+  const json setup = expect(io, "setup", asked.connect_s + asked.lost_s, wo.stop, io.setup_begun());
   Session s;
   try {
     s = read_setup(wo, setup, io.endpoint());

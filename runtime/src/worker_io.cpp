@@ -113,9 +113,12 @@ void WorkerIo::begin_setup(nlohmann::json j) {
   const auto bytes = wire::number(j, "model_bytes", 0.0, static_cast<double>(wire::max_model_bytes));
   if (!bytes) return command(std::move(j));  // the main thread refuses it: no model
   setup_ = std::move(j);
+  setup_begun_ = true;
   model_expected_ = static_cast<std::size_t>(*bytes);
   model_.clear();
-  model_.reserve(model_expected_);  // address space: the pages are touched as parts arrive
+  // Memory grows with what arrives, never with what was announced: a set-up announcing
+  // 2^38 bytes costs nothing until the bytes come (and they are capped per part).
+  model_.shrink_to_fit();
   take_model_part(zmq::message_t());
 }
 
@@ -147,6 +150,50 @@ void WorkerIo::reply_error(const std::string& to, const std::string& message) {
   }
 }
 
+// One message of the control socket. Its sender is known before a byte of it is parsed:
+// after the hello only the coordinator's messages are read (another peer gets a refusal,
+// unread); before it only a message small enough to be a hello is parsed, so that an
+// unknown peer cannot make this worker spend memory on a large one.
+void WorkerIo::receive() {
+  zmq::message_t id, body, attachment;
+  (void)wire::recv(control_, id);
+  if (id.more()) (void)wire::recv(control_, body);
+  if (body.more()) (void)wire::recv(control_, attachment);
+  wire::skip_rest(control_, attachment);
+  const std::string from = id.to_string();
+  if (!coordinator_.empty() && from != coordinator_) {
+    reply_error(from, "this worker is busy with another run");
+    return;
+  }
+  if (coordinator_.empty()) {
+    if (body.size() > max_hello_bytes) return;
+    const std::optional<nlohmann::json> j = wire::parse_control(body, std::nullopt);
+    if (!j || wire::text(*j, "type") != "hello") return;
+    const std::string run = wire::text(*j, "run");
+    const auto t = hello_timeouts(*j);
+    if (run.size() != 16 || run.find_first_not_of("0123456789abcdef") != std::string::npos || !t)
+      return reply_error(from, "refused a hello without a run id or with timeouts out of range");
+    coordinator_ = from;
+    run_ = std::stoull(run, nullptr, 16);
+    {
+      std::lock_guard lock(mutex_);
+      timeouts_ = *t;
+    }
+    heard_ = wire::Clock::now();
+    return command(*j);
+  }
+  std::optional<nlohmann::json> j = wire::parse_control(body, run_);
+  if (!j) return;  // not of this run, or no control message
+  heard_ = wire::Clock::now();
+  const std::string type = wire::text(*j, "type");
+  if (type == "setup")
+    begin_setup(std::move(*j));
+  else if (type == "model_part")
+    take_model_part(attachment);
+  else if (type != "heartbeat")
+    command(std::move(*j));
+}
+
 void WorkerIo::loop() {
   using wire::Clock;
   heard_ = beat_ = Clock::now();
@@ -172,41 +219,14 @@ void WorkerIo::loop() {
     while (wire::recv(wake_in_, ignored, zmq::recv_flags::dontwait)) {
     }
     if (items[0].revents & ZMQ_POLLIN) {
-      zmq::message_t id, body, attachment;
-      (void)wire::recv(control_, id);
-      if (id.more()) (void)wire::recv(control_, body);
-      if (body.more()) (void)wire::recv(control_, attachment);
-      wire::skip_rest(control_, attachment);
-      const std::string from = id.to_string();
-      // Before the hello, only a hello with a run id and sane timeouts is taken; after it,
-      // only the coordinator's messages of its run. Anything else is dropped unread.
-      std::optional<nlohmann::json> j = wire::parse_control(body, coordinator_.empty() ? std::optional<std::uint64_t>() : std::optional<std::uint64_t>(run_));
-      if (coordinator_.empty() && j && wire::text(*j, "type") == "hello") {
-        const std::string run = wire::text(*j, "run");
-        const auto t = hello_timeouts(*j);
-        if (run.size() == 16 && run.find_first_not_of("0123456789abcdef") == std::string::npos && t) {
-          coordinator_ = from;
-          run_ = std::stoull(run, nullptr, 16);
-          std::lock_guard lock(mutex_);
-          timeouts_ = *t;
-        } else {
-          reply_error(from, "refused a hello without a run id or with timeouts out of range");
-          continue;
-        }
-      }
-      if (!j && from == coordinator_) continue;
-      if (coordinator_.empty()) continue;
-      if (from != coordinator_) {
-        if (j) reply_error(from, "this worker is busy with another run");  // another coordinator
-      } else {
-        heard_ = Clock::now();
-        const std::string type = wire::text(*j, "type");
-        if (type == "setup")
-          begin_setup(std::move(*j));
-        else if (type == "model_part")
-          take_model_part(attachment);
-        else if (type != "heartbeat")
-          command(std::move(*j));
+      // Whatever a message holds, it ends in a refusal or a named loss of the coordinator,
+      // never in an exception that leaves this thread (and aborts the process).
+      try {
+        receive();
+      } catch (const std::bad_alloc&) {
+        lose("the coordinator's message does not fit in this worker's memory");
+      } catch (const std::exception& e) {
+        lose(std::string("a message from the coordinator could not be taken: ") + e.what());
       }
     }
     if (!coordinator_.empty() && !lost) {

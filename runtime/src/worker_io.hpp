@@ -46,9 +46,14 @@ class WorkerIo {
   // The checkpoint opportunity the coordinator asked for last (its "checkpoint" command,
   // which is not queued), or -1.
   std::int64_t checkpoint_request() const { return checkpoint_at_.load(); }
+  // Set once the coordinator's set-up has begun to arrive (its model may take a while).
+  const std::atomic<bool>* setup_begun() const { return &setup_begun_; }
 
  private:
   void loop();
+  void receive();  // one message of the control socket (I/O thread)
+  // A hello is a few hundred bytes; before it, nothing larger is parsed.
+  static constexpr std::size_t max_hello_bytes = 64 * 1024;
   void command(nlohmann::json j);
   // The set-up waits for its model, which follows in "model_part" messages; it is handed
   // on complete (with "model": the text).
@@ -74,6 +79,7 @@ class WorkerIo {
   bool lost_ = false;
   std::atomic<std::int64_t> progress_ns_{0};  // 0: no run yet
   std::atomic<std::int64_t> checkpoint_at_{-1};
+  std::atomic<bool> setup_begun_{false};
   // I/O thread only.
   std::string coordinator_;  // its routing id
   std::uint64_t run_ = 0;    // the run id of its hello (read by send() only after the hello)

@@ -199,6 +199,32 @@ TEST_CASE("a stopped (SIGSTOP) or hung worker is named and the run stopped like 
   fs::remove_all(scratch("").parent_path());
 }
 
+TEST_CASE("a stopped worker of --processes ends the run within 5 s of its last sign of life", "[apps][cluster][faults]") {
+  const fs::path d = scratch("processes-worker-stopped");
+  REQUIRE(run("generate chain --bodies 400 -o chain.json", d.string()).code == 0);
+  Child coordinator({"run", "chain.json", "--processes", "2", "--t-end", "1000", "--every", "20", "-o", "out.h5"}, d,
+                    "coordinator");
+  wait_for_results(d / "out.h5", 1500);
+  REQUIRE(!coordinator.wait(0.0));
+  // Its workers are its children (the /proc task list of its threads).
+  std::vector<pid_t> workers;
+  for (const auto& task : fs::directory_iterator("/proc/" + std::to_string(coordinator.pid()) + "/task")) {
+    std::ifstream in(task.path() / "children");
+    for (pid_t p; in >> p;) workers.push_back(p);
+  }
+  REQUIRE(workers.size() == 2);
+  ::kill(workers[1], SIGSTOP);
+  const auto from = Clock::now();
+  const std::optional<int> code = coordinator.wait(15.0);
+  const double took = std::chrono::duration<double>(Clock::now() - from).count();
+  INFO(coordinator.err());
+  CHECK(code == std::optional<int>(1));
+  CHECK(coordinator.err().find("was lost") != std::string::npos);
+  CHECK(took < 5.0);  // lost_s (3 s) after the stop, and the stopped worker killed rather than waited for
+  for (pid_t p : workers) CHECK(::kill(p, 0) != 0);  // none left behind
+  fs::remove_all(scratch("").parent_path());
+}
+
 TEST_CASE("the coordinator killed: every worker notices and exits within 5 s", "[apps][cluster][faults]") {
   const fs::path d = scratch("cluster-coordinator-lost");
   const std::string dir = d.string();

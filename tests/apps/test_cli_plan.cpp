@@ -70,9 +70,9 @@ TEST_CASE("cli plan: implicit methods and missing models are refused with the re
   const std::string dir = d.string();
   REQUIRE(run("generate chain --bodies 10 -o chain.json", dir).code == 0);
   std::string text = read_text(d / "chain.json");
-  const std::size_t at = text.find("\"method\":\"rk4\"");
+  const std::size_t at = text.find('{', text.find("\"simulation\""));
   REQUIRE(at != std::string::npos);
-  text.replace(at, 14, "\"method\":\"tirk\"");
+  text.insert(at + 1, "\"method\":\"tirk\",");
   std::ofstream(d / "tirk.json") << text;
   Result r = run("plan tirk.json", dir);
   CHECK(r.code == 2);

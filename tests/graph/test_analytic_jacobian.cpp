@@ -231,6 +231,7 @@ TEST_CASE("the analytic Jacobian covers rigid joints of every kind through their
   // to a free body outside (a column the cluster reads from outside).
   Model m = compliant_joints_model();
   for (Joint& j : m.joints) j.rigid = true;
+  m.simulation.assemble = true;  // the joints' points as the compliant model has them: assembled
   // Rigid, the universal joint's axes must be perpendicular and the rod must have its length.
   const Eigen::Quaterniond f2(m.joints[4].frame2[0], m.joints[4].frame2[1], m.joints[4].frame2[2], m.joints[4].frame2[3]);
   const Eigen::Quaterniond turned = f2 * Eigen::Quaterniond(Eigen::AngleAxisd(0.5 * std::numbers::pi, Eigen::Vector3d::UnitX()));

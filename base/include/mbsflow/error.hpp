@@ -62,6 +62,12 @@ struct InputError : Error {
   using Error::Error;
 };
 
+// Bad input that shows only once a model is set up (a rigid joint its bodies do not meet):
+// the front end, which knows the model's file, names it.
+struct ModelError : InputError {
+  using InputError::InputError;
+};
+
 // A run that could not be completed (diverged, step too small, peer lost). Exit code 1.
 struct RunError : Error {
   using Error::Error;

@@ -136,15 +136,23 @@ struct SimulationSettings {
   double t_start = 0.0;
   double t_end = 1.0;
   std::optional<double> step;  // none: RK4 picks a stable step
-  Method method = Method::rk4;
+  // None: chosen for the model (options_from_model): RK4 with the stable step of its
+  // stiffest joint, or DOPRI5 where no joint gives one (rigid joints only, say).
+  std::optional<Method> method;
   // Method-specific: tirk's tableau and/or iteration ("radau3", "newton", "radau5,newton-triangular"),
   // colloc's "m,s[,order]"; empty: the method's default.
   std::string variant;
-  int output_every = 1;        // write every k-th step (RK4) or every k*step (DOPRI5)
+  // Write every k-th step (RK4) or every k*step (DOPRI5); none: about a thousand
+  // snapshots over the run (options_from_model).
+  std::optional<int> output_every;
   // The output grid in s of model time, whatever the method's steps; overrides output_every.
   std::optional<double> output_interval;
   double rtol = 1e-6;
   double atol = 1e-8;
+  // Rigid joints violated at the start by more than assembly_tolerance (m, rad) are an
+  // error unless assemble is set: then the bodies are moved onto the joints.
+  bool assemble = false;
+  static constexpr double assembly_tolerance = 1e-5;
 };
 
 class ForceElement;  // force_element.hpp

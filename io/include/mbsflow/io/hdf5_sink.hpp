@@ -58,7 +58,9 @@ class Hdf5Sink : public ResultSink {
   struct File;  // HDF5 handles and the writer lock, in the .cpp
   void flush();
   void lay_out(File& f, const MultibodySystem& system, bool make);
+  void lay_out_and_publish(std::unique_ptr<File> f, const MultibodySystem& system);  // begin()'s work
   std::unique_ptr<File> create();
+  void write_header(File& f, const std::string& making);
   std::string part_path() const { return path_ + ".part"; }
 
   std::string path_;

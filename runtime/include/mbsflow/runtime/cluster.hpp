@@ -18,7 +18,7 @@
 namespace mbsflow {
 
 // Raised with every incompatible change of the messages between processes.
-constexpr int cluster_protocol_version = 6;  // 2: loose coupling records, newest-value lag; 3: tight DOPRI5; 4: run ids, frame versions; 5: checkpoints; 6: the set-up's model in a frame of its own
+constexpr int cluster_protocol_version = 7;  // 2: loose coupling records, newest-value lag; 3: tight DOPRI5; 4: run ids, frame versions; 5: checkpoints; 6: the set-up's model in a frame of its own; 7: part_of_body as text
 
 struct ClusterTimeouts {
   double connect_s = 10.0;   // every worker must answer the coordinator's hello within this
@@ -27,9 +27,10 @@ struct ClusterTimeouts {
   // A worker whose computation has not advanced this long (a step that never ends, while
   // its heartbeats go on) is hung; time spent waiting for its peers does not count.
   double stall_s = 60.0;
-  // The largest values accepted from a cluster file or the wire: beyond them a peer could
-  // hold the other side forever (and milliseconds overflow).
-  static constexpr double max_connect_s = 3600.0, max_heartbeat_s = 60.0, max_lost_s = 3600.0, max_stall_s = 86400.0;
+  // The largest values accepted from a cluster file or the wire: a peer's hello cannot
+  // hold a worker longer than these (a worker waits at most connect_s + lost_s for the
+  // set-up after the hello), nor make milliseconds overflow.
+  static constexpr double max_connect_s = 600.0, max_heartbeat_s = 30.0, max_lost_s = 600.0, max_stall_s = 86400.0;
 };
 
 struct ClusterWorker {

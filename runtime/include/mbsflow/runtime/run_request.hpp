@@ -17,6 +17,7 @@ struct ModelOverrides {
   std::optional<int> output_every;  // replaces an output interval too
   std::optional<Method> method;     // another method than the model's drops the model's variant
   std::optional<std::string> variant;
+  bool assemble = false;  // move the bodies onto violated rigid joints (else they are refused)
 };
 
 // InputError for a t_end not after the model's t_start.

@@ -19,6 +19,7 @@ namespace mbsflow {
 
 struct RunOptions {
   Method method = Method::rk4;  // any method of the stepper registry (mbsflow/methods/stepper.hpp)
+  bool method_chosen = false;   // the model named none: options_from_model chose it
   std::string variant;           // its variant (colloc: "m,s[,order]", tirk: tableau and/or iteration); empty: default
   std::string linear_solver = "auto";  // implicit methods' Newton matrices: auto, dense, banded, klu, sparselu
   // Implicit methods' Jacobian: "auto" (analytic where every force element has one, see
