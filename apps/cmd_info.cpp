@@ -49,9 +49,27 @@ int info_ode(const ResultsFile& r) {
   return 0;
 }
 
+// The results of mbsflow modes: where the model was linearised, and its modes.
+int info_modes(const ResultsFile& r) {
+  auto text = [&](const char* name) { return r.string_attribute(name).value_or("?"); };
+  const std::vector<double> f = r.read("/modes/frequency"), zeta = r.read("/modes/damping_ratio"), rigid = r.read("/modes/rigid_body");
+  std::printf("file          %s (%ju bytes)\n", r.path().c_str(), r.size_bytes());
+  std::printf("model         %s: %s\n", text("model_name").c_str(),
+              count_of(static_cast<long long>(r.body_names().size()), "body", "bodies").c_str());
+  std::printf("modes         %s about the %s, %s\n", count_of(static_cast<long long>(f.size()), "mode").c_str(),
+              text("linearised_at").c_str(), text("solver").c_str());
+  for (std::size_t j = 0; j < f.size(); ++j)
+    std::printf("  %4zu  %12.6g Hz  damping ratio %.4g%s\n", j + 1, f[j], zeta[j] == 0.0 ? 0.0 : zeta[j],
+                rigid[j] != 0.0 ? "  (rigid-body motion)" : "");
+  std::printf("written by    mbsflow %s\n", text("mbsflow_version").c_str());
+  std::printf("command line  %s\n", text("command_line").c_str());
+  return 0;
+}
+
 int info(const std::string& path) {
   const ResultsFile r(path);
   if (r.ode()) return info_ode(r);
+  if (r.modes()) return info_modes(r);
   const std::vector<double> t = r.time();
   auto text = [&](const char* name) { return r.string_attribute(name).value_or("?"); };
   auto number = [&](const char* name) { return r.number_attribute(name).value_or(std::nan("")); };

@@ -19,6 +19,8 @@ Action add_info(CLI::App& app);
 Action add_export(CLI::App& app);
 Action add_worker(CLI::App& app);
 Action add_ode(CLI::App& app);
+Action add_modes(CLI::App& app);  // cmd_modes.cpp
+Action add_frf(CLI::App& app);
 Action add_keygen(CLI::App& app);
 Action add_view(CLI::App& app);
 Action add_plot(CLI::App& app);

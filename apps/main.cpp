@@ -30,6 +30,8 @@ int main(int argc, char** argv) {
   add(mbsflow::cli::add_bench);
   add(mbsflow::cli::add_worker);
   add(mbsflow::cli::add_ode);
+  add(mbsflow::cli::add_modes);
+  add(mbsflow::cli::add_frf);
   add(mbsflow::cli::add_keygen);
   mbsflow::cli::set_invocation(argc, argv);
   // A mistyped command is named, with the commands there are (CLI11 would say only that a

@@ -11,6 +11,7 @@ packages=(
   iproute2  # ip netns, for the test across two network namespaces
   libsundials-dev libboost-dev
   libsuitesparse-dev  # KLU, the sparse LU of the implicit methods
+  libspectra-dev  # Spectra: the sparse shift-invert eigensolver of mbsflow modes
   clang libclang-rt-14-dev  # libFuzzer targets (tests/fuzz); Debian 12's clang is 14
   paraview python3-paraview xvfb  # the results opened in the real ParaView (tests/io/paraview_check.sh)
   libjs-three  # three.js, inlined by mbsflow view

@@ -308,6 +308,34 @@ double MultibodySystem::constraint_violation(double t, const Eigen::VectorXd& y,
   return worst;
 }
 
+Eigen::SparseMatrix<double> MultibodySystem::constraint_jacobian(double t, const Eigen::VectorXd& y,
+                                                                std::vector<int>* joint_of_row) const {
+  std::vector<Eigen::Triplet<double>> entries;
+  std::array<ConstraintRow, max_joint_rows> rows;
+  const int n = static_cast<int>(layout_.bodies);
+  int row = 0;
+  if (joint_of_row) joint_of_row->clear();
+  for (std::size_t k = 0; k < compiled_->joints.size(); ++k) {
+    const CompiledJoint& j = compiled_->joints[k];
+    if (j.kinematic < 0 || !j.rigid) continue;
+    const JointGeometry& g = constraints_->geometry[static_cast<std::size_t>(j.kinematic)];
+    evaluate_constraint(g, state_motion(layout_, y, j.a), state_motion(layout_, y, j.b), t, rows.data());
+    for (int r = 0; r < constraint_rows(g); ++r, ++row) {
+      const ConstraintRow& c = rows[static_cast<std::size_t>(r)];
+      for (int side = 0; side < 2; ++side) {
+        const int body = side == 0 ? j.a : j.b;
+        if (body >= n) continue;  // ground
+        for (int e = 0; e < 6; ++e)
+          if (const double v = c.j[6 * side + e]; v != 0.0) entries.emplace_back(row, 6 * body + e, v);
+      }
+      if (joint_of_row) joint_of_row->push_back(static_cast<int>(k));
+    }
+  }
+  Eigen::SparseMatrix<double> out(row, 6 * n);
+  out.setFromTriplets(entries.begin(), entries.end());
+  return out;
+}
+
 void MultibodySystem::add_reactions(Eigen::VectorXd& out) {
   Constraints& k = *constraints_;
   for (std::size_t c = 0; c < k.clusters.size(); ++c) {

@@ -30,10 +30,11 @@ ResultsFile::ResultsFile(const std::string& path) : path_(path) {
   unsigned intent = 0;
   live_ = H5Fget_intent(file_, &intent) >= 0 && (intent & H5F_ACC_SWMR_READ) != 0;
   ode_ = !has("/time") && has("/solution/time");
-  if (!has("/time") && !ode_) {
+  modes_ = !has("/time") && has("/modes/frequency");
+  if (!has("/time") && !ode_ && !modes_) {
     H5Fclose(file_);
     file_ = -1;
-    throw InputError(path + ": not an mbsflow results file (neither /time nor /solution/time)");
+    throw InputError(path + ": not an mbsflow results file (none of /time, /solution/time, /modes/frequency)");
   }
 }
 
@@ -42,11 +43,12 @@ ResultsFile::~ResultsFile() {
 }
 
 ResultsFile::ResultsFile(ResultsFile&& o) noexcept
-    : path_(std::move(o.path_)), file_(std::exchange(o.file_, -1)), ode_(o.ode_), live_(o.live_) {}
+    : path_(std::move(o.path_)), file_(std::exchange(o.file_, -1)), ode_(o.ode_), modes_(o.modes_), live_(o.live_) {}
 ResultsFile& ResultsFile::operator=(ResultsFile&& o) noexcept {
   std::swap(path_, o.path_);
   std::swap(file_, o.file_);
   std::swap(ode_, o.ode_);
+  std::swap(modes_, o.modes_);
   std::swap(live_, o.live_);
   return *this;
 }

@@ -1,4 +1,4 @@
-#include "klu_lu.hpp"
+#include "mbsflow/methods/klu_lu.hpp"
 
 #include <klu.h>
 

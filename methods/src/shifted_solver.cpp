@@ -1,6 +1,6 @@
 #include "mbsflow/methods/shifted_solver.hpp"
 
-#include "klu_lu.hpp"
+#include "mbsflow/methods/klu_lu.hpp"
 #include "scalar_archive.hpp"
 #include "schur_reduction.hpp"
 #include "mbsflow/error.hpp"

@@ -14,6 +14,7 @@ from ._core import Error, InputError, ModelError, RunError, Model, Simulation, g
 from .results import Results
 from .runner import run
 from .ivp import solve_ivp, OdeResult, OdeSolution, CompiledRhs
+from .analysis import linearize, modes, frf, LinearModel, Modes
 
-__all__ = ["Error", "InputError", "ModelError", "RunError", "Model", "Simulation", "generate", "Results", "run",
+__all__ = ["linearize", "modes", "frf", "LinearModel", "Modes", "Error", "InputError", "ModelError", "RunError", "Model", "Simulation", "generate", "Results", "run",
            "solve_ivp", "OdeResult", "OdeSolution", "CompiledRhs", "__version__"]

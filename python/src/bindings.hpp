@@ -19,6 +19,7 @@ void bind_results(py::module_& m);
 void bind_run(py::module_& m);
 void bind_simulation(py::module_& m);
 void bind_ivp(py::module_& m);
+void bind_analysis(py::module_& m);
 
 // A numpy array that owns the vector's storage (no copy), in the given C-order shape.
 py::array_t<double> to_numpy(std::vector<double>&& values, std::vector<py::ssize_t> shape);

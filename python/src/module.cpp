@@ -44,4 +44,5 @@ PYBIND11_MODULE(_core, m) {
   bind_run(m);
   bind_simulation(m);
   bind_ivp(m);
+  bind_analysis(m);
 }

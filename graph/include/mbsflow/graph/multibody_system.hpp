@@ -120,6 +120,12 @@ class MultibodySystem {
   // Largest violation of a rigid joint's position constraints at y (0 without any), and
   // which joint has it.
   double constraint_violation(double t, const Eigen::VectorXd& y, int* joint = nullptr) const;
+  // The rigid joints' constraint rows at y (their motors' rows included), each a row over
+  // the bodies' 6 velocity coordinates (velocity and angular velocity, world frame) at
+  // columns 6 i .. 6 i + 5 of body i: C v = 0 holds the joints. joint_of_row, if given,
+  // gets each row's joint index. For linearisations (the analysis layer).
+  Eigen::SparseMatrix<double> constraint_jacobian(double t, const Eigen::VectorXd& y,
+                                                  std::vector<int>* joint_of_row = nullptr) const;
 
   // The structural non-zeros of d rhs / d y (values 1), following the body graph: a body's
   // accelerations depend on its own state and on the states of the bodies it shares a

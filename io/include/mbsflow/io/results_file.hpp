@@ -27,6 +27,7 @@ class ResultsFile {
   std::vector<std::uint64_t> shape(const std::string& dataset) const;  // empty if absent
 
   bool ode() const { return ode_; }  // the results of mbsflow ode: /solution and /steps
+  bool modes() const { return modes_; }  // the results of mbsflow modes: /modes, /equilibrium
   // Opened as SWMR reader: a run is writing the file (or was killed while it did).
   bool live() const { return live_; }
   std::vector<double> time() const;  // snapshot times, or the ODE solution's points
@@ -45,6 +46,7 @@ class ResultsFile {
   std::string path_;
   std::int64_t file_ = -1;  // hid_t
   bool ode_ = false;
+  bool modes_ = false;
   bool live_ = false;
 };
 

@@ -1,0 +1,30 @@
+#pragma once
+// The augmented matrix [P C^T; C d I] of a linearised model: P on the bodies' coordinates,
+// the rigid joints' rows C holding their motions, d on the multipliers' diagonal (a tiny
+// negative d keeps a matrix with redundant rows regular; 0 puts the entry in the pattern).
+#include <Eigen/SparseCore>
+#include <vector>
+
+namespace mbsflow {
+
+template <class Scalar>
+Eigen::SparseMatrix<Scalar> augmented(const Eigen::SparseMatrix<Scalar>& p, const Eigen::SparseMatrix<double>& c,
+                                      Scalar d = Scalar(0)) {
+  const Eigen::Index n = p.rows(), r = c.rows();
+  std::vector<Eigen::Triplet<Scalar>> e;
+  e.reserve(static_cast<std::size_t>(p.nonZeros() + 2 * c.nonZeros() + r));
+  for (Eigen::Index col = 0; col < p.outerSize(); ++col)
+    for (typename Eigen::SparseMatrix<Scalar>::InnerIterator it(p, col); it; ++it) e.emplace_back(it.row(), it.col(), it.value());
+  for (Eigen::Index col = 0; col < c.outerSize(); ++col)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(c, col); it; ++it) {
+      e.emplace_back(n + it.row(), it.col(), Scalar(it.value()));
+      e.emplace_back(it.col(), n + it.row(), Scalar(it.value()));
+    }
+  for (Eigen::Index i = 0; i < r; ++i) e.emplace_back(n + i, n + i, d);
+  Eigen::SparseMatrix<Scalar> a(n + r, n + r);
+  a.setFromTriplets(e.begin(), e.end());
+  a.makeCompressed();
+  return a;
+}
+
+}  // namespace mbsflow

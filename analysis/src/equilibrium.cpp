@@ -1,0 +1,124 @@
+#include "mbsflow/analysis/equilibrium.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "augmented.hpp"
+#include "mbsflow/analysis/linearization.hpp"
+#include "mbsflow/error.hpp"
+#include "mbsflow/methods/klu_lu.hpp"
+
+namespace mbsflow {
+namespace {
+
+using Sparse = Eigen::SparseMatrix<double>;
+
+// The largest force or torque on one body.
+double worst(const Eigen::VectorXd& f, Eigen::Index* at = nullptr) {
+  Eigen::Index i = 0;
+  const double w = f.size() ? f.cwiseAbs().maxCoeff(&i) : 0.0;
+  if (at) *at = i;
+  return w;
+}
+
+// Solves [S C^T; C 0] [dx; mu] = [f; 0], S = K + M / h^2: the step on the allowed motions.
+Eigen::VectorXd step(const LinearModel& lm, const Eigen::VectorXd& f, double h) {
+  const Eigen::Index n = lm.size(), r = lm.C.rows();
+  // Redundant rows (a planar loop in 3D) make the augmented matrix singular: a tiny
+  // negative diagonal on the multipliers keeps it regular and leaves dx as it is.
+  const double eps = 1e-12 * (lm.M.coeffs().size() ? lm.M.coeffs().cwiseAbs().maxCoeff() : 1.0) / (h * h);
+  const Sparse a = augmented<double>(lm.K + (1.0 / (h * h)) * lm.M, lm.C, -eps);
+  KluLu<double> lu;
+  lu.analyze(a);
+  lu.factorize(a);
+  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(n + r);
+  rhs.head(n) = f;
+  lu.solve(rhs);
+  return rhs.head(n);
+}
+
+double potential(MultibodySystem& sys, double t, const Eigen::VectorXd& y) {
+  const Energy e = sys.energy(t, y);
+  return e.gravity + e.elastic;
+}
+
+}  // namespace
+
+Equilibrium find_equilibrium(MultibodySystem& sys, double t, const Eigen::VectorXd& start, const EquilibriumOptions& o) {
+  const StateLayout& l = sys.layout();
+  const std::vector<int> bodies = free_bodies(sys);
+  Eigen::VectorXd y = start;
+  for (Eigen::Index b = 0; b < l.bodies; ++b) {
+    y.segment<3>(l.velocity(b)).setZero();
+    y.segment<3>(l.angular_velocity(b)).setZero();
+  }
+  sys.after_step(t, y);  // on the rigid joints and the drivers' motion
+  Equilibrium out;
+  Eigen::VectorXd f = static_residual(sys, t, y, bodies);
+  out.initial_residual = worst(f);
+  // The scale of "balanced": the bodies' weight, or the forces at the start.
+  const Model& m = sys.model();
+  const double g = std::sqrt(m.gravity[0] * m.gravity[0] + m.gravity[1] * m.gravity[1] + m.gravity[2] * m.gravity[2]);
+  double weight = 0.0, extent = 0.0;
+  for (int b : bodies) weight = std::max(weight, m.bodies[static_cast<std::size_t>(b)].mass * g);
+  for (int b : bodies) extent = std::max(extent, y.segment<3>(l.position(b)).norm());
+  const double scale = std::max({weight, out.initial_residual, 1e-300});
+  const double enough = o.tolerance * scale;
+  double energy = potential(sys, t, y);
+  // The first pseudo-time step moves the body with the largest acceleration by about a
+  // hundredth of the model's size.
+  double h = 1e-2;
+  {
+    double fastest = 0.0;
+    for (std::size_t k = 0; k < bodies.size(); ++k)
+      fastest = std::max(fastest, f.segment<3>(static_cast<Eigen::Index>(6 * k)).norm() /
+                                      m.bodies[static_cast<std::size_t>(bodies[k])].mass);
+    if (fastest > 0.0) h = std::sqrt(0.01 * std::max(extent, 1e-3) / fastest);
+  }
+  int iteration = 0;
+  while (worst(f) > enough) {
+    if (++iteration > o.max_iterations) {
+      Eigen::Index at = 0;
+      const double left = worst(f, &at);
+      const int body = bodies[static_cast<std::size_t>(at / 6)];
+      char buf[256];
+      std::snprintf(buf, sizeof buf, "%s %.3g %s after %d iterations (the start had %.3g)",
+                    at % 6 < 3 ? "a force of" : "a torque of", left, at % 6 < 3 ? "N" : "N m", o.max_iterations,
+                    out.initial_residual);
+      throw RunError("no static equilibrium found: body '" + m.bodies[static_cast<std::size_t>(body)].name +
+                     "' does not settle, " + buf +
+                     " (is it held against gravity and its loads? --at-initial linearises where it is)");
+    }
+    const LinearModel lm = linearize(sys, t, y);
+    Eigen::VectorXd next = y;
+    Eigen::VectorXd dx;
+    try {
+      dx = step(lm, f, h);
+    } catch (const RunError&) {  // singular: a smaller pseudo-time step adds more mass
+      h *= 0.25;
+      continue;
+    }
+    apply_tangent_step(l, bodies, dx, next);
+    sys.after_step(t, next);
+    const Eigen::VectorXd f_next = static_residual(sys, t, next, bodies);
+    const double e_next = potential(sys, t, next);
+    const bool lower = e_next <= energy + 1e-12 * (std::abs(energy) + scale * std::max(extent, 1.0));
+    if ((!lower && !(worst(f_next) < worst(f))) || !f_next.allFinite()) {
+      h *= 0.25;  // the step overshot: more of the mass term
+      continue;
+    }
+    // Switched evolution relaxation: h grows as the residual falls, up to Newton's step.
+    h *= std::clamp(std::sqrt(worst(f) / std::max(worst(f_next), 1e-300)), 0.5, 4.0);
+    y = next;
+    f = f_next;
+    energy = e_next;
+    if (o.progress) o.progress(iteration, worst(f));
+  }
+  out.state = y;
+  out.iterations = iteration;
+  out.residual = worst(f);
+  return out;
+}
+
+}  // namespace mbsflow

@@ -1,0 +1,245 @@
+// Modes, equilibrium and frequency response against exact answers: a body on a bushing,
+// the natural-frequency form, a chain of springs, single and double pendulums on rigid
+// revolute joints, a damped oscillator's frequency response; the dense and the sparse
+// solver against each other.
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <numbers>
+
+#include "mbsflow/analysis/equilibrium.hpp"
+#include "mbsflow/analysis/frequency_response.hpp"
+#include "mbsflow/analysis/modes.hpp"
+#include "mbsflow/io/model_reader.hpp"
+
+using namespace mbsflow;
+
+namespace {
+
+constexpr double pi = std::numbers::pi;
+
+struct Linearised {
+  Model model;
+  std::unique_ptr<MultibodySystem> sys;
+  LinearModel lm;
+};
+
+// The model of `json`, linearised at its static equilibrium (or its initial state).
+Linearised linearised(const std::string& json, bool equilibrium = true) {
+  Linearised out;
+  out.model = read_model_text(json, "test model");
+  out.sys = std::make_unique<MultibodySystem>(out.model);
+  Eigen::VectorXd y = out.sys->initial_state();
+  if (equilibrium) y = find_equilibrium(*out.sys, 0.0, y).state;
+  out.lm = linearize(*out.sys, 0.0, y);
+  return out;
+}
+
+Modes modes_of(const LinearModel& lm, int count, bool damped, ModeSolver solver = ModeSolver::automatic) {
+  ModeOptions o;
+  o.count = count;
+  o.damped = damped;
+  o.solver = solver;
+  return compute_modes(lm, o);
+}
+
+const char* bushing_body = R"({"name": "mount", "gravity": [0, 0, 0],
+  "bodies": [{"name": "block", "mass": 2.0, "inertia": [0.3, 0.5, 0.7], "position": [0, 0, 0]}],
+  "joints": [{"name": "pad", "type": "bushing", "body1": "ground", "body2": "block", "point1": [0, 0, 0], "point2": [0, 0, 0],
+              %s}]})";
+
+std::string with(const char* format, const std::string& fields) {
+  std::string s = format;
+  return s.replace(s.find("%s"), 2, fields);
+}
+
+}  // namespace
+
+TEST_CASE("a body on a bushing vibrates at sqrt(k/m) along and sqrt(kr/I) about each axis", "[analysis][modes]") {
+  const Linearised l = linearised(with(bushing_body, R"("stiffness": [800, 1800, 3200, 30, 80, 140])"), false);
+  const Modes m = modes_of(l.lm, 10, false);
+  REQUIRE(m.frequency.size() == 6);  // all there are
+  std::vector<double> expected = {std::sqrt(800 / 2.0), std::sqrt(1800 / 2.0), std::sqrt(3200 / 2.0),
+                                  std::sqrt(30 / 0.3),  std::sqrt(80 / 0.5),    std::sqrt(140 / 0.7)};
+  std::sort(expected.begin(), expected.end());
+  for (std::size_t j = 0; j < 6; ++j) {
+    CHECK(m.frequency[j] == Approx(expected[j] / (2 * pi)).epsilon(1e-10));
+    CHECK(m.damping_ratio[j] == Approx(0.0).margin(1e-12));
+    CHECK(m.residual[j] < 1e-12);
+    CHECK(!m.rigid_body[j]);
+    CHECK(m.kinetic_share(0, static_cast<Eigen::Index>(j)) == Approx(1.0));
+  }
+  // Mass-normalised: x^H M x = 1.
+  const Eigen::VectorXcd x = m.shape.col(0);
+  CHECK(std::abs((x.adjoint() * (l.lm.M * x))(0)) == Approx(1.0).epsilon(1e-12));
+}
+
+TEST_CASE("bodies on bushings in the natural-frequency form: every mode at Omega with damping ratio mu", "[analysis][modes]") {
+  const double omega = 40.0, mu = 0.05;
+  std::string bodies, joints;
+  for (int i = 0; i < 4; ++i) {
+    const std::string b = "b" + std::to_string(i), at = std::to_string(2.0 * i);
+    bodies += std::string(i ? "," : "") + R"({"name": ")" + b + R"(", "mass": )" + std::to_string(1.0 + i) +
+              R"(, "inertia": [0.3, 0.5, 0.7], "position": [)" + at + ", 0, 0]}";
+    joints += std::string(i ? "," : "") + R"({"name": "p)" + b + R"(", "type": "bushing", "body1": "ground", "body2": ")" + b +
+              R"(", "point1": [)" + at + R"(, 0, 0], "point2": [0, 0, 0], "frequency": 40, "damping_ratio": 0.05})";
+  }
+  const Linearised l = linearised(R"({"name": "mounts", "gravity": [0, 0, 0], "bodies": [)" + bodies + R"(], "joints": [)" + joints +
+                                  "]}", false);
+  for (ModeSolver solver : {ModeSolver::dense, ModeSolver::sparse}) {
+    INFO((solver == ModeSolver::dense ? "dense" : "sparse"));
+    const Modes m = modes_of(l.lm, 6, true, solver);
+    REQUIRE(m.frequency.size() == 6);
+    CHECK(m.solver.find(solver == ModeSolver::dense ? "dense" : "sparse") == 0);
+    for (std::size_t j = 0; j < 6; ++j) {
+      CHECK(std::abs(m.eigenvalue[j]) == Approx(omega).epsilon(1e-9));
+      CHECK(m.damping_ratio[j] == Approx(mu).epsilon(1e-9));
+      CHECK(m.eigenvalue[j].real() == Approx(-mu * omega).epsilon(1e-9));
+      CHECK(m.residual[j] < 1e-10);
+    }
+  }
+}
+
+TEST_CASE("a chain of masses and springs, fixed at one end: the closed-form frequencies", "[analysis][modes]") {
+  // n masses m on springs k along x; the j-th frequency 2 sqrt(k/m) sin((2j - 1) pi / (2 (2n + 1))).
+  const int n = 8;
+  const double k = 1000.0, mass = 0.5;
+  std::string bodies, joints;
+  for (int i = 0; i < n; ++i) {
+    bodies += std::string(i ? "," : "") + R"({"name": "m)" + std::to_string(i) + R"(", "mass": 0.5, "inertia": [0.01, 0.01, 0.01], "position": [)" +
+              std::to_string(i + 1) + ", 0, 0]}";
+    joints += std::string(i ? "," : "") + R"({"name": "s)" + std::to_string(i) + R"(", "type": "spring", "body1": ")" +
+              (i ? "m" + std::to_string(i - 1) : std::string("ground")) + R"(", "body2": "m)" + std::to_string(i) +
+              R"(", "point1": [)" + (i ? "0" : "0") + R"(, 0, 0], "point2": [0, 0, 0], "stiffness": 1000})";
+  }
+  const Linearised l = linearised(R"({"name": "springs", "gravity": [0, 0, 0], "bodies": [)" + bodies + R"(], "joints": [)" +
+                                  joints + "]}", false);
+  const Modes m = modes_of(l.lm, 6 * n, false);
+  std::vector<double> vibrating;
+  int rigid = 0;
+  for (std::size_t j = 0; j < m.frequency.size(); ++j) {
+    if (m.rigid_body[j]) ++rigid;
+    else vibrating.push_back(m.frequency[j]);
+  }
+  CHECK(rigid == 5 * n);  // sideways and turning: no stiffness without tension
+  REQUIRE(vibrating.size() == static_cast<std::size_t>(n));
+  for (int j = 1; j <= n; ++j)
+    CHECK(vibrating[static_cast<std::size_t>(j - 1)] ==
+          Approx(2.0 * std::sqrt(k / mass) * std::sin((2 * j - 1) * pi / (2.0 * (2 * n + 1))) / (2 * pi)).epsilon(1e-9));
+}
+
+TEST_CASE("a pendulum on a rigid revolute released off its equilibrium: found hanging, one mode at sqrt(m g L / I_pivot)",
+          "[analysis][modes][equilibrium]") {
+  // Bob of 1 kg at 1.2 m, 60 degrees off the vertical; inertia 0.02 about z.
+  const double L = 1.2, m = 1.0, izz = 0.02, g = 9.81;
+  const double x = L * std::sin(pi / 3), y = -L * std::cos(pi / 3);
+  char json[1024];
+  std::snprintf(json, sizeof json, R"({"name": "pendulum", "gravity": [0, -9.81, 0],
+    "bodies": [{"name": "bob", "mass": 1.0, "inertia": [0.02, 0.02, 0.02], "position": [%.17g, %.17g, 0]}],
+    "joints": [{"name": "pivot", "type": "revolute", "body1": "ground", "body2": "bob", "point1": [0, 0, 0],
+                "point2": [%.17g, %.17g, 0], "axis1": [0, 0, 1]}]})", x, y, -x, -y);
+  Model model = read_model_text(json, "pendulum");
+  MultibodySystem sys(model);
+  const Equilibrium e = find_equilibrium(sys, 0.0, sys.initial_state());
+  const StateLayout& l = sys.layout();
+  CHECK(e.state[l.position(0)] == Approx(0.0).margin(1e-9));
+  CHECK(e.state[l.position(0) + 1] == Approx(-L).epsilon(1e-9));
+  CHECK(e.residual < 1e-8);
+  const LinearModel lm = linearize(sys, 0.0, e.state);
+  CHECK(lm.C.rows() == 5);
+  const Modes modes = modes_of(lm, 10, true);
+  REQUIRE(modes.frequency.size() == 1);  // no constraint direction shows up as a mode
+  CHECK(modes.frequency[0] == Approx(std::sqrt(m * g * L / (izz + m * L * L)) / (2 * pi)).epsilon(1e-9));
+  CHECK(modes.residual[0] < 1e-10);
+  // Sparse, through the augmented pencil: the same.
+  const Modes sparse = modes_of(lm, 1, true, ModeSolver::sparse);
+  REQUIRE(sparse.frequency.size() >= 1);
+  CHECK(sparse.frequency[0] == Approx(modes.frequency[0]).epsilon(1e-8));
+}
+
+TEST_CASE("a double pendulum of point-like bobs: frequencies sqrt(g/L (2 -+ sqrt 2))", "[analysis][modes][equilibrium]") {
+  // Released level (both rods horizontal); equal bobs, rods L.
+  const char* json = R"({"name": "double", "gravity": [0, -9.81, 0],
+    "bodies": [{"name": "upper", "mass": 1.0, "inertia": [1e-7, 1e-7, 1e-7], "position": [1, 0, 0]},
+               {"name": "lower", "mass": 1.0, "inertia": [1e-7, 1e-7, 1e-7], "position": [2, 0, 0]}],
+    "joints": [{"name": "shoulder", "type": "revolute", "body1": "ground", "body2": "upper", "point1": [0, 0, 0],
+                "point2": [-1, 0, 0], "axis1": [0, 0, 1]},
+               {"name": "elbow", "type": "revolute", "body1": "upper", "body2": "lower", "point1": [0, 0, 0],
+                "point2": [-1, 0, 0], "axis1": [0, 0, 1]}]})";
+  const Linearised l = linearised(json);
+  const Modes m = modes_of(l.lm, 10, false);
+  REQUIRE(m.frequency.size() == 2);
+  CHECK(m.frequency[0] == Approx(std::sqrt(9.81 * (2 - std::sqrt(2.0))) / (2 * pi)).epsilon(1e-5));
+  CHECK(m.frequency[1] == Approx(std::sqrt(9.81 * (2 + std::sqrt(2.0))) / (2 * pi)).epsilon(1e-5));
+}
+
+TEST_CASE("a free body has six rigid-body modes, reported as such", "[analysis][modes]") {
+  const Linearised l = linearised(R"({"name": "free", "gravity": [0, 0, 0],
+    "bodies": [{"name": "b", "mass": 3.0, "inertia": [0.1, 0.2, 0.3], "position": [0, 0, 0]}], "joints": []})", false);
+  const Modes m = modes_of(l.lm, 10, true);
+  REQUIRE(m.frequency.size() == 6);
+  for (std::size_t j = 0; j < 6; ++j) {
+    CHECK(m.rigid_body[j]);
+    CHECK(m.frequency[j] == 0.0);
+  }
+}
+
+TEST_CASE("the sparse shift-invert solver finds the dense solver's lowest modes of a chain of bushings", "[analysis][modes]") {
+  std::string bodies, joints;
+  const int n = 60;
+  for (int i = 0; i < n; ++i) {
+    bodies += std::string(i ? "," : "") + R"({"name": "l)" + std::to_string(i) +
+              R"(", "mass": 1.0, "inertia": [0.01, 0.02, 0.02], "position": [)" + std::to_string(0.5 * i) + ", 0, 0]}";
+    joints += std::string(i ? "," : "") + R"({"name": "j)" + std::to_string(i) + R"(", "type": "bushing", "body1": ")" +
+              (i ? "l" + std::to_string(i - 1) : std::string("ground")) + R"(", "body2": "l)" + std::to_string(i) +
+              R"(", "point1": [)" + (i ? "0.25" : "-0.25") + R"(, 0, 0], "point2": [-0.25, 0, 0], "stiffness": [4e4, 3e4, 3e4, 50, 80, 80], "damping": [5, 5, 5, 0.01, 0.01, 0.01]})";
+  }
+  const Linearised l = linearised(R"({"name": "chain", "gravity": [0, -9.81, 0], "bodies": [)" + bodies + R"(], "joints": [)" + joints +
+                                  "]}");
+  const Modes dense = modes_of(l.lm, 8, true, ModeSolver::dense), sparse = modes_of(l.lm, 8, true, ModeSolver::sparse);
+  REQUIRE(dense.frequency.size() == 8);
+  REQUIRE(sparse.frequency.size() >= 8);
+  for (std::size_t j = 0; j < 8; ++j) {
+    CHECK(sparse.frequency[j] == Approx(dense.frequency[j]).epsilon(1e-8));
+    CHECK(std::abs(sparse.damping_ratio[j] - dense.damping_ratio[j]) < 1e-9);  // Re lambda to 1e-9 |lambda|
+    CHECK(sparse.residual[j] < 1e-8);
+    CHECK(dense.residual[j] < 1e-8);
+  }
+}
+
+TEST_CASE("a damped oscillator's frequency response is 1 / (k - m w^2 + i c w)", "[analysis][frf]") {
+  const Linearised l = linearised(with(bushing_body, R"("stiffness": [800, 1800, 3200, 30, 80, 140], "damping": [4, 1, 1, 0.1, 0.1, 0.1])"), false);
+  const std::vector<Channel> in = {parse_channel(l.model, "block:fx", true)};
+  const std::vector<Channel> out = {parse_channel(l.model, "block:x", false), parse_channel(l.model, "block:vx", false),
+                                    parse_channel(l.model, "block:ax", false), parse_channel(l.model, "block:y", false)};
+  const std::vector<double> hz = {0.5, 3.0, std::sqrt(400.0) / (2 * pi), 10.0, 80.0};
+  const FrequencyResponse r = frequency_response(l.lm, in, out, hz);
+  for (std::size_t k = 0; k < hz.size(); ++k) {
+    const double w = 2 * pi * hz[k];
+    const std::complex<double> h = 1.0 / std::complex<double>(800.0 - 2.0 * w * w, 4.0 * w);
+    CHECK(std::abs(r.h[k](0, 0) - h) < 1e-12 * std::abs(h));
+    CHECK(std::abs(r.h[k](1, 0) - std::complex<double>(0, w) * h) < 1e-12 * std::abs(h) * w);
+    CHECK(std::abs(r.h[k](2, 0) + w * w * h) < 1e-12 * std::abs(h) * w * w);
+    CHECK(std::abs(r.h[k](3, 0)) < 1e-14);  // no coupling to y
+  }
+  CHECK_THROWS_WITH(parse_channel(l.model, "block:fq", true), Catch::Contains("'fq' is not one of fx, fy, fz, tx, ty, tz"));
+  CHECK_THROWS_WITH(parse_channel(l.model, "brick:x", false), Catch::Contains("no body 'brick'"));
+  // The state-space model gives the same response: C (i w - A)^-1 B + D.
+  const StateSpace s = state_space(l.lm, in, out);
+  const double w = 2 * pi * 3.0;
+  const Eigen::MatrixXcd a = Eigen::MatrixXd(s.A).cast<std::complex<double>>();
+  const Eigen::MatrixXcd g = Eigen::MatrixXd(s.C).cast<std::complex<double>>() *
+                                 (std::complex<double>(0, w) * Eigen::MatrixXcd::Identity(a.rows(), a.cols()) - a)
+                                     .partialPivLu()
+                                     .solve(Eigen::MatrixXd(s.B).cast<std::complex<double>>()) +
+                             Eigen::MatrixXd(s.D).cast<std::complex<double>>();
+  for (Eigen::Index o = 0; o < 4; ++o) CHECK(std::abs(g(o, 0) - r.h[1](o, 0)) < 1e-10 * (std::abs(r.h[1](o, 0)) + 1e-12));
+}
+
+TEST_CASE("an unsupported body under gravity: no equilibrium, and the body named", "[analysis][equilibrium]") {
+  Model model = read_model_text(R"({"name": "falling", "gravity": [0, -9.81, 0],
+    "bodies": [{"name": "stone", "mass": 1.0, "inertia": [0.1, 0.1, 0.1], "position": [0, 0, 0]}], "joints": []})", "falling");
+  MultibodySystem sys(model);
+  EquilibriumOptions o;
+  o.max_iterations = 20;
+  CHECK_THROWS_WITH(find_equilibrium(sys, 0.0, sys.initial_state(), o), Catch::Contains("body 'stone' does not settle"));
+}
