@@ -1,6 +1,8 @@
 // mbsflow modes MODEL.json and mbsflow frf MODEL.json: small motions about a working point
 // (static equilibrium, the initial state, or a state of a run), their natural modes and
 // their frequency response (docs/modes.md).
+#include <unistd.h>
+
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -96,7 +98,13 @@ Loaded working_point(const WorkingPoint& w) {
   }
   EquilibriumOptions eo;
   const auto start = std::chrono::steady_clock::now();
+  const bool terminal = !w.quiet && ::isatty(2);
+  if (terminal)
+    eo.progress = [](int iteration, double residual) {
+      std::fprintf(stderr, "\rmbsflow: static equilibrium: iteration %d, residual %.3g N or N m   ", iteration, residual);
+    };
   const Equilibrium e = find_equilibrium(*out.sys, out.t, out.state, eo);
+  if (terminal) std::fprintf(stderr, "\r%80s\r", "");
   out.state = e.state;
   out.where = "static equilibrium";
   if (!w.quiet)
@@ -168,7 +176,7 @@ int modes(const ModesArgs& a) {
     const double share = m.kinetic_share.col(static_cast<Eigen::Index>(j)).maxCoeff(&body);
     char lambda[64];
     std::snprintf(lambda, sizeof lambda, "%.6g %+.6gi", m.eigenvalue[j].real(), m.eigenvalue[j].imag());
-    std::printf("%5zu %14.6g %12.4g %26s %10.2g %10s  %s (%.0f %%)%s\n", j + 1, m.frequency[j], m.damping_ratio[j], lambda,
+    std::printf("%5zu %14.6g %12.4g %26s %10.2g %10s  %s (%.2g %%)%s\n", j + 1, m.frequency[j], m.damping_ratio[j], lambda,
                 m.residual[j], main_direction(lm, m.shape.col(static_cast<Eigen::Index>(j))).c_str(), model.bodies[static_cast<std::size_t>(lm.bodies[static_cast<std::size_t>(body)])].name.c_str(),
                 100.0 * share, m.rigid_body[j] ? "  rigid-body motion" : m.eigenvalue[j].real() > 0.0 ? "  unstable" : "");
   }

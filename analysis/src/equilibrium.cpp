@@ -13,6 +13,7 @@ namespace mbsflow {
 namespace {
 
 using Sparse = Eigen::SparseMatrix<double>;
+constexpr double max_turn = 0.25;  // rad per iteration and body
 
 // The largest force or torque on one body.
 double worst(const Eigen::VectorXd& f, Eigen::Index* at = nullptr) {
@@ -23,14 +24,27 @@ double worst(const Eigen::VectorXd& f, Eigen::Index* at = nullptr) {
 }
 
 // Solves [S C^T; C 0] [dx; mu] = [f; 0], S = K + M / h^2: the step on the allowed motions.
-Eigen::VectorXd step(const LinearModel& lm, const Eigen::VectorXd& f, double h) {
+// The pattern is the same at every iteration: analysed once (AMD on a million rows takes
+// longer than the factorisation).
+struct Factor {
+  KluLu<double> lu;
+  std::vector<int> outer, inner;  // the pattern analysed
+};
+
+Eigen::VectorXd step(const LinearModel& lm, const Eigen::VectorXd& f, double h, Factor& factor) {
   const Eigen::Index n = lm.size(), r = lm.C.rows();
   // Redundant rows (a planar loop in 3D) make the augmented matrix singular: a tiny
   // negative diagonal on the multipliers keeps it regular and leaves dx as it is.
   const double eps = 1e-12 * (lm.M.coeffs().size() ? lm.M.coeffs().cwiseAbs().maxCoeff() : 1.0) / (h * h);
   const Sparse a = augmented<double>(lm.K + (1.0 / (h * h)) * lm.M, lm.C, -eps);
-  KluLu<double> lu;
-  lu.analyze(a);
+  const std::vector<int> outer(a.outerIndexPtr(), a.outerIndexPtr() + a.outerSize() + 1),
+      inner(a.innerIndexPtr(), a.innerIndexPtr() + a.nonZeros());
+  if (outer != factor.outer || inner != factor.inner) {
+    factor.lu.analyze(a);
+    factor.outer = outer;
+    factor.inner = inner;
+  }
+  KluLu<double>& lu = factor.lu;
   lu.factorize(a);
   Eigen::VectorXd rhs = Eigen::VectorXd::Zero(n + r);
   rhs.head(n) = f;
@@ -57,11 +71,13 @@ Equilibrium find_equilibrium(MultibodySystem& sys, double t, const Eigen::Vector
   Equilibrium out;
   Eigen::VectorXd f = static_residual(sys, t, y, bodies);
   out.initial_residual = worst(f);
-  // The scale of "balanced": the bodies' weight, or the forces at the start.
+  // The scale of "balanced": the weight the supports carry (the largest force a joint of
+  // a hanging chain transmits), or the forces at the start; a residual of 1e-9 of it is
+  // at rounding's level for a long chain.
   const Model& m = sys.model();
   const double g = std::sqrt(m.gravity[0] * m.gravity[0] + m.gravity[1] * m.gravity[1] + m.gravity[2] * m.gravity[2]);
   double weight = 0.0, extent = 0.0;
-  for (int b : bodies) weight = std::max(weight, m.bodies[static_cast<std::size_t>(b)].mass * g);
+  for (int b : bodies) weight += m.bodies[static_cast<std::size_t>(b)].mass * g;
   for (int b : bodies) extent = std::max(extent, y.segment<3>(l.position(b)).norm());
   const double scale = std::max({weight, out.initial_residual, 1e-300});
   const double enough = o.tolerance * scale;
@@ -77,6 +93,8 @@ Equilibrium find_equilibrium(MultibodySystem& sys, double t, const Eigen::Vector
     if (fastest > 0.0) h = std::sqrt(0.01 * std::max(extent, 1e-3) / fastest);
   }
   int iteration = 0;
+  Factor factor;
+  const Sparse pattern = sys.has_analytic_jacobian() ? sys.jacobian_pattern() : Sparse();
   while (worst(f) > enough) {
     if (++iteration > o.max_iterations) {
       Eigen::Index at = 0;
@@ -90,15 +108,21 @@ Equilibrium find_equilibrium(MultibodySystem& sys, double t, const Eigen::Vector
                      "' does not settle, " + buf +
                      " (is it held against gravity and its loads? --at-initial linearises where it is)");
     }
-    const LinearModel lm = linearize(sys, t, y);
+    const LinearModel lm = linearize(sys, t, y, pattern.size() ? &pattern : nullptr);
     Eigen::VectorXd next = y;
     Eigen::VectorXd dx;
     try {
-      dx = step(lm, f, h);
+      dx = step(lm, f, h, factor);
     } catch (const RunError&) {  // singular: a smaller pseudo-time step adds more mass
       h *= 0.25;
       continue;
     }
+    // No body turns by more than a quarter radian in one step: a long step could turn a
+    // joint past half a turn, where its rotational deflection jumps (and no equilibrium
+    // is near).
+    double turn = 0.0;
+    for (std::size_t k = 0; k < bodies.size(); ++k) turn = std::max(turn, dx.segment<3>(static_cast<Eigen::Index>(6 * k + 3)).norm());
+    if (turn > max_turn) dx *= max_turn / turn;
     apply_tangent_step(l, bodies, dx, next);
     sys.after_step(t, next);
     const Eigen::VectorXd f_next = static_residual(sys, t, next, bodies);
@@ -108,8 +132,9 @@ Equilibrium find_equilibrium(MultibodySystem& sys, double t, const Eigen::Vector
       h *= 0.25;  // the step overshot: more of the mass term
       continue;
     }
-    // Switched evolution relaxation: h grows as the residual falls, up to Newton's step.
-    h *= std::clamp(std::sqrt(worst(f) / std::max(worst(f_next), 1e-300)), 0.5, 4.0);
+    // A step that lowered the energy (or the residual) lets the next one be longer: h
+    // grows, fastest where the residual falls, and the step becomes Newton's.
+    h *= std::clamp(std::sqrt(worst(f) / std::max(worst(f_next), 1e-300)), 2.0, 8.0);
     y = next;
     f = f_next;
     energy = e_next;

@@ -170,7 +170,7 @@ Eigen::VectorXd static_residual(MultibodySystem& sys, double t, const Eigen::Vec
   return f;
 }
 
-LinearModel linearize(MultibodySystem& sys, double t, const Eigen::VectorXd& y) {
+LinearModel linearize(MultibodySystem& sys, double t, const Eigen::VectorXd& y, const Eigen::SparseMatrix<double>* pattern) {
   const StateLayout& l = sys.layout();
   LinearModel out;
   out.model = &sys.model();
@@ -183,7 +183,7 @@ LinearModel linearize(MultibodySystem& sys, double t, const Eigen::VectorXd& y) 
   tangent_maps(l, out.bodies, y, tm, tp);
   Eigen::SparseMatrix<double> jt;
   if (sys.has_analytic_jacobian()) {
-    Eigen::SparseMatrix<double> jac = sys.jacobian_pattern();
+    Eigen::SparseMatrix<double> jac = pattern ? *pattern : sys.jacobian_pattern();
     sys.jacobian(t, y, jac);
     jt = jac * tm;
   } else {

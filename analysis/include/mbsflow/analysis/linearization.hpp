@@ -33,7 +33,10 @@ struct LinearModel {
 
 // The linearisation of sys about (t, y). Uses the analytic Jacobian where the model has
 // one (MultibodySystem::has_analytic_jacobian), else central differences.
-LinearModel linearize(MultibodySystem& sys, double t, const Eigen::VectorXd& y);
+// pattern: sys.jacobian_pattern(), when the caller keeps it between calls (it costs about
+// as much as the Jacobian itself).
+LinearModel linearize(MultibodySystem& sys, double t, const Eigen::VectorXd& y,
+                      const Eigen::SparseMatrix<double>* pattern = nullptr);
 
 // The generalised force on each free body at (t, y) with the velocities taken as zero:
 // M times the accelerations (force, torque; world frame), the rigid joints' reactions
