@@ -176,7 +176,7 @@ int modes(const ModesArgs& a) {
     const double share = m.kinetic_share.col(static_cast<Eigen::Index>(j)).maxCoeff(&body);
     char lambda[64];
     std::snprintf(lambda, sizeof lambda, "%.6g %+.6gi", m.eigenvalue[j].real(), m.eigenvalue[j].imag());
-    std::printf("%5zu %14.6g %12.4g %26s %10.2g %10s  %s (%.2g %%)%s\n", j + 1, m.frequency[j], m.damping_ratio[j], lambda,
+    std::printf("%5zu %14.6g %12.4g %26s %10.2g %10s  %s (%.3g %%)%s\n", j + 1, m.frequency[j], m.damping_ratio[j], lambda,
                 m.residual[j], main_direction(lm, m.shape.col(static_cast<Eigen::Index>(j))).c_str(), model.bodies[static_cast<std::size_t>(lm.bodies[static_cast<std::size_t>(body)])].name.c_str(),
                 100.0 * share, m.rigid_body[j] ? "  rigid-body motion" : m.eigenvalue[j].real() > 0.0 ? "  unstable" : "");
   }
