@@ -52,7 +52,7 @@ TEST_CASE("modes: a pendulum released level is linearised hanging, one mode, kep
   fs::remove_all(d.parent_path());
 }
 
-TEST_CASE("modes: a run's snapshot as the working point; refusals name what is wrong", "[apps][modes]") {
+TEST_CASE("modes: a run's snapshot as the working point, and refusals that name what is wrong", "[apps][modes]") {
   const fs::path d = scratch("modes-errors");
   const std::string dir = d.string();
   std::ofstream(d / "pendulum.json") << pendulum;

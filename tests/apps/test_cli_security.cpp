@@ -77,7 +77,7 @@ TEST_CASE("keygen writes an owner-only secret key and never overwrites one", "[a
   fs::remove_all(d.parent_path());
 }
 
-TEST_CASE("a keyed run is the insecure run bit for bit; a wrong or missing key is refused, logged, nothing written",
+TEST_CASE("a keyed run is the insecure run bit for bit, and a wrong or missing key is refused, logged, nothing written",
           "[apps][security][cluster]") {
   const fs::path d = scratch("curve");
   const std::string dir = d.string();

@@ -45,7 +45,7 @@ TEST_CASE("Simulation stepped to the end gives run_simulation's numbers to the b
   }
 }
 
-TEST_CASE("advance_to lands on the asked time; states and loads between steps", "[runtime][stepping]") {
+TEST_CASE("advance_to lands on the asked time, with states and loads between steps", "[runtime][stepping]") {
   Model m = spring_mass(800.0);
   const double w = std::sqrt(800.0 / 2.0);
   Simulation sim(m);
