@@ -10,6 +10,7 @@
 #include "mbsflow/analysis/frequency_response.hpp"
 #include "mbsflow/analysis/modes.hpp"
 #include "mbsflow/io/model_reader.hpp"
+#include "test_support.hpp"
 
 using namespace mbsflow;
 
@@ -242,4 +243,60 @@ TEST_CASE("an unsupported body under gravity: no equilibrium, and the body named
   EquilibriumOptions o;
   o.max_iterations = 20;
   CHECK_THROWS_WITH(find_equilibrium(sys, 0.0, sys.initial_state(), o), Catch::Contains("body 'stone' does not settle"));
+}
+
+TEST_CASE("the modal frequencies are the peaks of a free vibration's spectrum (a transient run, Fourier-transformed)",
+          "[analysis][modes]") {
+  // Two masses on springs along x, fixed at one end, the outer one pulled 1 cm and let go;
+  // its motion sampled at 500 Hz over 40 s and transformed (Hann window).
+  const char* json = R"({"name": "two", "gravity": [0, 0, 0],
+    "bodies": [{"name": "a", "mass": 0.5, "inertia": [0.01, 0.01, 0.01], "position": [1, 0, 0]},
+               {"name": "b", "mass": 0.5, "inertia": [0.01, 0.01, 0.01], "position": [2.01, 0, 0]}],
+    "joints": [{"name": "s0", "type": "spring", "body1": "ground", "body2": "a", "point1": [0, 0, 0], "point2": [0, 0, 0],
+                "stiffness": 1000, "rest_length": 1},
+               {"name": "s1", "type": "spring", "body1": "a", "body2": "b", "point1": [0, 0, 0], "point2": [0, 0, 0],
+                "stiffness": 1000, "rest_length": 1}]})";
+  Model model = read_model_text(json, "two");
+  MultibodySystem sys(model);
+  std::vector<double> x;
+  const double t_end = 40.0;
+  const long steps = 400000, every = 20;  // h = 1e-4 s, samples at 500 Hz
+  long k = 0;
+  test::integrate_rk4(sys, t_end, steps, [&](double, const Eigen::VectorXd& y) {
+    if (++k % every == 0) x.push_back(y[sys.layout().position(1)] - 2.0);
+  });
+  const double fs = 500.0;
+  const auto n = static_cast<double>(x.size());
+  auto spectrum = [&](double f) {  // |sum w(t) x(t) e^{-i 2 pi f t}|
+    std::complex<double> s = 0.0;
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      const double w = 0.5 - 0.5 * std::cos(2 * pi * static_cast<double>(i) / (n - 1));
+      s += w * x[i] * std::exp(std::complex<double>(0.0, -2 * pi * f * static_cast<double>(i) / fs));
+    }
+    return std::abs(s);
+  };
+  // The two largest local maxima on a 0.005 Hz grid up to 20 Hz.
+  std::vector<std::pair<double, double>> peaks;
+  double before = spectrum(0.0), here = spectrum(0.005);
+  for (double f = 0.01; f < 20.0; f += 0.005) {
+    const double after = spectrum(f);
+    if (here > before && here > after) peaks.emplace_back(here, f - 0.005);
+    before = here;
+    here = after;
+  }
+  std::sort(peaks.rbegin(), peaks.rend());
+  REQUIRE(peaks.size() >= 2);
+  std::vector<double> seen = {peaks[0].second, peaks[1].second};
+  std::sort(seen.begin(), seen.end());
+  // About the equilibrium (the springs at rest: no tension, so nothing vibrates sideways).
+  Linearised l = linearised(json, true);
+  const Modes m = modes_of(l.lm, 12, false);
+  std::vector<double> vibrating;
+  for (std::size_t j = 0; j < m.frequency.size(); ++j)
+    if (m.frequency[j] > 0.1) vibrating.push_back(m.frequency[j]);  // sideways: 1e-5 Hz from the residual tension
+  REQUIRE(vibrating.size() == 2);
+  // Within the transform's resolution (1 / 40 s = 0.025 Hz; the peak of a Hann window is
+  // found to a fraction of it).
+  CHECK(std::abs(seen[0] - vibrating[0]) < 0.01);
+  CHECK(std::abs(seen[1] - vibrating[1]) < 0.01);
 }
