@@ -197,8 +197,7 @@ struct FrfArgs {
   double from = 0.1, to = 100.0;
   int points = 200;
   bool linear = false;
-  std::string output, state_space, plot;
-  bool force = false;
+  std::string output, state_space;
 };
 
 int frf(const FrfArgs& a) {

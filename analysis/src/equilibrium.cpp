@@ -4,7 +4,7 @@
 #include <cmath>
 #include <cstdio>
 
-#include "augmented.hpp"
+#include "constrained.hpp"
 #include "mbsflow/analysis/linearization.hpp"
 #include "mbsflow/error.hpp"
 #include "mbsflow/methods/klu_lu.hpp"

@@ -1,11 +1,10 @@
 #include "mbsflow/analysis/frequency_response.hpp"
 
-#include <Eigen/QR>
 #include <cstdio>
 #include <fstream>
 #include <numbers>
 
-#include "augmented.hpp"
+#include "constrained.hpp"
 #include "mbsflow/error.hpp"
 #include "mbsflow/methods/klu_lu.hpp"
 
@@ -72,6 +71,8 @@ FrequencyResponse frequency_response(const LinearModel& m, const std::vector<Cha
   if (inputs.empty() || outputs.empty()) throw InputError("a frequency response needs at least one input and one output");
   const Eigen::Index n = m.size(), r = m.C.rows();
   const Sparse b = selection(m, inputs);
+  std::vector<Eigen::Index> at;  // each output's coordinate, found once
+  for (const Channel& o : outputs) at.push_back(coordinate(m, o));
   FrequencyResponse out;
   out.frequency = hz;
   // The augmented matrix's pattern: K, D, M and the joints' rows, the same at every frequency.
@@ -99,7 +100,7 @@ FrequencyResponse frequency_response(const LinearModel& m, const std::vector<Cha
       x.head(n) = Eigen::VectorXd(b.col(j)).cast<Complex>();
       lu.solve(x);
       for (std::size_t o = 0; o < outputs.size(); ++o) {
-        const Complex d = x[coordinate(m, outputs[o])];
+        const Complex d = x[at[o]];
         const Channel::Kind k = outputs[o].kind;
         h(static_cast<Eigen::Index>(o), j) =
             k == Channel::Kind::displacement ? d : k == Channel::Kind::velocity ? Complex(0.0, omega) * d : -omega * omega * d;
@@ -116,11 +117,7 @@ StateSpace state_space(const LinearModel& m, const std::vector<Channel>& inputs,
   Eigen::MatrixXd basis;
   if (m.C.rows() > 0) {
     if (n > 6000) throw InputError("a state-space model of rigid joints is formed dense: at most 1000 free bodies");
-    const Eigen::MatrixXd ct = Eigen::MatrixXd(m.C).transpose();
-    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(ct);
-    qr.setThreshold(1e-10);
-    const Eigen::MatrixXd q = qr.householderQ();
-    basis = q.rightCols(n - qr.rank());
+    basis = null_space(m.C, n);
   }
   const Sparse bin = selection(m, inputs), cout = selection(m, outputs);
   StateSpace s;

@@ -7,7 +7,7 @@
 #include <cmath>
 #include <numbers>
 
-#include "augmented.hpp"
+#include "constrained.hpp"
 #include "mbsflow/error.hpp"
 #include "mbsflow/methods/klu_lu.hpp"
 
@@ -41,17 +41,6 @@ double rate_scale(const LinearModel& m) {
     if (mi > 0.0) fastest = std::max(fastest, std::sqrt(ki / mi));
   }
   return fastest > 0.0 ? fastest : 1.0;
-}
-
-// Orthonormal basis of the null space of C (dense), n x (n - rank).
-Eigen::MatrixXd null_space(const Sparse& c, Eigen::Index n) {
-  if (c.rows() == 0) return Eigen::MatrixXd::Identity(n, n);
-  const Eigen::MatrixXd ct = Eigen::MatrixXd(c).transpose();
-  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(ct);
-  qr.setThreshold(1e-10);
-  const Eigen::Index rank = qr.rank();
-  const Eigen::MatrixXd q = qr.householderQ();
-  return q.rightCols(n - rank);
 }
 
 // The modes of the reduced dense problem (Mr, Dr, Kr in the basis n_basis).
@@ -137,7 +126,8 @@ std::vector<Found> sparse_modes(const LinearModel& m, int count, bool damped) {
   const Eigen::Index ncv = std::min<Eigen::Index>(n2, std::max<Eigen::Index>(2 * nev + 1, 30));
   // A shift just off zero: the modes nearest it are the lowest, rigid-body ones included,
   // and the shifted matrix stays regular where the stiffness is not.
-  const double sigma = -1e-4 * rate_scale(m);
+  const double scale = rate_scale(m);
+  const double sigma = -1e-4 * scale;
   Spectra::GenEigsRealShiftSolver<ShiftSolve> eigs(op, nev, ncv, sigma);
   eigs.init();
   eigs.compute(Spectra::SortRule::LargestMagn, 300, 1e-10);  // restarts: clustered near-zero modes may not converge
@@ -146,14 +136,14 @@ std::vector<Found> sparse_modes(const LinearModel& m, int count, bool damped) {
                    " eigenvalues; ask for fewer modes (-n) or the dense solver");
   const Eigen::VectorXcd values = eigs.eigenvalues();
   const Eigen::MatrixXcd vectors = eigs.eigenvectors();
-  const double zero = 1e-6 * rate_scale(m);
+  const double zero = 1e-6 * scale;
   std::vector<Found> out;
   Eigen::MatrixXcd rigid(m.size(), 0);  // rigid-body motions found so far, M-orthonormal
   for (Eigen::Index i = 0; i < values.size(); ++i) {
     const Complex lambda = values[i];
     // The augmented pencil's constraint directions are eigenvalues at infinity: the shifted
     // inverse maps them to zero, and they come back here as huge or not finite.
-    if (!std::isfinite(lambda.real()) || !std::isfinite(lambda.imag()) || std::abs(lambda) > 1e8 * rate_scale(m)) continue;
+    if (!std::isfinite(lambda.real()) || !std::isfinite(lambda.imag()) || std::abs(lambda) > 1e8 * scale) continue;
     Eigen::VectorXcd x = vectors.col(i).head(m.size());
     if (std::abs(lambda) < zero) {
       // A zero eigenvalue's Jordan pair gives the same motion twice: kept once.

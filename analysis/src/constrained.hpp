@@ -1,7 +1,11 @@
 #pragma once
+// The rigid joints' rows C in the linear algebra of a linearised model: the augmented
+// matrix of the sparse solves, and an orthonormal null-space basis for the dense ones.
+//
 // The augmented matrix [P C^T; C d I] of a linearised model: P on the bodies' coordinates,
 // the rigid joints' rows C holding their motions, d on the multipliers' diagonal (a tiny
 // negative d keeps a matrix with redundant rows regular; 0 puts the entry in the pattern).
+#include <Eigen/QR>
 #include <Eigen/SparseCore>
 #include <vector>
 
@@ -25,6 +29,16 @@ Eigen::SparseMatrix<Scalar> augmented(const Eigen::SparseMatrix<Scalar>& p, cons
   a.setFromTriplets(e.begin(), e.end());
   a.makeCompressed();
   return a;
+}
+
+// Orthonormal basis of the null space of C (dense Householder QR of C^T), n x (n - rank);
+// the identity without rows.
+inline Eigen::MatrixXd null_space(const Eigen::SparseMatrix<double>& c, Eigen::Index n) {
+  if (c.rows() == 0) return Eigen::MatrixXd::Identity(n, n);
+  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(Eigen::MatrixXd(c).transpose());
+  qr.setThreshold(1e-10);
+  const Eigen::MatrixXd q = qr.householderQ();
+  return q.rightCols(n - qr.rank());
 }
 
 }  // namespace mbsflow
