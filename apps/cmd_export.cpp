@@ -24,7 +24,7 @@ int export_results(const ExportArgs& a) {
 
 Action add_export(CLI::App& app) {
   auto a = std::make_shared<ExportArgs>();
-  CLI::App* sub = app.add_subcommand("export", "Write results as CSV: one file per body with a header row");
+  CLI::App* sub = app.add_subcommand("export", "Write results as CSV: one file per body with a header row (a modes file: modes.csv and each body's part of every mode)");
   sub->add_option("file", a->file, "Results file (.h5)")->required();
   sub->add_option("--csv", a->csv, "Folder for the CSV files (created if missing)")->required();
   sub->add_option("--bodies", a->bodies, "Bodies to export, comma-separated or one per option (default: all)")->delimiter(',');

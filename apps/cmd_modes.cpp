@@ -181,9 +181,12 @@ int modes(const ModesArgs& a) {
                 100.0 * share, m.rigid_body[j] ? "  rigid-body motion" : m.eigenvalue[j].real() > 0.0 ? "  unstable" : "");
   }
   if (!a.output.empty()) {
-    write_modes_file(a.output, lm, m, {model_to_json(model), invocation(), w.where});
-    std::fprintf(stderr, "mbsflow: %s in %s (%.3f s)\n", count_of(static_cast<long long>(m.frequency.size()), "mode").c_str(),
-                 a.output.c_str(), seconds);
+    const ModesFileWritten file = write_modes_file(a.output, lm, m, {model_to_json(model), invocation(), w.where});
+    std::fprintf(stderr, "mbsflow: %s in %s (%.3f s); ParaView animates them from %s (%s)\n",
+                 count_of(static_cast<long long>(m.frequency.size()), "mode").c_str(), a.output.c_str(), seconds,
+                 file.xdmf.c_str(),
+                 file.frames > 0 ? (std::to_string(file.frames) + " frames a period; time k + f is mode k at f of its period").c_str()
+                                 : "one still picture a mode, the model being too large to animate: warp by 'shape'");
   } else if (!a.at.quiet) {
     std::fprintf(stderr, "mbsflow: %s (%.3f s); -o FILE.h5 keeps their shapes\n",
                  count_of(static_cast<long long>(m.frequency.size()), "mode").c_str(), seconds);

@@ -51,8 +51,9 @@ int view(const ViewArgs& a) {
   std::ofstream o(out);
   o << page.html;
   if (!o.flush()) throw Error(out + ": cannot write the page");
-  std::fprintf(stderr, "mbsflow: wrote %s (%.1f MB): %ld frames%s; open it in a browser\n", out.c_str(),
-               static_cast<double>(page.html.size()) / 1e6, page.frames,
+  std::fprintf(stderr, "mbsflow: wrote %s (%.1f MB): %s%ld frames%s; open it in a browser\n", out.c_str(),
+               static_cast<double>(page.html.size()) / 1e6,
+               r.modes() ? ("mode " + std::to_string(a.settings.mode) + " over one period, ").c_str() : "", page.frames,
                page.stride > 1 ? (", every " + ordinal(page.stride) + " snapshot").c_str() : "");
   return 0;
 }
@@ -63,7 +64,9 @@ Action add_view(CLI::App& app) {
   auto a = std::make_shared<ViewArgs>();
   CLI::App* sub = app.add_subcommand("view", "Write the motion as one self-contained HTML page (three.js, no network): bodies as "
                                              "ellipsoids from their inertia, joints as lines, play, seek, speed, orbit, colour");
-  sub->add_option("file", a->file, "Results file (.h5) of mbsflow run")->required();
+  sub->add_option("file", a->file, "Results file (.h5) of mbsflow run, or a modes file of mbsflow modes")->required();
+  sub->add_option("--mode", a->settings.mode, "A modes file: the mode played over one period (default 1, the lowest)")
+      ->check(CLI::PositiveNumber);
   sub->add_option("-o,--output", a->output, "Page to write (default: FILE.html)");
   sub->add_option("--max-frames", a->settings.max_frames, "Snapshots shown at most, evenly spread (default 1000)")
       ->check(CLI::PositiveNumber);

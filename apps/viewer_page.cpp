@@ -3,9 +3,12 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <complex>
+#include <numbers>
 #include <nlohmann/json.hpp>
 
 #include "mbsflow/error.hpp"
+#include "mbsflow/io/mode_frames.hpp"
 #include "mbsflow/io/model_reader.hpp"
 #include "mbsflow/io/result_fields.hpp"
 #include "shared_files.hpp"
@@ -44,48 +47,98 @@ Eigen::Vector3d ellipsoid(const Body& b, double fallback) {
   return squared.cwiseSqrt();
 }
 
-}  // namespace
+// The motion to show: frames of body positions and orientations, joint points, and the
+// quantities that colour the bodies.
+struct Motion {
+  std::size_t bodies = 0, joints = 0;
+  std::vector<double> times;
+  std::vector<float> position, quaternion, attachment, speed, angular_speed, kinetic;
+  bool orientation = false;
+};
 
-ViewerPage viewer_page(const ResultsFile& r, const ViewerSettings& s) {
-  if (r.ode()) throw InputError(r.path() + ": the results of mbsflow ode hold no bodies to show (mbsflow plot draws them)");
+void append(std::vector<float>& to, const std::vector<double>& from) { to.insert(to.end(), from.begin(), from.end()); }
+
+// A run's snapshots, evenly spread with the last included, within the data budget.
+Motion run_motion(const ResultsFile& r, const ViewerSettings& s, ViewerPage& page) {
   if (!r.has("/bodies/position")) throw InputError(r.path() + ": no body positions to show (run with --fields position)");
   const std::vector<double> t = r.time();
   const std::size_t rows = std::min<std::size_t>(t.size(), r.shape("/bodies/position")[0]);
   if (rows == 0) throw InputError(r.path() + ": no snapshots yet");
-  const std::size_t n = r.body_names().size();
-  const bool orientation = r.has("/bodies/orientation"), velocity = r.has("/bodies/velocity");
+  Motion m;
+  m.bodies = r.body_names().size();
+  const std::size_t n = m.bodies;
+  m.orientation = r.has("/bodies/orientation");
+  const bool velocity = r.has("/bodies/velocity");
   const bool spin = r.has("/bodies/angular_velocity"), ends = r.has(joint_attachment_dataset);
   const bool energies = r.has(body_energy_dataset);
-  const std::size_t joints = ends ? r.shape(joint_attachment_dataset)[1] : 0;
-  const Model model = read_model_text(r.model_text().value_or(""), r.path() + " (its model)");
-  if (model.bodies.size() != n) throw InputError(r.path() + ": its model has another number of bodies than its results");
-
-  // Frames: evenly spread over the snapshots, the last included, within the data budget.
-  const double frame_bytes = 4.0 * (static_cast<double>(n) * (3 + 4 + 3) + 6.0 * static_cast<double>(joints));
+  m.joints = ends ? r.shape(joint_attachment_dataset)[1] : 0;
+  const double frame_bytes = 4.0 * (static_cast<double>(n) * (3 + 4 + 3) + 6.0 * static_cast<double>(m.joints));
   const auto budget = static_cast<std::size_t>(std::max(1.0, s.max_megabytes * 1e6 / frame_bytes));
   const std::size_t most = std::max<std::size_t>(1, std::min<std::size_t>(static_cast<std::size_t>(s.max_frames), budget));
-  ViewerPage page;
   const std::vector<std::size_t> picked = evenly_spread_rows(rows, most);
   page.frames = static_cast<long>(picked.size());
   page.stride = picked.size() > 1 ? static_cast<long>(picked[1] - picked[0]) : 1;
-
-  std::vector<float> position, quaternion, attachment, speed, angular_speed, kinetic;
-  std::vector<double> times;
-  auto append = [](std::vector<float>& to, const std::vector<double>& from) { to.insert(to.end(), from.begin(), from.end()); };
   for (std::size_t k : picked) {
-    times.push_back(t[k]);
-    append(position, r.read_row("/bodies/position", k));
-    if (orientation) append(quaternion, r.read_row("/bodies/orientation", k));
-    if (ends) append(attachment, r.read_row(joint_attachment_dataset, k));
+    m.times.push_back(t[k]);
+    append(m.position, r.read_row("/bodies/position", k));
+    if (m.orientation) append(m.quaternion, r.read_row("/bodies/orientation", k));
+    if (ends) append(m.attachment, r.read_row(joint_attachment_dataset, k));
     const std::vector<double> v = velocity ? r.read_row("/bodies/velocity", k) : std::vector<double>{};
     const std::vector<double> w = spin ? r.read_row("/bodies/angular_velocity", k) : std::vector<double>{};
     const std::vector<double> e = energies ? r.read_row(body_energy_dataset, k) : std::vector<double>{};
     for (std::size_t i = 0; i < n; ++i) {
-      if (velocity) speed.push_back(static_cast<float>(Eigen::Vector3d(v[3 * i], v[3 * i + 1], v[3 * i + 2]).norm()));
-      if (spin) angular_speed.push_back(static_cast<float>(Eigen::Vector3d(w[3 * i], w[3 * i + 1], w[3 * i + 2]).norm()));
-      if (energies) kinetic.push_back(static_cast<float>(e[2 * i]));
+      if (velocity) m.speed.push_back(static_cast<float>(Eigen::Vector3d(v[3 * i], v[3 * i + 1], v[3 * i + 2]).norm()));
+      if (spin) m.angular_speed.push_back(static_cast<float>(Eigen::Vector3d(w[3 * i], w[3 * i + 1], w[3 * i + 2]).norm()));
+      if (energies) m.kinetic.push_back(static_cast<float>(e[2 * i]));
     }
   }
+  return m;
+}
+
+// One mode of a modes file over one period (times in seconds; 1 s for a rigid-body motion),
+// drawn as the XDMF sidecar draws it (mode_frames.hpp), coloured by each body's share of the
+// mode's kinetic energy.
+Motion mode_motion(const ResultsFile& r, const ViewerSettings& s, ViewerPage& page) {
+  const std::vector<double> frequency = r.read("/modes/frequency");
+  if (s.mode < 1 || static_cast<std::size_t>(s.mode) > frequency.size())
+    throw InputError("--mode " + std::to_string(s.mode) + ": " + r.path() + " holds modes 1 to " + std::to_string(frequency.size()));
+  const auto k = static_cast<std::size_t>(s.mode - 1);
+  Motion m;
+  m.bodies = r.body_names().size();
+  m.orientation = true;
+  const std::vector<double> rest = r.read("/equilibrium/position"), rest_q = r.read("/equilibrium/orientation");
+  const std::vector<double> re = r.read_row("/modes/shape", k), im = r.read_row("/modes/shape_imag", k);
+  const std::vector<double> share = r.read_row("/modes/energy_share", k);
+  const auto shape = [&](std::size_t b, int e) { return std::complex<double>(re[6 * b + e], im[6 * b + e]); };
+  const double scale = mode_scale(shape, m.bodies, model_size(rest));
+  const int frames = static_cast<int>(std::clamp<long>(s.max_frames, 1, 48));
+  const double period = frequency[k] > 0.0 ? 1.0 / frequency[k] : 1.0;
+  std::vector<double> position(3 * m.bodies), quaternion(4 * m.bodies);
+  for (int f = 0; f < frames; ++f) {
+    const double phase = 2.0 * std::numbers::pi * f / frames;
+    for (std::size_t b = 0; b < m.bodies; ++b)
+      mode_frame_body(shape, b, scale, phase, &rest[3 * b], &rest_q[4 * b], &position[3 * b], &quaternion[4 * b]);
+    m.times.push_back(period * f / frames);
+    append(m.position, position);
+    append(m.quaternion, quaternion);
+    for (std::size_t b = 0; b < m.bodies; ++b) m.kinetic.push_back(static_cast<float>(share[2 * b]));
+  }
+  page.frames = frames;
+  return m;
+}
+
+}  // namespace
+
+ViewerPage viewer_page(const ResultsFile& r, const ViewerSettings& s) {
+  if (r.ode()) throw InputError(r.path() + ": the results of mbsflow ode hold no bodies to show (mbsflow plot draws them)");
+  ViewerPage page;
+  const Motion motion = r.modes() ? mode_motion(r, s, page) : run_motion(r, s, page);
+  const std::size_t n = motion.bodies, joints = motion.joints;
+  const bool orientation = motion.orientation, ends = joints > 0;
+  const std::vector<float>&position = motion.position, &attachment = motion.attachment;
+  const Model model = read_model_text(r.model_text().value_or(""), r.path() + " (its model)");
+  if (model.bodies.size() != n) throw InputError(r.path() + ": its model has another number of bodies than its results");
+
   // The extent of the motion: every body and joint point over the frames shown (a single
   // pendulum bob sweeps its circle; its pivot is a joint point).
   Eigen::Vector3f lo = Eigen::Vector3f::Constant(INFINITY), hi = -lo;
@@ -113,20 +166,20 @@ ViewerPage viewer_page(const ResultsFile& r, const ViewerSettings& s) {
   nlohmann::json data;
   data["name"] = model.name;
   data["refresh"] = s.refresh_seconds;
-  data["t"] = times;
+  data["t"] = motion.times;
   data["bodies"] = n;
   data["joints"] = joints;
   data["position"] = base64(position);
-  data["orientation"] = orientation ? nlohmann::json(base64(quaternion)) : nlohmann::json();
+  data["orientation"] = orientation ? nlohmann::json(base64(motion.quaternion)) : nlohmann::json();
   data["attachment"] = ends ? nlohmann::json(base64(attachment)) : nlohmann::json();
   data["size"] = base64(size);
   data["joint_bodies"] = joint_bodies;
   data["up"] = {up.x(), up.y(), up.z()};
   data["extent"] = scale;
   data["quantities"] = nlohmann::json::object();
-  if (!speed.empty()) data["quantities"]["speed [m/s]"] = base64(speed);
-  if (!angular_speed.empty()) data["quantities"]["angular speed [rad/s]"] = base64(angular_speed);
-  if (!kinetic.empty()) data["quantities"]["kinetic energy [J]"] = base64(kinetic);
+  if (!motion.speed.empty()) data["quantities"]["speed [m/s]"] = base64(motion.speed);
+  if (!motion.angular_speed.empty()) data["quantities"]["angular speed [rad/s]"] = base64(motion.angular_speed);
+  if (!motion.kinetic.empty()) data["quantities"][r.modes() ? "kinetic share of the mode" : "kinetic energy [J]"] = base64(motion.kinetic);
 
   page.html = file_text(shared_file("viewer.html"));
   replace(page.html, "/*THREE*/", file_text(three_js_file("three.min.js")));

@@ -10,6 +10,7 @@ struct ViewerSettings {
   long max_frames = 1000;   // snapshots shown at most (evenly spread, the last included)
   double max_megabytes = 200;  // bound on the motion data in the page
   double refresh_seconds = 0;  // > 0: a live run's page, which reloads itself this often
+  int mode = 1;                // a modes file: the mode shown (1: the lowest)
 };
 
 struct ViewerPage {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 
 #include "constrained.hpp"
 #include "mbsflow/analysis/linearization.hpp"
@@ -94,6 +95,7 @@ Equilibrium find_equilibrium(MultibodySystem& sys, double t, const Eigen::Vector
   }
   int iteration = 0;
   Factor factor;
+  std::optional<LinearModel> lm;
   const Sparse pattern = sys.has_analytic_jacobian() ? sys.jacobian_pattern() : Sparse();
   while (worst(f) > enough) {
     if (++iteration > o.max_iterations) {
@@ -108,11 +110,11 @@ Equilibrium find_equilibrium(MultibodySystem& sys, double t, const Eigen::Vector
                      "' does not settle, " + buf +
                      " (is it held against gravity and its loads? --at-initial linearises where it is)");
     }
-    const LinearModel lm = linearize(sys, t, y, pattern.size() ? &pattern : nullptr);
-    Eigen::VectorXd next = y;
+    // A rejected step leaves y where it was: its linearisation serves the next try.
+    if (!lm) lm = linearize(sys, t, y, pattern.size() ? &pattern : nullptr);
     Eigen::VectorXd dx;
     try {
-      dx = step(lm, f, h, factor);
+      dx = step(*lm, f, h, factor);
     } catch (const RunError&) {  // singular: a smaller pseudo-time step adds more mass
       h *= 0.25;
       continue;
@@ -123,12 +125,23 @@ Equilibrium find_equilibrium(MultibodySystem& sys, double t, const Eigen::Vector
     double turn = 0.0;
     for (std::size_t k = 0; k < bodies.size(); ++k) turn = std::max(turn, dx.segment<3>(static_cast<Eigen::Index>(6 * k + 3)).norm());
     if (turn > max_turn) dx *= max_turn / turn;
-    apply_tangent_step(l, bodies, dx, next);
-    sys.after_step(t, next);
-    const Eigen::VectorXd f_next = static_residual(sys, t, next, bodies);
-    const double e_next = potential(sys, t, next);
-    const bool lower = e_next <= energy + 1e-12 * (std::abs(energy) + scale * std::max(extent, 1.0));
-    if ((!lower && !(worst(f_next) < worst(f))) || !f_next.allFinite()) {
+    // The step, then up to two of its halves (a residual each, far cheaper than a new
+    // factorisation): a step cut to the turn limit stays the same for every h above some
+    // value, so shrinking h alone would factorise again and again for the same step.
+    Eigen::VectorXd next, f_next;
+    double e_next = 0.0;
+    bool taken = false;
+    for (int half = 0; half < 3 && !taken; ++half, dx *= 0.5) {
+      next = y;
+      apply_tangent_step(l, bodies, dx, next);
+      sys.after_step(t, next);
+      f_next = static_residual(sys, t, next, bodies);
+      e_next = potential(sys, t, next);
+      const bool lower = e_next <= energy + 1e-12 * (std::abs(energy) + scale * std::max(extent, 1.0));
+      taken = (lower || worst(f_next) < worst(f)) && f_next.allFinite();
+      if (taken && half > 0) h *= 0.5;  // a shorter step fitted: the next starts from there
+    }
+    if (!taken) {
       h *= 0.25;  // the step overshot: more of the mass term
       continue;
     }
@@ -138,6 +151,7 @@ Equilibrium find_equilibrium(MultibodySystem& sys, double t, const Eigen::Vector
     y = next;
     f = f_next;
     energy = e_next;
+    lm.reset();
     if (o.progress) o.progress(iteration, worst(f));
   }
   out.state = y;

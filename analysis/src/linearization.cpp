@@ -122,6 +122,94 @@ Eigen::SparseMatrix<double> differenced(MultibodySystem& sys, double t, const Ei
   return jt;
 }
 
+// The mass matrix's block of body b: m I on the translation, the world-frame inertia on the rotation.
+Eigen::Matrix<double, 6, 6> mass_block(const Body& body, const Eigen::Matrix3d& R) {
+  Eigen::Matrix<double, 6, 6> m = Eigen::Matrix<double, 6, 6>::Zero();
+  m.topLeftCorner<3, 3>() = body.mass * Eigen::Matrix3d::Identity();
+  m.bottomRightCorner<3, 3>() = R * body_inertia(body) * R.transpose();
+  return m;
+}
+
+// K = -M A_vx and D = -M A_vv straight from the state Jacobian, body pair by body pair:
+// A's rate rows of body r and tangent columns of body c are L_r J_rc T_c, where J_rc holds
+// J's rows (orientation, velocity, angular velocity) of r and columns (all 13) of c, L_r is
+// the tangent map's rate rows and T_c its columns. Equal to the products tp J tm of the
+// general path without forming them (which took most of an equilibrium iteration on large
+// models); every entry of a coupled pair is kept, so the pattern follows J's alone.
+void rate_blocks(const StateLayout& l, const std::vector<int>& bodies, const Eigen::VectorXd& y,
+                 const Eigen::SparseMatrix<double>& jac, const std::vector<Eigen::Matrix<double, 6, 6>>& mass,
+                 Triplets& k_out, Triplets& d_out) {
+  const Eigen::Index nb = l.bodies;
+  std::vector<int> index_of(static_cast<std::size_t>(nb), -1);  // system body -> free index
+  for (std::size_t k = 0; k < bodies.size(); ++k) index_of[static_cast<std::size_t>(bodies[k])] = static_cast<int>(k);
+  using Left = Eigen::Matrix<double, 6, 10>;
+  using Right = Eigen::Matrix<double, 13, 12>;
+  std::vector<Left> left(bodies.size());
+  std::vector<Right> right(bodies.size());
+  for (std::size_t k = 0; k < bodies.size(); ++k) {
+    const int b = bodies[k];
+    const Eigen::Vector4d q = y.segment<4>(l.orientation(b)).normalized();
+    const Eigen::Matrix3d R = rotation(y, l, b);
+    const Eigen::Vector3d omega = R * y.segment<3>(l.angular_velocity(b));
+    const Eigen::Matrix<double, 4, 3> h = half_map(q);
+    Left& L = left[k];  // rows: v (3), omega (3); columns: q (4), v (3), w (3) of the state
+    L.setZero();
+    L.block<3, 3>(0, 4).setIdentity();
+    L.block<3, 4>(3, 0) = -skew(omega) * (2.0 * h.transpose());
+    L.block<3, 3>(3, 7) = R;
+    Right& T = right[k];  // rows: p, q, v, w of the state; columns: x (3 + 3), v (3 + 3)
+    T.setZero();
+    T.block<3, 3>(0, 0).setIdentity();
+    T.block<4, 3>(3, 3) = 0.5 * h;
+    T.block<3, 3>(7, 6).setIdentity();
+    T.block<3, 3>(10, 3) = R.transpose() * skew(omega);
+    T.block<3, 3>(10, 9) = R.transpose();
+  }
+  // Where row s of the state lies: body, and row in J_rc (-1: a position row, not needed).
+  const auto locate_row = [&](Eigen::Index s, Eigen::Index& body) -> int {
+    if (s < 3 * nb) return -1;
+    if (s < 7 * nb) return body = (s - 3 * nb) / 4, static_cast<int>((s - 3 * nb) % 4);
+    if (s < 10 * nb) return body = (s - 7 * nb) / 3, 4 + static_cast<int>((s - 7 * nb) % 3);
+    return body = (s - 10 * nb) / 3, 7 + static_cast<int>((s - 10 * nb) % 3);
+  };
+  std::vector<int> slot(bodies.size(), -1);
+  std::vector<int> rows_of;  // the free bodies coupled to column body c
+  std::vector<Eigen::Matrix<double, 10, 13>> blocks;
+  for (std::size_t c = 0; c < bodies.size(); ++c) {
+    const int b = bodies[c];
+    rows_of.clear();
+    const Eigen::Index columns[13] = {l.position(b),        l.position(b) + 1,    l.position(b) + 2,    l.orientation(b),
+                                      l.orientation(b) + 1, l.orientation(b) + 2, l.orientation(b) + 3, l.velocity(b),
+                                      l.velocity(b) + 1,    l.velocity(b) + 2,    l.angular_velocity(b),
+                                      l.angular_velocity(b) + 1, l.angular_velocity(b) + 2};
+    for (int j = 0; j < 13; ++j)
+      for (Eigen::SparseMatrix<double>::InnerIterator it(jac, columns[j]); it; ++it) {
+        Eigen::Index body = 0;
+        const int row = locate_row(it.row(), body);
+        if (row < 0) continue;
+        const int r = index_of[static_cast<std::size_t>(body)];
+        if (r < 0) continue;  // a driven body's rows: no coordinates
+        if (slot[static_cast<std::size_t>(r)] < 0) {
+          slot[static_cast<std::size_t>(r)] = static_cast<int>(rows_of.size());
+          rows_of.push_back(r);
+          if (blocks.size() < rows_of.size()) blocks.emplace_back();
+          blocks[rows_of.size() - 1].setZero();
+        }
+        blocks[static_cast<std::size_t>(slot[static_cast<std::size_t>(r)])](row, j) = it.value();
+      }
+    for (std::size_t i = 0; i < rows_of.size(); ++i) {
+      const auto r = static_cast<std::size_t>(rows_of[i]);
+      const Eigen::Matrix<double, 6, 12> a = -mass[r] * (left[r] * blocks[i] * right[c]);
+      for (int row = 0; row < 6; ++row)
+        for (int col = 0; col < 6; ++col) {
+          k_out.emplace_back(static_cast<int>(6 * r) + row, static_cast<int>(6 * c) + col, a(row, col));
+          d_out.emplace_back(static_cast<int>(6 * r) + row, static_cast<int>(6 * c) + col, a(row, 6 + col));
+        }
+      slot[r] = -1;
+    }
+  }
+}
+
 }  // namespace
 
 std::vector<int> free_bodies(const MultibodySystem& sys) {
@@ -179,45 +267,45 @@ LinearModel linearize(MultibodySystem& sys, double t, const Eigen::VectorXd& y, 
   out.bodies = free_bodies(sys);
   const auto n = static_cast<Eigen::Index>(out.bodies.size());
   if (n == 0) throw InputError("every body is driven: nothing moves freely to linearise");
-  Eigen::SparseMatrix<double> tm, tp;
-  tangent_maps(l, out.bodies, y, tm, tp);
-  Eigen::SparseMatrix<double> jt;
+  std::vector<Eigen::Matrix<double, 6, 6>> mass(out.bodies.size());
+  Triplets masses, k, d;
+  double fastest = 0.0;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const int b = out.bodies[static_cast<std::size_t>(i)];
+    mass[static_cast<std::size_t>(i)] = mass_block(sys.model().bodies[static_cast<std::size_t>(b)], rotation(y, l, b));
+    for (int r = 0; r < 6; ++r)
+      for (int c = 0; c < 6; ++c)
+        if (const double v = mass[static_cast<std::size_t>(i)](r, c); v != 0.0 || r == c) masses.emplace_back(6 * i + r, 6 * i + c, v);
+    fastest = std::max({fastest, y.segment<3>(l.velocity(b)).norm(), y.segment<3>(l.angular_velocity(b)).norm()});
+  }
+  out.M.resize(6 * n, 6 * n);
+  out.M.setFromTriplets(masses.begin(), masses.end());
+  out.K.resize(6 * n, 6 * n);
+  out.D.resize(6 * n, 6 * n);
   if (sys.has_analytic_jacobian()) {
     Eigen::SparseMatrix<double> jac = pattern ? *pattern : sys.jacobian_pattern();
     sys.jacobian(t, y, jac);
-    jt = jac * tm;
+    rate_blocks(l, out.bodies, y, jac, mass, k, d);
+    out.K.setFromTriplets(k.begin(), k.end());
+    out.D.setFromTriplets(d.begin(), d.end());
   } else {
-    jt = differenced(sys, t, y, out.bodies);
+    // Central differences in the tangent directions, then the rate rows of A = tp (J tm):
+    // K = -M A_vx, D = -M A_vv.
+    Eigen::SparseMatrix<double> tm, tp;
+    tangent_maps(l, out.bodies, y, tm, tp);
+    const Eigen::SparseMatrix<double> a = tp * differenced(sys, t, y, out.bodies);
+    Triplets avx, avv;
+    for (Eigen::Index c = 0; c < a.outerSize(); ++c)
+      for (Eigen::SparseMatrix<double>::InnerIterator it(a, c); it; ++it) {
+        if (it.row() < 6 * n) continue;
+        (it.col() < 6 * n ? avx : avv).emplace_back(it.row() - 6 * n, it.col() < 6 * n ? it.col() : it.col() - 6 * n, it.value());
+      }
+    Eigen::SparseMatrix<double> dadx(6 * n, 6 * n), dadv(6 * n, 6 * n);
+    dadx.setFromTriplets(avx.begin(), avx.end());
+    dadv.setFromTriplets(avv.begin(), avv.end());
+    out.K = -(out.M * dadx);
+    out.D = -(out.M * dadv);
   }
-  const Eigen::SparseMatrix<double> a = tp * jt;  // z' = A z, z = (x, v)
-  // The mass matrix, and the rate rows' blocks of A: K = -M A_vx, D = -M A_vv.
-  Triplets mass, avx, avv;
-  double fastest = 0.0;
-  for (Eigen::Index k = 0; k < n; ++k) {
-    const int b = out.bodies[static_cast<std::size_t>(k)];
-    const Body& body = sys.model().bodies[static_cast<std::size_t>(b)];
-    const Eigen::Matrix3d R = rotation(y, l, b);
-    const Eigen::Matrix3d j = R * body_inertia(body) * R.transpose();
-    for (int i = 0; i < 3; ++i) {
-      mass.emplace_back(6 * k + i, 6 * k + i, body.mass);
-      for (int c = 0; c < 3; ++c) mass.emplace_back(6 * k + 3 + i, 6 * k + 3 + c, j(i, c));
-    }
-    fastest = std::max({fastest, y.segment<3>(l.velocity(b)).norm(), y.segment<3>(l.angular_velocity(b)).norm()});
-  }
-  for (Eigen::Index c = 0; c < a.outerSize(); ++c)
-    for (Eigen::SparseMatrix<double>::InnerIterator it(a, c); it; ++it) {
-      if (it.row() < 6 * n) continue;
-      (it.col() < 6 * n ? avx : avv).emplace_back(it.row() - 6 * n, it.col() < 6 * n ? it.col() : it.col() - 6 * n, it.value());
-    }
-  out.M.resize(6 * n, 6 * n);
-  out.M.setFromTriplets(mass.begin(), mass.end());
-  Eigen::SparseMatrix<double> dadx(6 * n, 6 * n), dadv(6 * n, 6 * n);
-  dadx.setFromTriplets(avx.begin(), avx.end());
-  dadv.setFromTriplets(avv.begin(), avv.end());
-  out.K = -(out.M * dadx);
-  out.D = -(out.M * dadv);
-  out.K.prune(0.0);
-  out.D.prune(0.0);
   out.at_rest = fastest <= 1e-12;
   // The rigid joints' rows on the free bodies' coordinates (a driven body's are held).
   std::vector<int> joint_of_row;

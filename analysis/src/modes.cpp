@@ -32,6 +32,12 @@ struct Found {
   bool rigid = false;
 };
 
+// An eigenvalue below this fraction of rate_scale counts as zero (a rigid-body motion):
+// a zero eigenvalue is a Jordan pair of the first-order pencil, which rounding splits by
+// about sqrt(machine epsilon) of the scale, and a 100 000-link chain's lowest vibration
+// lies at 2e-6 of it.
+constexpr double zero_rate = 1e-7;
+
 // The speed of the model's fastest motions (rad/s): the scale against which an
 // eigenvalue counts as zero.
 double rate_scale(const LinearModel& m) {
@@ -53,7 +59,7 @@ std::vector<Found> dense_modes(const LinearModel& m, bool damped, Eigen::Index& 
   const Eigen::MatrixXd dr = damped ? Eigen::MatrixXd(basis.transpose() * (m.D * basis)) : Eigen::MatrixXd::Zero(free, free);
   const Eigen::LLT<Eigen::MatrixXd> mass(mr);
   if (mass.info() != Eigen::Success) throw InputError("the mass matrix is not positive definite: a body without mass or inertia");
-  const double zero = 1e-6 * rate_scale(m);
+  const double zero = zero_rate * rate_scale(m);
   std::vector<Found> out;
   // Rigid-body motions: the null space of the stiffness on the allowed motions.
   const Eigen::MatrixXd ks = 0.5 * (kr + kr.transpose());
@@ -125,9 +131,12 @@ std::vector<Found> sparse_modes(const LinearModel& m, int count, bool damped) {
   const Eigen::Index nev = std::min<Eigen::Index>(2 * count + 4, n2 - 2);
   const Eigen::Index ncv = std::min<Eigen::Index>(n2, std::max<Eigen::Index>(2 * nev + 1, 30));
   // A shift just off zero: the modes nearest it are the lowest, rigid-body ones included,
-  // and the shifted matrix stays regular where the stiffness is not.
+  // and the shifted matrix stays regular where the stiffness is not. It must lie well
+  // below the lowest vibration: the inverse separates lambda_1 and lambda_k only by
+  // |lambda_k - sigma| / |lambda_1 - sigma|, and a long chain's lowest modes are 1e-5 of
+  // its fastest rate (sigma at 1e-4 of it made 100 000 links take minutes of restarts).
   const double scale = rate_scale(m);
-  const double sigma = -1e-4 * scale;
+  const double sigma = -zero_rate * scale;
   Spectra::GenEigsRealShiftSolver<ShiftSolve> eigs(op, nev, ncv, sigma);
   eigs.init();
   eigs.compute(Spectra::SortRule::LargestMagn, 300, 1e-10);  // restarts: clustered near-zero modes may not converge
@@ -136,7 +145,7 @@ std::vector<Found> sparse_modes(const LinearModel& m, int count, bool damped) {
                    " eigenvalues; ask for fewer modes (-n) or the dense solver");
   const Eigen::VectorXcd values = eigs.eigenvalues();
   const Eigen::MatrixXcd vectors = eigs.eigenvectors();
-  const double zero = 1e-6 * scale;
+  const double zero = zero_rate * scale;
   std::vector<Found> out;
   Eigen::MatrixXcd rigid(m.size(), 0);  // rigid-body motions found so far, M-orthonormal
   for (Eigen::Index i = 0; i < values.size(); ++i) {

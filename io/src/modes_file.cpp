@@ -1,7 +1,11 @@
 #include "mbsflow/io/modes_file.hpp"
 
+#include <filesystem>
+#include <fstream>
 
 #include "hdf5_handle.hpp"
+#include "mbsflow/io/hdf5_sink.hpp"
+#include "modes_xdmf.hpp"
 #include "part_file.hpp"
 #include "mbsflow/version.hpp"
 
@@ -13,7 +17,8 @@ void unit(hid_t file, const char* dataset, const char* units) {
   h5::write_string_attribute(set.get(), "units", units);
 }
 
-void write_file(const std::string& path, const LinearModel& lm, const Modes& modes, const ModesFileInfo& info) {
+ModesXdmf write_file(const std::string& path, const std::string& h5_name, const LinearModel& lm, const Modes& modes,
+                     const ModesFileInfo& info) {
   const Model& model = *lm.model;
   const h5::Handle file(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose, "create " + path);
   const hid_t root = file.get();
@@ -74,12 +79,23 @@ void write_file(const std::string& path, const LinearModel& lm, const Modes& mod
   unit(root, "/modes/energy_share", "1");
   unit(root, "/equilibrium/position", "m");
   unit(root, "/equilibrium/orientation", "1");
+  return write_mode_frames(root, lm, modes, h5_name);
 }
 
 }  // namespace
 
-void write_modes_file(const std::string& path, const LinearModel& lm, const Modes& modes, const ModesFileInfo& info) {
-  write_through_part(path, [&](const std::string& making) { write_file(making, lm, modes, info); });
+ModesFileWritten write_modes_file(const std::string& path, const LinearModel& lm, const Modes& modes, const ModesFileInfo& info) {
+  ModesXdmf xdmf;
+  const std::string name = std::filesystem::path(path).filename().string();  // the sidecar lies beside it
+  write_through_part(path, [&](const std::string& making) { xdmf = write_file(making, name, lm, modes, info); });
+  ModesFileWritten out{xdmf_path(path), xdmf.frames};
+  // Written after the modes file is complete, so that it never names a file being made.
+  write_through_part(out.xdmf, [&](const std::string& making) {
+    std::ofstream o(making);
+    o << xdmf.text;
+    if (!o.flush()) throw InputError(out.xdmf + ": cannot write the XDMF sidecar");
+  });
+  return out;
 }
 
 }  // namespace mbsflow

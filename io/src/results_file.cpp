@@ -248,15 +248,9 @@ std::vector<std::string> export_ode_csv(const ResultsFile& r, const std::string&
 
 std::string with_unit(const std::string& column, const char* unit) { return column + " [" + unit + "]"; }
 
-}  // namespace
-
-std::vector<std::string> export_csv(const ResultsFile& r, const std::string& dir, const std::vector<std::string>& wanted) {
-  if (r.ode()) {
-    if (!wanted.empty()) throw InputError("{bodies}: " + r.path() + " holds the solution of an ODE, not bodies");
-    std::filesystem::create_directories(dir);
-    return export_ode_csv(r, dir);
-  }
-  const std::vector<std::string> names = r.body_names();
+// The bodies named in `wanted` (all where it is empty), as indices into `names`.
+std::vector<std::size_t> chosen_bodies(const ResultsFile& r, const std::vector<std::string>& names,
+                                       const std::vector<std::string>& wanted) {
   std::vector<std::size_t> bodies;
   if (wanted.empty()) {
     for (std::size_t i = 0; i < names.size(); ++i) bodies.push_back(i);
@@ -267,6 +261,48 @@ std::vector<std::string> export_csv(const ResultsFile& r, const std::string& dir
       bodies.push_back(static_cast<std::size_t>(it - names.begin()));
     }
   }
+  return bodies;
+}
+
+// modes.csv (a row per mode) and per body BODY.csv: its part of each mode's shape (real
+// and imaginary) and its share of the mode's kinetic and strain energy.
+std::vector<std::string> export_modes_csv(const ResultsFile& r, const std::string& dir, const std::vector<std::string>& wanted) {
+  const std::vector<std::string> names = r.body_names();
+  const std::vector<std::size_t> bodies = chosen_bodies(r, names, wanted);
+  std::filesystem::create_directories(dir);
+  const std::vector<double> frequency = r.read("/modes/frequency");
+  std::vector<double> mode(frequency.size());
+  for (std::size_t k = 0; k < mode.size(); ++k) mode[k] = static_cast<double>(k + 1);
+  std::vector<std::string> written;
+  if (wanted.empty())
+    written.push_back(write_csv_table(in_dir(dir, "modes.csv"),
+                                      "mode,frequency [Hz],damping_ratio,eigenvalue_real [1/s],eigenvalue_imag [1/s],"
+                                      "rigid_body,residual",
+                                      mode,
+                                      {{frequency, 1},
+                                       {r.read("/modes/damping_ratio"), 1},
+                                       {r.read("/modes/eigenvalue"), 2},
+                                       {r.read("/modes/rigid_body"), 1},
+                                       {r.read("/modes/residual"), 1}}));
+  for (std::size_t b : bodies)
+    written.push_back(write_csv_table(
+        in_dir(dir, names[b] + ".csv"),
+        "mode,x,y,z,rx,ry,rz,x_imag,y_imag,z_imag,rx_imag,ry_imag,rz_imag,kinetic_share,strain_share", mode,
+        {{r.read_item("/modes/shape", b), 6}, {r.read_item("/modes/shape_imag", b), 6}, {r.read_item("/modes/energy_share", b), 2}}));
+  return written;
+}
+
+}  // namespace
+
+std::vector<std::string> export_csv(const ResultsFile& r, const std::string& dir, const std::vector<std::string>& wanted) {
+  if (r.ode()) {
+    if (!wanted.empty()) throw InputError("{bodies}: " + r.path() + " holds the solution of an ODE, not bodies");
+    std::filesystem::create_directories(dir);
+    return export_ode_csv(r, dir);
+  }
+  if (r.modes()) return export_modes_csv(r, dir, wanted);
+  const std::vector<std::string> names = r.body_names();
+  const std::vector<std::size_t> bodies = chosen_bodies(r, names, wanted);
   std::filesystem::create_directories(dir);
   const std::vector<double> t = r.time();
   const std::string time_column = with_unit("t", time_unit);

@@ -92,23 +92,23 @@ void write_ints(hid_t file, const std::string& path, const std::vector<hsize_t>&
     h5::check(H5Dwrite(set.get(), H5T_NATIVE_INT, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()), "write " + path);
 }
 
+std::string dims_text(std::size_t a, std::size_t b) { return std::to_string(a) + ' ' + std::to_string(b); }
+
+}  // namespace
+
 // One DataItem reading the dataset `path` of the results file.
-void item(std::ostream& o, const std::string& file, const std::string& path, const std::string& dims, bool integer,
+void xdmf_item(std::ostream& o, const std::string& file, const std::string& path, const std::string& dims, bool integer,
           const char* indent) {
   o << indent << "<DataItem Dimensions=\"" << dims << "\" NumberType=\"" << (integer ? "Int\" Precision=\"4" : "Float\" Precision=\"8")
     << "\" Format=\"HDF\">" << file << ':' << path << "</DataItem>\n";
 }
 
-void attribute(std::ostream& o, const std::string& file, const char* name, const char* type, const char* center,
-               const std::string& path, const std::string& dims, bool integer = false) {
+void xdmf_attribute(std::ostream& o, const std::string& file, const char* name, const char* type, const char* center,
+               const std::string& path, const std::string& dims, bool integer) {
   o << "     <Attribute Name=\"" << name << "\" AttributeType=\"" << type << "\" Center=\"" << center << "\">\n";
-  item(o, file, path, dims, integer, "      ");
+  xdmf_item(o, file, path, dims, integer, "      ");
   o << "     </Attribute>\n";
 }
-
-std::string dims_text(std::size_t a, std::size_t b) { return std::to_string(a) + ' ' + std::to_string(b); }
-
-}  // namespace
 
 void write_xdmf(hid_t file, const std::string& xdmf_path, const std::string& h5_path, const std::vector<double>& times,
                 const XdmfContent& c) {
@@ -157,37 +157,37 @@ void write_xdmf(hid_t file, const std::string& xdmf_path, const std::string& h5_
     o << "   <Grid Name=\"t" << t << "\" GridType=\"Collection\" CollectionType=\"Spatial\">\n    <Time Value=\"" << time
       << "\"/>\n    <Grid Name=\"bodies\" GridType=\"Uniform\">\n"
       << "     <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << c.bodies << "\" NodesPerElement=\"1\">\n";
-    item(o, file_name, group + "/body_index", dims_text(c.bodies, 1), true, "      ");  // Xdmf3 makes no cells without it
+    xdmf_item(o, file_name, group + "/body_index", dims_text(c.bodies, 1), true, "      ");  // Xdmf3 makes no cells without it
     o << "     </Topology>\n     <Geometry GeometryType=\"XYZ\">\n";
-    item(o, file_name, step + "position", n3, false, "      ");
+    xdmf_item(o, file_name, step + "position", n3, false, "      ");
     o << "     </Geometry>\n";
     for (const BodyField* f : c.body_fields) {
       if (f == &body_fields[0]) continue;  // the geometry
-      attribute(o, file_name, f->name, f->components == 3 ? "Vector" : "Matrix", "Node", step + f->name,
+      xdmf_attribute(o, file_name, f->name, f->components == 3 ? "Vector" : "Matrix", "Node", step + f->name,
                 dims_text(c.bodies, static_cast<std::size_t>(f->components)));
     }
-    attribute(o, file_name, "body_index", "Scalar", "Node", group + "/body_index", std::to_string(c.bodies), true);
+    xdmf_attribute(o, file_name, "body_index", "Scalar", "Node", group + "/body_index", std::to_string(c.bodies), true);
     if (body_energy) {
-      attribute(o, file_name, "kinetic_energy", "Scalar", "Node", step + "kinetic_energy", std::to_string(c.bodies));
-      attribute(o, file_name, "gravity_energy", "Scalar", "Node", step + "gravity_energy", std::to_string(c.bodies));
+      xdmf_attribute(o, file_name, "kinetic_energy", "Scalar", "Node", step + "kinetic_energy", std::to_string(c.bodies));
+      xdmf_attribute(o, file_name, "gravity_energy", "Scalar", "Node", step + "gravity_energy", std::to_string(c.bodies));
     }
-    if (c.energy) attribute(o, file_name, "energy_kinetic_gravity_elastic", "Vector", "Grid", step + "energy", "1 3");
+    if (c.energy) xdmf_attribute(o, file_name, "energy_kinetic_gravity_elastic", "Vector", "Grid", step + "energy", "1 3");
     o << "    </Grid>\n";
     if (lines) {
       make_view(views.get(), "attachment", {2 * c.joints, 3}, *ends, t, 0, 6);
       o << "    <Grid Name=\"joints\" GridType=\"Uniform\">\n"
         << "     <Topology TopologyType=\"Polyline\" NumberOfElements=\"" << c.joints << "\" NodesPerElement=\"2\">\n";
-      item(o, file_name, group + "/joint_lines", dims_text(c.joints, 2), true, "      ");
+      xdmf_item(o, file_name, group + "/joint_lines", dims_text(c.joints, 2), true, "      ");
       o << "     </Topology>\n     <Geometry GeometryType=\"XYZ\">\n";
-      item(o, file_name, step + "attachment", dims_text(2 * c.joints, 3), false, "      ");
+      xdmf_item(o, file_name, step + "attachment", dims_text(2 * c.joints, 3), false, "      ");
       o << "     </Geometry>\n";
       if (c.joint_force) {
         make_view(views.get(), "force", {c.joints, 3}, *wrench, t, 0, 3);
         make_view(views.get(), "torque", {c.joints, 3}, *wrench, t, 3, 3);
-        attribute(o, file_name, "force", "Vector", "Cell", step + "force", j3);
-        attribute(o, file_name, "torque", "Vector", "Cell", step + "torque", j3);
+        xdmf_attribute(o, file_name, "force", "Vector", "Cell", step + "force", j3);
+        xdmf_attribute(o, file_name, "torque", "Vector", "Cell", step + "torque", j3);
       }
-      attribute(o, file_name, "joint_index", "Scalar", "Cell", group + "/joint_index", std::to_string(c.joints), true);
+      xdmf_attribute(o, file_name, "joint_index", "Scalar", "Cell", group + "/joint_index", std::to_string(c.joints), true);
       o << "    </Grid>\n";
     }
     o << "   </Grid>\n";

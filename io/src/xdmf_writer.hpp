@@ -13,6 +13,7 @@
 // which hold no data of their own but cost about five times as much to make.
 #include <hdf5.h>
 
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -39,6 +40,13 @@ struct XdmfContent {
   bool energy = false;
   bool body_energy = false;  // /bodies/energy: per body kinetic and gravity energy
 };
+
+// One DataItem reading the dataset `path` of the HDF5 file `file` (named as the sidecar
+// names it), and an Attribute holding one.
+void xdmf_item(std::ostream& o, const std::string& file, const std::string& path, const std::string& dims, bool integer,
+               const char* indent);
+void xdmf_attribute(std::ostream& o, const std::string& file, const char* name, const char* type, const char* center,
+                    const std::string& path, const std::string& dims, bool integer = false);
 
 // Makes the views in `file` (open for writing, its series flushed) and writes the sidecar.
 void write_xdmf(hid_t file, const std::string& xdmf_path, const std::string& h5_path, const std::vector<double>& times,

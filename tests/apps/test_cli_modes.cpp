@@ -45,6 +45,19 @@ TEST_CASE("modes: a pendulum released level is linearised hanging, one mode, kep
   const Result info = run("info modes.h5", dir, true);
   CHECK(info.code == 0);
   CHECK(info.out.find("1 mode about the static equilibrium") != std::string::npos);
+  // The ParaView sidecar beside it, and the modes as CSV.
+  CHECK(r.err.find("ParaView animates them from modes.xdmf (16 frames a period") != std::string::npos);
+  CHECK(fs::exists(d / "modes.xdmf"));
+  REQUIRE(run("export modes.h5 --csv csv", dir, true).code == 0);
+  std::ifstream table(d / "csv" / "modes.csv"), bob(d / "csv" / "bob.csv");
+  std::string header, row;
+  REQUIRE(std::getline(table, header));
+  CHECK(header.rfind("mode,frequency [Hz],damping_ratio", 0) == 0);
+  REQUIRE(std::getline(table, row));
+  CHECK(std::stod(row.substr(row.find(',') + 1)) == hz[0]);  // to full precision
+  CHECK(!std::getline(table, row));  // one mode
+  REQUIRE(std::getline(bob, header));
+  CHECK(header == "mode,x,y,z,rx,ry,rz,x_imag,y_imag,z_imag,rx_imag,ry_imag,rz_imag,kinetic_share,strain_share");
   // At the state given: level, the rod carries no tension and the pendulum has no stiffness.
   const Result level = run("modes pendulum.json --at-initial --undamped", dir, true);
   CHECK(level.code == 0);

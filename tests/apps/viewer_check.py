@@ -14,6 +14,7 @@ import subprocess
 import sys
 
 import h5py
+import numpy as np
 from PIL import Image
 from selenium import webdriver
 from selenium.webdriver.chrome.options import Options
@@ -50,20 +51,21 @@ def open_page(driver, page):
         fail(f"{page}: console errors: {errors}")
 
 
-def check_positions(driver, h5, work):
+def check_positions(driver, positions, work, frames_to_check):
+    """positions[k]: the N x 3 body positions the page must show at frame k."""
     frames = driver.execute_script("return window.viewer.frames")
-    if frames != h5["time"].shape[0]:
-        fail(f"the page shows {frames} frames, the file has {h5['time'].shape[0]} snapshots")
-    for k in (frames - 1, 0):
+    if frames != len(positions):
+        fail(f"the page shows {frames} frames, the file has {len(positions)}")
+    for k in frames_to_check:
         if driver.execute_script(f"return window.viewer.seek({k})") != k:
             fail(f"seeking to frame {k} failed")
-        p = h5["bodies/position"][k]
+        p = positions[k]
         centre = (p.min(axis=0) + p.max(axis=0)) / 2
         extent = max(float((p.max(axis=0) - p.min(axis=0)).max()), 1e-3)
         fov, distance = 40.0, 2.5 * extent
         driver.execute_script(f"window.viewer.setView({{target: {list(map(float, centre))}, distance: {distance}, fov: {fov}}})")
         width, height = driver.execute_script("return [window.innerWidth, window.innerHeight]")
-        shot = os.path.join(work, f"viewer_frame{k}.png")
+        shot = os.path.join(work, f"viewer_frame{k}_{len(positions)}.png")
         driver.save_screenshot(shot)
         image = Image.open(shot).convert("RGB")
         scale = image.size[0] / width  # device pixels per CSS pixel
@@ -81,6 +83,17 @@ def check_positions(driver, h5, work):
     print(f"viewer_check: {frames} frames; after seeking, every body drawn where the file puts it")
 
 
+def mode_positions(h5, mode, frames):
+    """The bodies of mode `mode` at frames 0..frames-1 of a period, from the modes file's
+    shapes: the equilibrium moved by a Re(shape e^(i phase)), the largest body translation
+    a twentieth of the model's size."""
+    shape = h5["modes/shape"][mode - 1, :, :3] + 1j * h5["modes/shape_imag"][mode - 1, :, :3]
+    rest = h5["equilibrium/position"][:]
+    size = np.linalg.norm(rest.max(axis=0) - rest.min(axis=0)) or 1.0
+    a = 0.05 * size / np.max(np.linalg.norm(np.abs(shape), axis=1))
+    return [rest + a * np.real(shape * np.exp(2j * np.pi * f / frames)) for f in range(frames)]
+
+
 def run(mbsflow, work, *args):
     subprocess.run([mbsflow, *args], cwd=work, check=True, stderr=subprocess.DEVNULL)
 
@@ -91,6 +104,8 @@ def main():
     run(mbsflow, work, "generate", "chain", "--bodies", "5", "-o", "chain.json")
     run(mbsflow, work, "run", "chain.json", "--t-end", "0.3", "--output-interval", "0.05", "--fields", "all", "-o", "chain.h5")
     run(mbsflow, work, "view", "chain.h5", "-o", "chain.html")
+    run(mbsflow, work, "modes", "chain.json", "-n", "3", "-o", "modes.h5")
+    run(mbsflow, work, "view", "modes.h5", "--mode", "2", "-o", "modes.html")
     run(mbsflow, work, "generate", "grid", "--rows", "100", "--cols", "100", "-o", "grid.json")
     run(mbsflow, work, "run", "grid.json", "--t-end", "0.02", "--output-interval", "0.002", "-o", "grid.h5")
     run(mbsflow, work, "view", "grid.h5", "-o", "grid.html")
@@ -98,7 +113,11 @@ def main():
     try:
         open_page(driver, os.path.join(work, "chain.html"))
         with h5py.File(os.path.join(work, "chain.h5"), "r") as h5:
-            check_positions(driver, h5, work)
+            positions = h5["bodies/position"][:]
+            check_positions(driver, positions, work, (len(positions) - 1, 0))
+        open_page(driver, os.path.join(work, "modes.html"))
+        with h5py.File(os.path.join(work, "modes.h5"), "r") as h5:
+            check_positions(driver, mode_positions(h5, 2, 48), work, (12, 36))  # a quarter and three quarters of a period
         open_page(driver, os.path.join(work, "grid.html"))
         bodies = driver.execute_script("return window.viewer.bodies")
         ms = driver.execute_async_script("window.viewer.timeFrames(5, arguments[0])")

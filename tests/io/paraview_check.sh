@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Results in the real ParaView: runs a model as one process, partitioned on threads, on
 # worker processes and loosely coupled, and opens each run's XDMF sidecar with pvpython
-# (both XDMF readers, every time step against the HDF5 file, a rendered picture).
+# (both XDMF readers, every time step against the HDF5 file, a rendered picture), and a
+# modes file's animation of its modes.
 # usage: paraview_check.sh MBSFLOW SOURCE_DIR WORK_DIR
 set -euo pipefail
 mbsflow=$(realpath "$1") source=$(realpath "$2") work=$3
@@ -49,4 +50,10 @@ grep -v -e "^$" -e "Skipping" large.log
 "$mbsflow" generate chain --bodies 3 -o chain.json 2>/dev/null
 "$mbsflow" run chain.json --t-end 1.2 --output-interval 0.001 -o long.h5 2>/dev/null
 /usr/bin/python3 "$source/tests/io/check_xdmf.py" long.xdmf
-echo "paraview_check: $((${#runs[@]} + 1)) runs read by both ParaView readers"
+# The modes of a hanging chain, each animated over a period by the modes file's sidecar.
+"$mbsflow" generate chain --bodies 6 -o modes_chain.json 2>/dev/null
+"$mbsflow" modes modes_chain.json -n 5 -o modes.h5 2>/dev/null
+pvpython "$source/tests/io/paraview_modes.py" "$work/modes.xdmf" "$work/modes.png" > modes.log 2>&1 ||
+  { cat modes.log >&2; echo "paraview_check: ParaView failed on the modes file" >&2; exit 1; }
+grep -v -e "^$" -e "Skipping" modes.log
+echo "paraview_check: $((${#runs[@]} + 1)) runs read by both ParaView readers, and a modes file by the default one"

@@ -80,7 +80,9 @@ def check_reader(label, reader, h5):
     print(f"paraview_xdmf: {label}: {len(times)} time steps agree with the file")
 
 
-def render(reader, picture):
+def render(reader, picture, colour_by=("POINTS", "velocity", "Magnitude"), time=None):
+    """Renders the reader's bodies at `time` (default: the last step) to `picture` and
+    fails unless something is drawn."""
     view = simple.GetActiveViewOrCreate("RenderView")
     view.ViewSize = [640, 480]
     view.Background = [1, 1, 1]
@@ -92,8 +94,8 @@ def render(reader, picture):
     shown.SetRepresentationType("Points")
     shown.PointSize = 10
     shown.RenderPointsAsSpheres = 1
-    simple.ColorBy(shown, ("POINTS", "velocity", "Magnitude"))
-    view.ViewTime = reader.TimestepValues[-1]
+    simple.ColorBy(shown, colour_by)
+    view.ViewTime = reader.TimestepValues[-1] if time is None else time
     simple.ResetCamera(view)
     simple.SaveScreenshot(picture, view, ImageResolution=[640, 480])
     from vtkmodules.vtkIOImage import vtkPNGReader
