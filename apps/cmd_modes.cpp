@@ -5,6 +5,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <complex>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -26,6 +27,12 @@
 
 namespace mbsflow::cli {
 namespace {
+
+// A mode that grows: Re lambda above rounding's level. An undamped model's eigenvalues get
+// real parts of about 1e-8 |lambda| either way from rounding (a steel beam's axial
+// stiffness in the same matrix as its bending), which are no instability.
+bool unstable(std::complex<double> lambda) { return lambda.real() > 1e-6 * std::abs(lambda); }
+
 
 // Where to linearise: the static equilibrium (default), the model's initial state, or a
 // snapshot of a run.
@@ -178,7 +185,7 @@ int modes(const ModesArgs& a) {
     std::snprintf(lambda, sizeof lambda, "%.6g %+.6gi", m.eigenvalue[j].real(), m.eigenvalue[j].imag());
     std::printf("%5zu %14.6g %12.4g %26s %10.2g %10s  %s (%.3g %%)%s\n", j + 1, m.frequency[j], m.damping_ratio[j], lambda,
                 m.residual[j], main_direction(lm, m.shape.col(static_cast<Eigen::Index>(j))).c_str(), model.bodies[static_cast<std::size_t>(lm.bodies[static_cast<std::size_t>(body)])].name.c_str(),
-                100.0 * share, m.rigid_body[j] ? "  rigid-body motion" : m.eigenvalue[j].real() > 0.0 ? "  unstable" : "");
+                100.0 * share, m.rigid_body[j] ? "  rigid-body motion" : unstable(m.eigenvalue[j]) ? "  unstable" : "");
   }
   if (!a.output.empty()) {
     const ModesFileWritten file = write_modes_file(a.output, lm, m, {model_to_json(model), invocation(), w.where});

@@ -169,7 +169,10 @@ RunOptions choose_options(Model& m, const RunArgs& a, const StableStep& s) {
   if (a.quiet) return o;
   char tolerances[64];
   std::snprintf(tolerances, sizeof tolerances, "rtol %.3g, atol %.3g", o.rtol, o.atol);
-  if (o.method_chosen && o.method != Method::rk4) {
+  if (o.method_chosen && !m.beams.empty()) {
+    std::fprintf(stderr, "mbsflow: beams are stiff: %s, adaptive, %s (--method, --step, --rtol and --atol choose)\n", name,
+                 tolerances);
+  } else if (o.method_chosen && o.method != Method::rk4) {
     std::fprintf(stderr,
                  "mbsflow: no joint gives RK4 a stable step (no compliant joint): %s, adaptive, %s (--method, --step, "
                  "--rtol and --atol choose)\n", name, tolerances);

@@ -516,6 +516,13 @@ void Hdf5Sink::end() {
   c.joint_force = f->joint_force.has_value();
   c.energy = f->energy.has_value();
   c.body_energy = f->body_energy.has_value();
+  const std::vector<BeamRecord>& beams = system_->model().beams;
+  for (std::size_t b = 0; b < beams.size(); ++b)
+    for (int e = 0; e < beams[b].elements; ++e) {
+      c.beam_lines.insert(c.beam_lines.end(), {beams[b].first_body + e, beams[b].first_body + e + 1});
+      c.beam_index.push_back(static_cast<int>(b));
+      c.beam_joint.push_back(beams[b].first_joint + e);
+    }
   const std::vector<double> times = std::move(f->times);
   f.reset();
   const h5::Handle file(H5Fopen(path_.c_str(), H5F_ACC_RDWR, file_access().get()), H5Fclose, "open " + path_ + " again");

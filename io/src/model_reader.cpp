@@ -13,6 +13,7 @@
 
 #include "json_list_stream.hpp"
 #include "json_depth.hpp"
+#include "beam_reader.hpp"
 #include "json_node.hpp"
 #include "json_tape_list.hpp"
 #include "mbsflow/error.hpp"
@@ -146,10 +147,22 @@ class Reader {
 
   explicit Reader(const JsonSource& src) : src_(src) {}
 
+  // The reference reader's lists: these, then "beams" (index beams_list).
+  static constexpr std::size_t beams_list = list_count;
+  static constexpr const char* beams_name = "beams";
+
+  // A model that may have beams (its text holds "beams"): joints, loads and drivers wait
+  // for them too, since they may name a beam's nodes.
+  void expect_beams(bool maybe) { expect_beams_ = maybe; }
+
   void item(std::size_t list, std::size_t index, nlohmann::json&& j) {
     if (list == bodies_list)
       body(JsonNode(j, item_path(list_names[list], index), src_));
-    else if (bodies_read_)
+    else if (list == beams_list && bodies_read_)
+      beam(JsonNode(j, item_path(beams_name, index), src_));
+    else if (list == beams_list)  // a beam's nodes come after the bodies, whatever the order in the file
+      waiting_beams_.push_back(std::move(j));
+    else if (ready())
       dependent(list, JsonNode(j, item_path(list_names[list], index), src_));
     else
       waiting_[list].push_back(std::move(j));
@@ -180,17 +193,21 @@ class Reader {
   void item(std::size_t list, std::size_t index, const JsonTape& tape) { dependent(list, JsonNode(tape, list_names[list], index, src_)); }
 
   void end(std::size_t list, std::size_t count) {
+    if (list == beams_list) {
+      beams_read_ = true;
+      release();
+      return;
+    }
     if (list != bodies_list) return;
-    if (count == 0) JsonNode(nlohmann::json::array(), list_names[list], src_).fail("must list at least one body");
+    if (count == 0 && !expect_beams_) JsonNode(nlohmann::json::array(), list_names[list], src_).fail("must list at least one body");
     bodies_read_ = true;
     // Most models have about as many joints as bodies: room for them now spares the moves
     // and page faults of growing by doubling (a Joint is large). Pages that stay unused
     // are never touched, so a model with fewer joints costs only address space.
     m_.joints.reserve(m_.bodies.size());
-    for (std::size_t l = joints_list; l < list_count; ++l) {
-      for (std::size_t i = 0; i < waiting_[l].size(); ++i) dependent(l, JsonNode(waiting_[l][i], item_path(list_names[l], i), src_));
-      waiting_[l].clear();
-    }
+    for (std::size_t i = 0; i < waiting_beams_.size(); ++i) beam(JsonNode(waiting_beams_[i], item_path(beams_name, i), src_));
+    waiting_beams_.clear();
+    release();
   }
 
   // Room for at most n items of a list, made before it is read (read_model_fast).
@@ -202,13 +219,20 @@ class Reader {
   // The document less the streamed lists.
   Model finish(const nlohmann::json& document) {
     const JsonNode root(document, "", src_);
-    root.allow_only({"name", "description", "gravity", "bodies", "joints", "loads", "drivers", "simulation"});
+    root.allow_only({"name", "description", "gravity", "bodies", "joints", "loads", "drivers", "simulation", "beams"});
+    if (expect_beams_ && !(bodies_read_ && beams_read_)) {  // no beams after all, or no bodies besides them
+      if (!bodies_read_ && !root.find("bodies")) end(bodies_list, 0);
+      beams_read_ = true;
+      release();
+    }
     if (auto n = root.find("name")) m_.name = n->string();
     if (auto n = root.find("description")) n->string();
     m_.gravity = vec3(root, "gravity");
     // A streamed list is left as an empty array; one that was not streamed is missing or
     // not an array, and fails here as it should.
-    root[list_names[bodies_list]].array_size();
+    if (m_.beams.empty() || root.find(list_names[bodies_list])) root[list_names[bodies_list]].array_size();
+    if (m_.bodies.empty()) JsonNode(nlohmann::json::array(), list_names[bodies_list], src_).fail("must list at least one body (or a beam)");
+    if (auto n = root.find(beams_name)) n->array_size();
     for (std::size_t l = joints_list; l < list_count; ++l)
       if (auto n = root.find(list_names[l])) n->array_size();
     if (auto n = root.find("simulation")) simulation(*n);
@@ -223,6 +247,35 @@ class Reader {
       load(n);
     else
       driver(n);
+  }
+
+  // Joints, loads and drivers can be read once the bodies are, and the beams if any.
+  bool ready() const { return bodies_read_ && (!expect_beams_ || beams_read_); }
+
+  void release() {
+    if (!ready()) return;
+    for (std::size_t l = joints_list; l < list_count; ++l) {
+      for (std::size_t i = 0; i < waiting_[l].size(); ++i) dependent(l, JsonNode(waiting_[l][i], item_path(list_names[l], i), src_));
+      waiting_[l].clear();
+    }
+  }
+
+  void beam(const JsonNode& n) {
+    std::string name;
+    BeamParts parts = read_beam(n, static_cast<int>(m_.bodies.size()), name);
+    BeamRecord r{name, static_cast<int>(m_.bodies.size()), static_cast<int>(parts.nodes.size()),
+                 static_cast<int>(m_.joints.size()), static_cast<int>(parts.elements.size())};
+    for (Body& b : parts.nodes) {
+      enter_body_name(b.name, n["name"]);
+      shared_(b);
+      m_.bodies.push_back(std::move(b));
+    }
+    for (Joint& j : parts.elements) {
+      enter_joint_name(j.name, n);
+      shared_(j);
+      m_.joints.push_back(std::move(j));
+    }
+    m_.beams.push_back(std::move(r));
   }
 
   void body(const JsonNode& n) {
@@ -423,7 +476,9 @@ class Reader {
   Model m_;
   ValueSharing shared_;  // repeated values of joints and bodies stored once
   bool bodies_read_ = false;
+  bool expect_beams_ = false, beams_read_ = false;
   std::array<std::vector<nlohmann::json>, list_count> waiting_;
+  std::vector<nlohmann::json> waiting_beams_;
   // Names to indices, so that each reference is found in constant time (a model of a
   // million bodies names as many in its joints).
   NameIndex body_index_, joint_index_;
@@ -474,6 +529,7 @@ std::size_t count_of(char c, std::string_view text) {
 // reads it again the slow way, whose checks and messages are the reference.
 std::optional<Model> read_model_fast(std::string_view text, const JsonSource& src) try {
   constexpr std::size_t npos = std::string_view::npos;
+  if (text.find("\"beams\"") != npos) return std::nullopt;  // beams: the reference reader
   Reader reader(src);
   nlohmann::json rest = nlohmann::json::object();
   std::vector<std::string_view> keys;
@@ -570,8 +626,10 @@ std::optional<Model> read_model_fast(std::string_view text, const std::string& n
 Model read_model_reference(std::string_view text, const std::string& name) {
   const JsonSource src{name, JsonLocations(text)};
   Reader reader(src);
+  reader.expect_beams(text.find("\"beams\"") != std::string_view::npos);
   JsonListHandlers lists;
   lists.lists.assign(Reader::list_names.begin(), Reader::list_names.end());
+  lists.lists.push_back(Reader::beams_name);
   lists.item = [&](std::size_t list, std::size_t i, nlohmann::json&& item) { reader.item(list, i, std::move(item)); };
   lists.end = [&](std::size_t list, std::size_t count) { reader.end(list, count); };
   return reader.finish(parse_json_streaming_lists(text, name, lists));

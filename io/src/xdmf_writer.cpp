@@ -127,6 +127,12 @@ void write_xdmf(hid_t file, const std::string& xdmf_path, const std::string& h5_
     write_ints(file, group + "/joint_index", {c.joints}, {index.begin(), index.begin() + static_cast<long>(c.joints)});
   }
 
+  const std::size_t segments = c.beam_index.size();
+  if (segments > 0) {
+    write_ints(file, group + "/beam_lines", {segments, 2}, c.beam_lines);
+    write_ints(file, group + "/beam_index", {segments}, c.beam_index);
+    write_ints(file, group + "/beam_joint", {segments}, c.beam_joint);
+  }
   std::vector<Source> body_sources;  // in the order of c.body_fields
   for (const BodyField* f : c.body_fields) body_sources.emplace_back(file, f->dataset);
   std::optional<Source> energy, body_energy, ends, wrench;
@@ -173,6 +179,17 @@ void write_xdmf(hid_t file, const std::string& xdmf_path, const std::string& h5_
     }
     if (c.energy) xdmf_attribute(o, file_name, "energy_kinetic_gravity_elastic", "Vector", "Grid", step + "energy", "1 3");
     o << "    </Grid>\n";
+    if (segments > 0) {  // the beams: segments between node bodies, on the bodies' positions
+      o << "    <Grid Name=\"beams\" GridType=\"Uniform\">\n"
+        << "     <Topology TopologyType=\"Polyline\" NumberOfElements=\"" << segments << "\" NodesPerElement=\"2\">\n";
+      xdmf_item(o, file_name, group + "/beam_lines", dims_text(segments, 2), true, "      ");
+      o << "     </Topology>\n     <Geometry GeometryType=\"XYZ\">\n";
+      xdmf_item(o, file_name, step + "position", n3, false, "      ");
+      o << "     </Geometry>\n";
+      xdmf_attribute(o, file_name, "beam_index", "Scalar", "Cell", group + "/beam_index", std::to_string(segments), true);
+      xdmf_attribute(o, file_name, "joint_index", "Scalar", "Cell", group + "/beam_joint", std::to_string(segments), true);
+      o << "    </Grid>\n";
+    }
     if (lines) {
       make_view(views.get(), "attachment", {2 * c.joints, 3}, *ends, t, 0, 6);
       o << "    <Grid Name=\"joints\" GridType=\"Uniform\">\n"

@@ -1,8 +1,9 @@
 #pragma once
 // XDMF sidecar of a results file, so that ParaView opens a run with either of its XDMF
 // readers: per snapshot, the bodies as points (velocity, angular velocity, orientation,
-// kinetic and gravity energy, body index; the model's energies as values of the grid) and the joints as lines between
-// their attachment points (force, torque and joint index per line).
+// kinetic and gravity energy, body index; the model's energies as values of the grid), the joints as lines between
+// their attachment points (force, torque and joint index per line), and elastic beams as
+// polylines through their nodes (beam and element joint index per segment).
 //
 // ParaView's default reader (Xdmf3) does not read XDMF hyperslabs (it skips their arrays
 // and shows 0 points), so the sidecar does not select rows of the T x N x k series itself:
@@ -39,6 +40,9 @@ struct XdmfContent {
   bool joint_force = false;
   bool energy = false;
   bool body_energy = false;  // /bodies/energy: per body kinetic and gravity energy
+  // Elastic beams' elements as lines between their nodes' centres (a beam's centreline):
+  // per element its two node bodies, its beam and its bushing (joint index).
+  std::vector<int> beam_lines, beam_index, beam_joint;
 };
 
 // One DataItem reading the dataset `path` of the HDF5 file `file` (named as the sidecar

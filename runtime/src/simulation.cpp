@@ -93,7 +93,12 @@ RunOptions options_from_model(const Model& model, std::optional<double> stable_s
   const double stable = s.step ? 0.0 : stable_step ? *stable_step : estimate_stable_step(model).step;
   // No method named: RK4 where a step is given or a joint gives a stable one, else an
   // adaptive method (a pendulum on a rigid revolute has no stiffness to take a step from).
-  o.method = s.method ? *s.method : s.step || std::isfinite(stable) ? Method::rk4 : Method::dopri5;
+  // Beams are stiff (a steel element's axial and torsion modes lie far above its bending):
+  // tirk unless a step is given.
+  o.method = s.method                              ? *s.method
+             : !model.beams.empty() && !s.step     ? Method::tirk
+             : s.step || std::isfinite(stable)     ? Method::rk4
+                                                   : Method::dopri5;
   o.method_chosen = !s.method;
   o.variant = s.variant;
   o.t_start = s.t_start;

@@ -50,10 +50,16 @@ grep -v -e "^$" -e "Skipping" large.log
 "$mbsflow" generate chain --bodies 3 -o chain.json 2>/dev/null
 "$mbsflow" run chain.json --t-end 1.2 --output-interval 0.001 -o long.h5 2>/dev/null
 /usr/bin/python3 "$source/tests/io/check_xdmf.py" long.xdmf
+# An elastic beam: its centreline as polylines through its nodes.
+"$mbsflow" run "$source/examples/models/flexible_boom.json" --t-end 0.5 --fields all -o boom.h5 2>/dev/null
+/usr/bin/python3 "$source/tests/io/check_xdmf.py" boom.xdmf
+pvpython "$source/tests/io/paraview_xdmf.py" "$work/boom.xdmf" "$work/boom.png" > boom.log 2>&1 ||
+  { cat boom.log >&2; echo "paraview_check: ParaView failed on the beam run" >&2; exit 1; }
+grep -v -e "^$" -e "Skipping" boom.log
 # The modes of a hanging chain, each animated over a period by the modes file's sidecar.
 "$mbsflow" generate chain --bodies 6 -o modes_chain.json 2>/dev/null
 "$mbsflow" modes modes_chain.json -n 5 -o modes.h5 2>/dev/null
 pvpython "$source/tests/io/paraview_modes.py" "$work/modes.xdmf" "$work/modes.png" > modes.log 2>&1 ||
   { cat modes.log >&2; echo "paraview_check: ParaView failed on the modes file" >&2; exit 1; }
 grep -v -e "^$" -e "Skipping" modes.log
-echo "paraview_check: $((${#runs[@]} + 1)) runs read by both ParaView readers, and a modes file by the default one"
+echo "paraview_check: $((${#runs[@]} + 2)) runs read by both ParaView readers, and a modes file by the default one"

@@ -41,11 +41,23 @@ def check_reader(label, reader, h5):
     if not np.array_equal(np.array(reader.TimestepValues), times):
         fail(f"{label}: time steps {list(reader.TimestepValues)} are not /time")
     joints = h5["joints/attachment"].shape[1] if "joints/attachment" in h5 else 0
+    segments = h5["xdmf/beam_lines"][:] if "xdmf/beam_lines" in h5 else None
     for t, time in enumerate(times):
         reader.UpdatePipeline(time)
         parts = blocks(sm.Fetch(reader))
-        if len(parts) != (2 if joints else 1):
+        if len(parts) != 1 + (segments is not None) + (joints > 0):
             fail(f"{label}: {len(parts)} blocks at t = {time}")
+        if segments is not None:  # the beams' centrelines: segments between their node bodies
+            beams = parts[1]
+            if beams.GetNumberOfCells() != len(segments):
+                fail(f"{label}: {beams.GetNumberOfCells()} beam segments, {len(segments)} elements")
+            ends = vtk_to_numpy(beams.GetPoints().GetData())[segments.reshape(-1)]
+            if not np.array_equal(ends, h5["bodies/position"][t][segments.reshape(-1)]):
+                fail(f"{label}: beam segments at t = {time} do not join their nodes' positions")
+            cell = beams.GetCell(0)
+            if cell.GetNumberOfPoints() != 2 or cell.GetPointId(0) != segments[0][0] or cell.GetPointId(1) != segments[0][1]:
+                fail(f"{label}: the first beam segment is not between bodies {segments[0]}")
+            parts = [parts[0]] + parts[2:]
         bodies = parts[0]
         if bodies.GetNumberOfCells() != h5["bodies/names"].shape[0]:
             fail(f"{label}: {bodies.GetNumberOfCells()} body cells, {h5['bodies/names'].shape[0]} bodies")

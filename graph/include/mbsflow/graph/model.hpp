@@ -157,6 +157,14 @@ struct SimulationSettings {
 
 class ForceElement;  // force_element.hpp
 
+// Where an elastic beam's parts lie in its model (beams.hpp): the beam is its node bodies
+// and element bushings; this names them together, for the results' centrelines.
+struct BeamRecord {
+  std::string name;
+  int first_body = 0, nodes = 0;      // bodies first_body .. first_body + nodes - 1, in order
+  int first_joint = 0, elements = 0;  // element bushings, first_joint + i between nodes i and i + 1
+};
+
 struct Model {
   std::string name = "model";
   Vec3 gravity{};
@@ -169,6 +177,7 @@ struct Model {
   // this process applies them, partitioned and loosely coupled ones included; a run
   // across worker processes refuses them.
   std::vector<std::shared_ptr<const ForceElement>> force_elements;
+  std::vector<BeamRecord> beams;
 };
 
 // Checks every field of the model (finite numbers, positive masses and inertias, body

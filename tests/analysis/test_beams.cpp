@@ -1,0 +1,273 @@
+// Elastic beams (graph/beams.hpp) against closed forms: a cantilever's and a free-free
+// beam's bending frequencies in both planes through the modes, converging as elements
+// double; the static tip deflection P L^3 / (3 E I); the large-deflection cantilever (the
+// elastica) under tip loads P L^2 / (E I) from 1 to 5 against its own shooting solution
+// and Mattiasson's published table; energy kept by an undamped beam in free motion.
+#include <catch2/catch.hpp>
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "mbsflow/analysis/equilibrium.hpp"
+#include "mbsflow/analysis/modes.hpp"
+#include "mbsflow/graph/beams.hpp"
+#include "test_support.hpp"
+
+using namespace mbsflow;
+
+namespace {
+
+constexpr double pi = std::numbers::pi;
+constexpr double L = 1.0, E = 2.1e11, G = 8.1e10, rho = 7850.0, A = 1e-4;
+constexpr double Iz = 8.0e-10, Iy = 2.0 * Iz, J = 1.2e-9;  // two bending planes apart
+
+BeamSpec beam_spec(int elements) {
+  BeamSpec s;
+  s.name = "beam";
+  s.points = straight_beam_points({0, 0, 0}, {L, 0, 0}, elements);
+  s.up = {0, 1, 0};
+  s.E = E;
+  s.G = G;
+  s.density = rho;
+  s.section = {A, Iy, Iz, J};
+  return s;
+}
+
+// A model of one beam; clamped: its first node held (a driver without motion).
+Model beam_model(int elements, bool clamped) {
+  Model m;
+  m.name = "beam";
+  add_beam(m, beam_spec(elements));
+  if (clamped) m.drivers.push_back(Driver{0});
+  return m;
+}
+
+// The lowest `count` undamped natural frequencies (rad/s) at the initial state, rigid-body
+// motions left out; `zeros` gets how many there were.
+std::vector<double> frequencies(const Model& model, int count, int* zeros = nullptr) {
+  MultibodySystem sys(model);
+  const LinearModel lm = linearize(sys, 0.0, sys.initial_state());
+  ModeOptions o;
+  o.count = count + 6;
+  o.damped = false;
+  const Modes m = compute_modes(lm, o);
+  std::vector<double> out;
+  int rigid = 0;
+  for (std::size_t j = 0; j < m.frequency.size(); ++j)
+    if (m.rigid_body[j])
+      ++rigid;
+    else
+      out.push_back(2 * pi * m.frequency[j]);
+  if (zeros) *zeros = rigid;
+  out.resize(static_cast<std::size_t>(std::min<int>(count, static_cast<int>(out.size()))));
+  return out;
+}
+
+// The bending frequencies (rad/s) of both planes for the given beta L values, ascending.
+std::vector<double> bending(const std::vector<double>& beta_l) {
+  std::vector<double> out;
+  for (double inertia : {Iy, Iz})
+    for (double b : beta_l) out.push_back(b * b * std::sqrt(E * inertia / (rho * A * std::pow(L, 4))));
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+double worst_error(const std::vector<double>& got, const std::vector<double>& want) {
+  double worst = 0;
+  for (std::size_t j = 0; j < want.size(); ++j) worst = std::max(worst, std::abs(got.at(j) / want[j] - 1));
+  return worst;
+}
+
+}  // namespace
+
+TEST_CASE("a cantilever beam's bending frequencies converge to beta L = 1.8751, 4.6941, 7.8548, 10.9955 in both planes",
+          "[analysis][beams]") {
+  const std::vector<double> want = bending({1.8751041, 4.6940911, 7.8547574, 10.9955407});
+  double previous = 1;
+  for (int elements : {10, 20, 40, 80}) {
+    const double error = worst_error(frequencies(beam_model(elements, true), 8), want);
+    INFO(elements << " elements: worst relative error " << error);
+    CHECK(error < 0.4 * previous);  // second order: a quarter per doubling, with margin
+    previous = error;
+  }
+  CHECK(previous < 3e-3);
+}
+
+TEST_CASE("a free-free beam has six rigid-body motions and bending at beta L = 4.7300, 7.8532, 10.9956", "[analysis][beams]") {
+  const std::vector<double> want = bending({4.7300408, 7.8532046, 10.9956078});
+  double previous = 1;
+  for (int elements : {10, 20, 40, 80}) {
+    int zeros = 0;
+    const double error = worst_error(frequencies(beam_model(elements, false), 6, &zeros), want);
+    INFO(elements << " elements: worst relative error " << error);
+    CHECK(zeros == 6);
+    CHECK(error < 0.4 * previous);
+    previous = error;
+  }
+  CHECK(previous < 4e-3);
+}
+
+namespace {
+
+// The cantilever's tip under a tip force P along -y (a dead load) at static equilibrium.
+Eigen::Vector3d loaded_tip(int elements, double p) {
+  Model m = beam_model(elements, true);
+  Load load;
+  load.body = elements;
+  load.force = {0.0, -p, 0.0};
+  m.loads.push_back(load);
+  MultibodySystem sys(m);
+  const Equilibrium e = find_equilibrium(sys, 0.0, sys.initial_state());
+  return e.state.segment<3>(sys.layout().position(elements));
+}
+
+// The elastica of a cantilever under a vertical tip load, alpha = P L^2 / (E I): theta'' =
+// -alpha cos(theta) on s in [0, 1], theta(0) = 0, theta'(1) = 0, by shooting on theta'(0)
+// with RK4 in s; returns the tip's (horizontal, vertical) displacement over L.
+std::pair<double, double> elastica(double alpha) {
+  const int steps = 4000;
+  const auto shoot = [&](double kappa0, double* x, double* y) {
+    double th = 0, k = kappa0, px = 0, py = 0;
+    const double h = 1.0 / steps;
+    auto f = [&](double t, double kk) { return std::array<double, 4>{kk, -alpha * std::cos(t), std::cos(t), std::sin(t)}; };
+    for (int i = 0; i < steps; ++i) {
+      const auto a = f(th, k);
+      const auto b = f(th + h / 2 * a[0], k + h / 2 * a[1]);
+      const auto c = f(th + h / 2 * b[0], k + h / 2 * b[1]);
+      const auto d = f(th + h * c[0], k + h * c[1]);
+      th += h / 6 * (a[0] + 2 * b[0] + 2 * c[0] + d[0]);
+      k += h / 6 * (a[1] + 2 * b[1] + 2 * c[1] + d[1]);
+      px += h / 6 * (a[2] + 2 * b[2] + 2 * c[2] + d[2]);
+      py += h / 6 * (a[3] + 2 * b[3] + 2 * c[3] + d[3]);
+    }
+    if (x) *x = px;
+    if (y) *y = py;
+    return k;  // theta'(1)
+  };
+  double lo = 0, hi = alpha;  // theta'(0) in (0, alpha]: the moment at the root is below P L
+  for (int i = 0; i < 100; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (shoot(mid, nullptr, nullptr) > 0 ? hi : lo) = mid;
+  }
+  double x = 0, y = 0;
+  shoot(0.5 * (lo + hi), &x, &y);
+  return {1 - x, std::abs(y)};
+}
+
+}  // namespace
+
+TEST_CASE("a cantilever's static tip deflection under a small tip load is P L^3 / (3 E I)", "[analysis][beams]") {
+  const double p = 1e-4 * 3 * E * Iz / (L * L * L);  // a deflection of 1e-4 L
+  for (int elements : {2, 8}) {
+    const Eigen::Vector3d tip = loaded_tip(elements, p);
+    INFO(elements << " elements: tip " << tip.transpose());
+    // The two-node element is exact for a tip load; what is left is the geometric nonlinearity, O(1e-8).
+    CHECK(-tip.y() == Approx(p * L * L * L / (3 * E * Iz)).epsilon(1e-6));
+    CHECK(std::abs(tip.z()) < 1e-15);
+  }
+}
+
+TEST_CASE("the elastica: a cantilever under a tip load P L^2 / (E I) = 1 .. 5 bends as the exact large-deflection solution",
+          "[analysis][beams]") {
+  // Mattiasson (1981), Table 1: the tip's horizontal and vertical displacement over L.
+  const double table[5][2] = {{0.05643, 0.30172}, {0.16064, 0.49346}, {0.25442, 0.60325}, {0.32894, 0.66996}, {0.38763, 0.71379}};
+  for (int a = 1; a <= 5; ++a) {
+    const auto [u, v] = elastica(a);
+    INFO("P L^2 / E I = " << a << ": shooting u/L " << u << ", v/L " << v);
+    CHECK(u == Approx(table[a - 1][0]).margin(2e-5));  // the table's digits
+    CHECK(v == Approx(table[a - 1][1]).margin(2e-5));
+    const Eigen::Vector3d tip = loaded_tip(40, a * E * Iz / (L * L));
+    INFO("40 elements: tip " << tip.transpose());
+    CHECK((L - tip.x()) / L == Approx(u).margin(1e-3));
+    CHECK(-tip.y() / L == Approx(v).margin(1e-3));
+  }
+}
+
+TEST_CASE("an undamped free beam keeps its energy while it bends and turns", "[analysis][beams]") {
+  Model m = beam_model(12, false);
+  // Bending and twisting at once: the nodes' velocities vary along the beam.
+  for (std::size_t i = 0; i < m.bodies.size(); ++i) {
+    const double s = static_cast<double>(i) / 12.0;
+    m.bodies[i].velocity = {0.0, 0.5 * std::cos(pi * s), 0.2 * std::sin(pi * s)};
+    m.bodies[i].angular_velocity = {3.0, 0.0, 0.0};
+  }
+  MultibodySystem sys(m);
+  const Eigen::VectorXd y0 = sys.initial_state();
+  const auto total = [&](double t, const Eigen::VectorXd& y) {
+    const Energy e = sys.energy(t, y);
+    return e.kinetic + e.elastic;
+  };
+  const double e0 = total(0, y0);
+  double drift = 0, most_elastic = 0;
+  // The stiffest mode (axial, about 2e5 rad/s for these elements) sets the step.
+  test::integrate_rk4(sys, 0.02, 20000, [&](double t, const Eigen::VectorXd& y) {
+    drift = std::max(drift, std::abs(total(t, y) / e0 - 1));
+    most_elastic = std::max(most_elastic, sys.energy(t, y).elastic);
+  });
+  INFO("energy drift " << drift << ", largest elastic energy " << most_elastic << " of " << e0);
+  CHECK(most_elastic > 0.02 * e0);  // it did bend
+  CHECK(drift < 1e-6);
+}
+
+TEST_CASE("a Timoshenko cantilever's tip deflection adds the shear's P L / (k G A)", "[analysis][beams]") {
+  // A short, deep beam: the shear part is a tenth of the bending part.
+  BeamSpec s = beam_spec(4);
+  s.shear = true;
+  s.section.shear_area_y = 0.8 * A;
+  Model m;
+  add_beam(m, s);
+  m.drivers.push_back(Driver{0});
+  const double p = 1e-4 * 3 * E * Iz / (L * L * L);
+  Load load;
+  load.body = 4;
+  load.force = {0.0, -p, 0.0};
+  m.loads.push_back(load);
+  MultibodySystem sys(m);
+  const Equilibrium e = find_equilibrium(sys, 0.0, sys.initial_state());
+  const double tip = -e.state[sys.layout().position(4) + 1];
+  CHECK(tip == Approx(p * L * L * L / (3 * E * Iz) + p * L / (G * 0.8 * A)).epsilon(1e-6));
+}
+
+TEST_CASE("a beam through points on a line is the beam from one end to the other; a curved one rests unloaded",
+          "[analysis][beams]") {
+  BeamSpec line = beam_spec(5);
+  Model a, b;
+  add_beam(a, line);
+  line.points = {{0, 0, 0}, {0.2, 0, 0}, {0.4, 0, 0}, {0.6, 0, 0}, {0.8, 0, 0}, {1.0, 0, 0}};
+  add_beam(b, line);
+  for (std::size_t i = 0; i < a.bodies.size(); ++i) {
+    CHECK(a.bodies[i].mass == Approx(b.bodies[i].mass).epsilon(1e-14));
+    for (int k = 0; k < 3; ++k) CHECK(a.bodies[i].position[k] == Approx(b.bodies[i].position[k]).margin(1e-15));
+  }
+  // A quarter circle: in its initial shape it carries no force at all.
+  BeamSpec arc = beam_spec(1);
+  arc.points.clear();
+  for (int i = 0; i <= 12; ++i) arc.points.push_back({std::cos(pi / 2 * i / 12), std::sin(pi / 2 * i / 12), 0.0});
+  arc.up = {0, 0, 1};
+  Model c;
+  add_beam(c, arc);
+  MultibodySystem sys(c);
+  const std::vector<int> all = free_bodies(sys);
+  // Rounding only: the elements' axial stiffness (1e8 N/m) times the points' rounding.
+  CHECK(static_residual(sys, 0.0, sys.initial_state(), all).cwiseAbs().maxCoeff() < 1e-6);
+  CHECK(sys.energy(0.0, sys.initial_state()).elastic < 1e-20);
+}
+
+TEST_CASE("stiffness-proportional damping: each mode's damping ratio is beta omega / 2", "[analysis][beams]") {
+  BeamSpec s = beam_spec(20);
+  s.stiffness_damping = 1e-4;
+  Model m;
+  add_beam(m, s);
+  m.drivers.push_back(Driver{0});
+  MultibodySystem sys(m);
+  const LinearModel lm = linearize(sys, 0.0, sys.initial_state());
+  ModeOptions o;
+  o.count = 4;
+  const Modes modes = compute_modes(lm, o);
+  REQUIRE(modes.frequency.size() == 4);
+  for (std::size_t j = 0; j < 4; ++j) {
+    const double omega = std::abs(modes.eigenvalue[j]);
+    // To the dense eigensolver's accuracy on rates from 50 to 1e6 rad/s (torsion).
+    CHECK(modes.damping_ratio[j] == Approx(1e-4 * omega / 2).epsilon(1e-4));
+  }
+}
