@@ -1,11 +1,13 @@
 #pragma once
 // The benchmarks of `mbsflow bench`: each prints a table and writes a CSV file.
 #include <chrono>
+#include <cmath>
 #include <fstream>
 #include <string>
 #include <vector>
 
 #include "mbsflow/error.hpp"
+#include "mbsflow/graph/multibody_system.hpp"
 #include "mbsflow/runtime/result_sink.hpp"
 
 namespace mbsflow::cli {
@@ -56,6 +58,7 @@ int bench_iterations(const BenchArgs& a);
 int bench_stiff(const BenchArgs& a);
 int bench_ivp(const BenchArgs& a);
 int bench_load(const BenchArgs& a);
+int bench_beams(const BenchArgs& a);
 
 // Where the example models are: --dir, or examples/models (run from the source tree).
 inline std::string examples_dir(const BenchArgs& a) { return a.dir == "." ? "examples/models" : a.dir; }
@@ -81,5 +84,34 @@ using BenchClock = std::chrono::steady_clock;
 inline double seconds_since(BenchClock::time_point start) {
   return std::chrono::duration<double>(BenchClock::now() - start).count();
 }
+
+// Repeats f until `seconds` have passed; returns seconds per call.
+template <class F>
+inline double time_per_call(double seconds, F f) {
+  long calls = 0;
+  const auto start = BenchClock::now();
+  double elapsed = 0.0;
+  do {
+    for (int i = 0; i < 4; ++i) f();
+    calls += 4;
+    elapsed = seconds_since(start);
+  } while (elapsed < seconds);
+  return elapsed / static_cast<double>(calls);
+}
+
+// A state with links bent and moving (deterministic), so that the rotation code takes its
+// general branch rather than the small-angle one of the straight initial chain.
+inline Eigen::VectorXd perturbed_state(const MultibodySystem& sys) {
+  Eigen::VectorXd y = sys.initial_state();
+  const StateLayout& l = sys.layout();
+  for (Eigen::Index i = 0; i < l.bodies; ++i) {
+    const double a = 0.3 * std::sin(0.7 * static_cast<double>(i));
+    y.segment<4>(l.orientation(i)) = Eigen::Vector4d(std::cos(a / 2), 0.3 * std::sin(a / 2), 0.0, std::sin(a / 2)).normalized();
+    y.segment<3>(l.velocity(i)) = Eigen::Vector3d(0.1, std::cos(0.3 * static_cast<double>(i)), 0.0);
+    y.segment<3>(l.angular_velocity(i)) = Eigen::Vector3d(0.2, -0.1, std::sin(0.5 * static_cast<double>(i)));
+  }
+  return y;
+}
+
 
 }  // namespace mbsflow::cli

@@ -21,34 +21,6 @@
 namespace mbsflow::cli {
 namespace {
 
-// Repeats f until `seconds` have passed; returns seconds per call.
-template <class F>
-double time_per_call(double seconds, F f) {
-  long calls = 0;
-  const auto start = BenchClock::now();
-  double elapsed = 0.0;
-  do {
-    for (int i = 0; i < 4; ++i) f();
-    calls += 4;
-    elapsed = seconds_since(start);
-  } while (elapsed < seconds);
-  return elapsed / static_cast<double>(calls);
-}
-
-// A state with links bent and moving (deterministic), so that the rotation code takes its
-// general branch rather than the small-angle one of the straight initial chain.
-Eigen::VectorXd perturbed_state(const MultibodySystem& sys) {
-  Eigen::VectorXd y = sys.initial_state();
-  const StateLayout& l = sys.layout();
-  for (Eigen::Index i = 0; i < l.bodies; ++i) {
-    const double a = 0.3 * std::sin(0.7 * static_cast<double>(i));
-    y.segment<4>(l.orientation(i)) = Eigen::Vector4d(std::cos(a / 2), 0.3 * std::sin(a / 2), 0.0, std::sin(a / 2)).normalized();
-    y.segment<3>(l.velocity(i)) = Eigen::Vector3d(0.1, std::cos(0.3 * static_cast<double>(i)), 0.0);
-    y.segment<3>(l.angular_velocity(i)) = Eigen::Vector3d(0.2, -0.1, std::sin(0.5 * static_cast<double>(i)));
-  }
-  return y;
-}
-
 // The machine side of the roofline, on one thread: the STREAM triad's bandwidth (a = b +
 // s c over arrays far larger than the caches; 24 bytes an element, as STREAM counts) and
 // the multiply-add throughput of independent chains, as this build compiles them (its

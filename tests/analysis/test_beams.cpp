@@ -228,7 +228,7 @@ TEST_CASE("a Timoshenko cantilever's tip deflection adds the shear's P L / (k G 
   CHECK(tip == Approx(p * L * L * L / (3 * E * Iz) + p * L / (G * 0.8 * A)).epsilon(1e-6));
 }
 
-TEST_CASE("a beam through points on a line is the beam from one end to the other; a curved one rests unloaded",
+TEST_CASE("a beam through points on a line is the beam from one end to the other, and a curved one rests unloaded",
           "[analysis][beams]") {
   BeamSpec line = beam_spec(5);
   Model a, b;

@@ -248,3 +248,33 @@ TEST_CASE("cli bench rhs: nanoseconds per body with the roofline's bytes per bod
   CHECK(models == 3);
   fs::remove_all(fs::path(dir).parent_path());
 }
+
+TEST_CASE("cli bench beams: cost per element, a cantilever through RK4 and tirk, the spin-up's work-precision", "[cli][bench]") {
+  const std::string dir = scratch("bench_beams").string();
+  const Result r = run("bench beams --bodies 40 --seconds 0.01 --t-end 0.001 --tolerances 1e-3,1e-5 --csv beams.csv --dir " +
+                           std::string(MBSFLOW_SOURCE) + "/examples/models",
+                       dir, true);
+  INFO(r.err << r.out);
+  REQUIRE(r.code == 0);
+  std::istringstream csv(read_text(fs::path(dir) / "beams.csv"));
+  std::string line;
+  std::getline(csv, line);
+  CHECK(line == "part,case,elements,method,tol,steps,factorizations,seconds,value");
+  std::map<std::string, double> value;  // part/case/method/tol -> value
+  int rows = 0;
+  while (std::getline(csv, line)) {
+    const std::vector<std::string> c = csv_cells(line);
+    REQUIRE(c.size() == 9);
+    value[c[0] + "/" + c[1] + "/" + c[3] + "/" + c[4]] = std::stod(c[8]);
+    ++rows;
+  }
+  CHECK(rows == 4 + 2 + 4);
+  CHECK(value.at("cost/beam rhs//") > 0.0);
+  CHECK(value.at("cost/chain jacobian//") > 0.0);
+  // RK4 at its stable step and tirk reach the same tip deflection under gravity.
+  const double rk4 = value.at("cantilever//rk4/0"), tirk = value.at("cantilever//tirk/0.0001");
+  CHECK(rk4 < 0.0);
+  CHECK(tirk == Approx(rk4).epsilon(1e-3));
+  // Tighter tolerances, smaller errors (against the tirk reference at 1e-10).
+  CHECK(value.at("spin-up//tirk/1e-05") < 0.1 * value.at("spin-up//tirk/0.001"));
+}
