@@ -41,3 +41,19 @@ def test_frf_of_a_damped_oscillator():
     assert h.shape == (3, 2, 1)
     assert np.allclose(h[:, 0, 0], exact, rtol=1e-10)
     assert np.allclose(h[:, 1, 0], 1j * w * exact, rtol=1e-10)
+
+
+def test_a_cantilever_beam_from_python_bends_at_its_closed_form_frequency():
+    """A model with a beam reads from a dict, its nodes are bodies, and its first bending
+    mode converges to 1.8751^2 sqrt(E I / (rho A L^4))."""
+    e, rho, a, i = 2.1e11, 7850.0, 1e-4, 8e-10
+    cantilever = {"name": "cantilever", "bodies": [],
+                  "beams": [{"name": "b", "from": [0, 0, 0], "to": [1, 0, 0], "up": [0, 1, 0], "elements": 40,
+                             "E": e, "G": 8.1e10, "density": rho,
+                             "section": {"area": a, "Iy": 2 * i, "Iz": i, "J": 1.2e-9}}],
+                  "joints": [{"name": "clamp", "type": "fixed", "body1": "ground", "body2": "b.0"}]}
+    model = mbsflow.Model.from_dict(cantilever)
+    m = mbsflow.modes(model, n=1, at="initial")
+    exact = 1.8751041 ** 2 * math.sqrt(e * i / (rho * a)) / (2 * math.pi)
+    assert m.shape.shape[1] == 41  # the 41 nodes
+    assert math.isclose(m.frequency[0], exact, rel_tol=1e-3)
