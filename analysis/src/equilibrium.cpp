@@ -110,7 +110,7 @@ Equilibrium find_equilibrium(MultibodySystem& sys, double t, const Eigen::Vector
   int iteration = 0;
   Factor factor;
   std::optional<LinearModel> lm;
-  const Sparse pattern = sys.has_analytic_jacobian() ? sys.jacobian_pattern() : Sparse();
+  Sparse jacobian = sys.has_analytic_jacobian() ? sys.jacobian_pattern() : Sparse();  // reused by every linearisation
   // Stiff elements (a steel beam's axial stiffness, 1e8 N/m and more) leave a residual of
   // their stiffness times the positions' rounding, which may exceed `enough`: a residual
   // below 1e-6 of the scale that four iterations in a row have not halved is converged.
@@ -136,7 +136,7 @@ Equilibrium find_equilibrium(MultibodySystem& sys, double t, const Eigen::Vector
                      " (is it held against gravity and its loads? --at-initial linearises where it is)");
     }
     // A rejected step leaves y where it was: its linearisation serves the next try.
-    if (!lm) lm = linearize(sys, t, y, pattern.size() ? &pattern : nullptr);
+    if (!lm) lm = linearize(sys, t, y, jacobian.size() ? &jacobian : nullptr);
     Eigen::VectorXd dx;
     try {
       dx = step(*lm, f, h, factor);

@@ -258,7 +258,7 @@ Eigen::VectorXd static_residual(MultibodySystem& sys, double t, const Eigen::Vec
   return f;
 }
 
-LinearModel linearize(MultibodySystem& sys, double t, const Eigen::VectorXd& y, const Eigen::SparseMatrix<double>* pattern) {
+LinearModel linearize(MultibodySystem& sys, double t, const Eigen::VectorXd& y, Eigen::SparseMatrix<double>* jacobian) {
   const StateLayout& l = sys.layout();
   LinearModel out;
   out.model = &sys.model();
@@ -283,7 +283,9 @@ LinearModel linearize(MultibodySystem& sys, double t, const Eigen::VectorXd& y, 
   out.K.resize(6 * n, 6 * n);
   out.D.resize(6 * n, 6 * n);
   if (sys.has_analytic_jacobian()) {
-    Eigen::SparseMatrix<double> jac = pattern ? *pattern : sys.jacobian_pattern();
+    Eigen::SparseMatrix<double> own;
+    if (!jacobian) own = sys.jacobian_pattern();
+    Eigen::SparseMatrix<double>& jac = jacobian ? *jacobian : own;
     sys.jacobian(t, y, jac);
     rate_blocks(l, out.bodies, y, jac, mass, k, d);
     out.K.setFromTriplets(k.begin(), k.end());
