@@ -46,6 +46,28 @@ inline void check(herr_t status, const std::string& what) {
 }
 
 // A variable-length UTF-8 string type.
+// A file whose writer was killed outside SWMR mode is marked open for writing, and HDF5
+// refuses to open it again; this property makes the open ignore (and, read-write, clear)
+// the mark, as `h5clear -s` does.
+inline void ignore_status_flags(hid_t fapl) {
+  hbool_t clear = 1;
+  if (H5Pexist(fapl, "clear_status_flags") > 0) H5Pset(fapl, "clear_status_flags", &clear);
+}
+
+// Opens a file read-only: plainly; else as an SWMR reader (a file that a run is writing,
+// or one whose writer was killed in SWMR mode); else, where no writer has it any more
+// (writer_gone), ignoring the open-for-writing mark that a writer killed outside SWMR
+// mode leaves (as `h5clear -s` would, without writing). Negative if none succeeds.
+inline hid_t open_read_only(const std::string& path, hid_t fapl, bool writer_gone) {
+  hid_t file = H5Fopen(path.c_str(), H5F_ACC_RDONLY, fapl);
+  if (file < 0) file = H5Fopen(path.c_str(), H5F_ACC_RDONLY | H5F_ACC_SWMR_READ, fapl);
+  if (file >= 0 || !writer_gone) return file;
+  const Handle cleared(fapl == H5P_DEFAULT ? H5Pcreate(H5P_FILE_ACCESS) : H5Pcopy(fapl), H5Pclose,
+                       "copy a file access list");
+  ignore_status_flags(cleared.get());
+  return H5Fopen(path.c_str(), H5F_ACC_RDONLY, cleared.get());
+}
+
 inline Handle string_type() {
   Handle t(H5Tcopy(H5T_C_S1), H5Tclose, "copy the string type");
   check(H5Tset_size(t.get(), H5T_VARIABLE), "size the string type");

@@ -382,8 +382,7 @@ void Hdf5Sink::resume(const MultibodySystem& system, long snapshots, const std::
   // HDF5 refuses to open again for writing; the marks are cleared as `h5clear -s` does
   // (the library's own file access property for it).
   const h5::Handle fapl = file_access();
-  hbool_t clear = 1;
-  if (H5Pexist(fapl.get(), "clear_status_flags") > 0) H5Pset(fapl.get(), "clear_status_flags", &clear);
+  h5::ignore_status_flags(fapl.get());
   f->file = h5::Handle(H5Fopen(path_.c_str(), H5F_ACC_RDWR, fapl.get()), H5Fclose,
                        "open the results file " + path_ + " (if a killed run left it marked open, h5clear -s clears the mark)");
   const std::optional<std::string> id = h5::read_string_attribute(f->file.get(), "run_id");

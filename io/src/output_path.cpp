@@ -40,10 +40,7 @@ bool is_mbsflow_results_file(const std::string& path) {
   // Not HDF5's own file lock: a file that a run is writing is told by WriterLock, and a
   // reader must not be refused because a killed run left the lock mark.
   H5Pset_file_locking(fapl, false, true);
-  hid_t file = H5Fopen(path.c_str(), H5F_ACC_RDONLY, fapl);
-  // A file a run is writing, or one whose run was killed, is marked as written in SWMR
-  // mode: only a SWMR reader opens it.
-  if (file < 0) file = H5Fopen(path.c_str(), H5F_ACC_RDONLY | H5F_ACC_SWMR_READ, fapl);
+  const hid_t file = h5::open_read_only(path, fapl, !WriterLock::held(path));
   H5Pclose(fapl);
   if (file < 0) return false;
   const bool ours = H5Aexists(file, "mbsflow_version") > 0;

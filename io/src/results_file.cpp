@@ -9,6 +9,7 @@
 #include "hdf5_handle.hpp"
 #include "mbsflow/error.hpp"
 #include "mbsflow/io/result_fields.hpp"
+#include "writer_lock.hpp"
 
 namespace mbsflow {
 
@@ -19,9 +20,9 @@ ResultsFile::ResultsFile(const std::string& path) : path_(path) {
   if (!std::filesystem::exists(path)) throw InputError(path + ": no such results file");
   if (H5Fis_hdf5(path.c_str()) <= 0) throw InputError(path + ": not an HDF5 file");
   // A file that a run is writing is in SWMR mode and takes only SWMR readers (as does one
-  // whose writer was killed in that mode).
-  file_ = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
-  if (file_ < 0) file_ = H5Fopen(path.c_str(), H5F_ACC_RDONLY | H5F_ACC_SWMR_READ, H5P_DEFAULT);
+  // whose writer was killed in that mode); one whose writer was killed while writing its
+  // end is marked open for writing.
+  file_ = h5::open_read_only(path, H5P_DEFAULT, !WriterLock::held(path));
   if (file_ < 0)
     throw InputError(path + ": cannot open the results file (a run that is ending holds it alone for a moment: try again)");
   // Live: open as an SWMR reader. Asked of the open file, not read off which open

@@ -26,15 +26,19 @@ WriterLock::WriterLock(const std::string& path) {
   }
 }
 
-void WriterLock::check_free(const std::string& path) {
+bool WriterLock::held(const std::string& path) {
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) return;  // no file: nothing to protect
+  if (fd < 0) return false;  // no file: nobody writes it
   struct flock l {};
   l.l_type = F_WRLCK;
   l.l_whence = SEEK_SET;
   const int got = ::fcntl(fd, F_OFD_GETLK, &l);
   ::close(fd);
-  if (got == 0 && l.l_type != F_UNLCK)
+  return got == 0 && l.l_type != F_UNLCK;
+}
+
+void WriterLock::check_free(const std::string& path) {
+  if (held(path))
     throw InputError("another run is writing the results file " + path + "; give another -o, or wait for it to end");
 }
 

@@ -13,6 +13,8 @@ class WriterLock {
   // Creates the file if it is missing (never truncates it) and locks it; InputError if
   // another process holds the lock.
   explicit WriterLock(const std::string& path);
+  // Whether another process holds the lock of an existing file at path.
+  static bool held(const std::string& path);
   // InputError if another process holds the lock of an existing file at path.
   static void check_free(const std::string& path);
   ~WriterLock();

@@ -1,5 +1,9 @@
 #include <catch2/catch.hpp>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <Eigen/Geometry>
+#include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -10,6 +14,7 @@
 #include "mbsflow/io/hdf5_sink.hpp"
 #include "mbsflow/io/model_reader.hpp"
 #include "mbsflow/io/model_writer.hpp"
+#include "mbsflow/io/output_path.hpp"
 #include "mbsflow/io/result_fields.hpp"
 #include "mbsflow/io/results_file.hpp"
 #include "mbsflow/runtime/async_sink.hpp"
@@ -344,4 +349,43 @@ TEST_CASE("a run resumed from a file whose run was killed as it closed writes it
   CHECK(r.time() == std::vector<double>{0.0, 0.1, 0.2, 0.3});
   CHECK(r.read("/coupling/index") == std::vector<double>{1.0, 2.0, 3.0});
   CHECK(r.read("/coupling/t_end").back() == 0.1 * 3);
+}
+
+TEST_CASE("a results file whose writer was killed while writing its end is still recognised and read", "[io]") {
+  // end() writes the file's last parts outside SWMR mode; a writer killed there leaves
+  // the file marked open for writing, which plain and SWMR readers both refuse.
+  ChainParams p;
+  p.bodies = 2;
+  const Model m = make_chain(p);
+  const MultibodySystem sys(m);
+  const fs::path file = temp_file("killed_in_end.h5");
+  fs::remove(file);
+  {
+    Hdf5Sink sink(file.string(), FieldSet{}, RunInfo{"{}", "rk4", 0.1, 0.0, 1.0, 1, "test"});
+    sink.begin(sys);
+    Snapshot s;
+    s.state = sys.initial_state();
+    s.energy = Energy{};
+    sink.write(std::move(s));
+    sink.end();
+  }
+  const pid_t child = ::fork();
+  REQUIRE(child >= 0);
+  if (child == 0) {
+    const hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
+    H5Pset_libver_bounds(fapl, H5F_LIBVER_V110, H5F_LIBVER_LATEST);
+    const hid_t f = H5Fopen(file.c_str(), H5F_ACC_RDWR, fapl);
+    if (f >= 0) H5Fflush(f, H5F_SCOPE_GLOBAL);
+    ::raise(SIGKILL);  // never closes it
+  }
+  int status = 0;
+  REQUIRE(::waitpid(child, &status, 0) == child);
+  REQUIRE(WIFSIGNALED(status));
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  REQUIRE(H5Fopen(file.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT) < 0);  // the mark is there
+  CHECK(is_mbsflow_results_file(file.string()));
+  CHECK_NOTHROW(check_output_path(file.string(), {}));
+  const ResultsFile r(file.string());
+  CHECK(r.time().size() == 1);
+  fs::remove(file);
 }
