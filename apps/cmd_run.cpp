@@ -295,7 +295,9 @@ int run(const RunArgs& a, const CheckpointFile* resumed = nullptr, const std::st
   const StableStep stable = estimate_stable_step(m);
   RunOptions o = choose_options(m, a, stable);
   timings.mark("stable step and options", bodies);
-  const FieldSet fields = a.output.empty() ? FieldSet{} : parse_fields(a.fields);
+  FieldSet fields = a.output.empty() ? FieldSet{} : parse_fields(a.fields);
+  // A model with beams writes their section forces unless told which fields to write.
+  if (!a.output.empty() && !m.beams.empty() && a.fields == RunArgs{}.fields) fields.joint_force = true;
   const int threads = a.threads > 0 ? a.threads : static_cast<int>(std::thread::hardware_concurrency());
   const bool cluster = !a.cluster.empty() || a.processes > 0 || slurm_workers;
   // The model's text for the results file and the worker processes is written on a

@@ -158,6 +158,26 @@ void append_attachment_points(const Model& m, const StateLayout& l, const Eigen:
   }
 }
 
+// Beam elements [first, last)'s section forces in the element's frame (x along it, y the
+// section's y): axial force, shear y, z, torsion, bending about y, z, the resultants on
+// the cut face whose outward normal is +x (tension and the moment that the part beyond
+// the midpoint exerts positive). The bushing's wrench on its second node is the force
+// that the first half exerts on the second: the face's resultant is its opposite.
+void append_section_forces(const Model& m, const StateLayout& l, const Eigen::VectorXd& y, const Eigen::VectorXd& wrench,
+                           const std::vector<int>& element_joints, std::size_t first, std::size_t last,
+                           std::vector<double>& out) {
+  for (std::size_t e = first; e < last; ++e) {
+    const int j = element_joints[e];
+    const Joint& joint = m.joints[static_cast<std::size_t>(j)];
+    const double* q = y.data() + l.orientation(joint.body1);
+    const Quat& f = joint.frame1;
+    const Eigen::Quaterniond frame = Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized() * Eigen::Quaterniond(f[0], f[1], f[2], f[3]);
+    const Eigen::Matrix3d to_element = frame.toRotationMatrix().transpose();
+    const Eigen::Vector3d force = -(to_element * wrench.segment<3>(6 * j)), moment = -(to_element * wrench.segment<3>(6 * j + 3));
+    out.insert(out.end(), {force.x(), force.y(), force.z(), moment.x(), moment.y(), moment.z()});
+  }
+}
+
 // The coupling records as columns of /coupling (in a file not in SWMR mode), in place of
 // any there: a resumed run's file holds its predecessor's if that was killed after it
 // wrote them, while it closed the file.
@@ -236,6 +256,8 @@ struct Hdf5Sink::File {
   Series time;
   std::vector<std::pair<std::size_t, Series>> bodies;  // (index into body_fields, series)
   std::optional<Series> energy, body_energy, joint_force, motor_effort, attachment;
+  std::optional<Series> section_force;  // the beams' elements, with the joint forces
+  std::vector<int> element_joints;      // per beam element (beams in order), its bushing
   hsize_t rows_per_chunk = 1;
   std::vector<double> times;  // every time written, for the XDMF sidecar
 };
@@ -281,6 +303,11 @@ void Hdf5Sink::lay_out(File& f, const MultibodySystem& system, bool make) {
   const bool motors = std::any_of(m.joints.begin(), m.joints.end(), [](const Joint& j) { return j.motor->kind != JointMotor::Kind::none; });
   if (f.joint_force && motors) f.motor_effort = series(motor_effort_dataset, {joints, 1}, rows, motor_effort_unit);
   if (fields_.body[0] && joints > 0) f.attachment = series(joint_attachment_dataset, {joints, 6}, rows, joint_attachment_unit);
+  f.element_joints.clear();
+  for (const BeamRecord& b : m.beams)
+    for (int e = 0; e < b.elements; ++e) f.element_joints.push_back(b.first_joint + e);
+  if (f.joint_force && !f.element_joints.empty())
+    f.section_force = series(beam_section_force_dataset, {f.element_joints.size(), 6}, rows, beam_section_force_unit);
 }
 
 // The file under its .part name, locked, with the model's text and the run's settings
@@ -404,6 +431,7 @@ void Hdf5Sink::resume(const MultibodySystem& system, long snapshots, const std::
   if (f->joint_force) truncate(*f->joint_force, kept);
   if (f->motor_effort) truncate(*f->motor_effort, kept);
   if (f->attachment) truncate(*f->attachment, kept);
+  if (f->section_force) truncate(*f->section_force, kept);
   if (f->body_energy) truncate(*f->body_energy, kept);
   f->times = read_rows(f->time, kept);
   h5::check(H5Fflush(f->file.get(), H5F_SCOPE_GLOBAL), "flush " + path_);
@@ -462,6 +490,10 @@ void Hdf5Sink::write(Snapshot&& s) {
     put(*f.attachment, [&](hsize_t first, hsize_t last, std::vector<double>& out) {
       append_attachment_points(m, l, s.state, first, last, out);
     });
+  if (f.section_force)
+    put(*f.section_force, [&](hsize_t first, hsize_t last, std::vector<double>& out) {
+      append_section_forces(m, l, s.state, s.joint_wrench, f.element_joints, first, last, out);
+    });
   if (static_cast<hsize_t>(f.time.buffer.size()) >= f.rows_per_chunk || now_seconds() - last_flush_ >= flush_interval_s)
     flush();
 }
@@ -482,6 +514,7 @@ void Hdf5Sink::flush() {
   if (f.joint_force) append(*f.joint_force, first);
   if (f.motor_effort) append(*f.motor_effort, first);
   if (f.attachment) append(*f.attachment, first);
+  if (f.section_force) append(*f.section_force, first);
   h5::check(H5Fflush(f.file.get(), H5F_SCOPE_GLOBAL), "flush " + path_);
   append(f.time, first);  // last: a reader never sees a time without its data
   rows_written_ += rows;
@@ -522,6 +555,7 @@ void Hdf5Sink::end() {
       c.beam_index.push_back(static_cast<int>(b));
       c.beam_joint.push_back(beams[b].first_joint + e);
     }
+  c.beam_section_force = f->section_force.has_value();
   const std::vector<double> times = std::move(f->times);
   f.reset();
   const h5::Handle file(H5Fopen(path_.c_str(), H5F_ACC_RDWR, file_access().get()), H5Fclose, "open " + path_ + " again");

@@ -140,6 +140,8 @@ void write_xdmf(hid_t file, const std::string& xdmf_path, const std::string& h5_
   if (c.body_energy) body_energy.emplace(file, body_energy_dataset);
   if (lines) ends.emplace(file, joint_attachment_dataset);
   if (lines && c.joint_force) wrench.emplace(file, joint_force_dataset);
+  std::optional<Source> section;
+  if (segments > 0 && c.beam_section_force) section.emplace(file, beam_section_force_dataset);
 
   std::ofstream o(xdmf_path);
   if (!o) throw Error(xdmf_path + ": cannot write the XDMF sidecar");
@@ -188,6 +190,13 @@ void write_xdmf(hid_t file, const std::string& xdmf_path, const std::string& h5_
       o << "     </Geometry>\n";
       xdmf_attribute(o, file_name, "beam_index", "Scalar", "Cell", group + "/beam_index", std::to_string(segments), true);
       xdmf_attribute(o, file_name, "joint_index", "Scalar", "Cell", group + "/beam_joint", std::to_string(segments), true);
+      if (section) {  // axial and shear forces, torsion and bending moments
+        const std::string s3 = dims_text(segments, 3);
+        make_view(views.get(), "section_force", {segments, 3}, *section, t, 0, 3);
+        make_view(views.get(), "section_moment", {segments, 3}, *section, t, 3, 3);
+        xdmf_attribute(o, file_name, "section_force", "Vector", "Cell", step + "section_force", s3);
+        xdmf_attribute(o, file_name, "section_moment", "Vector", "Cell", step + "section_moment", s3);
+      }
       o << "    </Grid>\n";
     }
     if (lines) {

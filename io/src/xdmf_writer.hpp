@@ -43,6 +43,7 @@ struct XdmfContent {
   // Elastic beams' elements as lines between their nodes' centres (a beam's centreline):
   // per element its two node bodies, its beam and its bushing (joint index).
   std::vector<int> beam_lines, beam_index, beam_joint;
+  bool beam_section_force = false;  // /beams/section_force: cell data of the centrelines
 };
 
 // One DataItem reading the dataset `path` of the HDF5 file `file` (named as the sidecar

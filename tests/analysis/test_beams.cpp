@@ -5,12 +5,18 @@
 // and Mattiasson's published table; energy kept by an undamped beam in free motion.
 #include <catch2/catch.hpp>
 #include <algorithm>
+#include <unistd.h>
+
 #include <cmath>
+#include <filesystem>
 #include <numbers>
 
 #include "mbsflow/analysis/equilibrium.hpp"
 #include "mbsflow/analysis/modes.hpp"
 #include "mbsflow/graph/beams.hpp"
+#include "mbsflow/io/hdf5_sink.hpp"
+#include "mbsflow/io/result_fields.hpp"
+#include "mbsflow/io/results_file.hpp"
 #include "test_support.hpp"
 
 using namespace mbsflow;
@@ -270,4 +276,63 @@ TEST_CASE("stiffness-proportional damping: each mode's damping ratio is beta ome
     // To the dense eigensolver's accuracy on rates from 50 to 1e6 rad/s (torsion).
     CHECK(modes.damping_ratio[j] == Approx(1e-4 * omega / 2).epsilon(1e-4));
   }
+}
+
+TEST_CASE("the results file holds each beam element's section forces: at a bent cantilever's equilibrium, the tip load",
+          "[analysis][beams][io]") {
+  // A large deflection (P L^2 / E I = 2): at every section the part beyond the cut carries
+  // the tip load, so the section's force is the load (-P along world y) and its moment the
+  // load's about the element's midpoint, whatever the element's turn.
+  const int elements = 10;
+  const double p = 2 * E * Iz / (L * L);
+  Model m = beam_model(elements, true);
+  Load load;
+  load.body = elements;
+  load.force = {0.0, -p, 0.0};
+  m.loads.push_back(load);
+  MultibodySystem sys(m);
+  const Equilibrium e = find_equilibrium(sys, 0.0, sys.initial_state());
+  const std::string file =
+      (std::filesystem::temp_directory_path() / ("mbsflow_beam_sections_" + std::to_string(::getpid()) + ".h5")).string();
+  FieldSet fields;
+  fields.joint_force = true;
+  {
+    Hdf5Sink sink(file, fields, RunInfo{"{}", "tirk", 0.1, 0.0, 1.0, 1, "test"});
+    sink.begin(sys);
+    Snapshot s;
+    s.state = e.state;
+    sys.joint_wrenches(0.0, s.state, s.joint_wrench);
+    s.motor_effort = sys.motor_efforts();
+    sink.write(std::move(s));
+    sink.end();
+  }
+  const ResultsFile r(file);
+  const std::vector<double> section = r.read(beam_section_force_dataset);
+  REQUIRE(section.size() == 6 * elements);
+  const StateLayout& l = sys.layout();
+  const Eigen::Vector3d tip = e.state.segment<3>(l.position(elements));
+  for (int k = 0; k < elements; ++k) {
+    const Eigen::Map<const Eigen::Vector3d> force(section.data() + 6 * k), moment(section.data() + 6 * k + 3);
+    // The midpoint as the second node's arm of half the element ends there (the wrench's
+    // point; the first node's arm ends within the bushing's small deflection of it).
+    const Joint& j = m.joints[static_cast<std::size_t>(k)];
+    const double* q = e.state.data() + l.orientation(k + 1);
+    const Eigen::Vector3d mid = e.state.segment<3>(l.position(k + 1)) +
+                                Eigen::Quaterniond(q[0], q[1], q[2], q[3]) * Eigen::Vector3d(j.point2[0], j.point2[1], j.point2[2]);
+    const Eigen::Vector3d load_moment = (tip - mid).cross(Eigen::Vector3d(0, -p, 0));
+    INFO("element " << k << ": force " << force.transpose() << ", moment " << moment.transpose());
+    CHECK(force.norm() == Approx(p).epsilon(1e-6));
+    CHECK(moment.norm() == Approx(load_moment.norm()).epsilon(1e-6));
+    if (k == 0) {  // the clamped node does not turn: the element's frame is the world's
+      CHECK(force.y() == Approx(-p).epsilon(1e-6));
+      CHECK(moment.z() == Approx(load_moment.z()).epsilon(1e-6));
+    }
+    // Bending in the x-y plane only: no out-of-plane shear, torsion or bending about y.
+    CHECK(std::abs(force.z()) < 1e-9 * p);
+    CHECK(std::abs(moment.x()) + std::abs(moment.y()) < 1e-9 * p * L);
+  }
+  // Axial tension grows towards the tip as the beam turns to hang along the load.
+  CHECK(section[6 * (elements - 1)] > section[0]);
+  std::filesystem::remove(file);
+  std::filesystem::remove(xdmf_path(file));
 }

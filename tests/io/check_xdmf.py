@@ -33,6 +33,9 @@ def source_row(h5, name, t):
     if name in ("force", "torque"):
         f = h5["joints/force"][t]
         return f[:, :3] if name == "force" else f[:, 3:]
+    if name in ("section_force", "section_moment"):
+        f = h5["beams/section_force"][t]
+        return f[:, :3] if name == "section_force" else f[:, 3:]
     return h5["bodies/" + name][t]
 
 

@@ -57,6 +57,11 @@ def check_reader(label, reader, h5):
             cell = beams.GetCell(0)
             if cell.GetNumberOfPoints() != 2 or cell.GetPointId(0) != segments[0][0] or cell.GetPointId(1) != segments[0][1]:
                 fail(f"{label}: the first beam segment is not between bodies {segments[0]}")
+            if "beams/section_force" in h5:  # section forces and moments per element, as cell data
+                section = h5["beams/section_force"][t]
+                if not (np.array_equal(array(beams.GetCellData(), "section_force"), section[:, :3])
+                        and np.array_equal(array(beams.GetCellData(), "section_moment"), section[:, 3:])):
+                    fail(f"{label}: beam section forces at t = {time} differ from the file")
             parts = [parts[0]] + parts[2:]
         bodies = parts[0]
         if bodies.GetNumberOfCells() != h5["bodies/names"].shape[0]:

@@ -38,6 +38,10 @@ inline constexpr const char* motor_effort_dataset = "/joints/motor_effort";
 // T x J x 6: each joint's two attachment points in the world (x1 y1 z1 x2 y2 z2), written
 // with the positions when the model has joints: the joints as lines in ParaView and the viewer.
 inline constexpr const char* joint_attachment_dataset = "/joints/attachment";
+// T x E x 6: each beam element's section forces at its midpoint in the element's frame
+// (axial, shear y, shear z, torsion, bending y, bending z), beams in the model's order;
+// written with joint_force when the model has beams.
+inline constexpr const char* beam_section_force_dataset = "/beams/section_force";
 
 // Units of the other series ("units" attribute of each dataset; body fields carry theirs).
 inline constexpr const char* time_unit = "s";
@@ -45,6 +49,7 @@ inline constexpr const char* energy_unit = "J";                 // kinetic, grav
 inline constexpr const char* joint_force_unit = "N, N m";       // force xyz, torque xyz on body2, world
 inline constexpr const char* motor_effort_unit = "N m or N";    // revolute: torque; prismatic: force
 inline constexpr const char* joint_attachment_unit = "m";
+inline constexpr const char* beam_section_force_unit = "N, N m";  // N Vy Vz, T My Mz
 
 struct FieldSet {
   std::array<bool, 4> body{true, true, true, true};  // in the order of body_fields
