@@ -115,14 +115,19 @@ TEST_CASE("a free-free beam has six rigid-body motions and bending at beta L = 4
 
 namespace {
 
-// The cantilever's tip under a tip force P along -y (a dead load) at static equilibrium.
-Eigen::Vector3d loaded_tip(int elements, double p) {
+// A cantilever under a tip force P along -y (a dead load).
+Model loaded_cantilever(int elements, double p) {
   Model m = beam_model(elements, true);
   Load load;
   load.body = elements;
   load.force = {0.0, -p, 0.0};
   m.loads.push_back(load);
-  MultibodySystem sys(m);
+  return m;
+}
+
+// The cantilever's tip under a tip force P along -y at static equilibrium.
+Eigen::Vector3d loaded_tip(int elements, double p) {
+  MultibodySystem sys(loaded_cantilever(elements, p));
   const Equilibrium e = find_equilibrium(sys, 0.0, sys.initial_state());
   return e.state.segment<3>(sys.layout().position(elements));
 }
@@ -285,11 +290,7 @@ TEST_CASE("the results file holds each beam element's section forces: at a bent 
   // load's about the element's midpoint, whatever the element's turn.
   const int elements = 10;
   const double p = 2 * E * Iz / (L * L);
-  Model m = beam_model(elements, true);
-  Load load;
-  load.body = elements;
-  load.force = {0.0, -p, 0.0};
-  m.loads.push_back(load);
+  const Model m = loaded_cantilever(elements, p);
   MultibodySystem sys(m);
   const Equilibrium e = find_equilibrium(sys, 0.0, sys.initial_state());
   const std::string file =
