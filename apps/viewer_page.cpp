@@ -127,6 +127,35 @@ Motion mode_motion(const ResultsFile& r, const ViewerSettings& s, ViewerPage& pa
   return m;
 }
 
+// The beams of a run as tubes: each one's node bodies in order (from the segments that the
+// results file's XDMF views hold) and a radius that gives the tube its section's polar
+// radius of gyration, as a solid round bar would (sqrt(2 I_axis / m) of a node), at least
+// 0.4 % of the extent so that it is seen.
+nlohmann::json beam_tubes(const ResultsFile& r, const Model& model, double scale) {
+  nlohmann::json beams = nlohmann::json::array();
+  if (!r.has("/xdmf/beam_lines") || !r.has("/xdmf/beam_index")) return beams;
+  const std::vector<double> lines = r.read("/xdmf/beam_lines"), index = r.read("/xdmf/beam_index");
+  if (lines.size() != 2 * index.size()) return beams;
+  std::vector<int> nodes;
+  const auto close = [&] {
+    if (nodes.empty()) return;
+    const Body& b = model.bodies.at(static_cast<std::size_t>(nodes[nodes.size() / 2]));
+    const double axis = std::min({b.inertia[0], b.inertia[1], b.inertia[2]});
+    const double radius = b.mass > 0 && axis > 0 ? std::sqrt(2 * axis / b.mass) : 0.0;
+    beams.push_back({{"nodes", nodes}, {"radius", std::max(radius, 0.004 * scale)}});
+    nodes.clear();
+  };
+  for (std::size_t e = 0; e < index.size(); ++e) {
+    if (e > 0 && index[e] != index[e - 1]) close();
+    const int from = static_cast<int>(lines[2 * e]), to = static_cast<int>(lines[2 * e + 1]);
+    if (from < 0 || to < 0 || static_cast<std::size_t>(std::max(from, to)) >= model.bodies.size()) return nlohmann::json::array();
+    if (nodes.empty()) nodes.push_back(from);
+    nodes.push_back(to);
+  }
+  close();
+  return beams;
+}
+
 }  // namespace
 
 ViewerPage viewer_page(const ResultsFile& r, const ViewerSettings& s) {
@@ -155,6 +184,10 @@ ViewerPage viewer_page(const ResultsFile& r, const ViewerSettings& s) {
   std::vector<float> size;
   for (const Body& b : model.bodies)
     for (double a : ellipsoid(b, 0.02 * scale)) size.push_back(static_cast<float>(std::max(a, 0.01 * scale)));
+  // A beam's nodes are beads on its tube, a little wider than it.
+  const nlohmann::json beams = beam_tubes(r, model, scale);
+  for (const nlohmann::json& beam : beams)
+    for (int node : beam["nodes"]) std::fill_n(size.begin() + 3 * node, 3, static_cast<float>(1.3 * beam["radius"].get<double>()));
   // The bodies of each joint's two ends (-1: ground), for the links drawn from a body's
   // centre to its joint points.
   std::vector<int> joint_bodies;
@@ -174,6 +207,7 @@ ViewerPage viewer_page(const ResultsFile& r, const ViewerSettings& s) {
   data["attachment"] = ends ? nlohmann::json(base64(attachment)) : nlohmann::json();
   data["size"] = base64(size);
   data["joint_bodies"] = joint_bodies;
+  data["beams"] = beams;
   data["up"] = {up.x(), up.y(), up.z()};
   data["extent"] = scale;
   data["quantities"] = nlohmann::json::object();

@@ -83,6 +83,30 @@ def check_positions(driver, positions, work, frames_to_check):
     print(f"viewer_check: {frames} frames; after seeking, every body drawn where the file puts it")
 
 
+def check_tubes(driver, h5):
+    """Each beam is drawn as a tube around its centreline: at every frame checked, every
+    node of the beam lies inside the tube, one radius from its nearest vertex (up to the
+    spacing of the tube's rings, a quarter of an element)."""
+    lines, index = h5["xdmf/beam_lines"][:], h5["xdmf/beam_index"][:]
+    positions = h5["bodies/position"][:]
+    frames = driver.execute_script("return window.viewer.frames")
+    for k in (0, frames // 2, frames - 1):
+        driver.execute_script(f"window.viewer.seek({k})")
+        tubes = driver.execute_script("return window.viewer.tubes()")
+        if len(tubes) != index.max() + 1:
+            fail(f"frame {k}: {len(tubes)} tubes for {index.max() + 1} beams")
+        for b, tube in enumerate(tubes):
+            segments = lines[index == b]
+            nodes = np.concatenate([segments[:1, 0], segments[:, 1]])
+            length = np.linalg.norm(np.diff(positions[k][nodes], axis=0), axis=1).max()
+            r = tube["radius"]
+            far = np.sqrt(r * r + (length / 4) ** 2) * 1.01
+            for node, d in zip(nodes, tube["nodes"]):
+                if not 0.99 * r <= d <= far:
+                    fail(f"frame {k}: beam {b}'s node {node} is {d:.4g} from its tube's nearest vertex (radius {r:.4g})")
+    print(f"viewer_check: {len(tubes)} beam(s) drawn as tubes through their nodes at 3 frames of {frames}")
+
+
 def mode_positions(h5, mode, frames):
     """The bodies of mode `mode` at frames 0..frames-1 of a period, from the modes file's
     shapes: the equilibrium moved by a Re(shape e^(i phase)), the largest body translation
@@ -106,6 +130,9 @@ def main():
     run(mbsflow, work, "view", "chain.h5", "-o", "chain.html")
     run(mbsflow, work, "modes", "chain.json", "-n", "3", "-o", "modes.h5")
     run(mbsflow, work, "view", "modes.h5", "--mode", "2", "-o", "modes.html")
+    boom = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "examples", "models", "flexible_boom.json")
+    run(mbsflow, work, "run", boom, "--t-end", "2", "--output-interval", "0.1", "-o", "boom.h5")
+    run(mbsflow, work, "view", "boom.h5", "-o", "boom.html")
     run(mbsflow, work, "generate", "grid", "--rows", "100", "--cols", "100", "-o", "grid.json")
     run(mbsflow, work, "run", "grid.json", "--t-end", "0.02", "--output-interval", "0.002", "-o", "grid.h5")
     run(mbsflow, work, "view", "grid.h5", "-o", "grid.html")
@@ -115,6 +142,11 @@ def main():
         with h5py.File(os.path.join(work, "chain.h5"), "r") as h5:
             positions = h5["bodies/position"][:]
             check_positions(driver, positions, work, (len(positions) - 1, 0))
+        if driver.execute_script("return window.viewer.tubes()") != []:
+            fail("a chain without beams is drawn with tubes")
+        open_page(driver, os.path.join(work, "boom.html"))
+        with h5py.File(os.path.join(work, "boom.h5"), "r") as h5:
+            check_tubes(driver, h5)
         open_page(driver, os.path.join(work, "modes.html"))
         with h5py.File(os.path.join(work, "modes.h5"), "r") as h5:
             check_positions(driver, mode_positions(h5, 2, 48), work, (12, 36))  # a quarter and three quarters of a period
