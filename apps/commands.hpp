@@ -25,6 +25,7 @@ Action add_keygen(CLI::App& app);
 Action add_view(CLI::App& app);
 Action add_plot(CLI::App& app);
 Action add_plan(CLI::App& app);
+Action add_reduce(CLI::App& app);  // cmd_reduce.cpp
 
 // `mbsflow worker` once its options are read; also what a worker task of `run --slurm` does.
 int serve_worker_command(WorkerOptions options, bool quiet);

@@ -32,6 +32,7 @@ int main(int argc, char** argv) {
   add(mbsflow::cli::add_ode);
   add(mbsflow::cli::add_modes);
   add(mbsflow::cli::add_frf);
+  add(mbsflow::cli::add_reduce);
   add(mbsflow::cli::add_keygen);
   mbsflow::cli::set_invocation(argc, argv);
   // A mistyped command is named, with the commands there are (CLI11 would say only that a

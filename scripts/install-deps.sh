@@ -10,8 +10,10 @@ packages=(
   python3 python3-h5py python3-matplotlib
   iproute2  # ip netns, for the test across two network namespaces
   libsundials-dev libboost-dev
-  libsuitesparse-dev  # KLU, the sparse LU of the implicit methods
+  libsuitesparse-dev  # KLU, the sparse LU of the implicit methods; CHOLMOD, the Cholesky of mbsflow reduce
+  libopenblas0-pthread  # the BLAS under CHOLMOD and the reduction's dense products: 7x the reference BLAS on a 200 000-DOF part
   libspectra-dev  # Spectra: the sparse shift-invert eigensolver of mbsflow modes
+  calculix-ccx  # tests only: the FE code whose matrices mbsflow reduce reads and whose frequencies it is checked against
   clang libclang-rt-14-dev  # libFuzzer targets (tests/fuzz); Debian 12's clang is 14
   paraview python3-paraview xvfb  # the results opened in the real ParaView (tests/io/paraview_check.sh)
   libjs-three  # three.js, inlined by mbsflow view

@@ -126,6 +126,12 @@ inline std::optional<std::string> read_text_dataset(hid_t parent, const std::str
   return s;
 }
 
+// The "units" attribute of a dataset of the file.
+inline void write_units(hid_t file, const char* dataset, const char* units) {
+  const Handle set(H5Dopen2(file, dataset, H5P_DEFAULT), H5Dclose, std::string("open ") + dataset);
+  write_string_attribute(set.get(), "units", units);
+}
+
 inline void write_number_attribute(hid_t obj, const char* name, double value) {
   const Handle space(H5Screate(H5S_SCALAR), H5Sclose, "create a scalar space");
   const Handle attr(H5Acreate2(obj, name, H5T_IEEE_F64LE, space.get(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose,

@@ -12,10 +12,6 @@
 namespace mbsflow {
 namespace {
 
-void unit(hid_t file, const char* dataset, const char* units) {
-  const h5::Handle set(H5Dopen2(file, dataset, H5P_DEFAULT), H5Dclose, std::string("open ") + dataset);
-  h5::write_string_attribute(set.get(), "units", units);
-}
 
 ModesXdmf write_file(const std::string& path, const std::string& h5_name, const LinearModel& lm, const Modes& modes,
                      const ModesFileInfo& info) {
@@ -70,15 +66,15 @@ ModesXdmf write_file(const std::string& path, const std::string& h5_name, const 
   }
   h5::write_array(root, "/equilibrium/position", H5T_NATIVE_DOUBLE, position, {n, 3});
   h5::write_array(root, "/equilibrium/orientation", H5T_NATIVE_DOUBLE, orientation, {n, 4});
-  unit(root, "/modes/frequency", "Hz");
-  unit(root, "/modes/damping_ratio", "1");
-  unit(root, "/modes/eigenvalue", "1/s");
-  unit(root, "/modes/residual", "1");
-  unit(root, "/modes/shape", "m, m, m, rad, rad, rad (mass-normalised: per square root of kg m^2)");
-  unit(root, "/modes/shape_imag", "m, m, m, rad, rad, rad");
-  unit(root, "/modes/energy_share", "1");
-  unit(root, "/equilibrium/position", "m");
-  unit(root, "/equilibrium/orientation", "1");
+  h5::write_units(root, "/modes/frequency", "Hz");
+  h5::write_units(root, "/modes/damping_ratio", "1");
+  h5::write_units(root, "/modes/eigenvalue", "1/s");
+  h5::write_units(root, "/modes/residual", "1");
+  h5::write_units(root, "/modes/shape", "m, m, m, rad, rad, rad (mass-normalised: per square root of kg m^2)");
+  h5::write_units(root, "/modes/shape_imag", "m, m, m, rad, rad, rad");
+  h5::write_units(root, "/modes/energy_share", "1");
+  h5::write_units(root, "/equilibrium/position", "m");
+  h5::write_units(root, "/equilibrium/orientation", "1");
   return write_mode_frames(root, lm, modes, h5_name);
 }
 

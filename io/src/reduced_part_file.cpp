@@ -1,0 +1,151 @@
+#include "mbsflow/io/reduced_part_file.hpp"
+
+#include <array>
+#include <unordered_map>
+
+#include "hdf5_handle.hpp"
+#include "mbsflow/version.hpp"
+#include "part_file.hpp"
+
+namespace mbsflow {
+namespace {
+
+constexpr const char* kind = "reduced finite-element part (Craig-Bampton)";
+
+std::vector<double> row_major(const Eigen::MatrixXd& m) {
+  std::vector<double> out(static_cast<std::size_t>(m.size()));
+  Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(out.data(), m.rows(), m.cols()) = m;
+  return out;
+}
+
+
+// A dataset's values (as doubles) and its shape.
+std::pair<std::vector<double>, std::vector<hsize_t>> read_all(hid_t file, const std::string& path, const std::string& name) {
+  if (H5Lexists(file, path.substr(0, path.find('/', 1)).c_str(), H5P_DEFAULT) <= 0 || H5Lexists(file, path.c_str(), H5P_DEFAULT) <= 0)
+    throw InputError(name + ": no " + path + " (not a reduced part: mbsflow reduce writes one)");
+  const h5::Handle set(H5Dopen2(file, path.c_str(), H5P_DEFAULT), H5Dclose, "open " + path);
+  const h5::Handle space(H5Dget_space(set.get()), H5Sclose, "space of " + path);
+  std::vector<hsize_t> dims(static_cast<std::size_t>(H5Sget_simple_extent_ndims(space.get())));
+  H5Sget_simple_extent_dims(space.get(), dims.data(), nullptr);
+  hsize_t count = 1;
+  for (hsize_t d : dims) count *= d;
+  std::vector<double> v(count);
+  if (count > 0) h5::check(H5Dread(set.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()), "read " + path);
+  return {std::move(v), std::move(dims)};
+}
+
+Eigen::MatrixXd matrix(const std::pair<std::vector<double>, std::vector<hsize_t>>& a, const std::string& what) {
+  if (a.second.size() != 2) throw InputError(what + " is not a matrix");
+  const auto rows = static_cast<Eigen::Index>(a.second[0]), cols = static_cast<Eigen::Index>(a.second[1]);
+  return Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(a.first.data(), rows, cols);
+}
+
+void write_file(const std::string& path, const ReducedPart& part, const std::vector<FeDof>& dofs, const FeMesh& mesh,
+                const ReducedPartInfo& info) {
+  const h5::Handle file(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose, "create " + path);
+  const hid_t root = file.get();
+  h5::write_string_attribute(root, "mbsflow_version", MBSFLOW_VERSION);
+  h5::write_string_attribute(root, "kind", kind);
+  h5::write_string_attribute(root, "source", info.source);
+  h5::write_string_attribute(root, "command_line", info.command_line);
+  for (const char* g : {"/reduced", "/modes", "/mass", "/invariants", "/nodes", "/interface", "/display"})
+    h5::Handle(H5Gcreate2(root, g, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose, std::string("create ") + g);
+  const auto r = static_cast<hsize_t>(part.mass.rows());
+  h5::write_array(root, "/reduced/mass", H5T_NATIVE_DOUBLE, row_major(part.mass), {r, r});
+  h5::write_array(root, "/reduced/stiffness", H5T_NATIVE_DOUBLE, row_major(part.stiffness), {r, r});
+  std::vector<long> coordinate_dof;
+  for (const FeDof& d : part.interface_dofs) coordinate_dof.insert(coordinate_dof.end(), {d.node, d.direction});
+  for (int k = 0; k < part.modes; ++k) coordinate_dof.insert(coordinate_dof.end(), {0L, 0L});
+  h5::write_array(root, "/reduced/coordinate_dof", H5T_NATIVE_LONG, coordinate_dof, {r, 2});
+  const std::vector<double> frequency(part.fixed_frequency.data(), part.fixed_frequency.data() + part.fixed_frequency.size());
+  h5::write_array(root, "/modes/frequency", H5T_NATIVE_DOUBLE, frequency, {frequency.size()});
+  h5::write_array(root, "/mass/mass", H5T_NATIVE_DOUBLE, std::vector<double>{part.properties.mass}, {1});
+  const Eigen::Vector3d& c = part.properties.centre;
+  h5::write_array(root, "/mass/centre", H5T_NATIVE_DOUBLE, std::vector<double>{c.x(), c.y(), c.z()}, {3});
+  h5::write_array(root, "/mass/inertia", H5T_NATIVE_DOUBLE, row_major(part.properties.inertia), {3, 3});
+  h5::write_array(root, "/invariants/rigid_coupling", H5T_NATIVE_DOUBLE, row_major(part.rigid_coupling), {6, r});
+
+  const hsize_t n = mesh.node_id.size();
+  std::vector<double> position;
+  for (const Eigen::Vector3d& x : mesh.node_position) position.insert(position.end(), {x.x(), x.y(), x.z()});
+  h5::write_array(root, "/nodes/id", H5T_NATIVE_LONG, mesh.node_id, {n});
+  h5::write_array(root, "/nodes/position", H5T_NATIVE_DOUBLE, position, {n, 3});
+  std::vector<long> interface_nodes;
+  for (const FeDof& d : part.interface_dofs)
+    if (interface_nodes.empty() || interface_nodes.back() != d.node) interface_nodes.push_back(d.node);
+  h5::write_array(root, "/interface/node", H5T_NATIVE_LONG, interface_nodes, {interface_nodes.size()});
+
+  // The display: the outer faces' corner nodes and each one's translation per coordinate.
+  const std::vector<std::array<long, 3>> faces = outer_triangles(mesh);
+  std::unordered_map<long, long> display_index;
+  std::vector<long> display_node, triangle;
+  for (const auto& f : faces)
+    for (long node : f) {
+      const auto [at, added] = display_index.emplace(node, static_cast<long>(display_node.size()));
+      if (added) display_node.push_back(static_cast<long>(mesh.node_index.at(node)));
+      triangle.push_back(at->second);
+    }
+  std::unordered_map<long, std::array<Eigen::Index, 3>> translation_row;  // node -> rows of its x, y, z DOFs
+  for (std::size_t k = 0; k < dofs.size(); ++k)
+    if (dofs[k].direction <= 3) {
+      auto [at, added] = translation_row.try_emplace(dofs[k].node, std::array<Eigen::Index, 3>{-1, -1, -1});
+      at->second[static_cast<std::size_t>(dofs[k].direction - 1)] = static_cast<Eigen::Index>(k);
+    }
+  const hsize_t d = display_node.size();
+  std::vector<double> shape(r * d * 3, 0.0);
+  for (hsize_t j = 0; j < d; ++j) {
+    const auto at = translation_row.find(mesh.node_id[static_cast<std::size_t>(display_node[j])]);
+    if (at == translation_row.end()) continue;  // a node with no DOF (held by the deck): it stays
+    for (std::size_t e = 0; e < 3; ++e)
+      if (at->second[e] >= 0)
+        for (hsize_t q = 0; q < r; ++q)
+          shape[(q * d + j) * 3 + e] = part.shapes(at->second[e], static_cast<Eigen::Index>(q));
+  }
+  h5::write_array(root, "/display/node", H5T_NATIVE_LONG, display_node, {d});
+  h5::write_array(root, "/display/triangle", H5T_NATIVE_LONG, triangle, {faces.size(), 3});
+  h5::write_array(root, "/display/shape", H5T_NATIVE_DOUBLE, shape, {r, d, 3});
+  h5::write_units(root, "/reduced/mass", "kg, kg m, kg m^2 (by the coordinates' kinds; modal coordinates mass-normalised)");
+  h5::write_units(root, "/reduced/stiffness", "N/m, N, N m (by the coordinates' kinds)");
+  h5::write_units(root, "/modes/frequency", "Hz");
+  h5::write_units(root, "/mass/mass", "kg");
+  h5::write_units(root, "/mass/centre", "m");
+  h5::write_units(root, "/mass/inertia", "kg m^2");
+  h5::write_units(root, "/nodes/position", "m");
+  h5::write_units(root, "/display/shape", "m per unit coordinate");
+}
+
+}  // namespace
+
+void write_reduced_part(const std::string& path, const ReducedPart& part, const std::vector<FeDof>& dofs, const FeMesh& mesh,
+                        const ReducedPartInfo& info) {
+  write_through_part(path, [&](const std::string& making) { write_file(making, part, dofs, mesh, info); });
+}
+
+ReducedPart read_reduced_part(const std::string& path) {
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  if (H5Fis_hdf5(path.c_str()) <= 0) throw InputError(path + ": not an HDF5 file (mbsflow reduce writes a reduced part)");
+  const h5::Handle file(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose, "open " + path);
+  if (h5::read_string_attribute(file.get(), "kind") != std::string(kind))
+    throw InputError(path + ": not a reduced part (mbsflow reduce writes one)");
+  ReducedPart p;
+  p.mass = matrix(read_all(file.get(), "/reduced/mass", path), path + ":/reduced/mass");
+  p.stiffness = matrix(read_all(file.get(), "/reduced/stiffness", path), path + ":/reduced/stiffness");
+  const Eigen::MatrixXd dof = matrix(read_all(file.get(), "/reduced/coordinate_dof", path), path + ":/reduced/coordinate_dof");
+  for (Eigen::Index k = 0; k < dof.rows(); ++k)
+    if (dof(k, 1) > 0)
+      p.interface_dofs.push_back({static_cast<long>(dof(k, 0)), static_cast<int>(dof(k, 1))});
+    else
+      ++p.modes;
+  const auto frequency = read_all(file.get(), "/modes/frequency", path).first;
+  p.fixed_frequency = Eigen::Map<const Eigen::VectorXd>(frequency.data(), static_cast<Eigen::Index>(frequency.size()));
+  p.properties.mass = read_all(file.get(), "/mass/mass", path).first.at(0);
+  const auto centre = read_all(file.get(), "/mass/centre", path).first;
+  p.properties.centre = Eigen::Vector3d(centre.at(0), centre.at(1), centre.at(2));
+  p.properties.inertia = matrix(read_all(file.get(), "/mass/inertia", path), path + ":/mass/inertia");
+  p.rigid_coupling = matrix(read_all(file.get(), "/invariants/rigid_coupling", path), path + ":/invariants/rigid_coupling");
+  if (p.mass.rows() != dof.rows() || p.stiffness.rows() != dof.rows() || p.mass.cols() != p.mass.rows())
+    throw InputError(path + ": the reduced matrices and coordinates disagree in size");
+  return p;
+}
+
+}  // namespace mbsflow
