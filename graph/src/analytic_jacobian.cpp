@@ -172,11 +172,11 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
     blocks.clear();
     const SeededState<BodyDual> own = seeded_state<BodyDual>(y, layout_, i, 0);
     const Matrix3T<BodyDual> rot = rotation_matrix<BodyDual>(own.q);
-    // Loads: through the orientation only.
+    // Loads: through the orientation, and a damping load through the velocities too.
     Vector3T<BodyDual> load_force = Vector3T<BodyDual>::Zero(), load_torque = Vector3T<BodyDual>::Zero();
     for (int p = compiled_->load_start[bi]; p < compiled_->load_start[bi + 1]; ++p) {
       const Load& l = model().loads[static_cast<std::size_t>(compiled_->load_index[static_cast<std::size_t>(p)])];
-      add_load<BodyDual>(l, evaluate(l.function, t).value, rot, load_force, load_torque);
+      add_load<BodyDual>(l, evaluate(l.function, t).value, rot, own.v, own.w, load_force, load_torque);
     }
     Block6& self = block_of(static_cast<int>(i));
     self.topRows<3>() = derivatives<3>(load_force, 0);
@@ -202,7 +202,7 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
     // w' = J^-1 (R^T T - w x J w): the torque's derivatives through J^-1 R^T; R(q) and the
     // gyroscopic term through the body's own quaternion and angular velocity.
     Eigen::Vector3d force, torque;
-    applied_wrench(i, t, force, torque);
+    applied_wrench(i, t, y, force, torque);
     const BodyLaw& law = body_law(bi);
     const Eigen::Matrix3d to_w = law.inv_inertia * rot_[bi].transpose();
     const Vector3T<BodyDual> w_rate = angular_acceleration<BodyDual>(rot, own.w, Vector3T<BodyDual>(torque.cast<BodyDual>()),

@@ -53,7 +53,8 @@ BeamParts make_beam(const BeamSpec& s, int first_body) {
   require_positive(s.section.Iy, name, "section.Iy");
   require_positive(s.section.Iz, name, "section.Iz");
   require_positive(s.section.J, name, "section.J");
-  if (!(s.stiffness_damping >= 0.0) || !std::isfinite(s.stiffness_damping))
+  if (!(s.stiffness_damping >= 0.0) || !std::isfinite(s.stiffness_damping) || !(s.mass_damping >= 0.0) ||
+      !std::isfinite(s.mass_damping))
     throw InputError("beam '" + name + "': damping must be a number >= 0");
   const std::size_t n = s.points.size();
   if (n < 2) throw InputError("beam '" + name + "': needs at least 2 points (one element)");
@@ -85,6 +86,13 @@ BeamParts make_beam(const BeamSpec& s, int first_body) {
                      rho * s.section.Iz * piece + m * piece * piece / 12.0, 0.0, 0.0, 0.0};
     b.position = s.points[i];
     b.orientation = quat(frame[i]);
+    if (s.mass_damping > 0.0) {
+      Load damping;
+      damping.body = first_body + static_cast<int>(i);
+      damping.damping = {s.mass_damping * m, s.mass_damping * m, s.mass_damping * m};
+      for (std::size_t k = 0; k < 6; ++k) damping.angular_damping[k] = s.mass_damping * b.inertia.get()[k];
+      out.loads.push_back(damping);
+    }
     out.nodes.push_back(std::move(b));
   }
   for (std::size_t e = 0; e + 1 < n; ++e) {
@@ -130,6 +138,7 @@ void add_beam(Model& model, const BeamSpec& spec) {
                static_cast<int>(model.joints.size()), static_cast<int>(parts.elements.size())};
   for (Body& b : parts.nodes) model.bodies.push_back(std::move(b));
   for (Joint& j : parts.elements) model.joints.push_back(std::move(j));
+  model.loads.insert(model.loads.end(), parts.loads.begin(), parts.loads.end());
   model.beams.push_back(std::move(r));
 }
 

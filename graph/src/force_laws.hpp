@@ -8,6 +8,7 @@
 
 #include "mbsflow/graph/force_table.hpp"
 #include "mbsflow/graph/model.hpp"
+#include "mbsflow/graph/multibody_system.hpp"  // inertia_matrix
 #include "rotation.hpp"
 
 namespace mbsflow {
@@ -155,9 +156,11 @@ template <class S, class Joint, class Body, class Out>
 }
 
 // Adds a load's force and its torque about the centre of mass, scaled by s (its time
-// function's value); r: the body's orientation.
+// function's value); r: the body's orientation, v and w its velocity (world) and angular
+// velocity (body frame), which a damping load opposes.
 template <class S>
-[[gnu::always_inline]] inline void add_load(const Load& l, double s, const Matrix3T<S>& r, Vector3T<S>& force, Vector3T<S>& torque) {
+[[gnu::always_inline]] inline void add_load(const Load& l, double s, const Matrix3T<S>& r, const Vector3T<S>& v,
+                                            const Vector3T<S>& w, Vector3T<S>& force, Vector3T<S>& torque) {
   const Eigen::Vector3d f0 = s * Eigen::Vector3d(l.force[0], l.force[1], l.force[2]);
   const Eigen::Vector3d m0 = s * Eigen::Vector3d(l.torque[0], l.torque[1], l.torque[2]);
   Vector3T<S> f = as_scalar<S>(f0), m = as_scalar<S>(m0);
@@ -167,6 +170,11 @@ template <class S>
   }
   force += f;
   torque += m + (r * as_scalar<S>(Eigen::Vector3d(l.point[0], l.point[1], l.point[2]))).cross(f);
+  if (l.damped()) {
+    const Eigen::Matrix3d angular = inertia_matrix(l.angular_damping);
+    force -= as_scalar<S>(Eigen::Vector3d(l.damping[0], l.damping[1], l.damping[2])).cwiseProduct(v);
+    torque -= r * (as_scalar<S>(angular) * w);
+  }
 }
 
 // A free body's angular acceleration (body frame) from the world torque on it:

@@ -167,6 +167,8 @@ void check_model(const Model& m) {
     finite(l.force, where / "force");
     finite(l.torque, where / "torque");
     finite(l.point, where / "point");
+    finite(l.damping, where / "damping");
+    finite(l.angular_damping, where / "angular_damping");
     check_function(l.function, where / "function");
   }
   for (std::size_t k = 0; k < m.drivers.size(); ++k) {

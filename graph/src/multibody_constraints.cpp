@@ -168,7 +168,7 @@ void MultibodySystem::solve_cluster(int c, double t, const Eigen::VectorXd& y, E
   for (std::size_t s = 0; s < nb; ++s) {
     const int i = bodies[s];
     const auto bi = static_cast<std::size_t>(i);
-    applied_wrench(i, t, k.force[s], k.torque[s]);
+    applied_wrench(i, t, y, k.force[s], k.torque[s]);
     if (const int d = compiled_->driver_of_body[bi]; d >= 0) {
       rc.inv_mass[s] = 0.0;
       rc.inv_inertia[s].setZero();

@@ -355,14 +355,16 @@ void MultibodySystem::joint_wrenches(double t, const Eigen::VectorXd& y, Eigen::
 
 // Gravity, loads, joints and force elements on body i: force and torque (world, about
 // the centre of mass), summed in the fixed order of the class comment.
-void MultibodySystem::applied_wrench(Eigen::Index i, double t, Eigen::Vector3d& force, Eigen::Vector3d& torque) const {
+void MultibodySystem::applied_wrench(Eigen::Index i, double t, const Eigen::VectorXd& y, Eigen::Vector3d& force,
+                                     Eigen::Vector3d& torque) const {
   // Summed in locals, stored once: sums through the references went to memory and back at
   // every term (they might alias what is summed).
   const auto bi = static_cast<std::size_t>(i);
   Eigen::Vector3d f = body_law(bi).mass * gravity_, m = Eigen::Vector3d::Zero();
   for (int p = compiled_->load_start[bi]; p < compiled_->load_start[bi + 1]; ++p) {
     const Load& l = model().loads[static_cast<std::size_t>(compiled_->load_index[static_cast<std::size_t>(p)])];
-    add_load<double>(l, evaluate(l.function, t).value, rot_[bi], f, m);  // loads: rotations kept
+    add_load<double>(l, evaluate(l.function, t).value, rot_[bi], y.segment<3>(layout_.velocity(i)),
+                     y.segment<3>(layout_.angular_velocity(i)), f, m);  // loads: rotations kept
   }
   for (int p = compiled_->incidence_start[bi]; p < compiled_->incidence_start[bi + 1]; ++p) {
     const int code = compiled_->incidence[static_cast<std::size_t>(p)];
@@ -412,7 +414,7 @@ void MultibodySystem::write_derivative(Eigen::Index i, double t, const Eigen::Ve
 [[gnu::always_inline]] inline void MultibodySystem::body_derivative(Eigen::Index i, double t, const Eigen::VectorXd& y,
                                                                       Eigen::VectorXd& dydt) const {
   Eigen::Vector3d force, torque;
-  applied_wrench(i, t, force, torque);
+  applied_wrench(i, t, y, force, torque);
   write_derivative(i, t, y, dydt, force, torque);
 }
 
@@ -424,7 +426,7 @@ void MultibodySystem::free_bodies_on_lanes(const int* k, double t, const Eigen::
   double wrench[6 * Width];
   for (int l = 0; l < Width; ++l) {
     Eigen::Vector3d force, torque;
-    applied_wrench(k[l], t, force, torque);
+    applied_wrench(k[l], t, y, force, torque);
     Eigen::Map<Eigen::Vector3d>(wrench + 6 * l) = force;
     Eigen::Map<Eigen::Vector3d>(wrench + 6 * l + 3) = torque;
     dydt.segment<3>(layout_.position(k[l])) = y.segment<3>(layout_.velocity(k[l]));

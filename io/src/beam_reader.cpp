@@ -44,15 +44,16 @@ BeamParts read_beam(const JsonNode& n, int first_body, std::string& name) {
   if (auto v = n.find("shear")) s.shear = v->boolean();
   if (auto d = n.find("damping")) {
     // Stiffness-proportional: beta directly, or the damping ratio at a frequency (zeta =
-    // beta omega / 2 there, rising with frequency).
-    d->allow_only({"beta", "ratio", "frequency"});
+    // beta omega / 2 there, rising with frequency); and Rayleigh's mass-proportional alpha.
+    d->allow_only({"beta", "ratio", "frequency", "alpha"});
     if (auto b = d->find("beta")) {
       if (d->has("ratio")) (*d)["ratio"].fail_at_key("give either beta or ratio with frequency, not both");
       s.stiffness_damping = b->non_negative();
-    } else {
+    } else if (d->has("ratio") || d->has("frequency") || !d->has("alpha")) {
       const double ratio = (*d)["ratio"].non_negative(), f = (*d)["frequency"].positive();
       s.stiffness_damping = 2.0 * ratio / (2.0 * std::numbers::pi * f);
     }
+    if (auto a = d->find("alpha")) s.mass_damping = a->non_negative();
   }
   try {
     return make_beam(s, first_body);

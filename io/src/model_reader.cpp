@@ -275,6 +275,7 @@ class Reader {
       shared_(j);
       m_.joints.push_back(std::move(j));
     }
+    m_.loads.insert(m_.loads.end(), parts.loads.begin(), parts.loads.end());
     m_.beams.push_back(std::move(r));
   }
 
@@ -419,12 +420,22 @@ class Reader {
   }
 
   void load(const JsonNode& n) {
-    n.allow_only({"body", "force", "torque", "point", "frame", "function"});
+    n.allow_only({"body", "force", "torque", "point", "frame", "function", "damping", "angular_damping"});
     Load l;
     l.body = body_ref(n["body"], false);
     l.force = vec3(n, "force");
     l.torque = vec3(n, "torque");
     l.point = vec3(n, "point");
+    if (auto d = n.find("damping")) {
+      l.damping = d->fixed<3>();
+      for (std::size_t i = 0; i < 3; ++i)
+        if (l.damping[i] < 0.0) d->item(i).non_negative();  // fails, naming the item
+    }
+    if (auto d = n.find("angular_damping")) {
+      l.angular_damping = d->fixed<6>();
+      for (std::size_t i = 0; i < 3; ++i)
+        if (l.angular_damping[i] < 0.0) d->item(i).non_negative();
+    }
     if (auto f = n.find("frame")) {
       const std::string frame = f->string();
       if (frame != "world" && frame != "body") f->fail("must be \"world\" or \"body\" (got '" + frame + "')");

@@ -146,6 +146,8 @@ void write_load(std::string& out, const Model& m, const Load& l) {
   if (!zero(l.point)) o("point", l.point);
   if (l.body_frame) o("frame", "body");
   o.object("function", function_of(l.function));
+  if (l.damping != Vec3{}) o("damping", l.damping);
+  if (l.angular_damping != Vec6{}) o("angular_damping", l.angular_damping);
 }
 
 void write_driver(std::string& out, const Model& m, const Driver& d) {

@@ -267,22 +267,74 @@ TEST_CASE("a beam through points on a line is the beam from one end to the other
   CHECK(sys.energy(0.0, sys.initial_state()).elastic < 1e-20);
 }
 
-TEST_CASE("stiffness-proportional damping: each mode's damping ratio is beta omega / 2", "[analysis][beams]") {
+namespace {
+
+// The four lowest modes of a damped cantilever of 20 elements.
+Modes damped_cantilever_modes(double alpha, double beta) {
   BeamSpec s = beam_spec(20);
-  s.stiffness_damping = 1e-4;
+  s.stiffness_damping = beta;
+  s.mass_damping = alpha;
   Model m;
   add_beam(m, s);
   m.drivers.push_back(Driver{0});
+  REQUIRE(m.loads.size() == (alpha > 0 ? 21u : 0u));  // with alpha, a damping load on each node
   MultibodySystem sys(m);
   const LinearModel lm = linearize(sys, 0.0, sys.initial_state());
   ModeOptions o;
   o.count = 4;
-  const Modes modes = compute_modes(lm, o);
+  Modes modes = compute_modes(lm, o);
   REQUIRE(modes.frequency.size() == 4);
+  return modes;
+}
+
+}  // namespace
+
+TEST_CASE("stiffness-proportional damping: each mode's damping ratio is beta omega / 2", "[analysis][beams]") {
+  const Modes modes = damped_cantilever_modes(0.0, 1e-4);
   for (std::size_t j = 0; j < 4; ++j) {
     const double omega = std::abs(modes.eigenvalue[j]);
     // To the dense eigensolver's accuracy on rates from 50 to 1e6 rad/s (torsion).
     CHECK(modes.damping_ratio[j] == Approx(1e-4 * omega / 2).epsilon(1e-4));
+  }
+}
+
+TEST_CASE("Rayleigh damping alpha M + beta K: each mode's damping ratio is alpha / (2 omega) + beta omega / 2",
+          "[analysis][beams]") {
+  const Modes modes = damped_cantilever_modes(20.0, 1e-5);
+  for (std::size_t j = 0; j < 4; ++j) {
+    const double omega = std::abs(modes.eigenvalue[j]);
+    INFO("mode " << j << ": omega " << omega);
+    CHECK(modes.damping_ratio[j] == Approx(20.0 / (2 * omega) + 1e-5 * omega / 2).epsilon(1e-4));
+  }
+}
+
+TEST_CASE("mass-proportional damping slows a free beam's rigid motion as exp(-alpha t), its spin too", "[analysis][beams]") {
+  BeamSpec s = beam_spec(6);
+  s.mass_damping = 3.0;
+  Model m;
+  add_beam(m, s);
+  MultibodySystem sys(m);
+  Eigen::VectorXd y = sys.initial_state();
+  const StateLayout& l = sys.layout();
+  for (Eigen::Index b = 0; b < l.bodies; ++b) {
+    y.segment<3>(l.velocity(b)) = Eigen::Vector3d(0.0, 0.0, 2.0);
+    y.segment<3>(l.angular_velocity(b)) = Eigen::Vector3d(1.5, 0.0, 0.0);  // about the beam's axis (each node's x)
+  }
+  const double t_end = 0.5;
+  const long steps = 5000;
+  const double h = t_end / static_cast<double>(steps);
+  Eigen::VectorXd k1(y.size()), k2(y.size()), k3(y.size()), k4(y.size());
+  for (long k = 0; k < steps; ++k) {  // RK4
+    const double t = static_cast<double>(k) * h;
+    sys.rhs(t, y, k1);
+    sys.rhs(t + h / 2, y + h / 2 * k1, k2);
+    sys.rhs(t + h / 2, y + h / 2 * k2, k3);
+    sys.rhs(t + h, y + h * k3, k4);
+    y += h / 6 * (k1 + 2 * k2 + 2 * k3 + k4);
+  }
+  for (Eigen::Index b = 0; b < l.bodies; ++b) {
+    CHECK(y[l.velocity(b) + 2] == Approx(2.0 * std::exp(-3.0 * t_end)).epsilon(1e-9));
+    CHECK(y[l.angular_velocity(b)] == Approx(1.5 * std::exp(-3.0 * t_end)).epsilon(1e-9));
   }
 }
 

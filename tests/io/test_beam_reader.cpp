@@ -91,3 +91,30 @@ TEST_CASE("bad beam data is refused with the field named", "[io][beams]") {
   refused(with(beam, "\"name\": \"blade\"", "\"name\": \"hub\"") + ", " + with(beam, "\"name\": \"blade\"", "\"name\": \"hub\""),
           "duplicate body name 'hub.0'");
 }
+
+TEST_CASE("a beam's Rayleigh damping: beta on its elements, alpha as damping loads on its nodes that write and read back",
+          "[io][beams]") {
+  const std::string damped = with(beam, "\"elements\": 4", "\"elements\": 4, \"damping\": {\"alpha\": 2.5, \"beta\": 1e-4}");
+  const Model m = read_model_text(model(damped, false), "m.json");
+  REQUIRE(m.loads.size() == 1 + 5);  // the tip load and one per node
+  CHECK(static_cast<const Vec6&>(m.joints[0].damping)[0] == Approx(1e-4 * static_cast<const Vec6&>(m.joints[0].stiffness)[0]));
+  const auto at = std::find_if(m.loads.begin(), m.loads.end(), [](const Load& l) { return l.body == 2 && l.damped(); });
+  REQUIRE(at != m.loads.end());  // blade.1's
+  const Load& node = *at;
+  const std::size_t k = static_cast<std::size_t>(at - m.loads.begin());
+  CHECK(node.damping[1] == Approx(2.5 * m.bodies[2].mass));
+  CHECK(node.angular_damping[0] == Approx(2.5 * m.bodies[2].inertia.get()[0]));
+  CHECK(node.force == Vec3{});
+  const Model back = read_model_text(model_to_json(m), "back.json");
+  REQUIRE(back.loads.size() == m.loads.size());
+  CHECK(back.loads[k].damping == node.damping);
+  CHECK(back.loads[k].angular_damping == node.angular_damping);
+  // alpha alone is a beam with no stiffness-proportional part
+  const Model alpha_only = read_model_text(model(with(beam, "\"elements\": 4", "\"elements\": 4, \"damping\": {\"alpha\": 1}"), false), "a.json");
+  CHECK(static_cast<const Vec6&>(alpha_only.joints[0].damping)[0] == 0.0);
+  CHECK(alpha_only.loads.size() == 6);
+  CHECK_THROWS_WITH(read_model_text(model(with(beam, "\"elements\": 4", "\"elements\": 4, \"damping\": {\"alpha\": -1}"), false), "a.json"),
+                    Catch::Contains("alpha: must be >= 0"));
+  CHECK_THROWS_WITH(read_model_text(R"({"name": "m", "bodies": [{"name": "a", "mass": 1, "inertia": [1, 1, 1]}], "loads": [{"body": "a", "damping": [1, -1, 0]}]})", "l.json"),
+                    Catch::Contains("loads[0].damping[1]"));
+}

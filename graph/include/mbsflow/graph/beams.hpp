@@ -38,11 +38,15 @@ struct BeamSpec {
   BeamSection section;
   bool shear = false;           // Timoshenko (shear deformation), else Euler-Bernoulli
   double stiffness_damping = 0.0;  // beta, s: each element's damping is beta times its stiffness
+  // alpha, 1/s: each node damped against its absolute motion by alpha times its mass and
+  // inertia (Rayleigh's alpha M; it damps rigid motion too: for structures held still)
+  double mass_damping = 0.0;
 };
 
 struct BeamParts {
   std::vector<Body> nodes;
   std::vector<Joint> elements;  // between nodes first_body + i and first_body + i + 1
+  std::vector<Load> loads;      // the nodes' mass-proportional damping, with mass_damping
 };
 
 // The nodes of a straight beam from `from` to `to` in `elements` equal elements.

@@ -121,6 +121,13 @@ struct Load {
   Vec3 point{};     // application point of the force, body frame
   bool body_frame = false;  // force and torque given in the body frame
   TimeFunction function{};  // constant 1 by default
+  // Damping against the body's absolute motion, not scaled by the function: a force
+  // -damping .* v (per world axis, N s/m) and a torque -R C w (C the body-frame matrix of
+  // angular_damping, N m s, laid out as an inertia). The mass-proportional (Rayleigh alpha)
+  // damping of a beam's nodes (docs/beams.md).
+  Vec3 damping{};
+  Vec6 angular_damping{};
+  bool damped() const { return damping != Vec3{} || angular_damping != Vec6{}; }
 };
 
 // Kinematic excitation: the body's position follows

@@ -221,7 +221,7 @@ class MultibodySystem {
   std::vector<int> clusters_of(std::span<const int> bodies) const;  // ascending, each once
   void add_reactions(Eigen::VectorXd& out);
   void project_cluster(int c, double t, Eigen::VectorXd& y) const;
-  void applied_wrench(Eigen::Index i, double t, Eigen::Vector3d& force, Eigen::Vector3d& torque) const;
+  void applied_wrench(Eigen::Index i, double t, const Eigen::VectorXd& y, Eigen::Vector3d& force, Eigen::Vector3d& torque) const;
   void write_derivative(Eigen::Index i, double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt,
                         const Eigen::Vector3d& force, const Eigen::Vector3d& torque) const;
   // list[0..n), or 0..n-1 when null; every rotation matrix, or those the model reads.
