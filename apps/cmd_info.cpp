@@ -6,6 +6,7 @@
 
 #include "commands.hpp"
 #include "mbsflow/io/result_fields.hpp"
+#include "mbsflow/io/reduced_part_file.hpp"
 #include "mbsflow/io/results_file.hpp"
 #include "mbsflow/words.hpp"
 
@@ -66,7 +67,33 @@ int info_modes(const ResultsFile& r) {
   return 0;
 }
 
+// A part that mbsflow reduce wrote: its coordinates, modes, mass and free frequencies.
+int info_part(const std::string& path) {
+  ReducedPartInfo made;
+  const ReducedPart p = read_reduced_part(path, &made);
+  std::printf("file          %s: a reduced finite-element part (Craig-Bampton)\n", path.c_str());
+  std::printf("from          %s\n", made.source.c_str());
+  std::printf("coordinates   %td: %s and %s\n", p.mass.rows(), count_of(static_cast<long long>(p.interface_dofs.size()), "interface DOF").c_str(),
+              count_of(p.modes, "fixed-interface mode").c_str());
+  for (Eigen::Index j = 0; j < p.fixed_frequency.size(); ++j) std::printf("  %4td  %12.6g Hz\n", j + 1, p.fixed_frequency[j]);
+  const MassProperties& m = p.properties;
+  std::printf("mass          %.6g kg, centre (%.6g, %.6g, %.6g) m\n", m.mass, m.centre.x(), m.centre.y(), m.centre.z());
+  std::printf("inertia       [%.6g %.6g %.6g; %.6g %.6g %.6g; %.6g %.6g %.6g] kg m^2 about the centre\n", m.inertia(0, 0), m.inertia(0, 1),
+              m.inertia(0, 2), m.inertia(1, 0), m.inertia(1, 1), m.inertia(1, 2), m.inertia(2, 0), m.inertia(2, 1), m.inertia(2, 2));
+  const Eigen::VectorXd free = reduced_frequencies(p, false);
+  std::string lowest;
+  for (Eigen::Index j = 6; j < std::min<Eigen::Index>(free.size(), 12); ++j) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%s%.6g", j > 6 ? ", " : "", free[j]);
+    lowest += text;
+  }
+  std::printf("free          lowest elastic frequencies %s Hz (after 6 rigid-body motions)\n", lowest.c_str());
+  std::printf("command line  %s\n", made.command_line.c_str());
+  return 0;
+}
+
 int info(const std::string& path) {
+  if (is_reduced_part(path)) return info_part(path);
   const ResultsFile r(path);
   if (r.ode()) return info_ode(r);
   if (r.modes()) return info_modes(r);
@@ -114,8 +141,8 @@ int info(const std::string& path) {
 
 Action add_info(CLI::App& app) {
   auto path = std::make_shared<std::string>();
-  CLI::App* sub = app.add_subcommand("info", "Print what a results file holds: settings, sizes, time span");
-  sub->add_option("file", *path, "Results file (.h5)")->required();
+  CLI::App* sub = app.add_subcommand("info", "Print what a results file (or a reduced part) holds: settings, sizes, time span");
+  sub->add_option("file", *path, "Results file (.h5) of run, ode or modes, or a part of mbsflow reduce")->required();
   return [path] { return info(*path); };
 }
 

@@ -121,12 +121,22 @@ void write_reduced_part(const std::string& path, const ReducedPart& part, const 
   write_through_part(path, [&](const std::string& making) { write_file(making, part, dofs, mesh, info); });
 }
 
-ReducedPart read_reduced_part(const std::string& path) {
+bool is_reduced_part(const std::string& path) {
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
-  if (H5Fis_hdf5(path.c_str()) <= 0) throw InputError(path + ": not an HDF5 file (mbsflow reduce writes a reduced part)");
+  if (H5Fis_hdf5(path.c_str()) <= 0) return false;
+  const hid_t file = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  if (file < 0) return false;
+  const h5::Handle closing(file, H5Fclose, "open " + path);
+  return h5::read_string_attribute(file, "kind") == std::string(kind);
+}
+
+ReducedPart read_reduced_part(const std::string& path, ReducedPartInfo* info) {
+  if (!is_reduced_part(path)) throw InputError(path + ": not a reduced part (mbsflow reduce writes one)");
   const h5::Handle file(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose, "open " + path);
-  if (h5::read_string_attribute(file.get(), "kind") != std::string(kind))
-    throw InputError(path + ": not a reduced part (mbsflow reduce writes one)");
+  if (info) {
+    info->source = h5::read_string_attribute(file.get(), "source").value_or("?");
+    info->command_line = h5::read_string_attribute(file.get(), "command_line").value_or("?");
+  }
   ReducedPart p;
   p.mass = matrix(read_all(file.get(), "/reduced/mass", path), path + ":/reduced/mass");
   p.stiffness = matrix(read_all(file.get(), "/reduced/stiffness", path), path + ":/reduced/stiffness");

@@ -142,6 +142,9 @@ def main():
                        cwd=work, capture_output=True, text=True)
     if r.returncode != 0 or "10 fixed-interface modes, 89.11" not in r.stderr:
         fail(f"examples/fe/bar.inp: mbsflow reduce said {r.stderr}")
+    r = subprocess.run([mbsflow, "info", "example_bar.h5"], cwd=work, capture_output=True, text=True)
+    if r.returncode != 0 or "27 interface DOFs and 10 fixed-interface modes" not in r.stdout or "mass          78.5 kg" not in r.stdout:
+        fail(f"mbsflow info on a reduced part said {r.stdout} {r.stderr}")
     print("reduce_check: the bar and the plate reduce to CalculiX's mass, inertia and frequencies; the example too")
 
 

@@ -33,6 +33,10 @@ void write_reduced_part(const std::string& path, const ReducedPart& part, const 
 // What a reduced part file holds for the model and the checks: the reduced matrices,
 // frequencies, mass properties and coupling, the interface DOFs (InputError for a file
 // that is not one).
-ReducedPart read_reduced_part(const std::string& path);
+// `info`, if given, gets the deck and command line it was made from.
+ReducedPart read_reduced_part(const std::string& path, ReducedPartInfo* info = nullptr);
+
+// Whether the file at path is one that mbsflow reduce wrote (false for anything else).
+bool is_reduced_part(const std::string& path);
 
 }  // namespace mbsflow
