@@ -1,6 +1,7 @@
 // mbsflow reduce DECK.inp --interface NODES --modes K -o part.h5: a finite-element part
 // reduced by Craig-Bampton (docs/flexible.md), from the matrices CalculiX writes or from
 // Matrix Market files.
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -17,7 +18,7 @@ namespace {
 
 struct ReduceArgs {
   std::string deck, matrices, stiffness, mass, dof_map, output = "part.h5";
-  std::vector<std::string> interface;
+  std::vector<std::string> interface, rigid_faces;
   int modes = 10;
   bool force = false, quiet = false;
 };
@@ -37,14 +38,14 @@ int reduce(const ReduceArgs& a) {
     if (!a.quiet) std::fprintf(stderr, "mbsflow: %.1f s: %s\n", seconds_since(start), what);
   };
   phase("read the deck");
-  const FeMesh mesh = read_fe_deck(a.deck);
+  FeMesh mesh = read_fe_deck(a.deck);
   std::string job = a.matrices;
   if (job.empty() && !market) {
     const std::filesystem::path deck(a.deck);
     job = (deck.parent_path() / deck.stem()).string();  // ccx JOB writes JOB.sti beside JOB.inp
   }
   phase("read the matrices");
-  const FeMatrices fe = market ? read_matrix_market(a.stiffness, a.mass, a.dof_map) : read_calculix_matrices(job);
+  FeMatrices fe = market ? read_matrix_market(a.stiffness, a.mass, a.dof_map) : read_calculix_matrices(job);
   std::vector<Eigen::Vector3d> dof_position;
   for (const FeDof& d : fe.dofs) {
     const auto at = mesh.node_index.find(d.node);
@@ -56,6 +57,30 @@ int reduce(const ReduceArgs& a) {
   for (const std::string& s : a.interface) list += s + " ";
   CraigBamptonOptions o;
   o.interface_nodes = parse_node_list(list, mesh);
+  if (o.interface_nodes.empty() && a.rigid_faces.empty()) throw InputError("give the interface: --interface NODES or --rigid-face SET");
+  // Each rigid face: its nodes tied to a new 6-DOF master node at their centroid, numbered
+  // after the deck's last node; the masters join the interface.
+  const std::vector<FeDof> model_dofs = fe.dofs;
+  Eigen::SparseMatrix<double> tie;
+  long next_node = *std::max_element(mesh.node_id.begin(), mesh.node_id.end()) + 1;
+  for (const std::string& face : a.rigid_faces) {
+    const std::vector<long> nodes = parse_node_list(face, mesh);
+    Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+    for (long node : nodes) centre += mesh.node_position[mesh.node_index.at(node)];
+    centre /= static_cast<double>(nodes.size());
+    const long master = next_node++;
+    TiedModel tied = tie_rigidly(fe, dof_position, nodes, master, centre);
+    fe = std::move(tied.fe);
+    dof_position = std::move(tied.dof_position);
+    tie = tie.size() == 0 ? tied.tie : Eigen::SparseMatrix<double>(tie * tied.tie);
+    mesh.node_index.emplace(master, mesh.node_id.size());
+    mesh.node_id.push_back(master);
+    mesh.node_position.push_back(centre);
+    o.interface_nodes.push_back(master);
+    if (!a.quiet)
+      std::fprintf(stderr, "mbsflow: %s: %zu nodes tied rigidly to node %ld at (%.6g, %.6g, %.6g), its 6 DOFs in the interface\n",
+                   face.c_str(), nodes.size(), master, centre.x(), centre.y(), centre.z());
+  }
   o.modes = a.modes;
   o.phase = phase;
   if (!a.quiet)
@@ -63,10 +88,11 @@ int reduce(const ReduceArgs& a) {
                  mesh.node_id.size(), mesh.elements.size(), fe.dofs.size(),
                  market ? "Matrix Market" : (job + ".sti/.mas/.dof").c_str(), o.interface_nodes.size(),
                  o.interface_nodes.size() == 1 ? "" : "s");
-  const ReducedPart part = craig_bampton(fe, dof_position, o);
+  ReducedPart part = craig_bampton(fe, dof_position, o);
+  if (tie.size() > 0) part.shapes = tie * part.shapes;  // the tied faces' nodes move with their masters
   const double reduced_in = seconds_since(start);
   phase("write the reduced part");
-  write_reduced_part(a.output, part, fe.dofs, mesh, {a.deck, invocation()});
+  write_reduced_part(a.output, part, model_dofs, mesh, {a.deck, invocation()});
   if (!a.quiet) {
     const MassProperties& p = part.properties;
     std::fprintf(stderr, "mbsflow: mass %.6g kg, centre (%.6g, %.6g, %.6g) m, inertia about it diag (%.6g, %.6g, %.6g) kg m^2\n",
@@ -100,8 +126,10 @@ Action add_reduce(CLI::App& app) {
       ->required()
       ->check(CLI::ExistingFile);
   sub->add_option("--interface", a->interface,
-                  "Interface nodes: numbers, ranges a-b, or node set names of the deck (several allowed)")
-      ->required();
+                  "Interface nodes: numbers, ranges a-b, or node set names of the deck (several allowed)");
+  sub->add_option("--rigid-face", a->rigid_faces,
+                  "A node set (or list) tied rigidly to a new 6-DOF master node at its centroid, which joins the interface "
+                  "(an RBE2 spider; repeat for several faces)");
   sub->add_option("--modes", a->modes, "Fixed-interface modes to keep")->capture_default_str()->check(CLI::Range(0, 100000));
   sub->add_option("--matrices", a->matrices,
                   "CalculiX job whose JOB.sti, JOB.mas, JOB.dof hold the matrices (default: the deck's path without .inp)");

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <numbers>
 #include <unordered_map>
+#include <unordered_set>
 
 #include "mbsflow/error.hpp"
 
@@ -238,6 +239,43 @@ ReducedPart craig_bampton(const FeMatrices& fe, const std::vector<Eigen::Vector3
   const Eigen::MatrixXd mass_rigid = fe.mass * rigid;
   r.rigid_coupling = transposed_product(mass_rigid, r.shapes);
   return r;
+}
+
+TiedModel tie_rigidly(const FeMatrices& fe, const std::vector<Eigen::Vector3d>& dof_position, const std::vector<long>& face_nodes,
+                      long master, const Eigen::Vector3d& centre) {
+  const std::unordered_set<long> face(face_nodes.begin(), face_nodes.end());
+  const auto n = static_cast<Eigen::Index>(fe.dofs.size());
+  const Eigen::MatrixXd rigid = rigid_body_fields(fe.dofs, dof_position, centre);
+  TiedModel out;
+  std::vector<Eigen::Triplet<double>> entries;
+  std::vector<Eigen::Index> on_face;
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const FeDof& d = fe.dofs[static_cast<std::size_t>(k)];
+    if (d.node == master) throw InputError("node " + std::to_string(master) + " is in the model already: give the master another number");
+    if (face.count(d.node)) {
+      on_face.push_back(k);
+      continue;
+    }
+    entries.emplace_back(k, static_cast<Eigen::Index>(out.fe.dofs.size()), 1.0);
+    out.fe.dofs.push_back(d);
+    out.dof_position.push_back(dof_position[static_cast<std::size_t>(k)]);
+  }
+  if (on_face.empty()) throw InputError("the face tied to node " + std::to_string(master) + " has no DOF in the model");
+  const auto first_master = static_cast<Eigen::Index>(out.fe.dofs.size());
+  for (int e = 0; e < 6; ++e) {
+    out.fe.dofs.push_back({master, e + 1});
+    out.dof_position.push_back(centre);
+  }
+  // A face DOF moves with the master as a rigid body does: u_p = u_m + theta_m x (p - centre).
+  for (Eigen::Index k : on_face)
+    for (int e = 0; e < 6; ++e)
+      if (rigid(k, e) != 0.0) entries.emplace_back(k, first_master + e, rigid(k, e));
+  out.tie.resize(n, first_master + 6);
+  out.tie.setFromTriplets(entries.begin(), entries.end());
+  const Sparse tie_t = out.tie.transpose();
+  out.fe.stiffness = tie_t * fe.stiffness * out.tie;
+  out.fe.mass = tie_t * fe.mass * out.tie;
+  return out;
 }
 
 Eigen::VectorXd reduced_frequencies(const ReducedPart& part, bool held) {

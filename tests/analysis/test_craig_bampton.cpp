@@ -6,6 +6,7 @@
 // mass, centre and inertia are the point masses' sums.
 #include <catch2/catch.hpp>
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -161,4 +162,32 @@ TEST_CASE("Craig-Bampton refuses an interface that does not hold the part, unkno
   CHECK_THROWS_WITH(craig_bampton(t.fe, t.dof_position, options({1, 2, 2}, 4)), Catch::Contains("named twice"));
   CHECK_THROWS_WITH(craig_bampton(t.fe, t.dof_position, options({1, 2, 4}, 73)), Catch::Contains("fewer fixed-interface modes"));
   CHECK_THROWS_AS(craig_bampton(t.fe, t.dof_position, options({}, 4)), InputError);
+}
+
+TEST_CASE("a face tied rigidly to a master node: the mass is kept, and held at the master the face is held", "[analysis][reduce]") {
+  const Truss t = truss();
+  const std::vector<long> face{1, 2, 4, 5};
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  for (long node : face) centre += t.node[static_cast<std::size_t>(node - 1)] / 4.0;
+  const TiedModel tied = tie_rigidly(t.fe, t.dof_position, face, 100, centre);
+  CHECK(tied.fe.dofs.size() == t.fe.dofs.size() - 12 + 6);
+  CHECK(tied.fe.dofs.back() == FeDof{100, 6});
+  const MassProperties before = mass_properties(t.fe, t.dof_position), after = mass_properties(tied.fe, tied.dof_position);
+  CHECK(after.mass == Approx(before.mass).epsilon(1e-14));
+  CHECK((after.centre - before.centre).norm() < 1e-14);
+  CHECK((after.inertia - before.inertia).norm() < 1e-12 * before.inertia.norm());
+  // Held at the master = the face's nodes held: the model's frequencies without their DOFs.
+  std::vector<Eigen::Index> keep;
+  for (std::size_t k = 0; k < t.fe.dofs.size(); ++k)
+    if (std::find(face.begin(), face.end(), t.fe.dofs[k].node) == face.end()) keep.push_back(static_cast<Eigen::Index>(k));
+  const Eigen::MatrixXd k = Eigen::MatrixXd(t.fe.stiffness), m = Eigen::MatrixXd(t.fe.mass);
+  const Eigen::VectorXd exact = dense_frequencies(k(keep, keep), m(keep, keep));
+  const ReducedPart part = craig_bampton(tied.fe, tied.dof_position, options({100}, 5));
+  for (Eigen::Index j = 0; j < 5; ++j) CHECK(part.fixed_frequency[j] == Approx(exact[j]).epsilon(1e-9));
+  // The tie carries a master motion to the face: a unit rotation about z turns node 1 by
+  // e_z x (p1 - centre).
+  const Eigen::VectorXd u = tied.tie.col(static_cast<Eigen::Index>(tied.fe.dofs.size()) - 1);
+  const Eigen::Vector3d arm = t.node[0] - centre;
+  CHECK(u.head<3>().isApprox(Eigen::Vector3d(-arm.y(), arm.x(), 0.0)));
+  CHECK_THROWS_WITH(tie_rigidly(t.fe, t.dof_position, face, 3, centre), Catch::Contains("node 3 is in the model already"));
 }

@@ -82,6 +82,18 @@ struct ReducedPart {
 ReducedPart craig_bampton(const FeMatrices& fe, const std::vector<Eigen::Vector3d>& dof_position,
                           const CraigBamptonOptions& options);
 
+// A face of the part tied rigidly to a master node (an RBE2 "spider"): the face nodes'
+// DOFs are replaced by the master's six (translations and small rotations at `centre`),
+// as an interface node that carries a whole face into a joint. `tie` maps the model's
+// DOFs to the tied model's: u = tie * u_tied.
+struct TiedModel {
+  FeMatrices fe;                              // the face DOFs gone, the master's six last
+  std::vector<Eigen::Vector3d> dof_position;  // of the tied model's DOFs
+  Eigen::SparseMatrix<double> tie;            // model DOFs x tied DOFs
+};
+TiedModel tie_rigidly(const FeMatrices& fe, const std::vector<Eigen::Vector3d>& dof_position, const std::vector<long>& face_nodes,
+                      long master, const Eigen::Vector3d& centre);
+
 // The frequencies (Hz, ascending) of the reduced part, free (the interface DOFs free) or
 // held at its interface (the modal block alone): dense, for checks and reports. Rigid-body
 // motions of a free part come out as frequencies near zero.
