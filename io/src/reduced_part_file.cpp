@@ -1,11 +1,16 @@
 #include "mbsflow/io/reduced_part_file.hpp"
 
 #include <array>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <unordered_map>
 
 #include "hdf5_handle.hpp"
+#include "mbsflow/io/hdf5_sink.hpp"
 #include "mbsflow/version.hpp"
 #include "part_file.hpp"
+#include "xdmf_writer.hpp"
 
 namespace mbsflow {
 namespace {
@@ -40,8 +45,34 @@ Eigen::MatrixXd matrix(const std::pair<std::vector<double>, std::vector<hsize_t>
   return Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(a.first.data(), rows, cols);
 }
 
-void write_file(const std::string& path, const ReducedPart& part, const std::vector<FeDof>& dofs, const FeMesh& mesh,
-                const ReducedPartInfo& info) {
+// The XDMF sidecar's views (/xdmf/shape<q>: coordinate q's displacement of the display
+// nodes) and its text: time q + 1 is coordinate q, the surface with its shape as a vector
+// to warp by.
+std::string write_views(hid_t root, const std::string& h5_name, hsize_t coordinates, hsize_t nodes, hsize_t triangles) {
+  const Source shapes(root, "/display/shape");
+  const h5::Handle group(H5Gcreate2(root, "/xdmf", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose, "create /xdmf");
+  std::ostringstream o;
+  o << "<?xml version=\"1.0\" ?>\n<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n<Xdmf Version=\"3.0\">\n <Domain>\n"
+    << "  <Grid Name=\"part\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
+  const std::string n3 = std::to_string(nodes) + " 3";
+  for (hsize_t q = 0; q < coordinates; ++q) {
+    const std::string name = "shape" + std::to_string(q);
+    make_view(group.get(), name.c_str(), {nodes, 3}, shapes, q, 0, 3);
+    o << "   <Grid Name=\"coordinate" << q + 1 << "\" GridType=\"Uniform\">\n    <Time Value=\"" << q + 1 << "\"/>\n"
+      << "     <Topology TopologyType=\"Triangle\" NumberOfElements=\"" << triangles << "\">\n";
+    xdmf_item(o, h5_name, "/display/triangle", std::to_string(triangles) + " 3", true, "      ");
+    o << "     </Topology>\n     <Geometry GeometryType=\"XYZ\">\n";
+    xdmf_item(o, h5_name, "/display/position", n3, false, "      ");
+    o << "     </Geometry>\n";
+    xdmf_attribute(o, h5_name, "shape", "Vector", "Node", "/xdmf/" + name, n3);
+    o << "   </Grid>\n";
+  }
+  o << "  </Grid>\n </Domain>\n</Xdmf>\n";
+  return o.str();
+}
+
+std::string write_file(const std::string& path, const std::string& h5_name, const ReducedPart& part, const std::vector<FeDof>& dofs,
+                       const FeMesh& mesh, const ReducedPartInfo& info) {
   const h5::Handle file(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose, "create " + path);
   const hid_t root = file.get();
   h5::write_string_attribute(root, "mbsflow_version", MBSFLOW_VERSION);
@@ -78,12 +109,13 @@ void write_file(const std::string& path, const ReducedPart& part, const std::vec
   // The display: the outer faces' corner nodes and each one's translation per coordinate.
   const std::vector<std::array<long, 3>> faces = outer_triangles(mesh);
   std::unordered_map<long, long> display_index;
-  std::vector<long> display_node, triangle;
+  std::vector<long> display_node;
+  std::vector<int> triangle;
   for (const auto& f : faces)
     for (long node : f) {
       const auto [at, added] = display_index.emplace(node, static_cast<long>(display_node.size()));
       if (added) display_node.push_back(static_cast<long>(mesh.node_index.at(node)));
-      triangle.push_back(at->second);
+      triangle.push_back(static_cast<int>(at->second));
     }
   std::unordered_map<long, std::array<Eigen::Index, 3>> translation_row;  // node -> rows of its x, y, z DOFs
   for (std::size_t k = 0; k < dofs.size(); ++k)
@@ -102,7 +134,13 @@ void write_file(const std::string& path, const ReducedPart& part, const std::vec
           shape[(q * d + j) * 3 + e] = part.shapes(at->second[e], static_cast<Eigen::Index>(q));
   }
   h5::write_array(root, "/display/node", H5T_NATIVE_LONG, display_node, {d});
-  h5::write_array(root, "/display/triangle", H5T_NATIVE_LONG, triangle, {faces.size(), 3});
+  std::vector<double> display_position;
+  for (long k : display_node) {
+    const Eigen::Vector3d& x = mesh.node_position[static_cast<std::size_t>(k)];
+    display_position.insert(display_position.end(), {x.x(), x.y(), x.z()});
+  }
+  h5::write_array(root, "/display/position", H5T_NATIVE_DOUBLE, display_position, {d, 3});
+  h5::write_array(root, "/display/triangle", H5T_NATIVE_INT, triangle, {faces.size(), 3});
   h5::write_array(root, "/display/shape", H5T_NATIVE_DOUBLE, shape, {r, d, 3});
   h5::write_units(root, "/reduced/mass", "kg, kg m, kg m^2 (by the coordinates' kinds; modal coordinates mass-normalised)");
   h5::write_units(root, "/reduced/stiffness", "N/m, N, N m (by the coordinates' kinds)");
@@ -112,13 +150,24 @@ void write_file(const std::string& path, const ReducedPart& part, const std::vec
   h5::write_units(root, "/mass/inertia", "kg m^2");
   h5::write_units(root, "/nodes/position", "m");
   h5::write_units(root, "/display/shape", "m per unit coordinate");
+  h5::write_units(root, "/display/position", "m");
+  return write_views(root, h5_name, r, d, faces.size());
 }
 
 }  // namespace
 
 void write_reduced_part(const std::string& path, const ReducedPart& part, const std::vector<FeDof>& dofs, const FeMesh& mesh,
                         const ReducedPartInfo& info) {
-  write_through_part(path, [&](const std::string& making) { write_file(making, part, dofs, mesh, info); });
+  std::string xdmf;
+  const std::string name = std::filesystem::path(path).filename().string();  // the sidecar lies beside it
+  write_through_part(path, [&](const std::string& making) { xdmf = write_file(making, name, part, dofs, mesh, info); });
+  // Written after the part's file is complete, so that it never names a file being made.
+  const std::string sidecar = xdmf_path(path);
+  write_through_part(sidecar, [&](const std::string& making) {
+    std::ofstream o(making);
+    o << xdmf;
+    if (!o.flush()) throw InputError(sidecar + ": cannot write the XDMF sidecar");
+  });
 }
 
 bool is_reduced_part(const std::string& path) {

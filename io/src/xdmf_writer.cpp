@@ -15,26 +15,6 @@ namespace {
 constexpr const char* views_group = "/xdmf";
 constexpr std::size_t compact_limit_bytes = 32768;  // a compact dataset's data: within HDF5's 64 KiB header
 
-// A series that views show rows of: its name and space, read once; and, where the whole
-// series is at most xdmf_copy_limit_bytes, its values (its views are then copies).
-struct Source {
-  const char* path;
-  h5::Handle space;
-  std::vector<hsize_t> extent;
-  std::vector<double> values;  // row-major T x item, when its views are copies
-  Source(hid_t file, const char* p) : path(p) {
-    const h5::Handle set(H5Dopen2(file, p, H5P_DEFAULT), H5Dclose, std::string("open ") + p);
-    space = h5::Handle(H5Dget_space(set.get()), H5Sclose, std::string("get the space of ") + p);
-    extent.resize(static_cast<std::size_t>(H5Sget_simple_extent_ndims(space.get())));
-    H5Sget_simple_extent_dims(space.get(), extent.data(), nullptr);
-    hsize_t count = 1;
-    for (hsize_t e : extent) count *= e;
-    if (count == 0 || count * sizeof(double) > xdmf_copy_limit_bytes) return;
-    values.resize(count);
-    h5::check(H5Dread(set.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()), std::string("read ") + p);
-  }
-};
-
 // A copy of row `row` of `source` (T x item), columns [column, column + columns) of its
 // last dimension, as a dataset `name` in `group` of shape `dims`: compact (in its object
 // header) where it fits.
@@ -60,6 +40,20 @@ void make_copy(hid_t group, const char* name, const std::vector<hsize_t>& dims, 
             std::string("write the view ") + name);
 }
 
+void write_ints(hid_t file, const std::string& path, const std::vector<hsize_t>& dims, const std::vector<int>& values) {
+  const h5::Handle space(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr), H5Sclose, "create a space");
+  const h5::Handle lcpl(H5Pcreate(H5P_LINK_CREATE), H5Pclose, "create a link property list");
+  h5::check(H5Pset_create_intermediate_group(lcpl.get(), 1), "allow intermediate groups");
+  const h5::Handle set(H5Dcreate2(file, path.c_str(), H5T_STD_I32LE, space.get(), lcpl.get(), H5P_DEFAULT, H5P_DEFAULT),
+                       H5Dclose, "create " + path);
+  if (!values.empty())
+    h5::check(H5Dwrite(set.get(), H5T_NATIVE_INT, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()), "write " + path);
+}
+
+std::string dims_text(std::size_t a, std::size_t b) { return std::to_string(a) + ' ' + std::to_string(b); }
+
+}  // namespace
+
 // A view `name` in `group`, of shape `dims`, of row `row` of `source` (T x item), columns
 // [column, column + columns) of its last dimension: a copy where the source was read, else
 // a virtual dataset.
@@ -81,20 +75,6 @@ void make_view(hid_t group, const char* name, const std::vector<hsize_t>& dims, 
   h5::Handle(H5Dcreate2(group, name, H5T_IEEE_F64LE, view_space.get(), H5P_DEFAULT, dcpl.get(), H5P_DEFAULT), H5Dclose,
              std::string("create the view ") + name);
 }
-
-void write_ints(hid_t file, const std::string& path, const std::vector<hsize_t>& dims, const std::vector<int>& values) {
-  const h5::Handle space(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr), H5Sclose, "create a space");
-  const h5::Handle lcpl(H5Pcreate(H5P_LINK_CREATE), H5Pclose, "create a link property list");
-  h5::check(H5Pset_create_intermediate_group(lcpl.get(), 1), "allow intermediate groups");
-  const h5::Handle set(H5Dcreate2(file, path.c_str(), H5T_STD_I32LE, space.get(), lcpl.get(), H5P_DEFAULT, H5P_DEFAULT),
-                       H5Dclose, "create " + path);
-  if (!values.empty())
-    h5::check(H5Dwrite(set.get(), H5T_NATIVE_INT, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()), "write " + path);
-}
-
-std::string dims_text(std::size_t a, std::size_t b) { return std::to_string(a) + ' ' + std::to_string(b); }
-
-}  // namespace
 
 // One DataItem reading the dataset `path` of the results file.
 void xdmf_item(std::ostream& o, const std::string& file, const std::string& path, const std::string& dims, bool integer,

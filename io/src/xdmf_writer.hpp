@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "hdf5_handle.hpp"
 #include "mbsflow/io/result_fields.hpp"
 
 namespace mbsflow {
@@ -45,6 +46,32 @@ struct XdmfContent {
   std::vector<int> beam_lines, beam_index, beam_joint;
   bool beam_section_force = false;  // /beams/section_force: cell data of the centrelines
 };
+
+// A series that views show rows of: its name and space, read once; and, where the whole
+// series is at most xdmf_copy_limit_bytes, its values (its views are then copies).
+struct Source {
+  const char* path;
+  h5::Handle space;
+  std::vector<hsize_t> extent;
+  std::vector<double> values;  // row-major T x item, when its views are copies
+  Source(hid_t file, const char* p) : path(p) {
+    const h5::Handle set(H5Dopen2(file, p, H5P_DEFAULT), H5Dclose, std::string("open ") + p);
+    space = h5::Handle(H5Dget_space(set.get()), H5Sclose, std::string("get the space of ") + p);
+    extent.resize(static_cast<std::size_t>(H5Sget_simple_extent_ndims(space.get())));
+    H5Sget_simple_extent_dims(space.get(), extent.data(), nullptr);
+    hsize_t count = 1;
+    for (hsize_t e : extent) count *= e;
+    if (count == 0 || count * sizeof(double) > xdmf_copy_limit_bytes) return;
+    values.resize(count);
+    h5::check(H5Dread(set.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()), std::string("read ") + p);
+  }
+};
+
+// A view `name` in `group`, of shape `dims`, of row `row` of `source` (T x item), columns
+// [column, column + columns) of its last dimension: a copy where the source was read, else
+// a virtual dataset.
+void make_view(hid_t group, const char* name, const std::vector<hsize_t>& dims, const Source& source, hsize_t row,
+               hsize_t column, hsize_t columns);
 
 // One DataItem reading the dataset `path` of the HDF5 file `file` (named as the sidecar
 // names it), and an Attribute holding one.

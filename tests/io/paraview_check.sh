@@ -65,4 +65,12 @@ grep -v -e "^$" -e "Skipping" boom.log
 pvpython "$source/tests/io/paraview_modes.py" "$work/modes.xdmf" "$work/modes.png" > modes.log 2>&1 ||
   { cat modes.log >&2; echo "paraview_check: ParaView failed on the modes file" >&2; exit 1; }
 grep -v -e "^$" -e "Skipping" modes.log
-echo "paraview_check: $((${#runs[@]} + 2)) runs read by both ParaView readers, and a modes file by the default one"
+# A reduced finite-element part (mbsflow reduce on a deck and its matrices written by ccx):
+# its outer surface with each coordinate's shape.
+cp "$source/examples/fe/bar.inp" part_bar.inp
+ccx part_bar > part_bar.ccx.log 2>&1 || { cat part_bar.ccx.log >&2; echo "paraview_check: ccx failed" >&2; exit 1; }
+"$mbsflow" reduce part_bar.inp --rigid-face END0 --modes 4 -o part_bar.h5 -q 2>/dev/null
+pvpython "$source/tests/io/paraview_part.py" "$work/part_bar.xdmf" "$work/part_bar.png" > part.log 2>&1 ||
+  { cat part.log >&2; echo "paraview_check: ParaView failed on the reduced part" >&2; exit 1; }
+grep -v -e "^$" -e "Skipping" part.log
+echo "paraview_check: $((${#runs[@]} + 2)) runs read by both ParaView readers, a modes file and a reduced part by the default one"

@@ -16,7 +16,7 @@ from paraview import simple
 from vtkmodules.util.numpy_support import vtk_to_numpy
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from paraview_xdmf import render  # noqa: E402
+from paraview_xdmf import open_with_default_reader, render  # noqa: E402
 
 
 def fail(msg):
@@ -26,10 +26,7 @@ def fail(msg):
 
 def main():
     xdmf, picture = sys.argv[1], sys.argv[2]
-    h5 = h5py.File(os.path.splitext(xdmf)[0] + ".h5", "r")
-    reader = simple.OpenDataFile(xdmf)
-    if reader.GetXMLName() != "Xdmf3ReaderS":
-        fail(f"ParaView opens .xdmf with {reader.GetXMLName()}, not Xdmf3ReaderS")
+    reader, h5 = open_with_default_reader(xdmf, fail)
     shape = h5["modes/shape"][:] + 1j * h5["modes/shape_imag"][:]  # K x N x 6
     rest = h5["equilibrium/position"][:]
     size = np.linalg.norm(rest.max(axis=0) - rest.min(axis=0)) or 1.0

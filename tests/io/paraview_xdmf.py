@@ -126,12 +126,18 @@ def render(reader, picture, colour_by=("POINTS", "velocity", "Magnitude"), time=
     print(f"paraview_xdmf: rendered {picture} ({drawn} pixels drawn)")
 
 
+def open_with_default_reader(xdmf, say=None):
+    """The sidecar opened as ParaView opens an .xdmf file, and its HDF5 file beside it;
+    fails unless the reader is the default one, Xdmf3ReaderS."""
+    reader = simple.OpenDataFile(xdmf)
+    if reader.GetXMLName() != "Xdmf3ReaderS":
+        (say or fail)(f"ParaView opens .xdmf with {reader.GetXMLName()}, not Xdmf3ReaderS")
+    return reader, h5py.File(os.path.splitext(xdmf)[0] + ".h5", "r")
+
+
 def main():
     xdmf, picture = sys.argv[1], sys.argv[2]
-    h5 = h5py.File(os.path.splitext(xdmf)[0] + ".h5", "r")
-    default = simple.OpenDataFile(xdmf)  # what ParaView's File > Open picks
-    if default.GetXMLName() != "Xdmf3ReaderS":
-        fail(f"ParaView opens .xdmf with {default.GetXMLName()}, not Xdmf3ReaderS")
+    default, h5 = open_with_default_reader(xdmf)  # what ParaView's File > Open picks
     check_reader("Xdmf3 reader (default)", default, h5)
     check_reader("legacy XDMF reader", simple.XDMFReader(FileNames=[xdmf]), h5)
     render(default, picture)

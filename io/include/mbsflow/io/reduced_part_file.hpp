@@ -9,9 +9,12 @@
 //     against each reduced coordinate, R^T M T)
 //   /nodes/id (N), /nodes/position (N x 3, m): every node of the deck
 //   /interface/node (nodes of the interface, in the coordinates' order)
-//   /display/node (D: indices into /nodes of the nodes drawn), /display/triangle (F x 3:
-//     indices into /display/node), /display/shape (R x D x 3: each display node's
-//     displacement per unit of each reduced coordinate, m)
+//   /display/node (D: indices into /nodes of the nodes drawn), /display/position (D x 3),
+//     /display/triangle (F x 3: indices into /display/node), /display/shape (R x D x 3: each
+//     display node's displacement per unit of each reduced coordinate, m)
+//   /xdmf: the views of the XDMF sidecar PATH.xdmf written beside it, which ParaView's
+//     default reader opens: time q is coordinate q (1-based), the outer surface with that
+//     coordinate's shape as a point vector (Warp By Vector draws it)
 // with the program version, the deck and the command line as attributes.
 #include <string>
 
