@@ -33,6 +33,7 @@ int reduce(const ReduceArgs& a) {
   if (market && (a.stiffness.empty() || a.mass.empty() || a.dof_map.empty()))
     throw InputError("--stiffness, --mass and --dofs go together (Matrix Market files and their DOF map)");
   if (market && !a.matrices.empty()) throw InputError("--matrices (CalculiX's) or --stiffness/--mass/--dofs, not both");
+  if (a.interface.empty() && a.rigid_faces.empty()) throw InputError("give the interface: --interface NODES or --rigid-face SET");
   check_output_path(a.output, {{a.deck, a.stiffness, a.mass, a.dof_map}, a.force});
   const auto phase = [&](const char* what) {
     if (!a.quiet) std::fprintf(stderr, "mbsflow: %.1f s: %s\n", seconds_since(start), what);
@@ -121,7 +122,7 @@ Action add_reduce(CLI::App& app) {
   auto a = std::make_shared<ReduceArgs>();
   CLI::App* sub = app.add_subcommand(
       "reduce", "Reduce a finite-element part by Craig-Bampton (its interface nodes kept, fixed-interface modes added) "
-                "into a file a model's flexible body reads (docs/flexible.md)");
+                "into one HDF5 file: its matrices, mass, inertia and surface (docs/flexible.md)");
   sub->add_option("deck", a->deck, "The part's CalculiX/Abaqus input deck (.inp): its nodes, elements and node sets")
       ->required()
       ->check(CLI::ExistingFile);
