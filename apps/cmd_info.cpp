@@ -80,14 +80,7 @@ int info_part(const std::string& path) {
   std::printf("mass          %.6g kg, centre (%.6g, %.6g, %.6g) m\n", m.mass, m.centre.x(), m.centre.y(), m.centre.z());
   std::printf("inertia       [%.6g %.6g %.6g; %.6g %.6g %.6g; %.6g %.6g %.6g] kg m^2 about the centre\n", m.inertia(0, 0), m.inertia(0, 1),
               m.inertia(0, 2), m.inertia(1, 0), m.inertia(1, 1), m.inertia(1, 2), m.inertia(2, 0), m.inertia(2, 1), m.inertia(2, 2));
-  const Eigen::VectorXd free = reduced_frequencies(p, false);
-  std::string lowest;
-  for (Eigen::Index j = 6; j < std::min<Eigen::Index>(free.size(), 12); ++j) {
-    char text[32];
-    std::snprintf(text, sizeof text, "%s%.6g", j > 6 ? ", " : "", free[j]);
-    lowest += text;
-  }
-  std::printf("free          lowest elastic frequencies %s Hz (after 6 rigid-body motions)\n", lowest.c_str());
+  std::printf("free          %s\n", free_frequencies_text(p).c_str());
   std::printf("command line  %s\n", made.command_line.c_str());
   return 0;
 }

@@ -102,14 +102,7 @@ int reduce(const ReduceArgs& a) {
       std::fprintf(stderr, "mbsflow: %d fixed-interface mode%s, %.6g .. %.6g Hz\n", part.modes, part.modes == 1 ? "" : "s",
                    part.fixed_frequency[0], part.fixed_frequency[part.modes - 1]);
     // Free, a part has its six rigid-body motions first (frequencies at rounding's level).
-    const Eigen::VectorXd free = reduced_frequencies(part, false);
-    std::string rigid, lowest;
-    for (Eigen::Index k = 0; k < std::min<Eigen::Index>(free.size(), 12); ++k) {
-      char text[32];
-      std::snprintf(text, sizeof text, "%s%.3g", k == 0 || k == 6 ? "" : ", ", free[k]);
-      (k < 6 ? rigid : lowest) += text;
-    }
-    std::fprintf(stderr, "mbsflow: the reduced part free: rigid-body motions at %s Hz, then %s Hz\n", rigid.c_str(), lowest.c_str());
+    std::fprintf(stderr, "mbsflow: the reduced part free: %s\n", free_frequencies_text(part).c_str());
   }
   std::fprintf(stderr, "mbsflow: wrote %s: %td coordinates (%zu interface DOFs + %d modes), reduced in %.3g s\n", a.output.c_str(),
                part.mass.rows(), part.interface_dofs.size(), part.modes, reduced_in);

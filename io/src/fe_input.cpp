@@ -7,12 +7,14 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <limits>
 #include <fstream>
 #include <set>
 #include <sstream>
 #include <string_view>
 
 #include "mbsflow/error.hpp"
+#include "mbsflow/io/file_text.hpp"
 
 namespace mbsflow {
 namespace {
@@ -159,33 +161,23 @@ struct DeckReader {
   }
 };
 
-// The whole file (matrices of large parts are hundreds of megabytes of text: parsed in
-// place, not line by line through streams).
-std::string slurp(const std::string& path, const char* what) {
-  std::ifstream in = open(path, what);
-  std::string text;
-  in.seekg(0, std::ios::end);
-  text.resize(static_cast<std::size_t>(std::max<std::streamoff>(in.tellg(), 0)));
-  in.seekg(0);
-  in.read(text.data(), static_cast<std::streamsize>(text.size()));
-  return text;
-}
-
 // "r c v" lines of one matrix of n rows; one triangle filled in with the other, unless
 // the file holds entries on both sides of the diagonal (then taken as they are).
 Eigen::SparseMatrix<double> read_triplets(const std::string& path, Eigen::Index n, bool matrix_market) {
-  const std::string text = slurp(path, "matrix");
+  // Mapped, not read through streams: a large part's matrices are hundreds of megabytes.
+  const FileText file(path, "matrix", std::numeric_limits<std::size_t>::max());
+  const std::string_view text = file.text();
   std::vector<Eigen::Triplet<double>> t;
   bool upper_seen = false, lower_seen = false, symmetric = !matrix_market, header = matrix_market;
-  const char* p = text.c_str();
+  const char* p = text.data();
   const char* const end = p + text.size();
+  char buffer[256];  // the line being parsed, NUL-terminated: strtol and strtod stop there
   int line = 0;
   while (p < end) {
     ++line;
     const char* eol = static_cast<const char*>(std::memchr(p, '\n', static_cast<std::size_t>(end - p)));
     if (!eol) eol = end;
     const std::string_view row(p, static_cast<std::size_t>(eol - p));
-    const char* here = p;
     p = eol + 1;
     if (matrix_market && !row.empty() && row[0] == '%') {
       if (line == 1) {
@@ -196,10 +188,13 @@ Eigen::SparseMatrix<double> read_triplets(const std::string& path, Eigen::Index 
       }
       continue;
     }
-    if (trim(std::string(row)).empty()) continue;
+    if (row.find_first_not_of(" \t\r") == std::string_view::npos) continue;
     const auto fail = [&](const std::string& what) { throw InputError(path + ":" + std::to_string(line) + ": " + what); };
+    if (row.size() >= sizeof buffer) fail("a line of over " + std::to_string(sizeof buffer - 1) + " characters");
+    std::memcpy(buffer, row.data(), row.size());
+    buffer[row.size()] = '\0';
     char* next = nullptr;
-    const long r = std::strtol(here, &next, 10);
+    const long r = std::strtol(buffer, &next, 10);
     const long c = std::strtol(next, &next, 10);
     if (header) {  // rows, columns, entries
       if (r != n || c != n)
@@ -209,7 +204,7 @@ Eigen::SparseMatrix<double> read_triplets(const std::string& path, Eigen::Index 
     }
     const char* number = next;
     const double v = std::strtod(number, &next);
-    if (next == number || next > eol || r < 1 || c < 1 || r > n || c > n)
+    if (next == number || r < 1 || c < 1 || r > n || c > n)
       fail("expected 'row column value' with rows and columns 1.." + std::to_string(n));
     upper_seen |= c > r;
     lower_seen |= r > c;

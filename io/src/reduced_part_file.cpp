@@ -1,6 +1,8 @@
 #include "mbsflow/io/reduced_part_file.hpp"
 
+#include <algorithm>
 #include <array>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -168,6 +170,17 @@ void write_reduced_part(const std::string& path, const ReducedPart& part, const 
     o << xdmf;
     if (!o.flush()) throw InputError(sidecar + ": cannot write the XDMF sidecar");
   });
+}
+
+std::string free_frequencies_text(const ReducedPart& part) {
+  const Eigen::VectorXd free = reduced_frequencies(part, false);
+  std::string rigid, lowest;
+  for (Eigen::Index k = 0; k < std::min<Eigen::Index>(free.size(), 12); ++k) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%s%.6g", k == 0 || k == 6 ? "" : ", ", free[k]);
+    (k < 6 ? rigid : lowest) += text;
+  }
+  return "rigid-body motions at " + rigid + " Hz, then " + lowest + " Hz";
 }
 
 bool is_reduced_part(const std::string& path) {

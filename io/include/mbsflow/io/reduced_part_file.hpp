@@ -39,6 +39,11 @@ void write_reduced_part(const std::string& path, const ReducedPart& part, const 
 // `info`, if given, gets the deck and command line it was made from.
 ReducedPart read_reduced_part(const std::string& path, ReducedPartInfo* info = nullptr);
 
+// "rigid-body motions at f1 .. f6 Hz, then f7, .. f12 Hz": the free reduced part's six
+// rigid-body motions (at rounding's level) and its lowest elastic frequencies, as mbsflow
+// reduce and mbsflow info report them.
+std::string free_frequencies_text(const ReducedPart& part);
+
 // Whether the file at path is one that mbsflow reduce wrote (false for anything else).
 bool is_reduced_part(const std::string& path);
 
