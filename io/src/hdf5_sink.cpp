@@ -553,8 +553,8 @@ void Hdf5Sink::end() {
     for (int e = 0; e < beams[b].elements; ++e) {
       c.beam_lines.insert(c.beam_lines.end(), {beams[b].first_body + e, beams[b].first_body + e + 1});
       c.beam_index.push_back(static_cast<int>(b));
-      c.beam_joint.push_back(beams[b].first_joint + e);
     }
+  c.beam_joint = f->element_joints;  // the elements' bushings, in the same order
   c.beam_section_force = f->section_force.has_value();
   const std::vector<double> times = std::move(f->times);
   f.reset();
