@@ -115,7 +115,8 @@ Action add_reduce(CLI::App& app) {
   auto a = std::make_shared<ReduceArgs>();
   CLI::App* sub = app.add_subcommand(
       "reduce", "Reduce a finite-element part by Craig-Bampton (its interface nodes kept, fixed-interface modes added) "
-                "into one HDF5 file: its matrices, mass, inertia and surface (docs/flexible.md)");
+                "into one HDF5 file: its matrices, mass, inertia, surface and floating-frame data, which a model uses as a "
+                "flexible body, {\"type\": \"flexible\", \"file\": ...} (docs/flexible.md)");
   sub->add_option("deck", a->deck, "The part's CalculiX/Abaqus input deck (.inp): its nodes, elements and node sets")
       ->required()
       ->check(CLI::ExistingFile);

@@ -10,6 +10,7 @@
 #include <unordered_map>
 #include <unordered_set>
 
+#include "blas_product.hpp"
 #include "mbsflow/error.hpp"
 
 namespace mbsflow {
@@ -39,33 +40,6 @@ class HeldInverse {
 };
 
 constexpr double two_pi = 2.0 * std::numbers::pi;
-
-}  // namespace
-}  // namespace mbsflow
-
-// BLAS's general matrix product (the system's libblas.so.3: OpenBLAS where installed).
-extern "C" void dgemm_(const char* transa, const char* transb, const int* m, const int* n, const int* k, const double* alpha,
-                       const double* a, const int* lda, const double* b, const int* ldb, const double* beta, double* c,
-                       const int* ldc);
-
-namespace mbsflow {
-namespace {
-
-// A^T B for tall A and B (rows of the FE model's size): the one product of the reduction
-// whose cost grows with the interface squared, through BLAS, whose blocked kernels run it
-// several times faster than a portable build of Eigen's.
-using Columns = Eigen::Ref<const Eigen::MatrixXd, 0, Eigen::OuterStride<>>;  // blocks of columns, no copy
-
-Eigen::MatrixXd transposed_product(const Columns& a, const Columns& b) {
-  Eigen::MatrixXd c(a.cols(), b.cols());
-  if (c.size() == 0) return c;
-  if (a.rows() == 0) return c.setZero();
-  const int m = static_cast<int>(a.cols()), n = static_cast<int>(b.cols()), k = static_cast<int>(a.rows());
-  const int lda = static_cast<int>(a.outerStride()), ldb = static_cast<int>(b.outerStride());
-  const double one = 1.0, zero = 0.0;
-  dgemm_("T", "N", &m, &n, &k, &one, a.data(), &lda, b.data(), &ldb, &zero, c.data(), &m);
-  return c;
-}
 
 }  // namespace
 
@@ -238,6 +212,8 @@ ReducedPart craig_bampton(const FeMatrices& fe, const std::vector<Eigen::Vector3
   const Eigen::MatrixXd rigid = rigid_body_fields(fe.dofs, dof_position, r.properties.centre);
   const Eigen::MatrixXd mass_rigid = fe.mass * rigid;
   r.rigid_coupling = transposed_product(mass_rigid, r.shapes);
+  phase("floating frame: elastic modes and inertia invariants");
+  r.floating = floating_frame(fe, dof_position, r);
   return r;
 }
 

@@ -214,6 +214,11 @@ void rate_blocks(const StateLayout& l, const std::vector<int>& bodies, const Eig
 
 std::vector<int> free_bodies(const MultibodySystem& sys) {
   const Model& m = sys.model();
+  // Equilibrium, modes and frequency response all start here.
+  if (!m.flexible.empty())
+    throw InputError("flexible body '" + m.flexible.front().name +
+                     "': the linearisation (equilibrium, modes, frf) does not take flexible bodies yet; mbsflow info PART.h5 "
+                     "gives the reduced part's own frequencies");
   std::vector<char> driven(m.bodies.size(), 0);
   for (const Driver& d : m.drivers) driven[static_cast<std::size_t>(d.body)] = 1;
   std::vector<int> out;

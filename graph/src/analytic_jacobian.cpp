@@ -95,6 +95,7 @@ bool no_jacobian(std::string* why, std::string reason) {
 bool has_analytic_jacobian(const Model& m, std::string* why) {
   for (const auto& e : m.force_elements)
     if (!e->constant_wrench()) return no_jacobian(why, "the model has user force elements");
+  if (!m.flexible.empty()) return no_jacobian(why, "flexible body '" + m.flexible.front().name + "' (its rates are differenced)");
   return true;
 }
 

@@ -233,6 +233,8 @@ Decomposition decompose(const Model& m, const std::vector<int>& part, int k) {
 }
 
 Model submodel_model(const Model& m, const Submodel& s) {
+  if (!m.flexible.empty())
+    throw InputError("flexible body '" + m.flexible.front().name + "': a model with flexible bodies is not cut into submodels yet");
   Model local;
   local.name = m.name;
   local.gravity = m.gravity;

@@ -28,6 +28,28 @@ Eigen::SparseMatrix<double> MultibodySystem::jacobian_pattern() const {
     for (int b : cluster_bodies(c)) reads[static_cast<std::size_t>(b)] = all;
   }
 
+  // A flexible body's frame, nodes and modes move as one: each of its bodies reads what
+  // any of them reads, and a body that reads one of them reads all and the modes.
+  const Model& m = model();
+  std::vector<std::vector<int>> group(m.flexible.size()), group_reads(m.flexible.size());
+  std::vector<std::vector<char>> reads_modes(m.flexible.size());
+  for (std::size_t f = 0; f < m.flexible.size(); ++f) {
+    group[f] = m.flexible[f].nodes;
+    group[f].push_back(m.flexible[f].frame);
+    std::vector<int> all;
+    for (int b : group[f]) all.insert(all.end(), reads[static_cast<std::size_t>(b)].begin(), reads[static_cast<std::size_t>(b)].end());
+    for (int b : group[f]) reads[static_cast<std::size_t>(b)] = all;
+    reads_modes[f].assign(static_cast<std::size_t>(n), 0);
+    for (Eigen::Index i = 0; i < n; ++i) {
+      auto& r = reads[static_cast<std::size_t>(i)];
+      if (std::none_of(r.begin(), r.end(), [&](int b) { return flexible_owned(b) && compiled_->flexible_of_body[static_cast<std::size_t>(b)] == static_cast<int>(f); }))
+        continue;
+      reads_modes[f][static_cast<std::size_t>(i)] = 1;
+      r.insert(r.end(), group[f].begin(), group[f].end());
+    }
+    std::sort(all.begin(), all.end());
+    group_reads[f] = std::move(all);
+  }
   for (auto& r : reads) {
     std::sort(r.begin(), r.end());
     r.erase(std::unique(r.begin(), r.end()), r.end());
@@ -56,6 +78,25 @@ Eigen::SparseMatrix<double> MultibodySystem::jacobian_pattern() const {
         if (f == orientation || f == angular_velocity) push_rows(layout_.orientation(b), 4);  // q' = q (x) (0, w) / 2
         for (const int i : readers[static_cast<std::size_t>(b)]) push_rows(layout_.velocity(i), 3);
         for (const int i : readers[static_cast<std::size_t>(b)]) push_rows(layout_.angular_velocity(i), 3);
+        for (std::size_t fl = 0; fl < m.flexible.size(); ++fl)  // the modes' accelerations
+          if (std::binary_search(group_reads[fl].begin(), group_reads[fl].end(), static_cast<int>(b)))
+            push_rows(layout_.tail(compiled_->flexible_tail[fl]) + m.flexible[fl].data->modes(), m.flexible[fl].data->modes());
+        outer.push_back(static_cast<int>(inner.size()));
+      }
+  }
+  // The modal coordinates' and rates' columns: the rates of every body that reads the
+  // flexible body, and the modes' own.
+  for (std::size_t fl = 0; fl < m.flexible.size(); ++fl) {
+    const int ne = m.flexible[fl].data->modes();
+    const Eigen::Index tail = layout_.tail(compiled_->flexible_tail[fl]);
+    for (int rate = 0; rate < 2; ++rate)
+      for (int k = 0; k < ne; ++k) {
+        for (Eigen::Index i = 0; i < n; ++i)
+          if (reads_modes[fl][static_cast<std::size_t>(i)]) push_rows(layout_.velocity(i), 3);
+        for (Eigen::Index i = 0; i < n; ++i)
+          if (reads_modes[fl][static_cast<std::size_t>(i)]) push_rows(layout_.angular_velocity(i), 3);
+        if (rate) push_rows(tail + k, 1);  // eta' = eta rate
+        push_rows(tail + ne, ne);
         outer.push_back(static_cast<int>(inner.size()));
       }
   }

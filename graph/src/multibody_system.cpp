@@ -125,6 +125,7 @@ MultibodySystem::MultibodySystem(std::shared_ptr<const Model> shared, int active
   compile_constraints();
   compiled_->rotations_read = !model.loads.empty() || !compiled_->elements.empty() ||
                               std::any_of(compiled_->joints.begin(), compiled_->joints.end(), [&](const CompiledJoint& j) { return !on_lanes(j); });
+  compile_flexible();
 }
 
 Eigen::VectorXd MultibodySystem::initial_state() const {
@@ -135,6 +136,13 @@ Eigen::VectorXd MultibodySystem::initial_state() const {
     y.segment<4>(layout_.orientation(i)) = quat(b.orientation).normalized();
     y.segment<3>(layout_.velocity(i)) = vec(b.velocity);
     y.segment<3>(layout_.angular_velocity(i)) = vec(b.angular_velocity);
+  }
+  y.tail(layout_.extra).setZero();
+  for (std::size_t f = 0; f < model().flexible.size(); ++f) {
+    const FlexibleBody& fb = model().flexible[f];
+    const Eigen::Index tail = layout_.tail(compiled_->flexible_tail[f]), ne = fb.data->modes();
+    if (fb.initial_eta.size() == ne) y.segment(tail, ne) = fb.initial_eta;
+    if (fb.initial_eta_rate.size() == ne) y.segment(tail + ne, ne) = fb.initial_eta_rate;
   }
   const double t0 = model().simulation.t_start;
   int given_joint = -1, worst_joint = -1;
@@ -228,12 +236,14 @@ void MultibodySystem::update_kinematics(double t, const Eigen::VectorXd& y) {
   time_ = t;
   kinematics_in(nullptr, static_cast<std::size_t>(layout_.bodies), y, true);
   for (const Driver& d : model().drivers) drive(d, t);
+  if (!model().flexible.empty()) follow_flexible(y);
 }
 
 void MultibodySystem::kinematics_for_rhs(double t, const Eigen::VectorXd& y) {
   time_ = t;
   kinematics_in(nullptr, static_cast<std::size_t>(layout_.bodies), y, false);
   for (const Driver& d : model().drivers) drive(d, t);
+  if (!model().flexible.empty()) follow_flexible(y);
 }
 
 void MultibodySystem::kinematics_of(double t, const Eigen::VectorXd& y, std::span<const int> bodies) {
@@ -242,6 +252,7 @@ void MultibodySystem::kinematics_of(double t, const Eigen::VectorXd& y, std::spa
   // The last driver of a body wins, as in update_kinematics.
   for (int i : bodies)
     if (const int d = compiled_->driver_of_body[static_cast<std::size_t>(i)]; d >= 0) drive(model().drivers[static_cast<std::size_t>(d)], t);
+  if (!model().flexible.empty()) follow_flexible(y);
 }
 
 [[gnu::always_inline]] inline void MultibodySystem::joint_force(std::size_t k) {
@@ -439,15 +450,15 @@ void MultibodySystem::free_bodies_on_lanes(const int* k, double t, const Eigen::
 
 // The bodies list[0..n) (0..n-1 when null) but those of rigid clusters.
 void MultibodySystem::derivatives_in(const int* list, std::size_t n, double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const {
-  const bool any = clusters() > 0;
+  const bool any = clusters() > 0, flexible = !model().flexible.empty();
   lane_groups_for_cpu<1>(
       list, n,
       [&](int i) {
-        if (any && cluster_of(i) >= 0) return -1;
+        if ((any && cluster_of(i) >= 0) || (flexible && flexible_owned(i))) return -1;
         return compiled_->driver_of_body[static_cast<std::size_t>(i)] >= 0 ? -1 : 0;
       },
       [&](int i) {
-        if (!any || cluster_of(i) < 0) body_derivative(i, t, y, dydt);
+        if ((!any || cluster_of(i) < 0) && !(flexible && flexible_owned(i))) body_derivative(i, t, y, dydt);
       },
       [&](const int* k) { free_bodies_on_lanes<Lanes::width>(k, t, y, dydt); },
       [&](const int* k) { free_bodies_on_lanes<4>(k, t, y, dydt); });
@@ -456,6 +467,7 @@ void MultibodySystem::derivatives_in(const int* list, std::size_t n, double t, c
 void MultibodySystem::compute_derivatives(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const {
   derivatives_in(nullptr, static_cast<std::size_t>(active_), t, y, dydt);
   for (int c = 0; c < clusters(); ++c) solve_cluster(c, t, y, dydt);
+  if (!model().flexible.empty()) flexible_derivatives(t, y, dydt);
 }
 
 // A listed body of a cluster brings in its whole cluster: the caller lists whole clusters.
@@ -463,6 +475,7 @@ void MultibodySystem::derivatives_of(double t, const Eigen::VectorXd& y, Eigen::
                                      std::span<const int> bodies) const {
   derivatives_in(bodies.data(), bodies.size(), t, y, dydt);
   for (int c : clusters_of(bodies)) solve_cluster(c, t, y, dydt);
+  if (!model().flexible.empty()) flexible_derivatives(t, y, dydt);  // the whole model (one system)
 }
 
 void MultibodySystem::rhs(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) {
@@ -488,6 +501,7 @@ void MultibodySystem::after_step(double t, Eigen::VectorXd& y) const {
   for (Eigen::Index i = 0; i < layout_.bodies; ++i) y.segment<4>(layout_.orientation(i)).normalize();
   for (const Driver& d : model().drivers) impose(d, t, y);
   for (int c = 0; c < clusters(); ++c) project_cluster(c, t, y);
+  if (!model().flexible.empty()) place_flexible_nodes(y);
 }
 
 void MultibodySystem::after_step_of(double t, Eigen::VectorXd& y, std::span<const int> bodies) const {
@@ -496,6 +510,7 @@ void MultibodySystem::after_step_of(double t, Eigen::VectorXd& y, std::span<cons
     if (const int d = compiled_->driver_of_body[static_cast<std::size_t>(i)]; d >= 0) impose(model().drivers[static_cast<std::size_t>(d)], t, y);
   }
   for (int c : clusters_of(bodies)) project_cluster(c, t, y);
+  if (!model().flexible.empty()) place_flexible_nodes(y);
 }
 
 template <class Frame>
@@ -538,11 +553,13 @@ Energy MultibodySystem::energy(double t, const Eigen::VectorXd& y) {
   // Without drivers, force elements and kinematic joints the energies need only the state,
   // and no workspace is made: the results writer's copy of a million-body system, which
   // evaluates nothing else, would otherwise hold 176 MB of kinematics.
-  const bool from_state = model().drivers.empty() && compiled_->elements.empty() && constraints_->geometry.empty();
+  const bool from_state = model().drivers.empty() && compiled_->elements.empty() && constraints_->geometry.empty() &&
+                          model().flexible.empty();
   if (!from_state) update_kinematics(t, y);
   Energy e;
   for (Eigen::Index i = 0; i < layout_.bodies; ++i) {
     const auto bi = static_cast<std::size_t>(i);
+    if (flexible_owned(i)) continue;  // flexible_energy below
     const double m = model().bodies[bi].mass;
     const Eigen::Vector3d w = y.segment<3>(layout_.angular_velocity(i));
     // The kinematics copy a free body's position and velocity from y; a driven body's follow its driver.
@@ -557,6 +574,7 @@ Energy MultibodySystem::energy(double t, const Eigen::VectorXd& y) {
                  : j.kinematic >= 0 ? kinematic_energy(j)
                                     : elastic_energy(j, body_frame_at(j.a), body_frame_at(j.b));
   if (from_state) return e;
+  flexible_energy(y, e);
   const Kinematics k = kinematics();
   for (const auto& element : compiled_->elements) e.elastic += element->energy(t, k);
   return e;

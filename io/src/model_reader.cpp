@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <sstream>
@@ -18,6 +19,7 @@
 #include "json_tape_list.hpp"
 #include "mbsflow/error.hpp"
 #include "mbsflow/io/file_text.hpp"
+#include "mbsflow/io/reduced_part_file.hpp"
 #include "mbsflow/methods/stepper.hpp"
 #include "model_fields.hpp"
 #include "model_reading.hpp"
@@ -280,8 +282,81 @@ class Reader {
   }
 
   void body(const JsonNode& n) {
+    if (auto type = n.find("type")) {
+      if (type->string() != "flexible") type->fail("must be \"flexible\" (a rigid body has no type)");
+      flexible(n);
+      return;
+    }
     m_.bodies.push_back(make_body(n, [&](const std::string& name, const JsonNode& at) { enter_body_name(name, at); }));
     shared_(m_.bodies.back());
+  }
+
+  // A reduced FE part on a floating frame (flexible_body.hpp): its frame body, then a body
+  // per interface node, "NAME@ID".
+  void flexible(const JsonNode& n) {
+    n.allow_only({"name", "type", "file", "position", "orientation", "velocity", "angular_velocity", "damping"});
+    FlexibleBody f;
+    const JsonNode name = n["name"];
+    f.name = name.string();
+    if (f.name.empty() || f.name == "ground" || f.name.find('@') != std::string::npos)
+      name.fail("must be a name other than ground, without '@'");
+    std::filesystem::path file = n["file"].string();
+    if (file.is_relative()) file = std::filesystem::path(src_.file).parent_path() / file;
+    file = std::filesystem::absolute(file).lexically_normal();
+    ReducedPart part;
+    try {
+      part = read_reduced_part(file.string());
+    } catch (const InputError& e) {
+      n["file"].fail(e.text());
+    }
+    const int ne = part.floating.modes();
+    if (ne == 0)
+      n["file"].fail(file.string() + " has no floating frame: it has " + std::to_string(part.mass.rows()) +
+                     " reduced coordinates, and a flexible body takes at most " + std::to_string(max_floating_modes + 6) +
+                     " (reduce it with fewer interface nodes, --rigid-face for a face, or fewer --modes)");
+    f.data = std::make_shared<const FloatingFrameData>(std::move(part.floating));
+    const FloatingFrameData& d = *f.data;
+    const Vec3 origin = vec3(n, "position");
+    Quat orientation{1.0, 0.0, 0.0, 0.0};
+    if (auto q = n.find("orientation")) orientation = unit_quat(*q);
+    const Eigen::Quaterniond rq(orientation[0], orientation[1], orientation[2], orientation[3]);
+    const Eigen::Matrix3d r = rq.normalized().toRotationMatrix();
+    const Vec3 velocity = vec3(n, "velocity"), spin = vec3(n, "angular_velocity");
+    const Eigen::Vector3d v(velocity[0], velocity[1], velocity[2]), w(spin[0], spin[1], spin[2]);
+    const Eigen::Vector3d centre = Eigen::Vector3d(origin[0], origin[1], origin[2]) + r * d.centre;
+    auto to_vec3 = [](const Eigen::Vector3d& x) { return Vec3{x.x(), x.y(), x.z()}; };
+    const auto nodes = static_cast<double>(d.node_id.size());
+    auto make = [&](const std::string& body_name, double mass, const Eigen::Matrix3d& inertia, const Eigen::Vector3d& arm) {
+      Body b;
+      b.name = body_name;
+      enter_body_name(b.name, name);
+      b.mass = mass;
+      b.inertia = Vec6{inertia(0, 0), inertia(1, 1), inertia(2, 2), inertia(0, 1), inertia(0, 2), inertia(1, 2)};
+      b.position = to_vec3(centre + r * arm);
+      b.orientation = orientation;
+      b.velocity = to_vec3(v + r * w.cross(arm));
+      b.angular_velocity = spin;
+      shared_(b);
+      m_.bodies.push_back(std::move(b));
+      return static_cast<int>(m_.bodies.size()) - 1;
+    };
+    f.frame = make(f.name, d.mass, d.inertia, Eigen::Vector3d::Zero());
+    // The nodes' masses and inertias serve the stable-step estimates only (a share of the part's).
+    for (std::size_t k = 0; k < d.node_id.size(); ++k)
+      f.nodes.push_back(make(f.name + "@" + std::to_string(d.node_id[k]), d.mass / nodes, d.inertia / nodes, d.node_position[k]));
+    nlohmann::json item = {{"name", f.name}, {"type", "flexible"}, {"file", file.string()}, {"position", origin},
+                           {"orientation", orientation}, {"velocity", velocity}, {"angular_velocity", spin}};
+    f.damping = Eigen::VectorXd::Zero(ne);
+    if (auto damping = n.find("damping")) {
+      damping->allow_only({"ratio", "alpha", "beta"});
+      const double ratio = damping->find("ratio") ? (*damping)["ratio"].non_negative() : 0.0;
+      const double alpha = damping->find("alpha") ? (*damping)["alpha"].non_negative() : 0.0;
+      const double beta = damping->find("beta") ? (*damping)["beta"].non_negative() : 0.0;
+      for (int k = 0; k < ne; ++k) f.damping[k] = 2.0 * ratio * std::sqrt(d.omega2[k]) + alpha + beta * d.omega2[k];
+      item["damping"] = {{"ratio", ratio}, {"alpha", alpha}, {"beta", beta}};
+    }
+    f.source = item.dump();
+    m_.flexible.push_back(std::move(f));
   }
 
   // The body n describes; enter_name(name, node) is called where the reference reader
@@ -541,6 +616,7 @@ std::size_t count_of(char c, std::string_view text) {
 std::optional<Model> read_model_fast(std::string_view text, const JsonSource& src) try {
   constexpr std::size_t npos = std::string_view::npos;
   if (text.find("\"beams\"") != npos) return std::nullopt;  // beams: the reference reader
+  if (text.find("\"flexible\"") != npos) return std::nullopt;  // flexible bodies too
   Reader reader(src);
   nlohmann::json rest = nlohmann::json::object();
   std::vector<std::string_view> keys;

@@ -47,6 +47,60 @@ Eigen::MatrixXd matrix(const std::pair<std::vector<double>, std::vector<hsize_t>
   return Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(a.first.data(), rows, cols);
 }
 
+// The floating frame's data (/floating, flexible_body.hpp), where the part has one.
+void write_floating(hid_t root, const FloatingFrameData& f) {
+  const auto ne = static_cast<hsize_t>(f.modes());
+  if (ne == 0) return;
+  h5::Handle(H5Gcreate2(root, "/floating", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose, "create /floating");
+  std::vector<double> a, c, e, position, shape;
+  const auto append = [](std::vector<double>& to, const Eigen::MatrixXd& m) {
+    const std::vector<double> values = row_major(m);
+    to.insert(to.end(), values.begin(), values.end());
+  };
+  for (const auto& m : f.a) append(a, m);
+  for (const auto& m : f.c) append(c, m);
+  for (const auto& m : f.e) append(e, m);
+  for (const auto& x : f.node_position) position.insert(position.end(), {x.x(), x.y(), x.z()});
+  for (const auto& m : f.node_shape) append(shape, m);
+  const hsize_t nodes = f.node_id.size();
+  h5::write_array(root, "/floating/omega_squared", H5T_NATIVE_DOUBLE, std::vector<double>(f.omega2.data(), f.omega2.data() + ne), {ne});
+  h5::write_array(root, "/floating/mass0", H5T_NATIVE_DOUBLE, row_major(f.mass0), {6 + ne, 6 + ne});
+  h5::write_array(root, "/floating/a", H5T_NATIVE_DOUBLE, a, {ne, 3, 6});
+  h5::write_array(root, "/floating/c", H5T_NATIVE_DOUBLE, c, {ne, ne, 3, 3});
+  h5::write_array(root, "/floating/e", H5T_NATIVE_DOUBLE, e, {ne, 3, ne});
+  h5::write_array(root, "/floating/node_id", H5T_NATIVE_LONG, f.node_id, {nodes});
+  h5::write_array(root, "/floating/node_position", H5T_NATIVE_DOUBLE, position, {nodes, 3});
+  h5::write_array(root, "/floating/node_shape", H5T_NATIVE_DOUBLE, shape, {nodes, 6, ne});
+  h5::write_units(root, "/floating/omega_squared", "(rad/s)^2: the free part's elastic modes");
+  h5::write_units(root, "/floating/node_position", "m, from the centre of mass");
+}
+
+void read_floating(hid_t file, const std::string& path, FloatingFrameData& f) {
+  const auto omega2 = read_all(file, "/floating/omega_squared", path).first;
+  const auto ne = static_cast<Eigen::Index>(omega2.size());
+  f.omega2 = Eigen::Map<const Eigen::VectorXd>(omega2.data(), ne);
+  f.mass0 = matrix(read_all(file, "/floating/mass0", path), path + ":/floating/mass0");
+  const auto a = read_all(file, "/floating/a", path).first, c = read_all(file, "/floating/c", path).first,
+             e = read_all(file, "/floating/e", path).first;
+  const auto ids = read_all(file, "/floating/node_id", path).first, position = read_all(file, "/floating/node_position", path).first,
+             shape = read_all(file, "/floating/node_shape", path).first;
+  const auto un = static_cast<std::size_t>(ne), nodes = ids.size();
+  if (f.mass0.rows() != 6 + ne || a.size() != 18 * un || c.size() != 9 * un * un || e.size() != 3 * un * un ||
+      position.size() != 3 * nodes || shape.size() != 6 * un * nodes)
+    throw InputError(path + ": the floating frame's data disagree in size");
+  using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  for (std::size_t k = 0; k < un; ++k) {
+    f.a.emplace_back(Eigen::Map<const RowMajor>(a.data() + 18 * k, 3, 6));
+    f.e.emplace_back(Eigen::Map<const RowMajor>(e.data() + 3 * un * k, 3, ne));
+  }
+  for (std::size_t k = 0; k < un * un; ++k) f.c.emplace_back(Eigen::Map<const RowMajor>(c.data() + 9 * k, 3, 3));
+  for (std::size_t k = 0; k < nodes; ++k) {
+    f.node_id.push_back(static_cast<long>(ids[k]));
+    f.node_position.emplace_back(position[3 * k], position[3 * k + 1], position[3 * k + 2]);
+    f.node_shape.emplace_back(Eigen::Map<const RowMajor>(shape.data() + 6 * un * k, 6, ne));
+  }
+}
+
 // The XDMF sidecar's views (/xdmf/shape<q>: coordinate q's displacement of the display
 // nodes) and its text: time q + 1 is coordinate q, the surface with its shape as a vector
 // to warp by.
@@ -153,6 +207,7 @@ std::string write_file(const std::string& path, const std::string& h5_name, cons
   h5::write_units(root, "/nodes/position", "m");
   h5::write_units(root, "/display/shape", "m per unit coordinate");
   h5::write_units(root, "/display/position", "m");
+  write_floating(root, part.floating);
   return write_views(root, h5_name, r, d, faces.size());
 }
 
@@ -217,6 +272,10 @@ ReducedPart read_reduced_part(const std::string& path, ReducedPartInfo* info) {
   p.rigid_coupling = matrix(read_all(file.get(), "/invariants/rigid_coupling", path), path + ":/invariants/rigid_coupling");
   if (p.mass.rows() != dof.rows() || p.stiffness.rows() != dof.rows() || p.mass.cols() != p.mass.rows())
     throw InputError(path + ": the reduced matrices and coordinates disagree in size");
+  p.floating.mass = p.properties.mass;
+  p.floating.inertia = p.properties.inertia;
+  p.floating.centre = p.properties.centre;
+  if (H5Lexists(file.get(), "/floating", H5P_DEFAULT) > 0) read_floating(file.get(), path, p.floating);
   return p;
 }
 

@@ -85,6 +85,7 @@ TightPoint restore_tight(const Checkpointing& c, const RunOptions& o, std::vecto
 }  // namespace
 
 int default_partitions(const Model& model, int threads) {
+  if (!model.flexible.empty()) return 1;  // a flexible body's modes are one system's tail
   return std::max(1, std::min(threads, static_cast<int>(model.bodies.size() / 64)));
 }
 

@@ -20,6 +20,8 @@
 #include <string>
 #include <vector>
 
+#include "mbsflow/graph/flexible_body.hpp"
+
 namespace mbsflow {
 
 // One displacement DOF of an FE model: its node's number and direction (1, 2, 3: x, y,
@@ -74,7 +76,19 @@ struct ReducedPart {
   // translations along x, y, z and rotations about axes through the centre of mass
   // (R^T M T, the linear inertia invariants of a floating frame).
   Eigen::MatrixXd rigid_coupling;
+  // The free elastic modes and inertia invariants that move it on a floating frame
+  // (floating_frame below); no modes where it has more than max_floating_modes.
+  FloatingFrameData floating;
 };
+
+// The most elastic coordinates (reduced coordinates less six) a flexible body takes: its
+// quadratic inertia invariants grow with their square.
+inline constexpr int max_floating_modes = 60;
+
+// The floating frame's data of a reduced part (flexible_body.hpp), from the FE model it
+// was reduced from: the free part's elastic modes (every reduced coordinate but the six
+// rigid motions), and its inertia invariants from the FE mass matrix.
+FloatingFrameData floating_frame(const FeMatrices& fe, const std::vector<Eigen::Vector3d>& dof_position, const ReducedPart& part);
 
 // InputError naming the node for an interface node with no DOF in the model or one named
 // twice, a part that its interface does not hold (K_ii not positive definite: a solid part

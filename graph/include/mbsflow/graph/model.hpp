@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "mbsflow/graph/flexible_body.hpp"
 #include "mbsflow/graph/force_table.hpp"
 #include "mbsflow/graph/rare_value.hpp"
 #include "mbsflow/method.hpp"
@@ -185,6 +186,9 @@ struct Model {
   // across worker processes refuses them.
   std::vector<std::shared_ptr<const ForceElement>> force_elements;
   std::vector<BeamRecord> beams;
+  // Reduced finite-element bodies on floating frames: each one's frame and interface
+  // nodes are bodies of the list above, its modal coordinates the state's tail.
+  std::vector<FlexibleBody> flexible;
 };
 
 // Checks every field of the model (finite numbers, positive masses and inertias, body

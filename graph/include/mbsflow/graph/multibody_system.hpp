@@ -240,6 +240,18 @@ class MultibodySystem {
   void free_bodies_on_lanes(const int* bodies, double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const;
   void derivatives_in(const int* list, std::size_t n, double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const;
   void drive(const Driver& d, double t);
+  // The flexible bodies (flexible_system.cpp): compiled with the system, their nodes'
+  // kinematics from the frame and the modes, the rates of frame and modes, the nodes'
+  // states put where the frame says, the energies.
+  void compile_flexible();
+  Eigen::Matrix3d frame_rotation(int i) const;
+  void follow_flexible(const Eigen::VectorXd& y);
+  void flexible_derivatives(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const;
+  void place_flexible_nodes(Eigen::VectorXd& y) const;
+  void flexible_energy(const Eigen::VectorXd& y, Energy& e) const;
+  bool flexible_owned(Eigen::Index i) const {
+    return !compiled_->flexible_of_body.empty() && compiled_->flexible_of_body[static_cast<std::size_t>(i)] >= 0;
+  }
   void impose(const Driver& d, double t, Eigen::VectorXd& y) const;
   void joint_force(std::size_t k);
   void joint_forces_in(const int* list, std::size_t n);  // list[0..n), or 0..n-1 when list is null
@@ -271,6 +283,10 @@ class MultibodySystem {
     std::vector<int> incidence_start, incidence;
     std::vector<int> load_start, load_index;
     std::vector<int> driver_of_body;  // -1 if free
+    // Per body, the flexible body it belongs to (frame or node), -1 if none (empty without
+    // flexible bodies); per flexible body, where its coordinates start in the state's tail.
+    std::vector<int> flexible_of_body;
+    std::vector<Eigen::Index> flexible_tail;
     // Force elements, and per body the slots into element_out_ in element order.
     std::vector<std::shared_ptr<const ForceElement>> elements;
     std::vector<std::size_t> element_first;  // first slot of each element

@@ -8,7 +8,11 @@ namespace mbsflow {
 
 struct StateLayout {
   Eigen::Index bodies = 0;
-  Eigen::Index size() const { return 13 * bodies; }
+  // After the bodies' fields: the flexible bodies' modal coordinates and their rates
+  // (flexible_body.hpp), `extra` numbers in all.
+  Eigen::Index extra = 0;
+  Eigen::Index size() const { return 13 * bodies + extra; }
+  Eigen::Index tail(Eigen::Index k) const { return 13 * bodies + k; }
   Eigen::Index position(Eigen::Index i) const { return 3 * i; }
   Eigen::Index orientation(Eigen::Index i) const { return 3 * bodies + 4 * i; }
   Eigen::Index velocity(Eigen::Index i) const { return 7 * bodies + 3 * i; }

@@ -1,0 +1,208 @@
+// The flexible bodies' part of MultibodySystem (flexible_body.hpp): their node bodies'
+// motion from the frame and the modes, their rates, and their state tail.
+#include <Eigen/Geometry>
+#include <cmath>
+
+#include "force_laws.hpp"
+#include "mbsflow/error.hpp"
+#include "mbsflow/graph/multibody_system.hpp"
+#include "rotation.hpp"
+
+namespace mbsflow {
+namespace {
+
+// The unit quaternion of a small rotation vector.
+Eigen::Vector4d rotation_quaternion(const Eigen::Vector3d& theta) {
+  const double angle = theta.norm();
+  if (angle < 1e-300) return {1.0, 0.0, 0.0, 0.0};
+  const Eigen::Vector3d axis = std::sin(0.5 * angle) / angle * theta;
+  return {std::cos(0.5 * angle), axis.x(), axis.y(), axis.z()};
+}
+
+// A flexible body's frame index, modal coordinates and rates, and the frame's angular
+// velocity (body axes) at y.
+struct FlexibleAt {
+  const FloatingFrameData& d;
+  int ne, frame;
+  Eigen::Index tail;
+  Eigen::VectorXd eta, eta_rate;
+  Eigen::Vector3d w;
+};
+
+FlexibleAt flexible_at(const FlexibleBody& fb, const StateLayout& l, Eigen::Index offset, const Eigen::VectorXd& y) {
+  const int ne = fb.data->modes();
+  const Eigen::Index tail = l.tail(offset);
+  return {*fb.data, ne, fb.frame, tail, y.segment(tail, ne), y.segment(tail + ne, ne), y.segment<3>(l.angular_velocity(fb.frame))};
+}
+
+// Node k's world kinematics from the frame's (position, velocity, quaternion, rotation).
+struct NodeWorld {
+  Eigen::Vector3d position, velocity, omega;  // omega: world
+  Eigen::Vector4d quat;
+};
+
+NodeWorld node_world(const FlexibleAt& f, int k, const Eigen::Vector3d& pos, const Eigen::Vector3d& vel, const Eigen::Vector4d& quat,
+                     const Eigen::Matrix3d& r) {
+  const NodeMotion nm = flexible_node_motion(f.d, k, f.eta, f.eta_rate);
+  return {pos + r * nm.position, vel + r * (f.w.cross(nm.position) + nm.velocity), r * (f.w + nm.angular_velocity),
+          quat_multiply(quat, rotation_quaternion(nm.rotation))};
+}
+
+}  // namespace
+
+void MultibodySystem::compile_flexible() {
+  const Model& m = *model_;
+  if (m.flexible.empty()) return;
+  const auto n = static_cast<std::size_t>(layout_.bodies);
+  if (active_ != layout_.bodies)
+    throw InputError("flexible body '" + m.flexible.front().name + "': a model with flexible bodies runs as one system");
+  compiled_->flexible_of_body.assign(n, -1);
+  // The node bodies' masses serve the stable-step estimates only: their motion is the
+  // frame's and the modes', and gravity acts on the part through the frame.
+  const int massless = static_cast<int>(compiled_->body_laws.size());
+  BodyLaw none;
+  none.inertia.setZero();
+  none.inv_inertia.setZero();
+  compiled_->body_laws.push_back(none);
+  Eigen::Index extra = 0;
+  for (std::size_t f = 0; f < m.flexible.size(); ++f) {
+    const FlexibleBody& fb = m.flexible[f];
+    const auto bad = [&](const std::string& what) { throw InputError("flexible body '" + fb.name + "': " + what); };
+    if (!fb.data) bad("no reduced part");
+    const int ne = fb.data->modes();
+    if (fb.nodes.size() != fb.data->node_id.size()) bad("a body per interface node");
+    if (fb.damping.size() != ne) bad("a damping coefficient per mode");
+    std::vector<int> owned{fb.frame};
+    owned.insert(owned.end(), fb.nodes.begin(), fb.nodes.end());
+    for (int b : owned) {
+      if (b < 0 || static_cast<std::size_t>(b) >= n || compiled_->flexible_of_body[static_cast<std::size_t>(b)] >= 0)
+        bad("its bodies must be distinct bodies of the model");
+      compiled_->flexible_of_body[static_cast<std::size_t>(b)] = static_cast<int>(f);
+      if (compiled_->driver_of_body[static_cast<std::size_t>(b)] >= 0)
+        bad("body '" + m.bodies[static_cast<std::size_t>(b)].name + "' cannot be driven (drive a body joined to it by a bushing)");
+    }
+    for (int b : fb.nodes) compiled_->body_law[static_cast<std::size_t>(b)] = massless;
+    compiled_->flexible_tail.push_back(extra);
+    extra += 2 * ne;
+  }
+  for (std::size_t k = 0; k < compiled_->joints.size(); ++k) {
+    const CompiledJoint& j = compiled_->joints[k];
+    if (j.kinematic < 0) continue;
+    for (int b : {j.a, j.b})
+      if (b < layout_.bodies && compiled_->flexible_of_body[static_cast<std::size_t>(b)] >= 0)
+        throw InputError("joint '" + m.joints[k].name + "': a rigid joint at flexible body '" +
+                         m.flexible[static_cast<std::size_t>(compiled_->flexible_of_body[static_cast<std::size_t>(b)])].name +
+                         "' is not supported yet; join it by a bushing (stiff where the joint holds, free about its axis)");
+  }
+  layout_.extra = extra;
+  compiled_->rotations_read = true;
+}
+
+// The frame's rotation matrix as this evaluation's kinematics hold it.
+Eigen::Matrix3d MultibodySystem::frame_rotation(int i) const {
+  return rot_.empty() ? rotation_matrix(Eigen::Vector4d(quat_.col(i))) : rot_[static_cast<std::size_t>(i)];
+}
+
+void MultibodySystem::follow_flexible(const Eigen::VectorXd& y) {
+  const Model& m = model();
+  for (std::size_t f = 0; f < m.flexible.size(); ++f) {
+    const FlexibleAt at = flexible_at(m.flexible[f], layout_, compiled_->flexible_tail[f], y);
+    const int i = at.frame;
+    const Eigen::Matrix3d r = frame_rotation(i);
+    for (std::size_t k = 0; k < m.flexible[f].nodes.size(); ++k) {
+      const int b = m.flexible[f].nodes[k];
+      const NodeWorld n = node_world(at, static_cast<int>(k), pos_.col(i), vel_.col(i), quat_.col(i), r);
+      pos_.col(b) = n.position;
+      vel_.col(b) = n.velocity;
+      omega_.col(b) = n.omega;
+      quat_.col(b) = n.quat;
+      if (!rot_.empty()) rot_[static_cast<std::size_t>(b)] = rotation_matrix(n.quat);
+    }
+  }
+}
+
+void MultibodySystem::flexible_derivatives(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const {
+  const Model& m = model();
+  for (std::size_t f = 0; f < m.flexible.size(); ++f) {
+    const FlexibleBody& fb = m.flexible[f];
+    const FlexibleAt at = flexible_at(fb, layout_, compiled_->flexible_tail[f], y);
+    const FloatingFrameData& d = at.d;
+    const int ne = at.ne, i = at.frame;
+    const Eigen::Index tail = at.tail;
+    const Eigen::VectorXd &eta = at.eta, &eta_rate = at.eta_rate;
+    const Eigen::Vector3d& w = at.w;
+    const Eigen::Matrix3d r = frame_rotation(i);
+    const Eigen::Vector3d v = y.segment<3>(layout_.velocity(i)), v_b = r.transpose() * v;
+    // Generalised forces: the frame's wrench (gravity on the part's mass at its origin,
+    // its loads and joints), gravity's share on the deformation (the centre of mass moves
+    // with the modes by L eta), and each node's wrench through its motion.
+    Eigen::VectorXd q = Eigen::VectorXd::Zero(6 + ne);
+    Eigen::Vector3d force, torque;
+    applied_wrench(i, t, y, force, torque);
+    q.head<3>() = r.transpose() * force;
+    q.segment<3>(3) = r.transpose() * torque;
+    const Eigen::Vector3d g_b = r.transpose() * gravity_;
+    const auto l = d.mass0.block(0, 6, 3, ne);
+    q.segment<3>(3) += Eigen::Vector3d(l * eta).cross(g_b);
+    q.tail(ne) += l.transpose() * g_b;
+    for (std::size_t k = 0; k < fb.nodes.size(); ++k) {
+      applied_wrench(fb.nodes[k], t, y, force, torque);
+      const Eigen::Vector3d f_b = r.transpose() * force, t_b = r.transpose() * torque;
+      const Eigen::MatrixXd& shape = d.node_shape[k];
+      const Eigen::Vector3d at = d.node_position[k] + shape.topRows<3>() * eta;
+      q.head<3>() += f_b;
+      q.segment<3>(3) += at.cross(f_b) + t_b;
+      q.tail(ne) += shape.topRows<3>().transpose() * f_b + shape.bottomRows<3>().transpose() * t_b;
+    }
+    const Eigen::VectorXd xi_rate = flexible_accelerations(fb, v_b, w, eta, eta_rate, q);
+    const Eigen::Vector4d quat = y.segment<4>(layout_.orientation(i));
+    dydt.segment<3>(layout_.position(i)) = v;
+    dydt.segment<4>(layout_.orientation(i)) = quaternion_rate<double>(quat, w);
+    dydt.segment<3>(layout_.velocity(i)) = r * (xi_rate.head<3>() + w.cross(v_b));
+    dydt.segment<3>(layout_.angular_velocity(i)) = xi_rate.segment<3>(3);
+    dydt.segment(tail, ne) = eta_rate;
+    dydt.segment(tail + ne, ne) = xi_rate.tail(ne);
+    // The nodes' states follow the frame (after_step puts them there); between steps they
+    // move with its kinematics, for the dense output.
+    for (int b : fb.nodes) {
+      const Eigen::Vector4d qb = quat_.col(b);
+      dydt.segment<3>(layout_.position(b)) = vel_.col(b);
+      dydt.segment<4>(layout_.orientation(b)) = quaternion_rate<double>(qb, Eigen::Vector3d(rotation_matrix(qb).transpose() * omega_.col(b)));
+      dydt.segment<3>(layout_.velocity(b)).setZero();
+      dydt.segment<3>(layout_.angular_velocity(b)).setZero();
+    }
+  }
+}
+
+void MultibodySystem::place_flexible_nodes(Eigen::VectorXd& y) const {
+  const Model& m = model();
+  for (std::size_t f = 0; f < m.flexible.size(); ++f) {
+    const FlexibleAt at = flexible_at(m.flexible[f], layout_, compiled_->flexible_tail[f], y);
+    const int i = at.frame;
+    const Eigen::Vector4d qf = y.segment<4>(layout_.orientation(i));
+    for (std::size_t k = 0; k < m.flexible[f].nodes.size(); ++k) {
+      const int b = m.flexible[f].nodes[k];
+      const NodeWorld n = node_world(at, static_cast<int>(k), y.segment<3>(layout_.position(i)), y.segment<3>(layout_.velocity(i)), qf,
+                                     rotation_matrix(qf));
+      y.segment<3>(layout_.position(b)) = n.position;
+      y.segment<3>(layout_.velocity(b)) = n.velocity;
+      y.segment<4>(layout_.orientation(b)) = n.quat;
+      y.segment<3>(layout_.angular_velocity(b)) = rotation_matrix(n.quat).transpose() * n.omega;
+    }
+  }
+}
+
+void MultibodySystem::flexible_energy(const Eigen::VectorXd& y, Energy& e) const {
+  const Model& m = model();
+  for (std::size_t f = 0; f < m.flexible.size(); ++f) {
+    const FlexibleAt at = flexible_at(m.flexible[f], layout_, compiled_->flexible_tail[f], y);
+    const int i = at.frame;
+    const Eigen::Matrix3d r = rotation_matrix(Eigen::Vector4d(y.segment<4>(layout_.orientation(i))));
+    const Eigen::Vector3d v_b = r.transpose() * y.segment<3>(layout_.velocity(i));
+    e.kinetic += flexible_kinetic_energy(at.d, v_b, at.w, at.eta, at.eta_rate);
+    e.gravity -= gravity_.dot(at.d.mass * y.segment<3>(layout_.position(i)) + r * (at.d.mass0.block(0, 6, 3, at.ne) * at.eta));
+    e.elastic += flexible_strain_energy(at.d, at.eta);
+  }
+}
+
+}  // namespace mbsflow

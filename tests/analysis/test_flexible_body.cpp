@@ -1,0 +1,203 @@
+// A reduced FE body on a floating frame (graph/flexible_body.hpp), on a bar-like lattice of
+// point masses and axial springs reduced by Craig-Bampton at one end's four nodes: the
+// inertia invariants against the lattice's mass properties, a small free vibration at
+// the free part's frequency, and the conservation laws of free motion (energy, linear and
+// angular momentum) with large rotation and deformation rates, and with a bushing and
+// gravity acting at an interface node.
+#include <catch2/catch.hpp>
+#include <Eigen/Geometry>
+#include <cmath>
+#include <numbers>
+
+#include "mbsflow/analysis/craig_bampton.hpp"
+#include "mbsflow/error.hpp"
+#include "mbsflow/graph/multibody_system.hpp"
+#include "test_support.hpp"
+
+using namespace mbsflow;
+
+namespace {
+
+// Nodes on a 6 x 2 x 2 grid (0.2 m along x, 0.1 m across), 0.5 .. 1.5 kg each, springs of
+// 2e5 / length N/m between nodes at most a cell's diagonal apart. Nodes 1-4: the end x = 0.
+ReducedPart bar_part(int modes) {
+  std::vector<Eigen::Vector3d> node;
+  std::vector<double> mass;
+  for (int i = 0; i < 6; ++i)
+    for (int j = 0; j < 2; ++j)
+      for (int k = 0; k < 2; ++k) {
+        node.emplace_back(0.2 * i, 0.1 * j, 0.1 * k + 0.01 * i);
+        mass.push_back(0.5 + 0.1 * static_cast<double>(node.size() % 11));
+      }
+  const auto n = static_cast<Eigen::Index>(3 * node.size());
+  Eigen::MatrixXd k = Eigen::MatrixXd::Zero(n, n), m = Eigen::MatrixXd::Zero(n, n);
+  FeMatrices fe;
+  std::vector<Eigen::Vector3d> at;
+  for (std::size_t a = 0; a < node.size(); ++a) {
+    for (int e = 0; e < 3; ++e) {
+      fe.dofs.push_back({static_cast<long>(a + 1), e + 1});
+      at.push_back(node[a]);
+      m(static_cast<Eigen::Index>(3 * a + e), static_cast<Eigen::Index>(3 * a + e)) = mass[a];
+    }
+    for (std::size_t b = a + 1; b < node.size(); ++b) {
+      const Eigen::Vector3d d = node[b] - node[a];
+      if (d.norm() > 0.26) continue;
+      const Eigen::Matrix3d block = 2e5 / d.norm() * d.normalized() * d.normalized().transpose();
+      const auto ia = static_cast<Eigen::Index>(3 * a), ib = static_cast<Eigen::Index>(3 * b);
+      k.block<3, 3>(ia, ia) += block;
+      k.block<3, 3>(ib, ib) += block;
+      k.block<3, 3>(ia, ib) -= block;
+      k.block<3, 3>(ib, ia) -= block;
+    }
+  }
+  fe.stiffness = k.sparseView();
+  fe.mass = m.sparseView();
+  CraigBamptonOptions o;
+  o.interface_nodes = {1, 2, 3, 4};
+  o.modes = modes;
+  return craig_bampton(fe, at, o);
+}
+
+// A model of the part alone (frame at the origin, unturned), as the model reader makes it:
+// the frame body, then a body per interface node.
+Model flexible_model(const ReducedPart& part) {
+  Model m;
+  FlexibleBody f;
+  f.name = "bar";
+  f.data = std::make_shared<const FloatingFrameData>(part.floating);
+  const FloatingFrameData& d = *f.data;
+  f.damping = Eigen::VectorXd::Zero(d.modes());
+  auto add = [&](const std::string& name, double mass, const Eigen::Matrix3d& j, const Eigen::Vector3d& x) {
+    Body b;
+    b.name = name;
+    b.mass = mass;
+    b.inertia = Vec6{j(0, 0), j(1, 1), j(2, 2), j(0, 1), j(0, 2), j(1, 2)};
+    b.position = {x.x(), x.y(), x.z()};
+    m.bodies.push_back(b);
+    return static_cast<int>(m.bodies.size()) - 1;
+  };
+  f.frame = add("bar", d.mass, d.inertia, Eigen::Vector3d::Zero());
+  for (std::size_t k = 0; k < d.node_id.size(); ++k)
+    f.nodes.push_back(add("bar@" + std::to_string(d.node_id[k]), d.mass / 4, d.inertia / 4, d.node_position[k]));
+  m.flexible.push_back(std::move(f));
+  return m;
+}
+
+struct Momentum {
+  Eigen::Vector3d linear, angular;  // world; angular about the world origin
+};
+
+Momentum momentum(const MultibodySystem& sys, const Eigen::VectorXd& y) {
+  const StateLayout& l = sys.layout();
+  const FlexibleBody& f = sys.model().flexible.front();
+  const int ne = f.data->modes();
+  const Eigen::Vector4d q = y.segment<4>(l.orientation(f.frame));
+  const Eigen::Matrix3d r = Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized().toRotationMatrix();
+  const Eigen::VectorXd eta = y.segment(l.tail(0), ne);
+  Eigen::VectorXd xi(6 + ne);
+  xi << r.transpose() * y.segment<3>(l.velocity(f.frame)), y.segment<3>(l.angular_velocity(f.frame)), y.segment(l.tail(ne), ne);
+  const Eigen::VectorXd p = flexible_mass_matrix(*f.data, eta) * xi;
+  const Eigen::Vector3d linear = r * p.head<3>();
+  return {linear, Eigen::Vector3d(y.segment<3>(l.position(f.frame))).cross(linear) + r * p.segment<3>(3)};
+}
+
+}  // namespace
+
+TEST_CASE("flexible body: the floating frame's invariants are the lattice's mass properties, its modes the free part's",
+          "[analysis][flexible]") {
+  const ReducedPart part = bar_part(6);
+  const FloatingFrameData& d = part.floating;
+  REQUIRE(d.modes() == 18 - 6);
+  REQUIRE(d.node_id == std::vector<long>{1, 2, 3, 4});
+  const Eigen::MatrixXd& m0 = d.mass0;
+  CHECK((m0.topLeftCorner<3, 3>() - d.mass * Eigen::Matrix3d::Identity()).norm() < 1e-9 * d.mass);
+  CHECK((m0.block<3, 3>(3, 3) - d.inertia).norm() < 1e-9 * d.inertia.norm());
+  CHECK(m0.block<3, 3>(0, 3).norm() < 1e-9 * d.mass);  // the origin is the centre of mass
+  CHECK(m0.topRightCorner(6, d.modes()).norm() < 1e-8 * d.mass);  // modes orthogonal to rigid motion
+  CHECK((m0.bottomRightCorner(d.modes(), d.modes()) - Eigen::MatrixXd::Identity(d.modes(), d.modes())).norm() < 1e-9);
+  const Eigen::VectorXd free = reduced_frequencies(part, false);
+  for (int k = 0; k < d.modes(); ++k) CHECK(std::sqrt(d.omega2[k]) / (2 * std::numbers::pi) == Approx(free[6 + k]).epsilon(1e-8));
+  // The interface nodes are where the lattice has them, from the centre of mass.
+  CHECK((d.node_position[0] + d.centre - Eigen::Vector3d(0, 0, 0)).norm() < 1e-12);
+  CHECK((d.node_position[3] + d.centre - Eigen::Vector3d(0, 0.1, 0.1)).norm() < 1e-12);
+}
+
+TEST_CASE("flexible body: a small free vibration keeps the free part's frequency, the frame at rest", "[analysis][flexible]") {
+  const ReducedPart part = bar_part(6);
+  Model m = flexible_model(part);
+  const int ne = part.floating.modes();
+  m.flexible.front().initial_eta = Eigen::VectorXd::Unit(ne, 0) * 1e-5;
+  MultibodySystem sys(m);
+  const double period = 2 * std::numbers::pi / std::sqrt(part.floating.omega2[0]);
+  const Eigen::VectorXd y = test::integrate_rk4(sys, period, 4000);
+  const StateLayout& l = sys.layout();
+  CHECK(y[l.tail(0)] == Approx(1e-5).epsilon(1e-6));
+  CHECK(y.segment(l.tail(1), ne - 1).norm() < 1e-12);
+  CHECK(y.segment<3>(l.position(0)).norm() < 1e-12);
+}
+
+TEST_CASE("flexible body in free motion conserves energy, momentum and angular momentum", "[analysis][flexible]") {
+  const ReducedPart part = bar_part(6);
+  Model m = flexible_model(part);
+  const int ne = part.floating.modes();
+  FlexibleBody& f = m.flexible.front();
+  f.initial_eta = Eigen::VectorXd::LinSpaced(ne, 2e-4, -1e-4);
+  f.initial_eta_rate = Eigen::VectorXd::LinSpaced(ne, 0.05, 0.01);
+  m.bodies[0].velocity = {0.3, -0.1, 0.2};
+  m.bodies[0].angular_velocity = {1.5, 6.0, -2.0};  // a fast tumble: every coupling term works
+  MultibodySystem sys(m);
+  const Eigen::VectorXd y0 = sys.initial_state();
+  const Energy e0 = sys.energy(0.0, y0);
+  const Momentum p0 = momentum(sys, y0);
+  REQUIRE(e0.elastic > 0.0);
+  double worst_energy = 0.0, worst_linear = 0.0, worst_angular = 0.0;
+  test::integrate_rk4(sys, 0.5, 50000, [&](double t, const Eigen::VectorXd& y) {
+    worst_energy = std::max(worst_energy, std::abs(sys.energy(t, y).total() - e0.total()));
+    const Momentum p = momentum(sys, y);
+    worst_linear = std::max(worst_linear, (p.linear - p0.linear).norm());
+    worst_angular = std::max(worst_angular, (p.angular - p0.angular).norm());
+  });
+  // RK4's error at this step (it falls as h^4 with the step); the momenta are conserved by
+  // the equations' form, to rounding.
+  CHECK(worst_energy < 1e-9 * e0.total());
+  CHECK(worst_linear < 1e-12 * p0.linear.norm());
+  CHECK(worst_angular < 1e-11 * p0.angular.norm());
+}
+
+TEST_CASE("flexible body held at an interface node by a bushing under gravity conserves energy", "[analysis][flexible]") {
+  const ReducedPart part = bar_part(4);
+  Model m = flexible_model(part);
+  m.gravity = {0.0, 0.0, -9.81};
+  Joint j;
+  j.name = "hinge";
+  j.type = JointType::bushing;
+  j.body1 = ground;
+  j.body2 = m.flexible.front().nodes[1];
+  j.point1 = m.bodies[static_cast<std::size_t>(j.body2)].position;
+  j.stiffness = {1e5, 1e5, 1e5, 0.0, 0.0, 0.0};
+  m.joints.push_back(j);
+  m.bodies[0].angular_velocity = {0.0, 1.0, 0.5};
+  MultibodySystem sys(m);
+  const Eigen::VectorXd y0 = sys.initial_state();
+  const double e0 = sys.energy(0.0, y0).total();
+  double worst = 0.0, lowest = 0.0;
+  test::integrate_rk4(sys, 0.5, 50000, [&](double t, const Eigen::VectorXd& y) {
+    const Energy e = sys.energy(t, y);
+    worst = std::max(worst, std::abs(e.total() - e0));
+    lowest = std::min(lowest, e.gravity);
+  });
+  CHECK(lowest < -1.0);  // it swings: the energy exchanged is large
+  CHECK(worst < 1e-7 * std::abs(lowest));
+}
+
+TEST_CASE("flexible body: rigid joints, drivers and linearisation are refused by name", "[analysis][flexible]") {
+  const ReducedPart part = bar_part(2);
+  Model m = flexible_model(part);
+  Joint j;
+  j.name = "pin";
+  j.type = JointType::revolute;
+  j.body1 = ground;
+  j.body2 = m.flexible.front().nodes[0];
+  m.joints.push_back(j);
+  CHECK_THROWS_WITH(MultibodySystem(m), Catch::Contains("joint 'pin'") && Catch::Contains("bushing"));
+}
