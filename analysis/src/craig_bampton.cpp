@@ -43,6 +43,15 @@ constexpr double two_pi = 2.0 * std::numbers::pi;
 
 }  // namespace
 
+std::unordered_map<long, std::array<Eigen::Index, 6>> dof_rows_by_node(const std::vector<FeDof>& dofs) {
+  std::unordered_map<long, std::array<Eigen::Index, 6>> rows;
+  for (std::size_t k = 0; k < dofs.size(); ++k) {
+    auto [at, added] = rows.try_emplace(dofs[k].node, std::array<Eigen::Index, 6>{-1, -1, -1, -1, -1, -1});
+    at->second[static_cast<std::size_t>(dofs[k].direction - 1)] = static_cast<Eigen::Index>(k);
+  }
+  return rows;
+}
+
 Eigen::MatrixXd rigid_body_fields(const std::vector<FeDof>& dofs, const std::vector<Eigen::Vector3d>& dof_position,
                                   const Eigen::Vector3d& centre) {
   Eigen::MatrixXd r = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(dofs.size()), 6);

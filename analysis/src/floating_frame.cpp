@@ -2,8 +2,6 @@
 // elastic modes and the inertia invariants, from the FE model's mass matrix.
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
-#include <array>
-#include <unordered_map>
 
 #include "blas_product.hpp"
 #include "mbsflow/analysis/craig_bampton.hpp"
@@ -38,11 +36,7 @@ FloatingFrameData floating_frame(const FeMatrices& fe, const std::vector<Eigen::
   d.centre = part.properties.centre;
   const auto n = static_cast<Eigen::Index>(fe.dofs.size()), r = part.mass.rows(), nb = static_cast<Eigen::Index>(part.interface_dofs.size());
   if (r - 6 > max_floating_modes || r <= 6) return d;  // no floating frame (reduced_part_file says why where it is asked for)
-  std::unordered_map<long, std::array<Eigen::Index, 6>> row_of;  // node -> its DOFs' rows by direction
-  for (Eigen::Index k = 0; k < n; ++k) {
-    auto [at, added] = row_of.try_emplace(fe.dofs[static_cast<std::size_t>(k)].node, std::array<Eigen::Index, 6>{-1, -1, -1, -1, -1, -1});
-    at->second[static_cast<std::size_t>(fe.dofs[static_cast<std::size_t>(k)].direction - 1)] = k;
-  }
+  const auto row_of = dof_rows_by_node(fe.dofs);
   const Eigen::MatrixXd rigid_fe = rigid_body_fields(fe.dofs, dof_position, d.centre);
   Eigen::MatrixXd rigid = Eigen::MatrixXd::Zero(r, 6);  // the fixed-interface modes do not move rigidly
   for (Eigen::Index k = 0; k < nb; ++k) {

@@ -95,12 +95,7 @@ void MultibodySystem::compile_flexible() {
                          "' is not supported yet; join it by a bushing (stiff where the joint holds, free about its axis)");
   }
   layout_.extra = extra;
-  compiled_->rotations_read = true;
-}
-
-// The frame's rotation matrix as this evaluation's kinematics hold it.
-Eigen::Matrix3d MultibodySystem::frame_rotation(int i) const {
-  return rot_.empty() ? rotation_matrix(Eigen::Vector4d(quat_.col(i))) : rot_[static_cast<std::size_t>(i)];
+  compiled_->rotations_read = true;  // every evaluation keeps rot_: the frames' and nodes' rotations below read it
 }
 
 void MultibodySystem::follow_flexible(const Eigen::VectorXd& y) {
@@ -108,7 +103,7 @@ void MultibodySystem::follow_flexible(const Eigen::VectorXd& y) {
   for (std::size_t f = 0; f < m.flexible.size(); ++f) {
     const FlexibleAt at = flexible_at(m.flexible[f], layout_, compiled_->flexible_tail[f], y);
     const int i = at.frame;
-    const Eigen::Matrix3d r = frame_rotation(i);
+    const Eigen::Matrix3d& r = rot_[static_cast<std::size_t>(i)];
     for (std::size_t k = 0; k < m.flexible[f].nodes.size(); ++k) {
       const int b = m.flexible[f].nodes[k];
       const NodeWorld n = node_world(at, static_cast<int>(k), pos_.col(i), vel_.col(i), quat_.col(i), r);
@@ -116,7 +111,7 @@ void MultibodySystem::follow_flexible(const Eigen::VectorXd& y) {
       vel_.col(b) = n.velocity;
       omega_.col(b) = n.omega;
       quat_.col(b) = n.quat;
-      if (!rot_.empty()) rot_[static_cast<std::size_t>(b)] = rotation_matrix(n.quat);
+      rot_[static_cast<std::size_t>(b)] = rotation_matrix(n.quat);
     }
   }
 }
@@ -131,7 +126,7 @@ void MultibodySystem::flexible_derivatives(double t, const Eigen::VectorXd& y, E
     const Eigen::Index tail = at.tail;
     const Eigen::VectorXd &eta = at.eta, &eta_rate = at.eta_rate;
     const Eigen::Vector3d& w = at.w;
-    const Eigen::Matrix3d r = frame_rotation(i);
+    const Eigen::Matrix3d& r = rot_[static_cast<std::size_t>(i)];
     const Eigen::Vector3d v = y.segment<3>(layout_.velocity(i)), v_b = r.transpose() * v;
     // Generalised forces: the frame's wrench (gravity on the part's mass at its origin,
     // its loads and joints), gravity's share on the deformation (the centre of mass moves
@@ -165,9 +160,9 @@ void MultibodySystem::flexible_derivatives(double t, const Eigen::VectorXd& y, E
     // The nodes' states follow the frame (after_step puts them there); between steps they
     // move with its kinematics, for the dense output.
     for (int b : fb.nodes) {
-      const Eigen::Vector4d qb = quat_.col(b);
       dydt.segment<3>(layout_.position(b)) = vel_.col(b);
-      dydt.segment<4>(layout_.orientation(b)) = quaternion_rate<double>(qb, Eigen::Vector3d(rotation_matrix(qb).transpose() * omega_.col(b)));
+      dydt.segment<4>(layout_.orientation(b)) = quaternion_rate<double>(
+          Eigen::Vector4d(quat_.col(b)), Eigen::Vector3d(rot_[static_cast<std::size_t>(b)].transpose() * omega_.col(b)));
       dydt.segment<3>(layout_.velocity(b)).setZero();
       dydt.segment<3>(layout_.angular_velocity(b)).setZero();
     }
@@ -197,7 +192,7 @@ void MultibodySystem::flexible_energy(const Eigen::VectorXd& y, Energy& e) const
   for (std::size_t f = 0; f < m.flexible.size(); ++f) {
     const FlexibleAt at = flexible_at(m.flexible[f], layout_, compiled_->flexible_tail[f], y);
     const int i = at.frame;
-    const Eigen::Matrix3d r = rotation_matrix(Eigen::Vector4d(y.segment<4>(layout_.orientation(i))));
+    const Eigen::Matrix3d& r = rot_[static_cast<std::size_t>(i)];  // energy() updated the kinematics
     const Eigen::Vector3d v_b = r.transpose() * y.segment<3>(layout_.velocity(i));
     e.kinetic += flexible_kinetic_energy(at.d, v_b, at.w, at.eta, at.eta_rate);
     e.gravity -= gravity_.dot(at.d.mass * y.segment<3>(layout_.position(i)) + r * (at.d.mass0.block(0, 6, 3, at.ne) * at.eta));

@@ -42,7 +42,7 @@ Eigen::SparseMatrix<double> MultibodySystem::jacobian_pattern() const {
     reads_modes[f].assign(static_cast<std::size_t>(n), 0);
     for (Eigen::Index i = 0; i < n; ++i) {
       auto& r = reads[static_cast<std::size_t>(i)];
-      if (std::none_of(r.begin(), r.end(), [&](int b) { return flexible_owned(b) && compiled_->flexible_of_body[static_cast<std::size_t>(b)] == static_cast<int>(f); }))
+      if (std::none_of(r.begin(), r.end(), [&](int b) { return compiled_->flexible_of_body[static_cast<std::size_t>(b)] == static_cast<int>(f); }))
         continue;
       reads_modes[f][static_cast<std::size_t>(i)] = 1;
       r.insert(r.end(), group[f].begin(), group[f].end());

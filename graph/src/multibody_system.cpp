@@ -236,14 +236,14 @@ void MultibodySystem::update_kinematics(double t, const Eigen::VectorXd& y) {
   time_ = t;
   kinematics_in(nullptr, static_cast<std::size_t>(layout_.bodies), y, true);
   for (const Driver& d : model().drivers) drive(d, t);
-  if (!model().flexible.empty()) follow_flexible(y);
+  follow_flexible(y);
 }
 
 void MultibodySystem::kinematics_for_rhs(double t, const Eigen::VectorXd& y) {
   time_ = t;
   kinematics_in(nullptr, static_cast<std::size_t>(layout_.bodies), y, false);
   for (const Driver& d : model().drivers) drive(d, t);
-  if (!model().flexible.empty()) follow_flexible(y);
+  follow_flexible(y);
 }
 
 void MultibodySystem::kinematics_of(double t, const Eigen::VectorXd& y, std::span<const int> bodies) {
@@ -252,7 +252,7 @@ void MultibodySystem::kinematics_of(double t, const Eigen::VectorXd& y, std::spa
   // The last driver of a body wins, as in update_kinematics.
   for (int i : bodies)
     if (const int d = compiled_->driver_of_body[static_cast<std::size_t>(i)]; d >= 0) drive(model().drivers[static_cast<std::size_t>(d)], t);
-  if (!model().flexible.empty()) follow_flexible(y);
+  follow_flexible(y);
 }
 
 [[gnu::always_inline]] inline void MultibodySystem::joint_force(std::size_t k) {
@@ -450,15 +450,15 @@ void MultibodySystem::free_bodies_on_lanes(const int* k, double t, const Eigen::
 
 // The bodies list[0..n) (0..n-1 when null) but those of rigid clusters.
 void MultibodySystem::derivatives_in(const int* list, std::size_t n, double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const {
-  const bool any = clusters() > 0, flexible = !model().flexible.empty();
+  const bool any = clusters() > 0;
   lane_groups_for_cpu<1>(
       list, n,
       [&](int i) {
-        if ((any && cluster_of(i) >= 0) || (flexible && flexible_owned(i))) return -1;
+        if ((any && cluster_of(i) >= 0) || flexible_owned(i)) return -1;
         return compiled_->driver_of_body[static_cast<std::size_t>(i)] >= 0 ? -1 : 0;
       },
       [&](int i) {
-        if ((!any || cluster_of(i) < 0) && !(flexible && flexible_owned(i))) body_derivative(i, t, y, dydt);
+        if ((!any || cluster_of(i) < 0) && !flexible_owned(i)) body_derivative(i, t, y, dydt);
       },
       [&](const int* k) { free_bodies_on_lanes<Lanes::width>(k, t, y, dydt); },
       [&](const int* k) { free_bodies_on_lanes<4>(k, t, y, dydt); });
@@ -467,7 +467,7 @@ void MultibodySystem::derivatives_in(const int* list, std::size_t n, double t, c
 void MultibodySystem::compute_derivatives(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const {
   derivatives_in(nullptr, static_cast<std::size_t>(active_), t, y, dydt);
   for (int c = 0; c < clusters(); ++c) solve_cluster(c, t, y, dydt);
-  if (!model().flexible.empty()) flexible_derivatives(t, y, dydt);
+  flexible_derivatives(t, y, dydt);
 }
 
 // A listed body of a cluster brings in its whole cluster: the caller lists whole clusters.
@@ -475,7 +475,7 @@ void MultibodySystem::derivatives_of(double t, const Eigen::VectorXd& y, Eigen::
                                      std::span<const int> bodies) const {
   derivatives_in(bodies.data(), bodies.size(), t, y, dydt);
   for (int c : clusters_of(bodies)) solve_cluster(c, t, y, dydt);
-  if (!model().flexible.empty()) flexible_derivatives(t, y, dydt);  // the whole model (one system)
+  flexible_derivatives(t, y, dydt);  // the whole model's (flexible bodies run as one system)
 }
 
 void MultibodySystem::rhs(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) {
@@ -501,7 +501,7 @@ void MultibodySystem::after_step(double t, Eigen::VectorXd& y) const {
   for (Eigen::Index i = 0; i < layout_.bodies; ++i) y.segment<4>(layout_.orientation(i)).normalize();
   for (const Driver& d : model().drivers) impose(d, t, y);
   for (int c = 0; c < clusters(); ++c) project_cluster(c, t, y);
-  if (!model().flexible.empty()) place_flexible_nodes(y);
+  place_flexible_nodes(y);
 }
 
 void MultibodySystem::after_step_of(double t, Eigen::VectorXd& y, std::span<const int> bodies) const {
@@ -510,7 +510,7 @@ void MultibodySystem::after_step_of(double t, Eigen::VectorXd& y, std::span<cons
     if (const int d = compiled_->driver_of_body[static_cast<std::size_t>(i)]; d >= 0) impose(model().drivers[static_cast<std::size_t>(d)], t, y);
   }
   for (int c : clusters_of(bodies)) project_cluster(c, t, y);
-  if (!model().flexible.empty()) place_flexible_nodes(y);
+  place_flexible_nodes(y);
 }
 
 template <class Frame>

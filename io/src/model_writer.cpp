@@ -197,23 +197,29 @@ void write_model_json(const Model& m, std::string& out, Spill spill) {
   key("gravity");
   json_text::write(out, m.gravity);
   SharedText shared;
-  // A flexible body is written as its item (its file and placement), in place of its
-  // frame; its node bodies come from the file.
-  std::vector<int> body_items;  // body index, or -1 - f for flexible body f
-  std::vector<int> flexible_of(m.bodies.size(), -2);
-  for (std::size_t f = 0; f < m.flexible.size(); ++f) {
-    flexible_of[static_cast<std::size_t>(m.flexible[f].frame)] = -1 - static_cast<int>(f);
-    for (int b : m.flexible[f].nodes) flexible_of[static_cast<std::size_t>(b)] = 0;
+  // A flexible body is written as its item (its file and placement) in its frame's place;
+  // its node bodies come from the file, so they are not written. (A model without one, a
+  // million bodies perhaps, is written straight from its list.)
+  const auto body = [&](const Body& b) { write_body(out, b, shared); };
+  if (m.flexible.empty()) {
+    list("bodies", m.bodies, body);
+  } else {
+    std::vector<const std::string*> item_of(m.bodies.size(), nullptr);
+    std::vector<char> node(m.bodies.size(), 0);
+    for (const FlexibleBody& f : m.flexible) {
+      item_of[static_cast<std::size_t>(f.frame)] = &f.source;
+      for (int b : f.nodes) node[static_cast<std::size_t>(b)] = 1;
+    }
+    std::vector<std::size_t> written;
+    for (std::size_t b = 0; b < m.bodies.size(); ++b)
+      if (!node[b]) written.push_back(b);
+    list("bodies", written, [&](std::size_t b) {
+      if (item_of[b])
+        out += *item_of[b];
+      else
+        body(m.bodies[b]);
+    });
   }
-  body_items.reserve(m.bodies.size());
-  for (std::size_t b = 0; b < m.bodies.size(); ++b)
-    if (flexible_of[b] != 0) body_items.push_back(flexible_of[b] == -2 ? static_cast<int>(b) : flexible_of[b]);
-  list("bodies", body_items, [&](int b) {
-    if (b >= 0)
-      write_body(out, m.bodies[static_cast<std::size_t>(b)], shared);
-    else
-      out += m.flexible[static_cast<std::size_t>(-1 - b)].source;
-  });
   list("joints", m.joints, [&](const Joint& j) { write_joint(out, m, j, shared); });
   if (!m.loads.empty()) list("loads", m.loads, [&](const Load& l) { write_load(out, m, l); });
   if (!m.drivers.empty()) list("drivers", m.drivers, [&](const Driver& d) { write_driver(out, m, d); });

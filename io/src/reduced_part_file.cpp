@@ -173,12 +173,7 @@ std::string write_file(const std::string& path, const std::string& h5_name, cons
       if (added) display_node.push_back(static_cast<long>(mesh.node_index.at(node)));
       triangle.push_back(static_cast<int>(at->second));
     }
-  std::unordered_map<long, std::array<Eigen::Index, 3>> translation_row;  // node -> rows of its x, y, z DOFs
-  for (std::size_t k = 0; k < dofs.size(); ++k)
-    if (dofs[k].direction <= 3) {
-      auto [at, added] = translation_row.try_emplace(dofs[k].node, std::array<Eigen::Index, 3>{-1, -1, -1});
-      at->second[static_cast<std::size_t>(dofs[k].direction - 1)] = static_cast<Eigen::Index>(k);
-    }
+  const auto translation_row = dof_rows_by_node(dofs);  // node -> rows of its x, y, z (and rotation) DOFs
   const hsize_t d = display_node.size();
   std::vector<double> shape(r * d * 3, 0.0);
   for (hsize_t j = 0; j < d; ++j) {

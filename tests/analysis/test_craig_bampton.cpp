@@ -12,6 +12,7 @@
 
 #include "mbsflow/analysis/craig_bampton.hpp"
 #include "mbsflow/error.hpp"
+#include "spring_lattice.hpp"
 
 using namespace mbsflow;
 
@@ -34,27 +35,9 @@ Truss truss() {
         t.node.emplace_back(0.3 * i, 0.2 * j + 0.01 * i, 0.25 * k);
         t.node_mass.push_back(1.0 + static_cast<double>(t.node.size() % 5));
       }
-  const auto n = static_cast<Eigen::Index>(3 * t.node.size());
-  Eigen::MatrixXd k = Eigen::MatrixXd::Zero(n, n), m = Eigen::MatrixXd::Zero(n, n);
-  for (std::size_t a = 0; a < t.node.size(); ++a) {
-    for (int e = 0; e < 3; ++e) {
-      t.fe.dofs.push_back({static_cast<long>(a + 1), e + 1});
-      t.dof_position.push_back(t.node[a]);
-      m(static_cast<Eigen::Index>(3 * a + e), static_cast<Eigen::Index>(3 * a + e)) = t.node_mass[a];
-    }
-    for (std::size_t b = a + 1; b < t.node.size(); ++b) {
-      const Eigen::Vector3d d = t.node[b] - t.node[a];
-      if (d.norm() > 0.5) continue;
-      const Eigen::Matrix3d block = 1e6 / d.norm() * d.normalized() * d.normalized().transpose();
-      const auto ia = static_cast<Eigen::Index>(3 * a), ib = static_cast<Eigen::Index>(3 * b);
-      k.block<3, 3>(ia, ia) += block;
-      k.block<3, 3>(ib, ib) += block;
-      k.block<3, 3>(ia, ib) -= block;
-      k.block<3, 3>(ib, ia) -= block;
-    }
-  }
-  t.fe.stiffness = k.sparseView();
-  t.fe.mass = m.sparseView();
+  test::SpringLattice lattice = test::spring_lattice(t.node, t.node_mass, 0.5, 1e6);
+  t.fe = std::move(lattice.fe);
+  t.dof_position = std::move(lattice.dof_position);
   return t;
 }
 

@@ -12,6 +12,7 @@
 #include "mbsflow/analysis/craig_bampton.hpp"
 #include "mbsflow/error.hpp"
 #include "mbsflow/graph/multibody_system.hpp"
+#include "spring_lattice.hpp"
 #include "test_support.hpp"
 
 using namespace mbsflow;
@@ -29,33 +30,11 @@ ReducedPart bar_part(int modes) {
         node.emplace_back(0.2 * i, 0.1 * j, 0.1 * k + 0.01 * i);
         mass.push_back(0.5 + 0.1 * static_cast<double>(node.size() % 11));
       }
-  const auto n = static_cast<Eigen::Index>(3 * node.size());
-  Eigen::MatrixXd k = Eigen::MatrixXd::Zero(n, n), m = Eigen::MatrixXd::Zero(n, n);
-  FeMatrices fe;
-  std::vector<Eigen::Vector3d> at;
-  for (std::size_t a = 0; a < node.size(); ++a) {
-    for (int e = 0; e < 3; ++e) {
-      fe.dofs.push_back({static_cast<long>(a + 1), e + 1});
-      at.push_back(node[a]);
-      m(static_cast<Eigen::Index>(3 * a + e), static_cast<Eigen::Index>(3 * a + e)) = mass[a];
-    }
-    for (std::size_t b = a + 1; b < node.size(); ++b) {
-      const Eigen::Vector3d d = node[b] - node[a];
-      if (d.norm() > 0.26) continue;
-      const Eigen::Matrix3d block = 2e5 / d.norm() * d.normalized() * d.normalized().transpose();
-      const auto ia = static_cast<Eigen::Index>(3 * a), ib = static_cast<Eigen::Index>(3 * b);
-      k.block<3, 3>(ia, ia) += block;
-      k.block<3, 3>(ib, ib) += block;
-      k.block<3, 3>(ia, ib) -= block;
-      k.block<3, 3>(ib, ia) -= block;
-    }
-  }
-  fe.stiffness = k.sparseView();
-  fe.mass = m.sparseView();
+  const test::SpringLattice lattice = test::spring_lattice(node, mass, 0.26, 2e5);
   CraigBamptonOptions o;
   o.interface_nodes = {1, 2, 3, 4};
   o.modes = modes;
-  return craig_bampton(fe, at, o);
+  return craig_bampton(lattice.fe, lattice.dof_position, o);
 }
 
 // A model of the part alone (frame at the origin, unturned), as the model reader makes it:

@@ -9,6 +9,7 @@ it has ccx's frequencies (the modes kept); free, its frequencies converge to ccx
 above as K grows, within 1 % for the modes a reduction of K = 20 resolves.
 
 usage: reduce_check.py MBSFLOW WORKDIR"""
+import json
 import os
 import shutil
 import subprocess
@@ -209,6 +210,18 @@ def check_flexible_example(mbsflow, work):
             fail(f"bar_pendulum: the centre fell {fall} m in {t} s, the rigid bar {0.5 * alpha * t * t * d} m")
         if np.abs(position[-1, 1] - position[0, 1]).max() > 1e-4:
             fail(f"bar_pendulum: the pivot node moved from {position[0, 1]} to {position[-1, 1]}")
+        # The model as the results file keeps it names the flexible body as its item (not its
+        # expanded bodies), and runs again from anywhere (the part's path made absolute).
+        saved = out["model"][()]
+        saved = json.loads(saved.decode() if isinstance(saved, bytes) else saved)
+        if [b.get("type") for b in saved["bodies"]] != ["flexible"] or not os.path.isabs(saved["bodies"][0]["file"]):
+            fail(f"bar_pendulum: the results' model has bodies {saved['bodies']}")
+    again = os.path.join(work, "bar_pendulum_again.json")
+    with open(again, "w") as f:
+        json.dump(saved, f)
+    r = subprocess.run([mbsflow, "run", again, "--t-end", "0.01", "-o", again + ".h5", "-q"], capture_output=True, text=True)
+    if r.returncode != 0:
+        fail(f"bar_pendulum: the results' model does not run again: {r.stderr}")
     print(f"reduce_check: the flexible bar pendulum falls as the rigid bar does ({fall:.6g} m in {t} s)")
 
 

@@ -16,8 +16,10 @@
 // shift-invert Lanczos (Spectra) on it: no dense matrix of the FE model's size is formed.
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
+#include <array>
 #include <functional>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "mbsflow/graph/flexible_body.hpp"
@@ -31,6 +33,10 @@ struct FeDof {
   int direction = 1;
   bool operator==(const FeDof&) const = default;
 };
+
+// Per node, the rows of its DOFs in `dofs` by direction (direction d at d - 1; -1 where
+// the node has no such DOF).
+std::unordered_map<long, std::array<Eigen::Index, 6>> dof_rows_by_node(const std::vector<FeDof>& dofs);
 
 // An FE model's matrices: row/column k of each is dof k. Symmetric, both triangles stored.
 struct FeMatrices {

@@ -244,7 +244,6 @@ class MultibodySystem {
   // kinematics from the frame and the modes, the rates of frame and modes, the nodes'
   // states put where the frame says, the energies.
   void compile_flexible();
-  Eigen::Matrix3d frame_rotation(int i) const;
   void follow_flexible(const Eigen::VectorXd& y);
   void flexible_derivatives(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const;
   void place_flexible_nodes(Eigen::VectorXd& y) const;
