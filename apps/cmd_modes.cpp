@@ -135,19 +135,21 @@ void add_working_point(CLI::App* sub, WorkingPoint& w) {
 }
 
 // The direction (x y z rx ry rz, world frame) that holds most of a mode's kinetic energy,
-// summed over the bodies: "z 97 %" for a bounce, "ry 80 %" for a pitch.
+// summed over the bodies: "z 97 %" for a bounce, "ry 80 %" for a pitch; "elastic" for the
+// flexible bodies' modal coordinates.
 std::string main_direction(const LinearModel& lm, const Eigen::VectorXcd& x) {
   const Eigen::VectorXcd mx = lm.M * x;
-  double per[6] = {}, total = 0.0;
-  for (Eigen::Index i = 0; i < x.size(); ++i) {
-    const double e = (std::conj(x[i]) * mx[i]).real();
-    per[i % 6] += e;
-    total += e;
-  }
+  double per[7] = {}, total = 0.0;
+  for (std::size_t k = 0; k < lm.coords.bodies.size(); ++k)
+    for (Eigen::Index i = lm.coords.start[k]; i < lm.coords.start[k + 1]; ++i) {
+      const double e = (std::conj(x[i]) * mx[i]).real();
+      per[std::min<Eigen::Index>(i - lm.coords.start[k], 6)] += e;
+      total += e;
+    }
   int best = 0;
-  for (int d = 1; d < 6; ++d)
+  for (int d = 1; d < 7; ++d)
     if (per[d] > per[best]) best = d;
-  const char* names[] = {"x", "y", "z", "rx", "ry", "rz"};
+  const char* names[] = {"x", "y", "z", "rx", "ry", "rz", "elastic"};
   char buf[32];
   std::snprintf(buf, sizeof buf, "%s %.0f %%", names[best], total > 0.0 ? 100.0 * per[best] / total : 0.0);
   return buf;
@@ -187,18 +189,18 @@ int modes(const ModesArgs& a) {
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const Model& model = *w.model;
   std::printf("model %s: %s, linearised at the %s: %s (%ld coordinates less %ld joint rows), %s\n", model.name.c_str(),
-              count_of(static_cast<long long>(lm.bodies.size()), "free body", "free bodies").c_str(), w.where.c_str(),
+              count_of(static_cast<long long>(lm.coords.bodies.size()), "free body", "free bodies").c_str(), w.where.c_str(),
               count_of(static_cast<long long>(m.free_coordinates), "degree of freedom", "degrees of freedom").c_str(),
               static_cast<long>(lm.size()), static_cast<long>(lm.C.rows()), m.solver.c_str());
-  std::printf("%5s %14s %12s %26s %10s %10s  %s\n", "mode", "frequency Hz", "damping", "eigenvalue 1/s", "residual",
+  std::printf("%5s %14s %12s %26s %10s %12s  %s\n", "mode", "frequency Hz", "damping", "eigenvalue 1/s", "residual",
               "motion", "largest kinetic share");
   for (std::size_t j = 0; j < m.frequency.size(); ++j) {
     Eigen::Index body = 0;
     const double share = m.kinetic_share.col(static_cast<Eigen::Index>(j)).maxCoeff(&body);
     char lambda[64];
     std::snprintf(lambda, sizeof lambda, "%.6g %+.6gi", m.eigenvalue[j].real(), m.eigenvalue[j].imag());
-    std::printf("%5zu %14.6g %12.4g %26s %10.2g %10s  %s (%.3g %%)%s\n", j + 1, m.frequency[j], m.damping_ratio[j], lambda,
-                m.residual[j], main_direction(lm, m.shape.col(static_cast<Eigen::Index>(j))).c_str(), model.bodies[static_cast<std::size_t>(lm.bodies[static_cast<std::size_t>(body)])].name.c_str(),
+    std::printf("%5zu %14.6g %12.4g %26s %10.2g %12s  %s (%.3g %%)%s\n", j + 1, m.frequency[j], m.damping_ratio[j], lambda,
+                m.residual[j], main_direction(lm, m.shape.col(static_cast<Eigen::Index>(j))).c_str(), model.bodies[static_cast<std::size_t>(lm.coords.bodies[static_cast<std::size_t>(body)])].name.c_str(),
                 100.0 * share, m.rigid_body[j] ? "  rigid-body motion" : unstable(m.eigenvalue[j]) ? "  unstable" : "");
   }
   if (!a.output.empty()) {

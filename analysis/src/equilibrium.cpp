@@ -79,15 +79,13 @@ double potential(MultibodySystem& sys, double t, const Eigen::VectorXd& y) {
 
 Equilibrium find_equilibrium(MultibodySystem& sys, double t, const Eigen::VectorXd& start, const EquilibriumOptions& o) {
   const StateLayout& l = sys.layout();
-  const std::vector<int> bodies = free_bodies(sys);
+  const FreeCoordinates coords = free_coordinates(sys);
+  const std::vector<int>& bodies = coords.bodies;
   Eigen::VectorXd y = start;
-  for (Eigen::Index b = 0; b < l.bodies; ++b) {
-    y.segment<3>(l.velocity(b)).setZero();
-    y.segment<3>(l.angular_velocity(b)).setZero();
-  }
+  set_at_rest(l, coords, y);
   sys.after_step(t, y);  // on the rigid joints and the drivers' motion
   Equilibrium out;
-  Eigen::VectorXd f = static_residual(sys, t, y, bodies);
+  Eigen::VectorXd f = static_residual(sys, t, y, coords);
   out.initial_residual = worst(f);
   // The scale of "balanced": the weight the supports carry (the largest force a joint of
   // a hanging chain transmits), or the forces at the start; a residual of 1e-9 of it is
@@ -106,7 +104,7 @@ Equilibrium find_equilibrium(MultibodySystem& sys, double t, const Eigen::Vector
   {
     double fastest = 0.0;
     for (std::size_t k = 0; k < bodies.size(); ++k)
-      fastest = std::max(fastest, f.segment<3>(static_cast<Eigen::Index>(6 * k)).norm() /
+      fastest = std::max(fastest, f.segment<3>(coords.start[k]).norm() /
                                       m.bodies[static_cast<std::size_t>(bodies[k])].mass);
     if (fastest > 0.0) h = std::sqrt(0.01 * std::max(extent, 1e-3) / fastest);
   }
@@ -129,11 +127,13 @@ Equilibrium find_equilibrium(MultibodySystem& sys, double t, const Eigen::Vector
     if (++iteration > o.max_iterations) {
       Eigen::Index at = 0;
       const double left = worst(f, &at);
-      const int body = bodies[static_cast<std::size_t>(at / 6)];
+      const std::size_t k = coords.body_of(at);
+      const int body = bodies[k];
+      const Eigen::Index e = at - coords.start[k];
       char buf[256];
       std::snprintf(buf, sizeof buf, "%s %.3g %s after %d iterations (the start had %.3g)",
-                    at % 6 < 3 ? "a force of" : "a torque of", left, at % 6 < 3 ? "N" : "N m", o.max_iterations,
-                    out.initial_residual);
+                    e < 3 ? "a force of" : e < 6 ? "a torque of" : "a modal force of", left, e < 3 ? "N" : e < 6 ? "N m" : "N sqrt(kg)",
+                    o.max_iterations, out.initial_residual);
       throw RunError("no static equilibrium found: body '" + m.bodies[static_cast<std::size_t>(body)].name +
                      "' does not settle, " + buf +
                      " (is it held against gravity and its loads? --at-initial linearises where it is)");
@@ -151,7 +151,7 @@ Equilibrium find_equilibrium(MultibodySystem& sys, double t, const Eigen::Vector
     // joint past half a turn, where its rotational deflection jumps (and no equilibrium
     // is near).
     double turn = 0.0;
-    for (std::size_t k = 0; k < bodies.size(); ++k) turn = std::max(turn, dx.segment<3>(static_cast<Eigen::Index>(6 * k + 3)).norm());
+    for (std::size_t k = 0; k < bodies.size(); ++k) turn = std::max(turn, dx.segment<3>(coords.start[k] + 3).norm());
     if (turn > max_turn) dx *= max_turn / turn;
     // The step, then up to two of its halves (a residual each, far cheaper than a new
     // factorisation): a step cut to the turn limit stays the same for every h above some
@@ -161,9 +161,9 @@ Equilibrium find_equilibrium(MultibodySystem& sys, double t, const Eigen::Vector
     bool taken = false;
     for (int half = 0; half < 3 && !taken; ++half, dx *= 0.5) {
       next = y;
-      apply_tangent_step(l, bodies, dx, next);
+      apply_tangent_step(l, coords, dx, next);
       sys.after_step(t, next);
-      f_next = static_residual(sys, t, next, bodies);
+      f_next = static_residual(sys, t, next, coords);
       e_next = potential(sys, t, next);
       const bool lower = e_next <= energy + 1e-12 * (std::abs(energy) + scale * std::max(extent, 1.0));
       taken = (lower || worst(f_next) < worst(f)) && f_next.allFinite();

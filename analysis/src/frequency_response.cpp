@@ -17,20 +17,25 @@ using Complex = std::complex<double>;
 const char* const input_names[6] = {"fx", "fy", "fz", "tx", "ty", "tz"};
 const char* const output_names[6] = {"x", "y", "z", "rx", "ry", "rz"};
 
-// The coordinate of a channel in the model's x, or InputError for a driven body.
-Eigen::Index coordinate(const LinearModel& m, const Channel& c) {
-  for (std::size_t k = 0; k < m.bodies.size(); ++k)
-    if (m.bodies[k] == c.body) return static_cast<Eigen::Index>(6 * k) + c.dof;
-  throw InputError("body " + std::to_string(c.body) + " is driven: its motion is prescribed, it has no response");
-}
-
-Sparse selection(const LinearModel& m, const std::vector<Channel>& channels) {
+// Each channel's row of the bodies' small motions (body_motion) as a column: the
+// combination of coordinates that is the channel's motion, and (by virtual work) the
+// generalised force of a unit force or torque there. InputError for a driven body.
+Sparse selection(const LinearModel& m, const Sparse& motion_t, const std::vector<Channel>& channels) {
   std::vector<Eigen::Triplet<double>> e;
-  for (std::size_t j = 0; j < channels.size(); ++j) e.emplace_back(coordinate(m, channels[j]), static_cast<Eigen::Index>(j), 1.0);
+  for (std::size_t j = 0; j < channels.size(); ++j) {
+    const std::size_t before = e.size();
+    for (Sparse::InnerIterator it(motion_t, 6 * channels[j].body + channels[j].dof); it; ++it)
+      e.emplace_back(it.row(), static_cast<Eigen::Index>(j), it.value());
+    if (e.size() == before)
+      throw InputError("body '" + m.model->bodies[static_cast<std::size_t>(channels[j].body)].name +
+                       "' is driven: its motion is prescribed, it has no response");
+  }
   Sparse s(m.size(), static_cast<Eigen::Index>(channels.size()));
   s.setFromTriplets(e.begin(), e.end());
   return s;
 }
+
+Sparse motion_transposed(const LinearModel& m) { return Sparse(body_motion(m).transpose()); }
 
 Sparse from_dense(const Eigen::MatrixXd& a) { return a.sparseView(0.0, 0.0); }
 
@@ -70,9 +75,9 @@ FrequencyResponse frequency_response(const LinearModel& m, const std::vector<Cha
                                      const std::vector<Channel>& outputs, const std::vector<double>& hz) {
   if (inputs.empty() || outputs.empty()) throw InputError("a frequency response needs at least one input and one output");
   const Eigen::Index n = m.size(), r = m.C.rows();
-  const Sparse b = selection(m, inputs);
-  std::vector<Eigen::Index> at;  // each output's coordinate, found once
-  for (const Channel& o : outputs) at.push_back(coordinate(m, o));
+  const Sparse motion_t = motion_transposed(m);
+  const Sparse b = selection(m, motion_t, inputs);
+  const Eigen::SparseMatrix<Complex> pick = Sparse(selection(m, motion_t, outputs).transpose()).cast<Complex>();
   FrequencyResponse out;
   out.frequency = hz;
   // The augmented matrix's pattern: K, D, M and the joints' rows, the same at every frequency.
@@ -99,8 +104,9 @@ FrequencyResponse frequency_response(const LinearModel& m, const std::vector<Cha
       Eigen::VectorXcd x = Eigen::VectorXcd::Zero(n + r);
       x.head(n) = Eigen::VectorXd(b.col(j)).cast<Complex>();
       lu.solve(x);
+      const Eigen::VectorXcd motion = pick * x.head(n);
       for (std::size_t o = 0; o < outputs.size(); ++o) {
-        const Complex d = x[at[o]];
+        const Complex d = motion[static_cast<Eigen::Index>(o)];
         const Channel::Kind k = outputs[o].kind;
         h(static_cast<Eigen::Index>(o), j) =
             k == Channel::Kind::displacement ? d : k == Channel::Kind::velocity ? Complex(0.0, omega) * d : -omega * omega * d;
@@ -119,7 +125,8 @@ StateSpace state_space(const LinearModel& m, const std::vector<Channel>& inputs,
     if (n > 6000) throw InputError("a state-space model of rigid joints is formed dense: at most 1000 free bodies");
     basis = null_space(m.C, n);
   }
-  const Sparse bin = selection(m, inputs), cout = selection(m, outputs);
+  const Sparse motion_t = motion_transposed(m);
+  const Sparse bin = selection(m, motion_t, inputs), cout = selection(m, motion_t, outputs);
   StateSpace s;
   Eigen::MatrixXd minv_k, minv_d, minv_b, pick;  // pick: outputs x free coordinates
   Eigen::Index f = n;
@@ -132,14 +139,14 @@ StateSpace state_space(const LinearModel& m, const std::vector<Channel>& inputs,
     minv_b = mass.solve(basis.transpose() * Eigen::MatrixXd(bin));
     pick = Eigen::MatrixXd(cout).transpose() * basis;
   } else {
-    // M is block diagonal (6 x 6 per body): inverted block by block, kept sparse.
+    // M is block diagonal (a block per free body): inverted block by block, kept sparse.
     std::vector<Eigen::Triplet<double>> e;
-    for (Eigen::Index k = 0; k < n / 6; ++k) {
-      const Eigen::Matrix<double, 6, 6> block = Eigen::MatrixXd(m.M.block(6 * k, 6 * k, 6, 6));
-      const Eigen::Matrix<double, 6, 6> inv = block.inverse();
-      for (int i = 0; i < 6; ++i)
-        for (int j = 0; j < 6; ++j)
-          if (inv(i, j) != 0.0) e.emplace_back(6 * k + i, 6 * k + j, inv(i, j));
+    for (std::size_t k = 0; k < m.coords.bodies.size(); ++k) {
+      const Eigen::Index at = m.coords.start[k], size = m.coords.start[k + 1] - at;
+      const Eigen::MatrixXd inv = Eigen::MatrixXd(m.M.block(at, at, size, size)).inverse();
+      for (Eigen::Index i = 0; i < size; ++i)
+        for (Eigen::Index j = 0; j < size; ++j)
+          if (inv(i, j) != 0.0) e.emplace_back(at + i, at + j, inv(i, j));
     }
     Sparse minv(n, n);
     minv.setFromTriplets(e.begin(), e.end());
@@ -156,18 +163,25 @@ StateSpace state_space(const LinearModel& m, const std::vector<Channel>& inputs,
     s.A.setFromTriplets(a.begin(), a.end());
     s.B.resize(2 * n, bin.cols());
     s.B.setFromTriplets(b.begin(), b.end());
+    // An output's row: its motion's combination of the coordinates (displacement), of
+    // their rates (velocity), or of the accelerations' rows of A and B.
+    const Sparse pick = Sparse(cout.transpose());
+    const Sparse acc_x = -(pick * mk), acc_v = -(pick * mdd), acc_u = pick * mb;
+    const auto kind = [&](Eigen::Index row) { return outputs[static_cast<std::size_t>(row)].kind; };
     std::vector<Eigen::Triplet<double>> c, d;
-    for (std::size_t o = 0; o < outputs.size(); ++o) {
-      const Eigen::Index at = coordinate(m, outputs[o]), row = static_cast<Eigen::Index>(o);
-      if (outputs[o].kind == Channel::Kind::displacement) c.emplace_back(row, at, 1.0);
-      if (outputs[o].kind == Channel::Kind::velocity) c.emplace_back(row, n + at, 1.0);
-      if (outputs[o].kind == Channel::Kind::acceleration) {
-        for (Eigen::Index col = 0; col < 2 * n; ++col)
-          if (const double v = s.A.coeff(n + at, col); v != 0.0) c.emplace_back(row, col, v);
-        for (Eigen::Index j = 0; j < mb.cols(); ++j)
-          if (const double v = mb.coeff(at, j); v != 0.0) d.emplace_back(row, j, v);
+    for (Eigen::Index col = 0; col < n; ++col) {
+      for (Sparse::InnerIterator it(pick, col); it; ++it) {
+        if (kind(it.row()) == Channel::Kind::displacement) c.emplace_back(it.row(), col, it.value());
+        if (kind(it.row()) == Channel::Kind::velocity) c.emplace_back(it.row(), n + col, it.value());
       }
+      for (Sparse::InnerIterator it(acc_x, col); it; ++it)
+        if (kind(it.row()) == Channel::Kind::acceleration) c.emplace_back(it.row(), col, it.value());
+      for (Sparse::InnerIterator it(acc_v, col); it; ++it)
+        if (kind(it.row()) == Channel::Kind::acceleration) c.emplace_back(it.row(), n + col, it.value());
     }
+    for (Eigen::Index col = 0; col < acc_u.outerSize(); ++col)
+      for (Sparse::InnerIterator it(acc_u, col); it; ++it)
+        if (kind(it.row()) == Channel::Kind::acceleration) d.emplace_back(it.row(), col, it.value());
     s.C.resize(static_cast<Eigen::Index>(outputs.size()), 2 * n);
     s.C.setFromTriplets(c.begin(), c.end());
     s.D.resize(static_cast<Eigen::Index>(outputs.size()), bin.cols());

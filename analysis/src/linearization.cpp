@@ -1,6 +1,7 @@
 #include "mbsflow/analysis/linearization.hpp"
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 
 #include "mbsflow/error.hpp"
@@ -32,14 +33,14 @@ Eigen::Matrix<double, 4, 3> half_map(const Eigen::Vector4d& q) {
 
 Eigen::Matrix3d body_inertia(const Body& b) { return inertia_matrix(b.inertia.get()); }
 
-// T: tangent (x, v) of the free bodies -> the state's numbers; T+: its left inverse.
-void tangent_maps(const StateLayout& l, const std::vector<int>& bodies, const Eigen::VectorXd& y,
-                  Eigen::SparseMatrix<double>& t, Eigen::SparseMatrix<double>& t_plus) {
-  const auto n = static_cast<Eigen::Index>(bodies.size());
+// T: tangent (x, v) of the free coordinates -> the state's numbers; T+: its left inverse.
+void tangent_maps(const StateLayout& l, const FreeCoordinates& fc, const Eigen::VectorXd& y, Eigen::SparseMatrix<double>& t,
+                  Eigen::SparseMatrix<double>& t_plus) {
+  const Eigen::Index n = fc.size();
   Triplets a, b;
-  for (Eigen::Index k = 0; k < n; ++k) {
-    const int body = bodies[static_cast<std::size_t>(k)];
-    const Eigen::Index x = 6 * k, v = 6 * n + 6 * k;
+  for (std::size_t k = 0; k < fc.bodies.size(); ++k) {
+    const int body = fc.bodies[k];
+    const Eigen::Index x = fc.start[k], v = n + fc.start[k];
     const Eigen::Index P = l.position(body), Q = l.orientation(body), V = l.velocity(body), W = l.angular_velocity(body);
     const Eigen::Vector4d q = y.segment<4>(Q).normalized();
     const Eigen::Matrix3d R = rotation(y, l, body);
@@ -65,23 +66,35 @@ void tangent_maps(const StateLayout& l, const std::vector<int>& bodies, const Ei
         b.emplace_back(x + 3 + c, Q + r, g_plus(c, r));
         b.emplace_back(v + 3 + c, Q + r, omega_g(c, r));
       }
+    if (const int f = fc.flexible_of(k); f >= 0) {
+      const Eigen::Index ne = fc.start[k + 1] - fc.start[k] - 6, eta = fc.eta[static_cast<std::size_t>(f)];
+      for (Eigen::Index i = 0; i < ne; ++i) {
+        a.emplace_back(eta + i, x + 6 + i, 1.0);
+        a.emplace_back(eta + ne + i, v + 6 + i, 1.0);
+        b.emplace_back(x + 6 + i, eta + i, 1.0);
+        b.emplace_back(v + 6 + i, eta + ne + i, 1.0);
+      }
+    }
   }
-  t.resize(l.size(), 12 * n);
+  t.resize(l.size(), 2 * n);
   t.setFromTriplets(a.begin(), a.end());
-  t_plus.resize(12 * n, l.size());
+  t_plus.resize(2 * n, l.size());
   t_plus.setFromTriplets(b.begin(), b.end());
 }
 
-// The state moved by h along tangent direction `column` (0 .. 12 n).
-Eigen::VectorXd moved(const StateLayout& l, const std::vector<int>& bodies, const Eigen::VectorXd& y, Eigen::Index column,
-                      double h) {
-  const auto n = static_cast<Eigen::Index>(bodies.size());
+// The state moved by h along tangent direction `column` (0 .. 2 n).
+Eigen::VectorXd moved(const StateLayout& l, const FreeCoordinates& fc, const Eigen::VectorXd& y, Eigen::Index column, double h) {
+  const Eigen::Index n = fc.size();
   Eigen::VectorXd out = y;
-  const bool rate = column >= 6 * n;
-  const Eigen::Index local = rate ? column - 6 * n : column;
-  const int body = bodies[static_cast<std::size_t>(local / 6)];
-  const int c = static_cast<int>(local % 6);
-  if (!rate && c < 3) {
+  const bool rate = column >= n;
+  const Eigen::Index local = rate ? column - n : column;
+  const std::size_t k = fc.body_of(local);
+  const int body = fc.bodies[k];
+  const auto c = static_cast<int>(local - fc.start[k]);
+  if (c >= 6) {  // a modal coordinate, or its rate
+    const Eigen::Index ne = fc.start[k + 1] - fc.start[k] - 6;
+    out[fc.eta[static_cast<std::size_t>(fc.flexible_of(k))] + (rate ? ne : 0) + c - 6] += h;
+  } else if (!rate && c < 3) {
     out[l.position(body) + c] += h;
   } else if (!rate) {
     Eigen::Vector3d axis = Eigen::Vector3d::Zero();
@@ -104,16 +117,15 @@ Eigen::VectorXd moved(const StateLayout& l, const std::vector<int>& bodies, cons
 }
 
 // J T: the state derivative's change along each tangent direction, by central differences.
-Eigen::SparseMatrix<double> differenced(MultibodySystem& sys, double t, const Eigen::VectorXd& y,
-                                        const std::vector<int>& bodies) {
+Eigen::SparseMatrix<double> differenced(MultibodySystem& sys, double t, const Eigen::VectorXd& y, const FreeCoordinates& fc) {
   const StateLayout& l = sys.layout();
-  const Eigen::Index columns = 12 * static_cast<Eigen::Index>(bodies.size());
+  const Eigen::Index columns = 2 * fc.size();
   Eigen::VectorXd plus(l.size()), minus(l.size());
   Triplets out;
   for (Eigen::Index c = 0; c < columns; ++c) {
     const double h = 1e-6;
-    sys.rhs(t, moved(l, bodies, y, c, h), plus);
-    sys.rhs(t, moved(l, bodies, y, c, -h), minus);
+    sys.rhs(t, moved(l, fc, y, c, h), plus);
+    sys.rhs(t, moved(l, fc, y, c, -h), minus);
     for (Eigen::Index r = 0; r < l.size(); ++r)
       if (const double d = (plus[r] - minus[r]) / (2.0 * h); d != 0.0) out.emplace_back(r, c, d);
   }
@@ -128,6 +140,27 @@ Eigen::Matrix<double, 6, 6> mass_block(const Body& body, const Eigen::Matrix3d& 
   m.topLeftCorner<3, 3>() = body.mass * Eigen::Matrix3d::Identity();
   m.bottomRightCorner<3, 3>() = R * body_inertia(body) * R.transpose();
   return m;
+}
+
+// A flexible body's mass matrix in the coordinates' rates (velocity and angular velocity
+// in the world frame, modal rates): B^T M(eta) B, B = diag(R^T, R^T, I) their map to the
+// frame's quasi-velocities.
+Eigen::MatrixXd flexible_mass_block(const FloatingFrameData& d, const Eigen::VectorXd& eta, const Eigen::Matrix3d& R) {
+  Eigen::MatrixXd m = flexible_mass_matrix(d, eta);
+  for (Eigen::Index i : {0, 3}) {
+    m.middleRows(i, 3) = (R * m.middleRows(i, 3)).eval();
+    m.middleCols(i, 3) = (m.middleCols(i, 3) * R.transpose()).eval();
+  }
+  return m;
+}
+
+// The frame's accelerations as its quasi-velocities' rates (a body-frame, w' body-frame,
+// eta'') from the state's rates at rest (no velocity terms).
+Eigen::VectorXd at_rest_rates(const StateLayout& l, int frame, Eigen::Index eta, Eigen::Index ne, const Eigen::Matrix3d& R,
+                              const Eigen::VectorXd& dydt) {
+  Eigen::VectorXd xi(6 + ne);
+  xi << R.transpose() * dydt.segment<3>(l.velocity(frame)), dydt.segment<3>(l.angular_velocity(frame)), dydt.segment(eta + ne, ne);
+  return xi;
 }
 
 // K = -M A_vx and D = -M A_vv straight from the state Jacobian, body pair by body pair:
@@ -212,25 +245,54 @@ void rate_blocks(const StateLayout& l, const std::vector<int>& bodies, const Eig
 
 }  // namespace
 
-std::vector<int> free_bodies(const MultibodySystem& sys) {
+std::size_t FreeCoordinates::body_of(Eigen::Index i) const {
+  return static_cast<std::size_t>(std::upper_bound(start.begin(), start.end() - 1, i) - start.begin() - 1);
+}
+
+FreeCoordinates free_coordinates(const MultibodySystem& sys) {
   const Model& m = sys.model();
-  // Equilibrium, modes and frequency response all start here.
-  if (!m.flexible.empty())
-    throw InputError("flexible body '" + m.flexible.front().name +
-                     "': the linearisation (equilibrium, modes, frf) does not take flexible bodies yet; mbsflow info PART.h5 "
-                     "gives the reduced part's own frequencies");
-  std::vector<char> driven(m.bodies.size(), 0);
-  for (const Driver& d : m.drivers) driven[static_cast<std::size_t>(d.body)] = 1;
-  std::vector<int> out;
-  for (std::size_t b = 0; b < m.bodies.size(); ++b)
-    if (!driven[b]) out.push_back(static_cast<int>(b));
+  FreeCoordinates out;
+  std::vector<char> held(m.bodies.size(), 0);  // driven, or a flexible body's node
+  for (const Driver& d : m.drivers) held[static_cast<std::size_t>(d.body)] = 1;
+  std::vector<int> frame_of(m.flexible.empty() ? 0 : m.bodies.size(), -1);
+  for (std::size_t f = 0; f < m.flexible.size(); ++f) {
+    for (int b : m.flexible[f].nodes) held[static_cast<std::size_t>(b)] = 1;
+    frame_of[static_cast<std::size_t>(m.flexible[f].frame)] = static_cast<int>(f);
+    out.eta.push_back(sys.flexible_state(f));
+  }
+  out.start.reserve(m.bodies.size() + 1);
+  Eigen::Index next = 0;
+  for (std::size_t b = 0; b < m.bodies.size(); ++b) {
+    if (held[b]) continue;
+    out.bodies.push_back(static_cast<int>(b));
+    out.start.push_back(next);
+    next += 6;
+    if (!frame_of.empty()) {
+      out.flexible.push_back(frame_of[b]);
+      if (frame_of[b] >= 0) next += m.flexible[static_cast<std::size_t>(frame_of[b])].data->modes();
+    }
+  }
+  out.start.push_back(next);
   return out;
 }
 
-void apply_tangent_step(const StateLayout& l, const std::vector<int>& bodies, const Eigen::VectorXd& dx, Eigen::VectorXd& y) {
-  for (std::size_t k = 0; k < bodies.size(); ++k) {
-    const int b = bodies[k];
-    const auto i = static_cast<Eigen::Index>(6 * k);
+void set_at_rest(const StateLayout& l, const FreeCoordinates& c, Eigen::VectorXd& y) {
+  for (Eigen::Index b = 0; b < l.bodies; ++b) {
+    y.segment<3>(l.velocity(b)).setZero();
+    y.segment<3>(l.angular_velocity(b)).setZero();
+  }
+  // The modal rates follow the modal coordinates: the tail's second half of each body.
+  for (std::size_t k = 0; k < c.bodies.size(); ++k)
+    if (const int f = c.flexible_of(k); f >= 0) {
+      const Eigen::Index ne = c.start[k + 1] - c.start[k] - 6;
+      y.segment(c.eta[static_cast<std::size_t>(f)] + ne, ne).setZero();
+    }
+}
+
+void apply_tangent_step(const StateLayout& l, const FreeCoordinates& c, const Eigen::VectorXd& dx, Eigen::VectorXd& y) {
+  for (std::size_t k = 0; k < c.bodies.size(); ++k) {
+    const int b = c.bodies[k];
+    const Eigen::Index i = c.start[k];
     y.segment<3>(l.position(b)) += dx.segment<3>(i);
     const Eigen::Vector3d phi = dx.segment<3>(i + 3);
     const auto q = y.segment<4>(l.orientation(b));
@@ -238,76 +300,141 @@ void apply_tangent_step(const StateLayout& l, const std::vector<int>& bodies, co
     if (phi.norm() > 0.0) turned = Eigen::Quaterniond(Eigen::AngleAxisd(phi.norm(), phi.normalized())) * turned;
     turned.normalize();
     y.segment<4>(l.orientation(b)) << turned.w(), turned.x(), turned.y(), turned.z();
-    y.segment<3>(l.velocity(b)).setZero();
-    y.segment<3>(l.angular_velocity(b)).setZero();
+    if (const int f = c.flexible_of(k); f >= 0) {
+      const Eigen::Index ne = c.start[k + 1] - i - 6;
+      y.segment(c.eta[static_cast<std::size_t>(f)], ne) += dx.segment(i + 6, ne);
+    }
   }
+  set_at_rest(l, c, y);
 }
 
-Eigen::VectorXd static_residual(MultibodySystem& sys, double t, const Eigen::VectorXd& y, const std::vector<int>& bodies) {
+Eigen::VectorXd static_residual(MultibodySystem& sys, double t, const Eigen::VectorXd& y, const FreeCoordinates& c) {
   const StateLayout& l = sys.layout();
   Eigen::VectorXd at_rest = y;
-  for (Eigen::Index b = 0; b < l.bodies; ++b) {
-    at_rest.segment<3>(l.velocity(b)).setZero();
-    at_rest.segment<3>(l.angular_velocity(b)).setZero();
-  }
+  set_at_rest(l, c, at_rest);
   Eigen::VectorXd dydt(l.size());
   sys.rhs(t, at_rest, dydt);
-  Eigen::VectorXd f(6 * static_cast<Eigen::Index>(bodies.size()));
-  for (std::size_t k = 0; k < bodies.size(); ++k) {
-    const int b = bodies[k];
-    const Body& body = sys.model().bodies[static_cast<std::size_t>(b)];
-    const auto i = static_cast<Eigen::Index>(6 * k);
+  const Model& m = sys.model();
+  Eigen::VectorXd f(c.size());
+  for (std::size_t k = 0; k < c.bodies.size(); ++k) {
+    const int b = c.bodies[k];
+    const Eigen::Index i = c.start[k];
+    const Eigen::Matrix3d R = rotation(y, l, b);
+    if (const int fb = c.flexible_of(k); fb >= 0) {
+      // B^T M xi' with B^T = diag(R, R, I): the frame's force and torque in the world frame.
+      const FloatingFrameData& d = *m.flexible[static_cast<std::size_t>(fb)].data;
+      const Eigen::Index eta = c.eta[static_cast<std::size_t>(fb)], ne = d.modes();
+      Eigen::VectorXd g = flexible_mass_matrix(d, y.segment(eta, ne)) * at_rest_rates(l, b, eta, ne, R, dydt);
+      f.segment<3>(i) = R * g.head<3>();
+      f.segment<3>(i + 3) = R * g.segment<3>(3);
+      f.segment(i + 6, ne) = g.tail(ne);
+      continue;
+    }
+    const Body& body = m.bodies[static_cast<std::size_t>(b)];
     f.segment<3>(i) = body.mass * dydt.segment<3>(l.velocity(b));
-    f.segment<3>(i + 3) = rotation(y, l, b) * (body_inertia(body) * dydt.segment<3>(l.angular_velocity(b)));
+    f.segment<3>(i + 3) = R * (body_inertia(body) * dydt.segment<3>(l.angular_velocity(b)));
   }
   return f;
 }
 
+Eigen::SparseMatrix<double> body_motion(const LinearModel& lm) {
+  const Model& m = *lm.model;
+  const FreeCoordinates& c = lm.coords;
+  const StateLayout l{static_cast<Eigen::Index>(m.bodies.size()), lm.state.size() - 13 * static_cast<Eigen::Index>(m.bodies.size())};
+  Triplets e;
+  e.reserve(6 * c.bodies.size());
+  for (std::size_t k = 0; k < c.bodies.size(); ++k)
+    for (int i = 0; i < 6; ++i) e.emplace_back(6 * c.bodies[k] + i, c.start[k] + i, 1.0);
+  // A node of a flexible body: its frame's motion carried to where it is (translation
+  // dx + dphi x R r), and the modes' displacement and rotation there, turned with the frame.
+  for (std::size_t k = 0; k < c.bodies.size(); ++k) {
+    const int f = c.flexible_of(k);
+    if (f < 0) continue;
+    const FlexibleBody& fb = m.flexible[static_cast<std::size_t>(f)];
+    const FloatingFrameData& d = *fb.data;
+    const Eigen::Index ne = d.modes(), x = c.start[k];
+    const Eigen::VectorXd eta = lm.state.segment(c.eta[static_cast<std::size_t>(f)], ne);
+    const Eigen::Matrix3d R = rotation(lm.state, l, fb.frame);
+    for (std::size_t n = 0; n < fb.nodes.size(); ++n) {
+      const Eigen::Index row = 6 * fb.nodes[n];
+      const Eigen::MatrixXd& shape = d.node_shape[n];
+      const Eigen::Matrix3d arm = -skew(R * (d.node_position[n] + shape.topRows<3>() * eta));
+      const Eigen::MatrixXd turned = R * shape.topRows<3>(), turned_rotation = R * shape.bottomRows<3>();
+      for (int i = 0; i < 3; ++i) {
+        e.emplace_back(row + i, x + i, 1.0);
+        e.emplace_back(row + 3 + i, x + 3 + i, 1.0);
+        for (int j = 0; j < 3; ++j) e.emplace_back(row + i, x + 3 + j, arm(i, j));
+        for (Eigen::Index j = 0; j < ne; ++j) {
+          e.emplace_back(row + i, x + 6 + j, turned(i, j));
+          e.emplace_back(row + 3 + i, x + 6 + j, turned_rotation(i, j));
+        }
+      }
+    }
+  }
+  Eigen::SparseMatrix<double> w(6 * static_cast<Eigen::Index>(m.bodies.size()), c.size());
+  w.setFromTriplets(e.begin(), e.end());
+  return w;
+}
+
 LinearModel linearize(MultibodySystem& sys, double t, const Eigen::VectorXd& y, Eigen::SparseMatrix<double>* jacobian) {
   const StateLayout& l = sys.layout();
+  const Model& model = sys.model();
   LinearModel out;
-  out.model = &sys.model();
+  out.model = &model;
   out.t = t;
   out.state = y;
-  out.bodies = free_bodies(sys);
-  const auto n = static_cast<Eigen::Index>(out.bodies.size());
-  if (n == 0) throw InputError("every body is driven: nothing moves freely to linearise");
-  std::vector<Eigen::Matrix<double, 6, 6>> mass(out.bodies.size());
+  out.coords = free_coordinates(sys);
+  const FreeCoordinates& fc = out.coords;
+  const std::vector<int>& bodies = fc.bodies;
+  const Eigen::Index n = fc.size();
+  if (bodies.empty()) throw InputError("every body is driven: nothing moves freely to linearise");
+  std::vector<Eigen::Matrix<double, 6, 6>> mass(bodies.size());
   Triplets masses, k, d;
   double fastest = 0.0;
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const int b = out.bodies[static_cast<std::size_t>(i)];
-    mass[static_cast<std::size_t>(i)] = mass_block(sys.model().bodies[static_cast<std::size_t>(b)], rotation(y, l, b));
+  for (std::size_t i = 0; i < bodies.size(); ++i) {
+    const int b = bodies[i];
+    const Eigen::Index at = fc.start[i];
+    fastest = std::max({fastest, y.segment<3>(l.velocity(b)).norm(), y.segment<3>(l.angular_velocity(b)).norm()});
+    if (const int f = fc.flexible_of(i); f >= 0) {
+      const FloatingFrameData& data = *model.flexible[static_cast<std::size_t>(f)].data;
+      const Eigen::Index eta = fc.eta[static_cast<std::size_t>(f)];
+      const Eigen::MatrixXd block = flexible_mass_block(data, y.segment(eta, data.modes()), rotation(y, l, b));
+      for (Eigen::Index r = 0; r < block.rows(); ++r)
+        for (Eigen::Index c = 0; c < block.cols(); ++c)
+          if (block(r, c) != 0.0 || r == c) masses.emplace_back(at + r, at + c, block(r, c));
+      fastest = std::max(fastest, y.segment(eta + data.modes(), data.modes()).cwiseAbs().maxCoeff());
+      continue;
+    }
+    mass[i] = mass_block(model.bodies[static_cast<std::size_t>(b)], rotation(y, l, b));
     for (int r = 0; r < 6; ++r)
       for (int c = 0; c < 6; ++c)
-        if (const double v = mass[static_cast<std::size_t>(i)](r, c); v != 0.0 || r == c) masses.emplace_back(6 * i + r, 6 * i + c, v);
-    fastest = std::max({fastest, y.segment<3>(l.velocity(b)).norm(), y.segment<3>(l.angular_velocity(b)).norm()});
+        if (const double v = mass[i](r, c); v != 0.0 || r == c) masses.emplace_back(at + r, at + c, v);
   }
-  out.M.resize(6 * n, 6 * n);
+  out.M.resize(n, n);
   out.M.setFromTriplets(masses.begin(), masses.end());
-  out.K.resize(6 * n, 6 * n);
-  out.D.resize(6 * n, 6 * n);
-  if (sys.has_analytic_jacobian()) {
+  out.K.resize(n, n);
+  out.D.resize(n, n);
+  if (sys.has_analytic_jacobian()) {  // never with flexible bodies: 6 coordinates per body
     Eigen::SparseMatrix<double> own;
     if (!jacobian) own = sys.jacobian_pattern();
     Eigen::SparseMatrix<double>& jac = jacobian ? *jacobian : own;
     sys.jacobian(t, y, jac);
-    rate_blocks(l, out.bodies, y, jac, mass, k, d);
+    rate_blocks(l, bodies, y, jac, mass, k, d);
     out.K.setFromTriplets(k.begin(), k.end());
     out.D.setFromTriplets(d.begin(), d.end());
   } else {
     // Central differences in the tangent directions, then the rate rows of A = tp (J tm):
     // K = -M A_vx, D = -M A_vv.
     Eigen::SparseMatrix<double> tm, tp;
-    tangent_maps(l, out.bodies, y, tm, tp);
-    const Eigen::SparseMatrix<double> a = tp * differenced(sys, t, y, out.bodies);
+    tangent_maps(l, fc, y, tm, tp);
+    const Eigen::SparseMatrix<double> a = tp * differenced(sys, t, y, fc);
     Triplets avx, avv;
     for (Eigen::Index c = 0; c < a.outerSize(); ++c)
       for (Eigen::SparseMatrix<double>::InnerIterator it(a, c); it; ++it) {
-        if (it.row() < 6 * n) continue;
-        (it.col() < 6 * n ? avx : avv).emplace_back(it.row() - 6 * n, it.col() < 6 * n ? it.col() : it.col() - 6 * n, it.value());
+        if (it.row() < n) continue;
+        (it.col() < n ? avx : avv).emplace_back(it.row() - n, it.col() < n ? it.col() : it.col() - n, it.value());
       }
-    Eigen::SparseMatrix<double> dadx(6 * n, 6 * n), dadv(6 * n, 6 * n);
+    Eigen::SparseMatrix<double> dadx(n, n), dadv(n, n);
     dadx.setFromTriplets(avx.begin(), avx.end());
     dadv.setFromTriplets(avv.begin(), avv.end());
     out.K = -(out.M * dadx);
@@ -319,8 +446,8 @@ LinearModel linearize(MultibodySystem& sys, double t, const Eigen::VectorXd& y, 
   const Eigen::SparseMatrix<double> c = sys.constraint_jacobian(t, y, &joint_of_row);
   if (c.rows() > 0) {
     std::vector<Eigen::Index> column_of(static_cast<std::size_t>(6 * l.bodies), -1);
-    for (Eigen::Index k = 0; k < n; ++k)
-      for (int e = 0; e < 6; ++e) column_of[static_cast<std::size_t>(6 * out.bodies[static_cast<std::size_t>(k)] + e)] = 6 * k + e;
+    for (std::size_t i = 0; i < bodies.size(); ++i)
+      for (int e = 0; e < 6; ++e) column_of[static_cast<std::size_t>(6 * bodies[i] + e)] = fc.start[i] + e;
     Triplets rows;
     std::vector<char> used(static_cast<std::size_t>(c.rows()), 0);
     for (Eigen::Index col = 0; col < c.outerSize(); ++col)
@@ -338,10 +465,10 @@ LinearModel linearize(MultibodySystem& sys, double t, const Eigen::VectorXd& y, 
         out.constraint_joint.push_back(joint_of_row[r]);
       }
     for (auto& e : rows) e = Eigen::Triplet<double>(row_to[static_cast<std::size_t>(e.row())], e.col(), e.value());
-    out.C.resize(kept, 6 * n);
+    out.C.resize(kept, n);
     out.C.setFromTriplets(rows.begin(), rows.end());
   } else {
-    out.C.resize(0, 6 * n);
+    out.C.resize(0, n);
   }
   return out;
 }

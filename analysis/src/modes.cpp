@@ -191,7 +191,7 @@ Modes compute_modes(const LinearModel& m, const ModeOptions& o) {
   });
   if (static_cast<int>(found.size()) > o.count) found.resize(static_cast<std::size_t>(o.count));
   const auto k = static_cast<Eigen::Index>(found.size());
-  const auto bodies = static_cast<Eigen::Index>(m.bodies.size());
+  const auto bodies = static_cast<Eigen::Index>(m.coords.bodies.size());
   out.shape.resize(n, k);
   out.kinetic_share = Eigen::MatrixXd::Zero(bodies, k);
   out.strain_share = Eigen::MatrixXd::Zero(bodies, k);
@@ -232,8 +232,10 @@ Modes compute_modes(const LinearModel& m, const ModeOptions& o) {
     const Eigen::VectorXcd mx = m.M * x, kx = ks * x;
     double kinetic = 0.0, strain = 0.0;
     for (Eigen::Index b = 0; b < bodies; ++b) {
-      const double e = (x.segment<6>(6 * b).adjoint() * mx.segment<6>(6 * b))(0).real();
-      const double s = (x.segment<6>(6 * b).adjoint() * kx.segment<6>(6 * b))(0).real();
+      const Eigen::Index first = m.coords.start[static_cast<std::size_t>(b)];
+      const Eigen::Index size = m.coords.start[static_cast<std::size_t>(b) + 1] - first;
+      const double e = (x.segment(first, size).adjoint() * mx.segment(first, size))(0).real();
+      const double s = (x.segment(first, size).adjoint() * kx.segment(first, size))(0).real();
       out.kinetic_share(b, j) = e;
       out.strain_share(b, j) = s;
       kinetic += e;

@@ -1,5 +1,6 @@
 #include "mbsflow/io/modes_file.hpp"
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 
@@ -34,19 +35,22 @@ ModesXdmf write_file(const std::string& path, const std::string& h5_name, const 
     eigenvalue.insert(eigenvalue.end(), {modes.eigenvalue[j].real(), modes.eigenvalue[j].imag()});
     rigid.push_back(modes.rigid_body[j] ? 1.0 : 0.0);
   }
-  // Shapes and energy shares over every body of the model (driven ones zero).
+  // Shapes over every body of the model (driven ones zero, a flexible body's nodes moved by
+  // its frame and modes); energy shares of the free bodies (a flexible body's with its
+  // frame, its modes' included).
   std::vector<double> re(k * n * 6, 0.0), im(k * n * 6, 0.0), share(k * n * 2, 0.0);
-  for (std::size_t j = 0; j < k; ++j)
-    for (std::size_t b = 0; b < lm.bodies.size(); ++b) {
-      const auto body = static_cast<std::size_t>(lm.bodies[b]);
-      for (std::size_t e = 0; e < 6; ++e) {
-        const std::complex<double> x = modes.shape(static_cast<Eigen::Index>(6 * b + e), static_cast<Eigen::Index>(j));
-        re[(j * n + body) * 6 + e] = x.real();
-        im[(j * n + body) * 6 + e] = x.imag();
-      }
+  const Eigen::SparseMatrix<double> motion = body_motion(lm);
+  for (std::size_t j = 0; j < k; ++j) {
+    const Eigen::VectorXd r = motion * modes.shape.col(static_cast<Eigen::Index>(j)).real();
+    const Eigen::VectorXd i = motion * modes.shape.col(static_cast<Eigen::Index>(j)).imag();
+    std::copy(r.data(), r.data() + 6 * n, re.begin() + static_cast<std::ptrdiff_t>(j * n * 6));
+    std::copy(i.data(), i.data() + 6 * n, im.begin() + static_cast<std::ptrdiff_t>(j * n * 6));
+    for (std::size_t b = 0; b < lm.coords.bodies.size(); ++b) {
+      const auto body = static_cast<std::size_t>(lm.coords.bodies[b]);
       share[(j * n + body) * 2] = modes.kinetic_share(static_cast<Eigen::Index>(b), static_cast<Eigen::Index>(j));
       share[(j * n + body) * 2 + 1] = modes.strain_share(static_cast<Eigen::Index>(b), static_cast<Eigen::Index>(j));
     }
+  }
   h5::write_array(root, "/modes/frequency", H5T_NATIVE_DOUBLE, modes.frequency, {k});
   h5::write_array(root, "/modes/damping_ratio", H5T_NATIVE_DOUBLE, modes.damping_ratio, {k});
   h5::write_array(root, "/modes/eigenvalue", H5T_NATIVE_DOUBLE, eigenvalue, {k, 2});
@@ -75,7 +79,7 @@ ModesXdmf write_file(const std::string& path, const std::string& h5_name, const 
   h5::write_units(root, "/modes/energy_share", "1");
   h5::write_units(root, "/equilibrium/position", "m");
   h5::write_units(root, "/equilibrium/orientation", "1");
-  return write_mode_frames(root, lm, modes, h5_name);
+  return write_mode_frames(root, lm, modes, re, im, h5_name);
 }
 
 }  // namespace

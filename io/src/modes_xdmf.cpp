@@ -22,7 +22,8 @@ void make_group(hid_t file, const std::string& path) {
 
 }  // namespace
 
-ModesXdmf write_mode_frames(hid_t file, const LinearModel& lm, const Modes& modes, const std::string& h5_name) {
+ModesXdmf write_mode_frames(hid_t file, const LinearModel& lm, const Modes& modes, const std::vector<double>& shape_re,
+                            const std::vector<double>& shape_im, const std::string& h5_name) {
   const Model& model = *lm.model;
   const auto n = static_cast<Eigen::Index>(model.bodies.size());
   const StateLayout l{n};
@@ -54,22 +55,21 @@ ModesXdmf write_mode_frames(hid_t file, const LinearModel& lm, const Modes& mode
   o << "<?xml version=\"1.0\" ?>\n<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n<Xdmf Version=\"3.0\">\n <Domain>\n"
     << "  <Grid Name=\"modes\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
   const std::string n1 = std::to_string(n) + " 1", n3 = std::to_string(n) + " 3", n4 = std::to_string(n) + " 4";
-  std::vector<int> slot_of(static_cast<std::size_t>(n), -1);  // body -> its coordinates' index in lm
-  for (std::size_t s = 0; s < lm.bodies.size(); ++s) slot_of[static_cast<std::size_t>(lm.bodies[s])] = static_cast<int>(s);
+  std::vector<int> slot_of(static_cast<std::size_t>(n), -1);  // body -> its index among the free bodies
+  for (std::size_t s = 0; s < lm.coords.bodies.size(); ++s) slot_of[static_cast<std::size_t>(lm.coords.bodies[s])] = static_cast<int>(s);
   for (Eigen::Index j = 0; j < k; ++j) {
     const std::string group = "/xdmf/mode" + std::to_string(j + 1);
     make_group(file, group);
     const auto shape_of = [&](std::size_t b, int e) {
-      const int slot = slot_of[b];
-      return slot < 0 ? std::complex<double>() : modes.shape(6 * slot + e, j);
+      const std::size_t at = (static_cast<std::size_t>(j * n) + b) * 6 + static_cast<std::size_t>(e);
+      return std::complex<double>(shape_re[at], shape_im[at]);
     };
     const double scale = mode_scale(shape_of, static_cast<std::size_t>(n), size);
     std::vector<double> shape(static_cast<std::size_t>(3 * n), 0.0), share(static_cast<std::size_t>(n), 0.0);
-    for (Eigen::Index b = 0; b < n; ++b)
-      if (const int s = slot_of[static_cast<std::size_t>(b)]; s >= 0) {
-        for (int i = 0; i < 3; ++i) shape[static_cast<std::size_t>(3 * b + i)] = scale * modes.shape(6 * s + i, j).real();
-        share[static_cast<std::size_t>(b)] = modes.kinetic_share(s, j);
-      }
+    for (Eigen::Index b = 0; b < n; ++b) {
+      for (int i = 0; i < 3; ++i) shape[static_cast<std::size_t>(3 * b + i)] = scale * shape_of(static_cast<std::size_t>(b), i).real();
+      if (const int s = slot_of[static_cast<std::size_t>(b)]; s >= 0) share[static_cast<std::size_t>(b)] = modes.kinetic_share(s, j);
+    }
     h5::write_array(file, (group + "/shape").c_str(), H5T_NATIVE_DOUBLE, shape, {static_cast<hsize_t>(n), 3});
     h5::write_array(file, (group + "/kinetic_share").c_str(), H5T_NATIVE_DOUBLE, share, {static_cast<hsize_t>(n)});
     h5::write_array(file, (group + "/mode").c_str(), H5T_NATIVE_DOUBLE, std::vector<double>{double(j + 1), modes.frequency[static_cast<std::size_t>(j)]}, {2});

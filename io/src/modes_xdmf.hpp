@@ -14,6 +14,7 @@
 
 #include <cstddef>
 #include <string>
+#include <vector>
 
 #include "mbsflow/analysis/modes.hpp"
 
@@ -29,6 +30,9 @@ struct ModesXdmf {
 };
 
 // Writes the frames into `file` (open for writing) and returns the sidecar's text.
-ModesXdmf write_mode_frames(hid_t file, const LinearModel& lm, const Modes& modes, const std::string& h5_name);
+// shape_re, shape_im: every body's shape per mode (mode j, body b, coordinate e at
+// (j bodies + b) 6 + e), as the modes file holds them.
+ModesXdmf write_mode_frames(hid_t file, const LinearModel& lm, const Modes& modes, const std::vector<double>& shape_re,
+                            const std::vector<double>& shape_im, const std::string& h5_name);
 
 }  // namespace mbsflow

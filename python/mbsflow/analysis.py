@@ -21,13 +21,16 @@ def _csc(parts):
 @dataclass
 class LinearModel:
     """M x'' + D x' + K x = f with C x = 0; x holds 6 coordinates per free body (translation,
-    then rotation as a world-frame rotation vector), in the order of `bodies`."""
+    then rotation as a world-frame rotation vector), in the order of `bodies`, from
+    start[k] (a flexible body's frame has its modal coordinates after its 6; its node bodies
+    have none)."""
     M: scipy.sparse.csc_matrix
     D: scipy.sparse.csc_matrix
     K: scipy.sparse.csc_matrix
     C: scipy.sparse.csc_matrix
     bodies: list
     state: np.ndarray
+    start: list
 
 
 @dataclass
@@ -50,7 +53,8 @@ class Modes:
 def linearize(model, at="equilibrium"):
     """The model (a Model or a model file) linearised: M, D, K, C as scipy sparse matrices."""
     d = _core._linearize(_load(model), at)
-    return LinearModel(_csc(d["M"]), _csc(d["D"]), _csc(d["K"]), _csc(d["C"]), list(d["bodies"]), d["state"])
+    return LinearModel(_csc(d["M"]), _csc(d["D"]), _csc(d["K"]), _csc(d["C"]), list(d["bodies"]), d["state"],
+                       list(d["start"]))
 
 
 def modes(model, n=10, at="equilibrium", damped=True, solver="auto"):

@@ -48,7 +48,8 @@ py::dict linear_model(const LinearModel& lm) {
   out["D"] = csc(lm.D);
   out["K"] = csc(lm.K);
   out["C"] = csc(lm.C);
-  out["bodies"] = lm.bodies;
+  out["bodies"] = lm.coords.bodies;
+  out["start"] = lm.coords.start;
   out["state"] = to_numpy(lm.state);
   return out;
 }
@@ -83,12 +84,13 @@ void bind_analysis(py::module_& m) {
         py::array_t<std::complex<double>> shape({k, bodies, py::ssize_t{6}});
         auto s = shape.mutable_unchecked<3>();
         std::vector<double> kinetic(static_cast<std::size_t>(k * bodies), 0.0), strain(kinetic.size(), 0.0);
+        const Eigen::SparseMatrix<std::complex<double>> motion = body_motion(lm).cast<std::complex<double>>();
         for (py::ssize_t j = 0; j < k; ++j) {
+          const Eigen::VectorXcd x = motion * modes.shape.col(j);
           for (py::ssize_t b = 0; b < bodies; ++b)
-            for (py::ssize_t e = 0; e < 6; ++e) s(j, b, e) = 0.0;
-          for (std::size_t b = 0; b < lm.bodies.size(); ++b) {
-            const auto body = static_cast<py::ssize_t>(lm.bodies[b]);
-            for (py::ssize_t e = 0; e < 6; ++e) s(j, body, e) = modes.shape(static_cast<Eigen::Index>(6 * b) + e, j);
+            for (py::ssize_t e = 0; e < 6; ++e) s(j, b, e) = x[6 * b + e];
+          for (std::size_t b = 0; b < lm.coords.bodies.size(); ++b) {
+            const auto body = static_cast<py::ssize_t>(lm.coords.bodies[b]);
             kinetic[static_cast<std::size_t>(j * bodies + body)] = modes.kinetic_share(static_cast<Eigen::Index>(b), j);
             strain[static_cast<std::size_t>(j * bodies + body)] = modes.strain_share(static_cast<Eigen::Index>(b), j);
           }

@@ -159,12 +159,54 @@ def check_rigid_face(mbsflow, work):
     print(f"reduce_check: the bar's end face tied to a master node: held as ccx, free within {100 * error.max():.3g} %")
 
 
+def check_modes_of_flexible(mbsflow, work):
+    """mbsflow modes on a model of the reduced bar (bar_rigid.h5, 20 modes, end face tied to
+    master node 190) as a flexible body: free, six rigid-body motions and then the reduced
+    part's free frequencies (those of its matrices, to 1e-6) within 1 % of ccx's free-free
+    ones; clamped at the master by a stiff bushing, ccx's clamped frequencies (to the
+    bushing's compliance: 1e-3)."""
+    free = ccx_frequencies(work, "bar_free")
+    held = ccx_frequencies(work, "bar_held")
+    with h5py.File(os.path.join(work, "bar_rigid.h5"), "r") as h5:
+        reduced = np.sqrt(np.abs(scipy.linalg.eigh(h5["reduced/stiffness"][:], h5["reduced/mass"][:], eigvals_only=True)))
+        master = h5["floating/node_position"][0] + h5["mass/centre"][:]
+    reduced = reduced[6:] / (2 * np.pi)
+    part = {"name": "bar", "type": "flexible", "file": "bar_rigid.h5", "position": [0.5, -1, 2],
+            "orientation": list(np.array([0.9, 0.1, -0.3, 0.2]) / np.linalg.norm([0.9, 0.1, -0.3, 0.2]))}
+    clamp = {"name": "clamp", "type": "bushing", "body1": "ground", "body2": "bar@190", "point1": list(master),
+             "stiffness": [1e13, 1e13, 1e13, 1e11, 1e11, 1e11]}
+    for name, joints in (("bar_free_modes", []), ("bar_held_modes", [clamp])):
+        model = {"name": name, "gravity": [0, 0, 0], "bodies": [part if not joints else dict(part, position=[0, 0, 0],
+                 orientation=[1, 0, 0, 0])], "joints": joints}
+        with open(os.path.join(work, name + ".json"), "w") as f:
+            json.dump(model, f)
+        r = subprocess.run([mbsflow, "modes", name + ".json", "--at-initial", "-n", "12", "--undamped", "-o", name + ".h5"],
+                           cwd=work, capture_output=True, text=True)
+        if r.returncode != 0:
+            fail(f"mbsflow modes {name}.json: {r.stderr}")
+        with h5py.File(os.path.join(work, name + ".h5"), "r") as h5:
+            f, rigid = h5["modes/frequency"][:], h5["modes/rigid_body"][:]
+        if not joints:
+            if list(rigid) != [1] * 6 + [0] * 6:
+                fail(f"mbsflow modes of the free flexible bar: rigid-body flags {rigid}")
+            if not np.allclose(f[6:], reduced[:6], rtol=1e-6):
+                fail(f"mbsflow modes of the free flexible bar: {f[6:]} Hz, its reduced matrices {reduced[:6]} Hz")
+            error = f[6:6 + len(free)] / free - 1
+            if error.min() < -1e-6 or error.max() > 0.01:
+                fail(f"mbsflow modes of the free flexible bar: {f[6:6 + len(free)]} Hz, ccx {free} Hz")
+        elif not np.allclose(f[:10], held[:10], rtol=1e-3):
+            fail(f"mbsflow modes of the clamped flexible bar: {f[:10]} Hz, ccx {held[:10]} Hz")
+    print(f"reduce_check: mbsflow modes of the flexible bar: free within {100 * error.max():.3g} % of ccx, "
+          f"clamped at its master node as ccx's clamped bar")
+
+
 def main():
     mbsflow, work = os.path.abspath(sys.argv[1]), sys.argv[2]
     os.makedirs(work, exist_ok=True)
     check_part(mbsflow, work, "bar", (1.0, 0.1, 0.1), (20, 2, 2), 4)
     check_part(mbsflow, work, "plate", (0.5, 0.3, 0.01), (10, 6, 1), 4)
     check_rigid_face(mbsflow, work)
+    check_modes_of_flexible(mbsflow, work)
     # The worked example of docs/flexible.md, as its comment says to run it.
     example = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "examples", "fe", "bar.inp")
     with open(example) as f:

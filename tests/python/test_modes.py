@@ -57,3 +57,44 @@ def test_a_cantilever_beam_from_python_bends_at_its_closed_form_frequency():
     exact = 1.8751041 ** 2 * math.sqrt(e * i / (rho * a)) / (2 * math.pi)
     assert m.shape.shape[1] == 41  # the 41 nodes
     assert math.isclose(m.frequency[0], exact, rel_tol=1e-3)
+
+
+def test_modes_of_a_flexible_body_reduced_from_matrix_market_files(tmp_path):
+    """A spring lattice written as Matrix Market files, reduced by `mbsflow reduce` and used
+    as a flexible body: free, its modes are six rigid-body motions and then the reduced
+    part's own free frequencies; its interface nodes are bodies whose shapes follow."""
+    import os
+    import subprocess
+    import scipy.linalg
+    nodes = [(0.2 * i, 0.1 * j, 0.1 * k) for i in range(4) for j in range(2) for k in range(2)]
+    n = 3 * len(nodes)
+    stiffness, mass = np.zeros((n, n)), np.diag(np.repeat(np.linspace(0.5, 1.5, len(nodes)), 3))
+    for a in range(len(nodes)):
+        for b in range(a + 1, len(nodes)):
+            d = np.subtract(nodes[b], nodes[a])
+            if np.linalg.norm(d) > 0.26:
+                continue
+            block = 2e5 / np.linalg.norm(d) ** 3 * np.outer(d, d)
+            for p, q, s in ((a, a, 1), (b, b, 1), (a, b, -1), (b, a, -1)):
+                stiffness[3 * p:3 * p + 3, 3 * q:3 * q + 3] += s * block
+    for name, matrix in (("K.mtx", stiffness), ("M.mtx", mass)):
+        rows, cols = np.nonzero(matrix)
+        with open(tmp_path / name, "w") as f:
+            f.write(f"%%MatrixMarket matrix coordinate real general\n{n} {n} {len(rows)}\n")
+            f.writelines(f"{r + 1} {c + 1} {matrix[r, c]!r}\n" for r, c in zip(rows, cols))
+    (tmp_path / "part.dof").write_text("".join(f"{i + 1}.{e + 1}\n" for i in range(len(nodes)) for e in range(3)))
+    (tmp_path / "part.inp").write_text("*NODE\n" + "".join(f"{i + 1}, {x}, {y}, {z}\n" for i, (x, y, z) in enumerate(nodes)))
+    subprocess.run([os.environ["MBSFLOW_EXE"], "reduce", "part.inp", "--stiffness", "K.mtx", "--mass", "M.mtx", "--dofs",
+                    "part.dof", "--interface", "1-4", "--modes", "4", "-o", "part.h5", "-q"], cwd=tmp_path, check=True)
+    import h5py
+    with h5py.File(tmp_path / "part.h5", "r") as h5:
+        reduced = np.sqrt(np.abs(scipy.linalg.eigh(h5["reduced/stiffness"][:], h5["reduced/mass"][:], eigvals_only=True)))
+    model = mbsflow.Model.from_dict({"name": "lattice", "gravity": [0, 0, 0], "joints": [],
+                                     "bodies": [{"name": "part", "type": "flexible", "file": str(tmp_path / "part.h5")}]})
+    m = mbsflow.modes(model, n=12, at="initial", damped=False)
+    assert list(m.rigid_body) == [True] * 6 + [False] * 6
+    assert np.allclose(m.frequency[6:], reduced[6:12] / (2 * np.pi), rtol=1e-7)
+    assert m.shape.shape == (12, 5, 6)  # the frame and its four interface nodes
+    assert np.abs(m.shape[6, 1:, :3]).max() > 0.1 * np.abs(m.shape[6, 0, :3]).max()
+    lm = mbsflow.linearize(model, at="initial")
+    assert lm.bodies == [0] and lm.start == [0, 6 + 12 + 4 - 6]

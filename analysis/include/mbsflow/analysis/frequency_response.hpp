@@ -17,7 +17,7 @@ namespace mbsflow {
 // One coordinate of one body: dof 0..2 translation (force) along x y z, 3..5 rotation
 // (torque) about x y z, world frame.
 struct Channel {
-  int body = 0;  // system body index (a free body)
+  int body = 0;  // system body index (a free body, or a flexible body's node)
   int dof = 0;
   enum class Kind { displacement, velocity, acceleration } kind = Kind::displacement;  // outputs only
 };

@@ -2,15 +2,18 @@
 // A model's motion linearised about a state, in tangent space: each free body has 6
 // coordinates x (its translation, and its rotation as a world-frame rotation vector
 // through the exponential map, q = exp(phi) q0) and their rates (velocity, angular
-// velocity in the world frame). Driven bodies are held on their motion (no coordinates).
+// velocity in the world frame); a flexible body's frame has its ne modal coordinates
+// after its 6. Driven bodies are held on their motion, a flexible body's node bodies
+// follow its frame and modes (no coordinates of their own: body_motion gives their motion).
 //
-//   M x'' + D x' + K x = f      (f: force and torque on each body, world frame)
+//   M x'' + D x' + K x = f      (f: force and torque on each body, world frame; modal forces)
 //   C x = 0                     (the rigid joints' rows)
 //
-// M is the bodies' mass and world-frame inertia; D and K come from the exact Jacobian of
-// the equations of motion (gyroscopic terms in D; the constraint forces' stiffness in K:
-// a pendulum in maximal coordinates gets all of its stiffness from it), as
-// K = -M dA/dx, D = -M dA/dv restricted to the motions the joints allow.
+// M is the bodies' mass and world-frame inertia (a flexible body's whole mass matrix,
+// frame and modes coupled); D and K come from the exact Jacobian of the equations of
+// motion (gyroscopic terms in D; the constraint forces' stiffness in K: a pendulum in
+// maximal coordinates gets all of its stiffness from it), as K = -M dA/dx, D = -M dA/dv
+// restricted to the motions the joints allow.
 #include <Eigen/SparseCore>
 #include <string>
 #include <vector>
@@ -19,10 +22,25 @@
 
 namespace mbsflow {
 
+// Which bodies have coordinates, and where they sit.
+struct FreeCoordinates {
+  std::vector<int> bodies;          // the free bodies (system indices), ascending
+  std::vector<Eigen::Index> start;  // per free body its first coordinate; then their count
+  // Without flexible bodies: empty. Else per free body the flexible body whose frame it is
+  // (-1: none), and per flexible body of the model where its modal coordinates start in
+  // the state.
+  std::vector<int> flexible;
+  std::vector<Eigen::Index> eta;
+  Eigen::Index size() const { return start.back(); }
+  int flexible_of(std::size_t k) const { return flexible.empty() ? -1 : flexible[k]; }
+  // The free body whose coordinates hold coordinate i.
+  std::size_t body_of(Eigen::Index i) const;
+};
+
 struct LinearModel {
   const Model* model = nullptr;  // the system's (it must outlive this)
-  std::vector<int> bodies;  // the free bodies (system indices), coordinates 6 k .. 6 k + 5 each
-  Eigen::SparseMatrix<double> M, D, K;  // n x n, n = 6 bodies.size()
+  FreeCoordinates coords;
+  Eigen::SparseMatrix<double> M, D, K;  // n x n, n = coords.size()
   Eigen::SparseMatrix<double> C;        // rows x n; no rows without rigid joints
   std::vector<int> constraint_joint;    // per row of C, its joint
   double t = 0.0;
@@ -41,15 +59,23 @@ LinearModel linearize(MultibodySystem& sys, double t, const Eigen::VectorXd& y,
                       Eigen::SparseMatrix<double>* jacobian = nullptr);
 
 // The generalised force on each free body at (t, y) with the velocities taken as zero:
-// M times the accelerations (force, torque; world frame), the rigid joints' reactions
-// included: zero at a static equilibrium.
-Eigen::VectorXd static_residual(MultibodySystem& sys, double t, const Eigen::VectorXd& y, const std::vector<int>& bodies);
+// M times the accelerations (force, torque; world frame; the modal forces), the rigid
+// joints' reactions included: zero at a static equilibrium.
+Eigen::VectorXd static_residual(MultibodySystem& sys, double t, const Eigen::VectorXd& y, const FreeCoordinates& c);
 
-// The free bodies of sys (not driven), ascending.
-std::vector<int> free_bodies(const MultibodySystem& sys);
+// The free bodies of sys (not driven, not a flexible body's node) and their coordinates.
+FreeCoordinates free_coordinates(const MultibodySystem& sys);
+
+// y with every velocity and modal rate zero.
+void set_at_rest(const StateLayout& l, const FreeCoordinates& c, Eigen::VectorXd& y);
 
 // The state y moved by the tangent step dx (translation added, rotation exp(dphi) applied
-// in the world frame), velocities set to zero.
-void apply_tangent_step(const StateLayout& l, const std::vector<int>& bodies, const Eigen::VectorXd& dx, Eigen::VectorXd& y);
+// in the world frame, modal coordinates added), velocities set to zero.
+void apply_tangent_step(const StateLayout& l, const FreeCoordinates& c, const Eigen::VectorXd& dx, Eigen::VectorXd& y);
+
+// The small motion of every body of the model (6 rows each: translation, rotation; world
+// frame) from the coordinates: a free body's own, a flexible body's node through its
+// frame's and the modes', zero for a driven body. (6 bodies) x n.
+Eigen::SparseMatrix<double> body_motion(const LinearModel& lm);
 
 }  // namespace mbsflow

@@ -29,8 +29,8 @@ struct Modes {
   std::vector<double> frequency;                 // Hz: |lambda| / 2 pi (undamped natural frequency)
   std::vector<double> damping_ratio;             // -Re lambda / |lambda|; 0 for a rigid-body mode
   std::vector<bool> rigid_body;                  // lambda zero to rounding: a motion without stiffness
-  Eigen::MatrixXcd shape;                        // n x modes: x (translation, rotation per body), x^H M x = 1
-  Eigen::MatrixXd kinetic_share, strain_share;   // bodies x modes: each body's share of the mode's energies
+  Eigen::MatrixXcd shape;                        // n x modes: the coordinates x (LinearModel), x^H M x = 1
+  Eigen::MatrixXd kinetic_share, strain_share;   // free bodies x modes: each body's share of the mode's energies
   std::vector<double> residual;                  // |(lambda^2 M + lambda D + K) x| / scale, on the allowed motions
   Eigen::Index free_coordinates = 0;             // coordinates less independent constraints
   std::string solver;                            // which solver found them

@@ -101,6 +101,10 @@ class MultibodySystem {
 
   Energy energy(double t, const Eigen::VectorXd& y);
 
+  // Where the modal coordinates of the model's flexible body f start in the state (their
+  // rates follow, as many again).
+  Eigen::Index flexible_state(std::size_t f) const { return layout_.tail(compiled_->flexible_tail[f]); }
+
   // Adds a user-defined force element (see force_element.hpp).
   void add_force_element(std::shared_ptr<const ForceElement> element);
 

@@ -1,0 +1,61 @@
+#pragma once
+// The flexible-body tests' part: a bar-like spring lattice reduced by Craig-Bampton, and a
+// model of it alone as the model reader makes it.
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "mbsflow/graph/model.hpp"
+#include "spring_lattice.hpp"
+
+namespace mbsflow::test {
+
+// Nodes on a 6 x 2 x 2 grid (0.2 m along x, 0.1 m across), 0.5 .. 1.5 kg each, springs of
+// 2e5 / length N/m between nodes at most a cell's diagonal apart (bar_lattice), reduced
+// at `interface`: nodes 1-4 are the end x = 0, 21-24 the end x = 1.
+inline SpringLattice bar_lattice() {
+  std::vector<Eigen::Vector3d> node;
+  std::vector<double> mass;
+  for (int i = 0; i < 6; ++i)
+    for (int j = 0; j < 2; ++j)
+      for (int k = 0; k < 2; ++k) {
+        node.emplace_back(0.2 * i, 0.1 * j, 0.1 * k + 0.01 * i);
+        mass.push_back(0.5 + 0.1 * static_cast<double>(node.size() % 11));
+      }
+  return spring_lattice(node, mass, 0.26, 2e5);
+}
+
+inline ReducedPart bar_part(int modes, std::vector<long> interface = {1, 2, 3, 4}) {
+  const SpringLattice lattice = bar_lattice();
+  CraigBamptonOptions o;
+  o.interface_nodes = std::move(interface);
+  o.modes = modes;
+  return craig_bampton(lattice.fe, lattice.dof_position, o);
+}
+
+// A model of the part alone (frame at the origin, unturned), as the model reader makes it:
+// the frame body, then a body per interface node.
+inline Model flexible_model(const ReducedPart& part) {
+  Model m;
+  FlexibleBody f;
+  f.name = "bar";
+  f.data = std::make_shared<const FloatingFrameData>(part.floating);
+  const FloatingFrameData& d = *f.data;
+  f.damping = Eigen::VectorXd::Zero(d.modes());
+  auto add = [&](const std::string& name, double mass, const Eigen::Matrix3d& j, const Eigen::Vector3d& x) {
+    Body b;
+    b.name = name;
+    b.mass = mass;
+    b.inertia = Vec6{j(0, 0), j(1, 1), j(2, 2), j(0, 1), j(0, 2), j(1, 2)};
+    b.position = {x.x(), x.y(), x.z()};
+    m.bodies.push_back(b);
+    return static_cast<int>(m.bodies.size()) - 1;
+  };
+  f.frame = add("bar", d.mass, d.inertia, Eigen::Vector3d::Zero());
+  for (std::size_t k = 0; k < d.node_id.size(); ++k)
+    f.nodes.push_back(add("bar@" + std::to_string(d.node_id[k]), d.mass / 4, d.inertia / 4, d.node_position[k]));
+  m.flexible.push_back(std::move(f));
+  return m;
+}
+
+}  // namespace mbsflow::test

@@ -1,0 +1,123 @@
+// Small motions of a model with a flexible body (analysis/linearization.hpp): free, its
+// modes are the reduced part's (six rigid motions, then the free part's elastic
+// frequencies, each with its modal damping) wherever the frame is and however it is
+// turned; held at its interface by stiff bushings, the fixed-interface modes the
+// reduction kept; its frequency response at an interface node, far below the first mode,
+// the full lattice's static deflection (Craig-Bampton is exact for loads at interface
+// nodes), through a node body's motion (body_motion) both ways.
+#include <catch2/catch.hpp>
+#include <Eigen/Geometry>
+#include <cmath>
+#include <numbers>
+
+#include "flexible_part.hpp"
+#include "mbsflow/analysis/frequency_response.hpp"
+#include "mbsflow/analysis/linearization.hpp"
+#include "mbsflow/analysis/modes.hpp"
+#include "mbsflow/graph/multibody_system.hpp"
+
+using namespace mbsflow;
+using test::bar_part;
+using test::flexible_model;
+
+namespace {
+
+// Each of the first `count` nodes of the flexible body held to the ground by a bushing of
+// translational stiffness k (the lattice's nodes have no rotation).
+void hold_nodes(Model& m, int count, double k) {
+  const FlexibleBody& f = m.flexible.front();
+  for (int i = 0; i < count; ++i) {
+    Joint j;
+    j.name = "hold" + std::to_string(i);
+    j.type = JointType::bushing;
+    j.body1 = ground;
+    j.body2 = f.nodes[static_cast<std::size_t>(i)];
+    j.point1 = m.bodies[static_cast<std::size_t>(j.body2)].position;
+    j.stiffness = {k, k, k, 0.0, 0.0, 0.0};
+    m.joints.push_back(j);
+  }
+}
+
+}  // namespace
+
+TEST_CASE("flexible body, free: its modes are the free part's, with their modal damping, however the frame lies",
+          "[analysis][flexible][modes]") {
+  const ReducedPart part = bar_part(6);
+  const FloatingFrameData& d = part.floating;
+  const int ne = d.modes();
+  Model m = flexible_model(part);
+  const double zeta = 0.02;
+  m.flexible.front().damping = 2.0 * zeta * d.omega2.cwiseSqrt();
+  const Eigen::Quaterniond turned(Eigen::AngleAxisd(0.7, Eigen::Vector3d(1.0, -2.0, 0.5).normalized()));
+  m.bodies[0].orientation = {turned.w(), turned.x(), turned.y(), turned.z()};
+  m.bodies[0].position = {0.3, -1.0, 2.0};
+  MultibodySystem sys(m);
+  const LinearModel lm = linearize(sys, 0.0, sys.initial_state());
+  REQUIRE(lm.size() == 6 + ne);
+  REQUIRE(lm.coords.bodies == std::vector<int>{0});  // the nodes follow the frame and the modes
+  ModeOptions o;
+  o.count = 6 + ne;
+  const Modes modes = compute_modes(lm, o);
+  REQUIRE(modes.frequency.size() == static_cast<std::size_t>(6 + ne));
+  for (int i = 0; i < 6; ++i) CHECK(modes.rigid_body[static_cast<std::size_t>(i)]);
+  for (int k = 0; k < ne; ++k) {
+    const auto j = static_cast<std::size_t>(6 + k);
+    CHECK_FALSE(modes.rigid_body[j]);
+    CHECK(modes.frequency[j] == Approx(std::sqrt(d.omega2[k]) / (2 * std::numbers::pi)).epsilon(1e-7));
+    CHECK(modes.damping_ratio[j] == Approx(zeta).epsilon(1e-6));
+    CHECK(modes.residual[j] < 1e-8);
+  }
+}
+
+TEST_CASE("flexible body held at its interface by stiff bushings: its modes are the fixed-interface ones kept",
+          "[analysis][flexible][modes]") {
+  const ReducedPart part = bar_part(6);
+  Model m = flexible_model(part);
+  // The lattice's springs are about 2e6 N/m: a bushing's compliance changes the result by
+  // about 2e6 / k, the Jacobian's central differences (of forces k h at positions of about
+  // 1 m, rounded to 1e-16 m) by about k 1e-16 / h: some 1e-5 at k = 1e11 either way.
+  hold_nodes(m, 4, 1e11);
+  MultibodySystem sys(m);
+  const LinearModel lm = linearize(sys, 0.0, sys.initial_state());
+  ModeOptions o;
+  o.count = 6;
+  o.damped = false;
+  const Modes modes = compute_modes(lm, o);
+  REQUIRE(modes.frequency.size() == 6);
+  for (std::size_t k = 0; k < 6; ++k) {
+    CHECK_FALSE(modes.rigid_body[k]);
+    CHECK(modes.frequency[k] == Approx(part.fixed_frequency[static_cast<Eigen::Index>(k)]).epsilon(3e-5));
+  }
+}
+
+TEST_CASE("flexible body: the response at an interface node far below its modes is the lattice's static deflection",
+          "[analysis][flexible][modes]") {
+  // Reduced at the end x = 0 (held) and the far corner, node 24, where the force acts.
+  const ReducedPart part = bar_part(6, {1, 2, 3, 4, 24});
+  Model m = flexible_model(part);
+  hold_nodes(m, 4, 1e11);  // as above: 1e-5 of the compliance
+  MultibodySystem sys(m);
+  const LinearModel lm = linearize(sys, 0.0, sys.initial_state());
+  // The full lattice held at nodes 1-4 (its first 12 DOFs) under a unit force at node 24.
+  const test::SpringLattice lattice = test::bar_lattice();
+  const Eigen::Index dofs = lattice.fe.stiffness.rows() - 12;
+  const Eigen::LDLT<Eigen::MatrixXd> held(Eigen::MatrixXd(lattice.fe.stiffness).bottomRightCorner(dofs, dofs));
+  const Eigen::Index node24 = 3 * 23 - 12;
+  const Eigen::VectorXd under_fz = held.solve(Eigen::VectorXd::Unit(dofs, node24 + 2));
+  const Eigen::VectorXd under_fx = held.solve(Eigen::VectorXd::Unit(dofs, node24));
+  const std::vector<Channel> in{parse_channel(m, "bar@24:fz", true), parse_channel(m, "bar@24:fx", true)};
+  const std::vector<Channel> out{parse_channel(m, "bar@24:z", false), parse_channel(m, "bar@24:x", false)};
+  const FrequencyResponse r = frequency_response(lm, in, out, {1e-3});
+  const Eigen::MatrixXcd& h = r.h.front();
+  CHECK(h(0, 0).real() == Approx(under_fz[node24 + 2]).epsilon(3e-5));
+  CHECK(h(1, 0).real() == Approx(under_fz[node24]).epsilon(3e-5));
+  CHECK(h(0, 1).real() == Approx(under_fx[node24 + 2]).epsilon(3e-5));
+  CHECK(h(1, 1).real() == Approx(under_fx[node24]).epsilon(3e-5));
+  CHECK(std::abs(h(0, 0).imag()) < 1e-12 * std::abs(h(0, 0)));
+  // The state-space model's static gain D - C A^-1 B is the same compliance.
+  const StateSpace s = state_space(lm, in, out);
+  const Eigen::MatrixXd a = Eigen::MatrixXd(s.A);
+  const Eigen::MatrixXd gain = Eigen::MatrixXd(s.D) - Eigen::MatrixXd(s.C) * a.partialPivLu().solve(Eigen::MatrixXd(s.B));
+  CHECK(gain(0, 0) == Approx(under_fz[node24 + 2]).epsilon(3e-5));
+  CHECK(gain(1, 1) == Approx(under_fx[node24]).epsilon(3e-5));
+}
