@@ -46,6 +46,7 @@ FloatingFrameData floating_frame(const FeMatrices& fe, const std::vector<Eigen::
   const auto [phi, lambda] = elastic_modes(part, rigid);
   const Eigen::Index ne = phi.cols();
   d.omega2 = lambda;
+  d.reduced_modes = phi;
   const Eigen::MatrixXd u = part.shapes * phi;  // the FE DOFs per elastic mode
   const Eigen::MatrixXd m_rigid = fe.mass * rigid_fe, m_u = fe.mass * u;
   d.mass0.resize(6 + ne, 6 + ne);

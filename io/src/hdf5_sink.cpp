@@ -257,6 +257,7 @@ struct Hdf5Sink::File {
   std::vector<std::pair<std::size_t, Series>> bodies;  // (index into body_fields, series)
   std::optional<Series> energy, body_energy, joint_force, motor_effort, attachment;
   std::optional<Series> section_force;  // the beams' elements, with the joint forces
+  std::optional<Series> modal;          // the flexible bodies' modal coordinates
   std::vector<int> element_joints;      // per beam element (beams in order), its bushing
   hsize_t rows_per_chunk = 1;
   std::vector<double> times;  // every time written, for the XDMF sidecar
@@ -308,6 +309,8 @@ void Hdf5Sink::lay_out(File& f, const MultibodySystem& system, bool make) {
     for (int e = 0; e < b.elements; ++e) f.element_joints.push_back(b.first_joint + e);
   if (f.joint_force && !f.element_joints.empty())
     f.section_force = series(beam_section_force_dataset, {f.element_joints.size(), 6}, rows, beam_section_force_unit);
+  if (fields_.body[0] && !m.flexible.empty())
+    f.modal = series(modal_coordinates_dataset, {static_cast<hsize_t>(system.layout().extra / 2)}, 1024, modal_coordinates_unit);
 }
 
 // The file under its .part name, locked, with the model's text and the run's settings
@@ -381,6 +384,17 @@ void Hdf5Sink::lay_out_and_publish(std::unique_ptr<File> f, const MultibodySyste
     const h5::Handle group(H5Gopen2(f->file.get(), "/joints", H5P_DEFAULT), H5Gclose, "open /joints");
     h5::write_names(group.get(), "names", names);
   }
+  if (f->modal) {
+    names.clear();
+    std::vector<int> modes;
+    for (const FlexibleBody& b : m.flexible) {
+      names.push_back(b.name);
+      modes.push_back(b.data->modes());
+    }
+    const h5::Handle group(H5Gopen2(f->file.get(), "/flexible", H5P_DEFAULT), H5Gclose, "open /flexible");
+    h5::write_names(group.get(), "names", names);
+    h5::write_array(group.get(), "modes", H5T_NATIVE_INT, modes, {modes.size()});
+  }
   const hid_t root = f->file.get();
   identity_ = id_text(random_id());
   h5::write_string_attribute(root, "run_id", identity_);
@@ -433,6 +447,7 @@ void Hdf5Sink::resume(const MultibodySystem& system, long snapshots, const std::
   if (f->attachment) truncate(*f->attachment, kept);
   if (f->section_force) truncate(*f->section_force, kept);
   if (f->body_energy) truncate(*f->body_energy, kept);
+  if (f->modal) truncate(*f->modal, kept);
   f->times = read_rows(f->time, kept);
   h5::check(H5Fflush(f->file.get(), H5F_SCOPE_GLOBAL), "flush " + path_);
   h5::check(H5Fstart_swmr_write(f->file.get()), "let readers in while the run writes " + path_);
@@ -494,6 +509,11 @@ void Hdf5Sink::write(Snapshot&& s) {
     put(*f.section_force, [&](hsize_t first, hsize_t last, std::vector<double>& out) {
       append_section_forces(m, l, s.state, s.joint_wrench, f.element_joints, first, last, out);
     });
+  if (f.modal)  // each flexible body's eta, the first half of its part of the state's tail
+    for (const FlexibleBody& b : m.flexible) {
+      const Eigen::Index eta = system_->flexible_state(static_cast<std::size_t>(&b - m.flexible.data()));
+      f.modal->buffer.insert(f.modal->buffer.end(), s.state.data() + eta, s.state.data() + eta + b.data->modes());
+    }
   if (static_cast<hsize_t>(f.time.buffer.size()) >= f.rows_per_chunk || now_seconds() - last_flush_ >= flush_interval_s)
     flush();
 }
@@ -515,6 +535,7 @@ void Hdf5Sink::flush() {
   if (f.motor_effort) append(*f.motor_effort, first);
   if (f.attachment) append(*f.attachment, first);
   if (f.section_force) append(*f.section_force, first);
+  if (f.modal) append(*f.modal, first);
   h5::check(H5Fflush(f.file.get(), H5F_SCOPE_GLOBAL), "flush " + path_);
   append(f.time, first);  // last: a reader never sees a time without its data
   rows_written_ += rows;
@@ -556,6 +577,13 @@ void Hdf5Sink::end() {
     }
   c.beam_joint = f->element_joints;  // the elements' bushings, in the same order
   c.beam_section_force = f->section_force.has_value();
+  if (f->modal && fields_.body[1]) {  // a flexible body's surface is drawn from its frame's orientation
+    std::size_t first = 0;
+    for (const FlexibleBody& b : system_->model().flexible) {
+      if (b.data->display_position.cols() > 0) c.surfaces.push_back({b.name, b.frame, first, b.data.get()});
+      first += static_cast<std::size_t>(b.data->modes());
+    }
+  }
   const std::vector<double> times = std::move(f->times);
   f.reset();
   const h5::Handle file(H5Fopen(path_.c_str(), H5F_ACC_RDWR, file_access().get()), H5Fclose, "open " + path_ + " again");

@@ -75,6 +75,21 @@ void write_floating(hid_t root, const FloatingFrameData& f) {
   h5::write_units(root, "/floating/node_position", "m, from the centre of mass");
 }
 
+// The drawn surface and its displacement per elastic mode (FloatingFrameData::display_*).
+void read_display(hid_t file, const std::string& path, FloatingFrameData& f) {
+  const auto position = read_all(file, "/display/position", path).first;
+  const auto shape = read_all(file, "/floating/display_shape", path).first;
+  const auto triangle = read_all(file, "/display/triangle", path).first;
+  const auto points = static_cast<Eigen::Index>(position.size() / 3), ne = static_cast<Eigen::Index>(f.modes());
+  if (shape.size() != static_cast<std::size_t>(3 * points * ne) || triangle.size() % 3 != 0)
+    throw InputError(path + ": the display's points and shapes disagree in size");
+  for (double v : triangle)
+    if (v < 0 || v >= static_cast<double>(points)) throw InputError(path + ": a display triangle names a point it does not have");
+  f.display_position = Eigen::Map<const Eigen::Matrix3Xd>(position.data(), 3, points).colwise() - f.centre;
+  f.display_shape = Eigen::Map<const Eigen::MatrixXd>(shape.data(), 3 * points, ne);  // mode k: its 3 d values in order
+  f.display_triangle.assign(triangle.begin(), triangle.end());
+}
+
 void read_floating(hid_t file, const std::string& path, FloatingFrameData& f) {
   const auto omega2 = read_all(file, "/floating/omega_squared", path).first;
   const auto ne = static_cast<Eigen::Index>(omega2.size());
@@ -193,6 +208,19 @@ std::string write_file(const std::string& path, const std::string& h5_name, cons
   h5::write_array(root, "/display/position", H5T_NATIVE_DOUBLE, display_position, {d, 3});
   h5::write_array(root, "/display/triangle", H5T_NATIVE_INT, triangle, {faces.size(), 3});
   h5::write_array(root, "/display/shape", H5T_NATIVE_DOUBLE, shape, {r, d, 3});
+  write_floating(root, part.floating);
+  if (const Eigen::MatrixXd& phi = part.floating.reduced_modes; phi.size() > 0) {
+    // Each elastic mode's displacement of the display points: the floating frame's drawn
+    // deformation in a run's results.
+    const auto ne = static_cast<hsize_t>(phi.cols());
+    std::vector<double> elastic(ne * d * 3, 0.0);
+    for (hsize_t k = 0; k < ne; ++k)
+      for (hsize_t q = 0; q < r; ++q)
+        if (const double w = phi(static_cast<Eigen::Index>(q), static_cast<Eigen::Index>(k)); w != 0.0)
+          for (hsize_t i = 0; i < d * 3; ++i) elastic[k * d * 3 + i] += w * shape[q * d * 3 + i];
+    h5::write_array(root, "/floating/display_shape", H5T_NATIVE_DOUBLE, elastic, {ne, d, 3});
+    h5::write_units(root, "/floating/display_shape", "m per unit modal coordinate (part axes)");
+  }
   h5::write_units(root, "/reduced/mass", "kg, kg m, kg m^2 (by the coordinates' kinds; modal coordinates mass-normalised)");
   h5::write_units(root, "/reduced/stiffness", "N/m, N, N m (by the coordinates' kinds)");
   h5::write_units(root, "/modes/frequency", "Hz");
@@ -202,7 +230,6 @@ std::string write_file(const std::string& path, const std::string& h5_name, cons
   h5::write_units(root, "/nodes/position", "m");
   h5::write_units(root, "/display/shape", "m per unit coordinate");
   h5::write_units(root, "/display/position", "m");
-  write_floating(root, part.floating);
   return write_views(root, h5_name, r, d, faces.size());
 }
 
@@ -270,7 +297,10 @@ ReducedPart read_reduced_part(const std::string& path, ReducedPartInfo* info) {
   p.floating.mass = p.properties.mass;
   p.floating.inertia = p.properties.inertia;
   p.floating.centre = p.properties.centre;
-  if (H5Lexists(file.get(), "/floating", H5P_DEFAULT) > 0) read_floating(file.get(), path, p.floating);
+  if (H5Lexists(file.get(), "/floating", H5P_DEFAULT) > 0) {
+    read_floating(file.get(), path, p.floating);
+    if (H5Lexists(file.get(), "/floating/display_shape", H5P_DEFAULT) > 0) read_display(file.get(), path, p.floating);
+  }
   return p;
 }
 

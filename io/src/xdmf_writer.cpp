@@ -122,6 +122,9 @@ void write_xdmf(hid_t file, const std::string& xdmf_path, const std::string& h5_
   if (lines && c.joint_force) wrench.emplace(file, joint_force_dataset);
   std::optional<Source> section;
   if (segments > 0 && c.beam_section_force) section.emplace(file, beam_section_force_dataset);
+  const std::vector<std::size_t> rows = evenly_spread_rows(times.size(), xdmf_max_steps);
+  const bool surfaces = !c.surfaces.empty() && surfaces_fit(c.surfaces, rows.size());
+  if (surfaces) write_surface_triangles(file, c.surfaces);
 
   std::ofstream o(xdmf_path);
   if (!o) throw Error(xdmf_path + ": cannot write the XDMF sidecar");
@@ -129,7 +132,7 @@ void write_xdmf(hid_t file, const std::string& xdmf_path, const std::string& h5_
     << "  <Grid Name=\"run\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
   char time[32];
   const std::string n3 = dims_text(c.bodies, 3), j3 = dims_text(c.joints, 3);
-  for (const std::size_t t : evenly_spread_rows(times.size(), xdmf_max_steps)) {
+  for (const std::size_t t : rows) {
     const std::string step = group + '/' + std::to_string(t) + '/';
     const h5::Handle views(H5Gcreate2(file, step.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose, "create " + step);
     for (std::size_t i = 0; i < body_sources.size(); ++i) {
@@ -161,6 +164,7 @@ void write_xdmf(hid_t file, const std::string& xdmf_path, const std::string& h5_
     }
     if (c.energy) xdmf_attribute(o, file_name, "energy_kinetic_gravity_elastic", "Vector", "Grid", step + "energy", "1 3");
     o << "    </Grid>\n";
+    if (surfaces) write_surfaces_at(file, views.get(), step, t, c.surfaces, o, file_name);
     if (segments > 0) {  // the beams: segments between node bodies, on the bodies' positions
       o << "    <Grid Name=\"beams\" GridType=\"Uniform\">\n"
         << "     <Topology TopologyType=\"Polyline\" NumberOfElements=\"" << segments << "\" NodesPerElement=\"2\">\n";

@@ -2,8 +2,9 @@
 // XDMF sidecar of a results file, so that ParaView opens a run with either of its XDMF
 // readers: per snapshot, the bodies as points (velocity, angular velocity, orientation,
 // kinetic and gravity energy, body index; the model's energies as values of the grid), the joints as lines between
-// their attachment points (force, torque and joint index per line), and elastic beams as
-// polylines through their nodes (beam and element joint index per segment).
+// their attachment points (force, torque and joint index per line), elastic beams as
+// polylines through their nodes (beam and element joint index per segment), and flexible
+// bodies' surfaces deformed (flexible_surface.hpp).
 //
 // ParaView's default reader (Xdmf3) does not read XDMF hyperslabs (it skips their arrays
 // and shows 0 points), so the sidecar does not select rows of the T x N x k series itself:
@@ -18,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "flexible_surface.hpp"
 #include "hdf5_handle.hpp"
 #include "mbsflow/io/result_fields.hpp"
 
@@ -45,6 +47,9 @@ struct XdmfContent {
   // per element its two node bodies, its beam and its bushing (joint index).
   std::vector<int> beam_lines, beam_index, beam_joint;
   bool beam_section_force = false;  // /beams/section_force: cell data of the centrelines
+  // Flexible bodies with a drawn surface (flexible_surface.hpp), with the orientations and
+  // modal coordinates written.
+  std::vector<FlexibleSurface> surfaces;
 };
 
 // A series that views show rows of: its name and space, read once; and, where the whole

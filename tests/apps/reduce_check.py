@@ -252,19 +252,49 @@ def check_flexible_example(mbsflow, work):
             fail(f"bar_pendulum: the centre fell {fall} m in {t} s, the rigid bar {0.5 * alpha * t * t * d} m")
         if np.abs(position[-1, 1] - position[0, 1]).max() > 1e-4:
             fail(f"bar_pendulum: the pivot node moved from {position[0, 1]} to {position[-1, 1]}")
+        # The deformed surface the XDMF sidecar draws: at the start the part's display points
+        # where the deck has them (placed at the origin, unturned); at the end the end face's
+        # points, tied rigidly to node 190, where bar@190's position and orientation put them.
+        last = len(out["time"]) - 1
+        display = part["display/position"][:]
+        if not np.allclose(out["xdmf/0/surface0"][:], display, rtol=0, atol=1e-12):
+            fail("bar_pendulum: the surface at t = 0 is not the part's display points")
+        face = np.abs(display[:, 0]) < 1e-12
+        q = out["bodies/orientation"][last, 1]
+        w, x, y, z = q / np.linalg.norm(q)
+        turn = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                         [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                         [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+        master = c + part["floating/node_position"][0]
+        tied = out["bodies/position"][last, 1] + (display[face] - master) @ turn.T
+        drawn = out[f"xdmf/{last}/surface0"][:][face]
+        if np.abs(drawn - tied).max() > 1e-9:
+            fail(f"bar_pendulum: the end face is drawn {np.abs(drawn - tied).max()} m off where node 190 puts it")
         # The model as the results file keeps it names the flexible body as its item (not its
         # expanded bodies), and runs again from anywhere (the part's path made absolute).
         saved = out["model"][()]
         saved = json.loads(saved.decode() if isinstance(saved, bytes) else saved)
         if [b.get("type") for b in saved["bodies"]] != ["flexible"] or not os.path.isabs(saved["bodies"][0]["file"]):
             fail(f"bar_pendulum: the results' model has bodies {saved['bodies']}")
+    # A checkpoint of the run, resumed: the results end bit for bit as the run's, the modal
+    # coordinates included.
+    for command in (["run", "bar_pendulum.json", "--t-end", "0.05", "-o", "resumed.h5", "-q", "--checkpoint-every", "1e-9"],
+                    ["run", "--resume", "resumed.h5.ckpt", "-q"]):
+        r = subprocess.run([mbsflow] + command, cwd=flex, capture_output=True, text=True)
+        if r.returncode != 0:
+            fail(f"mbsflow {' '.join(command)}: {r.stderr}")
+    with h5py.File(os.path.join(flex, "bar_pendulum.h5"), "r") as a, h5py.File(os.path.join(flex, "resumed.h5"), "r") as b:
+        for d in ("time", "bodies/position", "bodies/orientation", "flexible/modal_coordinates"):
+            if not np.array_equal(a[d][:], b[d][:]):
+                fail(f"bar_pendulum: {d} of the run resumed from its checkpoint differs from the run's")
     again = os.path.join(work, "bar_pendulum_again.json")
     with open(again, "w") as f:
         json.dump(saved, f)
     r = subprocess.run([mbsflow, "run", again, "--t-end", "0.01", "-o", again + ".h5", "-q"], capture_output=True, text=True)
     if r.returncode != 0:
         fail(f"bar_pendulum: the results' model does not run again: {r.stderr}")
-    print(f"reduce_check: the flexible bar pendulum falls as the rigid bar does ({fall:.6g} m in {t} s)")
+    print(f"reduce_check: the flexible bar pendulum falls as the rigid bar does ({fall:.6g} m in {t} s), its surface "
+          f"drawn with its end face on node 190")
 
 
 if __name__ == "__main__":

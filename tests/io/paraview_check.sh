@@ -73,4 +73,10 @@ ccx part_bar > part_bar.ccx.log 2>&1 || { cat part_bar.ccx.log >&2; echo "paravi
 pvpython "$source/tests/io/paraview_part.py" "$work/part_bar.xdmf" "$work/part_bar.png" > part.log 2>&1 ||
   { cat part.log >&2; echo "paraview_check: ParaView failed on the reduced part" >&2; exit 1; }
 grep -v -e "^$" -e "Skipping" part.log
-echo "paraview_check: $((${#runs[@]} + 2)) runs read by both ParaView readers, a modes file and a reduced part by the default one"
+# That part as a flexible body: the pendulum of examples/fe, its deformed surface per step.
+mkdir -p flexible && cp part_bar.h5 flexible/bar.h5 && cp "$source/examples/fe/bar_pendulum.json" flexible/
+"$mbsflow" run flexible/bar_pendulum.json --t-end 0.02 -o flexible.h5 2>/dev/null
+pvpython "$source/tests/io/paraview_xdmf.py" "$work/flexible.xdmf" "$work/flexible.png" > flexible.log 2>&1 ||
+  { cat flexible.log >&2; echo "paraview_check: ParaView failed on the flexible body's run" >&2; exit 1; }
+grep -v -e "^$" -e "Skipping" flexible.log
+echo "paraview_check: $((${#runs[@]} + 3)) runs read by both ParaView readers, a modes file and a reduced part by the default one"

@@ -42,11 +42,23 @@ def check_reader(label, reader, h5):
         fail(f"{label}: time steps {list(reader.TimestepValues)} are not /time")
     joints = h5["joints/attachment"].shape[1] if "joints/attachment" in h5 else 0
     segments = h5["xdmf/beam_lines"][:] if "xdmf/beam_lines" in h5 else None
+    surfaces = []
+    while f"xdmf/surface{len(surfaces)}_triangles" in h5:
+        surfaces.append(h5[f"xdmf/surface{len(surfaces)}_triangles"][:])
     for t, time in enumerate(times):
         reader.UpdatePipeline(time)
         parts = blocks(sm.Fetch(reader))
-        if len(parts) != 1 + (segments is not None) + (joints > 0):
+        if len(parts) != 1 + len(surfaces) + (segments is not None) + (joints > 0):
             fail(f"{label}: {len(parts)} blocks at t = {time}")
+        for k, triangles in enumerate(surfaces):  # flexible bodies' deformed surfaces, after the bodies
+            surface = parts[1 + k]
+            if surface.GetNumberOfCells() != len(triangles):
+                fail(f"{label}: flexible body {k}: {surface.GetNumberOfCells()} cells, {len(triangles)} triangles")
+            if not np.array_equal(vtk_to_numpy(surface.GetPoints().GetData()), h5[f"xdmf/{t}/surface{k}"][:]):
+                fail(f"{label}: flexible body {k}'s surface at t = {time} differs from the file")
+            if not np.array_equal(array(surface.GetPointData(), "elastic_displacement"), h5[f"xdmf/{t}/elastic{k}"][:]):
+                fail(f"{label}: flexible body {k}'s elastic displacement at t = {time} differs from the file")
+        parts = [parts[0]] + parts[1 + len(surfaces):]
         if segments is not None:  # the beams' centrelines: segments between their node bodies
             beams = parts[1]
             if beams.GetNumberOfCells() != len(segments):

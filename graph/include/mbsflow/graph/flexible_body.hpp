@@ -44,6 +44,15 @@ struct FloatingFrameData {
   std::vector<long> node_id;
   std::vector<Eigen::Vector3d> node_position;
   std::vector<Eigen::MatrixXd> node_shape;
+  // The elastic modes in the reduced coordinates (R x ne), where the reduction made them.
+  Eigen::MatrixXd reduced_modes;
+  // The part's drawn surface (mbsflow reduce's /display), for the results' deformed shape:
+  // its points (from the centre, part axes), their displacement per modal coordinate
+  // (3 d x ne, point by point), its triangles (3 point indices each). Empty where the
+  // part file has none.
+  Eigen::Matrix3Xd display_position;
+  Eigen::MatrixXd display_shape;
+  std::vector<int> display_triangle;
   int modes() const { return static_cast<int>(omega2.size()); }
 };
 

@@ -38,6 +38,11 @@ inline constexpr const char* motor_effort_dataset = "/joints/motor_effort";
 // T x J x 6: each joint's two attachment points in the world (x1 y1 z1 x2 y2 z2), written
 // with the positions when the model has joints: the joints as lines in ParaView and the viewer.
 inline constexpr const char* joint_attachment_dataset = "/joints/attachment";
+// T x E: the flexible bodies' modal coordinates (docs/flexible.md), body after body in the
+// model's order; /flexible/names and /flexible/modes say whose and how many. Written with
+// the positions when the model has flexible bodies.
+inline constexpr const char* modal_coordinates_dataset = "/flexible/modal_coordinates";
+inline constexpr const char* modal_coordinates_unit = "m kg^0.5 (mass-normalised modes)";
 // T x E x 6: each beam element's section forces at its midpoint in the element's frame
 // (axial, shear y, shear z, torsion, bending y, bending z), beams in the model's order;
 // written with joint_force when the model has beams.
