@@ -52,6 +52,7 @@ Eigen::Vector3d ellipsoid(const Body& b, double fallback) {
 struct Motion {
   std::size_t bodies = 0, joints = 0;
   std::vector<double> times;
+  std::vector<std::size_t> rows;  // of a run's results: the snapshot of each frame
   std::vector<float> position, quaternion, attachment, speed, angular_speed, kinetic;
   bool orientation = false;
 };
@@ -78,6 +79,7 @@ Motion run_motion(const ResultsFile& r, const ViewerSettings& s, ViewerPage& pag
   const std::vector<std::size_t> picked = evenly_spread_rows(rows, most);
   page.frames = static_cast<long>(picked.size());
   page.stride = picked.size() > 1 ? static_cast<long>(picked[1] - picked[0]) : 1;
+  m.rows = picked;
   for (std::size_t k : picked) {
     m.times.push_back(t[k]);
     append(m.position, r.read_row("/bodies/position", k));
@@ -156,6 +158,48 @@ nlohmann::json beam_tubes(const ResultsFile& r, const Model& model, double scale
   return beams;
 }
 
+// The flexible bodies' surfaces (FloatingFrameData::display_*) at each frame of a run, in
+// the world: at the frame body's place, deformed by the modal coordinates. Left out where
+// the part has no surface, the results no modal coordinates or orientations, or the points
+// would pass the page's data budget.
+struct Surface {
+  const FlexibleBody* body = nullptr;
+  std::vector<float> points;  // frames x points x 3
+};
+
+std::vector<Surface> flexible_surfaces(const ResultsFile& r, const Model& model, const Motion& m, const ViewerSettings& s) {
+  std::vector<Surface> out;
+  if (model.flexible.empty() || m.rows.empty() || !m.orientation || !r.has(modal_coordinates_dataset)) return out;
+  double bytes = 0.0;
+  for (const FlexibleBody& f : model.flexible) bytes += 12.0 * static_cast<double>(f.data->display_position.cols() * m.rows.size());
+  if (bytes > s.max_megabytes * 1e6) return out;
+  std::vector<std::vector<double>> eta;  // per frame, every flexible body's
+  for (std::size_t k : m.rows) eta.push_back(r.read_row(modal_coordinates_dataset, k));
+  std::size_t first = 0;
+  for (const FlexibleBody& f : model.flexible) {
+    const FloatingFrameData& d = *f.data;
+    const Eigen::Index ne = d.modes(), points = d.display_position.cols();
+    if (points > 0) {
+      std::vector<float> at;
+      at.reserve(static_cast<std::size_t>(3 * points) * m.rows.size());
+      for (std::size_t k = 0; k < m.rows.size(); ++k) {
+        const std::size_t body = k * m.bodies + static_cast<std::size_t>(f.frame);
+        const float* q = &m.quaternion[4 * body];
+        const Eigen::Matrix3d turn = Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized().toRotationMatrix();
+        const Eigen::Vector3d origin(m.position[3 * body], m.position[3 * body + 1], m.position[3 * body + 2]);
+        const Eigen::VectorXd u = d.display_shape * Eigen::Map<const Eigen::VectorXd>(eta[k].data() + first, ne);
+        for (Eigen::Index j = 0; j < points; ++j) {
+          const Eigen::Vector3d x = origin + turn * (d.display_position.col(j) + u.segment<3>(3 * j));
+          at.insert(at.end(), {static_cast<float>(x.x()), static_cast<float>(x.y()), static_cast<float>(x.z())});
+        }
+      }
+      out.push_back({&f, std::move(at)});
+    }
+    first += static_cast<std::size_t>(ne);
+  }
+  return out;
+}
+
 }  // namespace
 
 ViewerPage viewer_page(const ResultsFile& r, const ViewerSettings& s) {
@@ -168,10 +212,13 @@ ViewerPage viewer_page(const ResultsFile& r, const ViewerSettings& s) {
   const Model model = read_model_text(r.model_text().value_or(""), r.path() + " (its model)");
   if (model.bodies.size() != n) throw InputError(r.path() + ": its model has another number of bodies than its results");
 
-  // The extent of the motion: every body and joint point over the frames shown (a single
-  // pendulum bob sweeps its circle; its pivot is a joint point).
+  const std::vector<Surface> surfaces = flexible_surfaces(r, model, motion, s);
+  // The extent of the motion: every body, joint and surface point over the frames shown (a
+  // single pendulum bob sweeps its circle; its pivot is a joint point).
   Eigen::Vector3f lo = Eigen::Vector3f::Constant(INFINITY), hi = -lo;
-  for (const std::vector<float>* points : {&position, &attachment})
+  std::vector<const std::vector<float>*> all_points{&position, &attachment};
+  for (const Surface& surface : surfaces) all_points.push_back(&surface.points);
+  for (const std::vector<float>* points : all_points)
     for (std::size_t k = 0; k + 2 < points->size(); k += 3) {
       const Eigen::Vector3f x((*points)[k], (*points)[k + 1], (*points)[k + 2]);
       lo = lo.cwiseMin(x);
@@ -188,6 +235,15 @@ ViewerPage viewer_page(const ResultsFile& r, const ViewerSettings& s) {
   const nlohmann::json beams = beam_tubes(r, model, scale);
   for (const nlohmann::json& beam : beams)
     for (int node : beam["nodes"]) std::fill_n(size.begin() + 3 * node, 3, static_cast<float>(1.3 * beam["radius"].get<double>()));
+  // A flexible body drawn as its surface: its frame and node bodies are small beads on it
+  // (their masses are the part's, not their shapes).
+  nlohmann::json surface_data = nlohmann::json::array();
+  for (const Surface& surface : surfaces) {
+    const FlexibleBody& f = *surface.body;
+    for (int b : f.nodes) std::fill_n(size.begin() + 3 * b, 3, static_cast<float>(0.01 * scale));
+    std::fill_n(size.begin() + 3 * f.frame, 3, static_cast<float>(0.01 * scale));
+    surface_data.push_back({{"name", f.name}, {"triangles", f.data->display_triangle}, {"points", base64(surface.points)}});
+  }
   // The bodies of each joint's two ends (-1: ground), for the links drawn from a body's
   // centre to its joint points.
   std::vector<int> joint_bodies;
@@ -208,6 +264,7 @@ ViewerPage viewer_page(const ResultsFile& r, const ViewerSettings& s) {
   data["size"] = base64(size);
   data["joint_bodies"] = joint_bodies;
   data["beams"] = beams;
+  data["surfaces"] = surface_data;
   data["up"] = {up.x(), up.y(), up.z()};
   data["extent"] = scale;
   data["quantities"] = nlohmann::json::object();

@@ -10,6 +10,7 @@ usage: viewer_check.py MBSFLOW WORK_DIR
 """
 import math
 import os
+import shutil
 import subprocess
 import sys
 
@@ -107,6 +108,23 @@ def check_tubes(driver, h5):
     print(f"viewer_check: {len(tubes)} beam(s) drawn as tubes through their nodes at 3 frames of {frames}")
 
 
+def check_surface(driver, h5):
+    """A flexible body's surface is drawn deformed: at every frame checked, its points are
+    the XDMF sidecar's for that snapshot (to float precision)."""
+    frames = driver.execute_script("return window.viewer.frames")
+    if frames != len(h5["time"]):
+        fail(f"the flexible run shows {frames} frames of {len(h5['time'])} snapshots")
+    for k in (0, frames // 2, frames - 1):
+        driver.execute_script(f"window.viewer.seek({k})")
+        surfaces = driver.execute_script("return window.viewer.surfaces()")
+        if len(surfaces) != 1:
+            fail(f"frame {k}: {len(surfaces)} surfaces for one flexible body")
+        drawn, written = np.array(surfaces[0]).reshape(-1, 3), h5[f"xdmf/{k}/surface0"][:]
+        if drawn.shape != written.shape or np.abs(drawn - written).max() > 1e-6 * np.abs(written).max():
+            fail(f"frame {k}: the flexible body's surface is not where the XDMF sidecar draws it")
+    print(f"viewer_check: a flexible body's surface drawn deformed as ParaView draws it at 3 frames of {frames}")
+
+
 def mode_positions(h5, mode, frames):
     """The bodies of mode `mode` at frames 0..frames-1 of a period, from the modes file's
     shapes: the equilibrium moved by a Re(shape e^(i phase)), the largest body translation
@@ -133,6 +151,14 @@ def main():
     boom = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "examples", "models", "flexible_boom.json")
     run(mbsflow, work, "run", boom, "--t-end", "2", "--output-interval", "0.1", "-o", "boom.h5")
     run(mbsflow, work, "view", "boom.h5", "-o", "boom.html")
+    # A reduced FE bar as a flexible body (ccx writes its matrices): the pendulum of examples/fe.
+    fe = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "examples", "fe")
+    shutil.copy(os.path.join(fe, "bar.inp"), work)
+    shutil.copy(os.path.join(fe, "bar_pendulum.json"), work)
+    subprocess.run(["ccx", "bar"], cwd=work, check=True, stdout=subprocess.DEVNULL)
+    run(mbsflow, work, "reduce", "bar.inp", "--rigid-face", "END0", "--modes", "10", "-o", "bar.h5")
+    run(mbsflow, work, "run", "bar_pendulum.json", "--t-end", "0.05", "--output-interval", "0.005", "-o", "pendulum.h5")
+    run(mbsflow, work, "view", "pendulum.h5", "-o", "pendulum.html")
     run(mbsflow, work, "generate", "grid", "--rows", "100", "--cols", "100", "-o", "grid.json")
     run(mbsflow, work, "run", "grid.json", "--t-end", "0.02", "--output-interval", "0.002", "-o", "grid.h5")
     run(mbsflow, work, "view", "grid.h5", "-o", "grid.html")
@@ -147,6 +173,9 @@ def main():
         open_page(driver, os.path.join(work, "boom.html"))
         with h5py.File(os.path.join(work, "boom.h5"), "r") as h5:
             check_tubes(driver, h5)
+        open_page(driver, os.path.join(work, "pendulum.html"))
+        with h5py.File(os.path.join(work, "pendulum.h5"), "r") as h5:
+            check_surface(driver, h5)
         open_page(driver, os.path.join(work, "modes.html"))
         with h5py.File(os.path.join(work, "modes.h5"), "r") as h5:
             check_positions(driver, mode_positions(h5, 2, 48), work, (12, 36))  # a quarter and three quarters of a period
