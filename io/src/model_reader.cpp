@@ -294,7 +294,8 @@ class Reader {
   // A reduced FE part on a floating frame (flexible_body.hpp): its frame body, then a body
   // per interface node, "NAME@ID".
   void flexible(const JsonNode& n) {
-    n.allow_only({"name", "type", "file", "position", "orientation", "velocity", "angular_velocity", "damping"});
+    n.allow_only({"name", "type", "file", "position", "orientation", "velocity", "angular_velocity", "damping",
+                  "modal_coordinates", "modal_rates"});
     FlexibleBody f;
     const JsonNode name = n["name"];
     f.name = name.string();
@@ -355,6 +356,18 @@ class Reader {
       for (int k = 0; k < ne; ++k) f.damping[k] = 2.0 * ratio * std::sqrt(d.omega2[k]) + alpha + beta * d.omega2[k];
       item["damping"] = {{"ratio", ratio}, {"alpha", alpha}, {"beta", beta}};
     }
+    // The initial deformation and its rate, by modal coordinate (the first ones given, the
+    // rest zero).
+    for (const char* key : {"modal_coordinates", "modal_rates"})
+      if (auto given = n.find(key)) {
+        const std::vector<double> values = given->numbers();
+        if (values.size() > static_cast<std::size_t>(ne))
+          given->fail("has " + std::to_string(values.size()) + " values; the part has " + std::to_string(ne) + " modes");
+        Eigen::VectorXd& to = key[6] == 'c' ? f.initial_eta : f.initial_eta_rate;
+        to = Eigen::VectorXd::Zero(ne);
+        std::copy(values.begin(), values.end(), to.data());
+        item[key] = values;
+      }
     f.source = item.dump();
     m_.flexible.push_back(std::move(f));
   }

@@ -15,6 +15,7 @@ _DATASETS = {
     "joint_wrench": "/joints/force",                 # T x J x 6: force (N), torque (N m), world frame
     "motor_effort": "/joints/motor_effort",          # T x J x 1
     "attachment": "/joints/attachment",              # T x J x 6: the two attachment points, m
+    "modal_coordinates": "/flexible/modal_coordinates",  # T x E: flexible bodies' modes, m kg^0.5
 }
 
 
@@ -22,7 +23,8 @@ class Results:
     """A run's results. Arrays are read when first asked for and kept; `refresh()` reads a
     live file again. Attributes: t, body_names, joint_names, position, orientation,
     velocity, angular_velocity, body_energy, energy, joint_force, joint_torque,
-    motor_effort, attachment; an ODE run's: t, y (points x kept components)."""
+    motor_effort, attachment, modal_coordinates (flexible bodies); an ODE run's: t, y
+    (points x kept components)."""
 
     def __init__(self, file=None, arrays=None, summary=None):
         self._file = file

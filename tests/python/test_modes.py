@@ -98,3 +98,21 @@ def test_modes_of_a_flexible_body_reduced_from_matrix_market_files(tmp_path):
     assert np.abs(m.shape[6, 1:, :3]).max() > 0.1 * np.abs(m.shape[6, 0, :3]).max()
     lm = mbsflow.linearize(model, at="initial")
     assert lm.bodies == [0] and lm.start == [0, 6 + 12 + 4 - 6]
+    # Run from Python, set vibrating in its first elastic mode: its modal coordinates in the
+    # results, the frame's centre still (the modes do not move it), the first mode's
+    # coordinate back where it began after one period.
+    model = mbsflow.Model.from_dict({"name": "lattice", "gravity": [0, 0, 0], "joints": [],
+                                     "bodies": [{"name": "part", "type": "flexible", "file": str(tmp_path / "part.h5"),
+                                                 "modal_coordinates": [1e-4]}]})
+    period = 1 / m.frequency[6]
+    r = mbsflow.run(model, t_end=period, method="rk4", step=period / 2000, output_every=2000)
+    eta = r.read("/flexible/modal_coordinates")
+    assert eta.shape == (2, 10) and math.isclose(eta[-1, 0], 1e-4, rel_tol=1e-6)
+    centre = r.read("/bodies/position")[:, 0]
+    assert np.abs(centre - centre[0]).max() < 1e-12
+    too_many = {"name": "part", "type": "flexible", "file": str(tmp_path / "part.h5"), "modal_rates": [0.0] * 11}
+    try:
+        mbsflow.Model.from_dict({"name": "lattice", "bodies": [too_many]})
+        assert False, "11 modal rates for 10 modes were taken"
+    except mbsflow.InputError as e:
+        assert "modal_rates: has 11 values; the part has 10 modes" in str(e)
