@@ -187,11 +187,9 @@ std::vector<Surface> flexible_surfaces(const ResultsFile& r, const Model& model,
         const float* q = &m.quaternion[4 * body];
         const Eigen::Matrix3d turn = Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized().toRotationMatrix();
         const Eigen::Vector3d origin(m.position[3 * body], m.position[3 * body + 1], m.position[3 * body + 2]);
-        const Eigen::VectorXd u = d.display_shape * Eigen::Map<const Eigen::VectorXd>(eta[k].data() + first, ne);
-        for (Eigen::Index j = 0; j < points; ++j) {
-          const Eigen::Vector3d x = origin + turn * (d.display_position.col(j) + u.segment<3>(3 * j));
-          at.insert(at.end(), {static_cast<float>(x.x()), static_cast<float>(x.y()), static_cast<float>(x.z())});
-        }
+        const Eigen::Matrix3Xf x =
+            flexible_surface_points(d, origin, turn, Eigen::Map<const Eigen::VectorXd>(eta[k].data() + first, ne)).cast<float>();
+        at.insert(at.end(), x.data(), x.data() + x.size());
       }
       out.push_back({&f, std::move(at)});
     }

@@ -142,7 +142,7 @@ StateSpace state_space(const LinearModel& m, const std::vector<Channel>& inputs,
     // M is block diagonal (a block per free body): inverted block by block, kept sparse.
     std::vector<Eigen::Triplet<double>> e;
     for (std::size_t k = 0; k < m.coords.bodies.size(); ++k) {
-      const Eigen::Index at = m.coords.start[k], size = m.coords.start[k + 1] - at;
+      const Eigen::Index at = m.coords.start[k], size = m.coords.count(k);
       const Eigen::MatrixXd inv = Eigen::MatrixXd(m.M.block(at, at, size, size)).inverse();
       for (Eigen::Index i = 0; i < size; ++i)
         for (Eigen::Index j = 0; j < size; ++j)

@@ -67,7 +67,7 @@ void tangent_maps(const StateLayout& l, const FreeCoordinates& fc, const Eigen::
         b.emplace_back(v + 3 + c, Q + r, omega_g(c, r));
       }
     if (const int f = fc.flexible_of(k); f >= 0) {
-      const Eigen::Index ne = fc.start[k + 1] - fc.start[k] - 6, eta = fc.eta[static_cast<std::size_t>(f)];
+      const Eigen::Index ne = fc.modes(k), eta = fc.eta[static_cast<std::size_t>(f)];
       for (Eigen::Index i = 0; i < ne; ++i) {
         a.emplace_back(eta + i, x + 6 + i, 1.0);
         a.emplace_back(eta + ne + i, v + 6 + i, 1.0);
@@ -92,7 +92,7 @@ Eigen::VectorXd moved(const StateLayout& l, const FreeCoordinates& fc, const Eig
   const int body = fc.bodies[k];
   const auto c = static_cast<int>(local - fc.start[k]);
   if (c >= 6) {  // a modal coordinate, or its rate
-    const Eigen::Index ne = fc.start[k + 1] - fc.start[k] - 6;
+    const Eigen::Index ne = fc.modes(k);
     out[fc.eta[static_cast<std::size_t>(fc.flexible_of(k))] + (rate ? ne : 0) + c - 6] += h;
   } else if (!rate && c < 3) {
     out[l.position(body) + c] += h;
@@ -283,10 +283,7 @@ void set_at_rest(const StateLayout& l, const FreeCoordinates& c, Eigen::VectorXd
   }
   // The modal rates follow the modal coordinates: the tail's second half of each body.
   for (std::size_t k = 0; k < c.bodies.size(); ++k)
-    if (const int f = c.flexible_of(k); f >= 0) {
-      const Eigen::Index ne = c.start[k + 1] - c.start[k] - 6;
-      y.segment(c.eta[static_cast<std::size_t>(f)] + ne, ne).setZero();
-    }
+    if (const int f = c.flexible_of(k); f >= 0) y.segment(c.eta[static_cast<std::size_t>(f)] + c.modes(k), c.modes(k)).setZero();
 }
 
 void apply_tangent_step(const StateLayout& l, const FreeCoordinates& c, const Eigen::VectorXd& dx, Eigen::VectorXd& y) {
@@ -300,10 +297,7 @@ void apply_tangent_step(const StateLayout& l, const FreeCoordinates& c, const Ei
     if (phi.norm() > 0.0) turned = Eigen::Quaterniond(Eigen::AngleAxisd(phi.norm(), phi.normalized())) * turned;
     turned.normalize();
     y.segment<4>(l.orientation(b)) << turned.w(), turned.x(), turned.y(), turned.z();
-    if (const int f = c.flexible_of(k); f >= 0) {
-      const Eigen::Index ne = c.start[k + 1] - i - 6;
-      y.segment(c.eta[static_cast<std::size_t>(f)], ne) += dx.segment(i + 6, ne);
-    }
+    if (const int f = c.flexible_of(k); f >= 0) y.segment(c.eta[static_cast<std::size_t>(f)], c.modes(k)) += dx.segment(i + 6, c.modes(k));
   }
   set_at_rest(l, c, y);
 }

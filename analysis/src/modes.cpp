@@ -232,8 +232,7 @@ Modes compute_modes(const LinearModel& m, const ModeOptions& o) {
     const Eigen::VectorXcd mx = m.M * x, kx = ks * x;
     double kinetic = 0.0, strain = 0.0;
     for (Eigen::Index b = 0; b < bodies; ++b) {
-      const Eigen::Index first = m.coords.start[static_cast<std::size_t>(b)];
-      const Eigen::Index size = m.coords.start[static_cast<std::size_t>(b) + 1] - first;
+      const Eigen::Index first = m.coords.start[static_cast<std::size_t>(b)], size = m.coords.count(static_cast<std::size_t>(b));
       const double e = (x.segment(first, size).adjoint() * mx.segment(first, size))(0).real();
       const double s = (x.segment(first, size).adjoint() * kx.segment(first, size))(0).real();
       out.kinetic_share(b, j) = e;

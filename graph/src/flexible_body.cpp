@@ -83,4 +83,12 @@ NodeMotion flexible_node_motion(const FloatingFrameData& d, int node, const Eige
   return n;
 }
 
+Eigen::Matrix3Xd flexible_surface_points(const FloatingFrameData& d, const Eigen::Vector3d& origin, const Eigen::Matrix3d& r,
+                                         const Eigen::VectorXd& eta, Eigen::Matrix3Xd* elastic) {
+  const Eigen::VectorXd u = d.display_shape * eta;  // part axes, point by point
+  const Eigen::Matrix3Xd moved = r * Eigen::Map<const Eigen::Matrix3Xd>(u.data(), 3, d.display_position.cols());
+  if (elastic) *elastic = moved;
+  return (r * d.display_position + moved).colwise() + origin;
+}
+
 }  // namespace mbsflow

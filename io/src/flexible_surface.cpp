@@ -56,20 +56,13 @@ void write_surfaces_at(hid_t file, hid_t step_group, const std::string& step, hs
     const Eigen::VectorXd q = read_item(file, body_fields[1].dataset, row, frame, 4);
     const Eigen::VectorXd eta = read_item(file, modal_coordinates_dataset, row, s.first, static_cast<hsize_t>(d.modes()));
     const Eigen::Matrix3d r = Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized().toRotationMatrix();
-    const Eigen::VectorXd u = d.display_shape * eta;  // part axes, point by point
-    std::vector<double> at(3 * points), elastic(3 * points);
-    for (std::size_t j = 0; j < points; ++j) {
-      const auto i = static_cast<Eigen::Index>(j);
-      const Eigen::Vector3d moved = r * u.segment<3>(3 * i);
-      const Eigen::Vector3d x = p.head<3>() + r * d.display_position.col(i) + moved;
-      for (int e = 0; e < 3; ++e) {
-        at[3 * j + static_cast<std::size_t>(e)] = x[e];
-        elastic[3 * j + static_cast<std::size_t>(e)] = moved[e];
-      }
-    }
+    Eigen::Matrix3Xd elastic;
+    const Eigen::Matrix3Xd at = flexible_surface_points(d, p.head<3>(), r, eta, &elastic);
     const std::string name = "surface" + std::to_string(k), shift = "elastic" + std::to_string(k);
-    h5::write_array(step_group, name.c_str(), H5T_NATIVE_DOUBLE, at, {points, 3});
-    h5::write_array(step_group, shift.c_str(), H5T_NATIVE_DOUBLE, elastic, {points, 3});
+    // Column-major 3 x d: the points' x y z in turn, as the d x 3 datasets hold them.
+    h5::write_array(step_group, name.c_str(), H5T_NATIVE_DOUBLE, std::vector<double>(at.data(), at.data() + at.size()), {points, 3});
+    h5::write_array(step_group, shift.c_str(), H5T_NATIVE_DOUBLE, std::vector<double>(elastic.data(), elastic.data() + elastic.size()),
+                    {points, 3});
     const std::size_t triangles = d.display_triangle.size() / 3;
     o << "    <Grid Name=\"" << s.name << "\" GridType=\"Uniform\">\n"
       << "     <Topology TopologyType=\"Triangle\" NumberOfElements=\"" << triangles << "\" NodesPerElement=\"3\">\n";

@@ -510,9 +510,9 @@ void Hdf5Sink::write(Snapshot&& s) {
       append_section_forces(m, l, s.state, s.joint_wrench, f.element_joints, first, last, out);
     });
   if (f.modal)  // each flexible body's eta, the first half of its part of the state's tail
-    for (const FlexibleBody& b : m.flexible) {
-      const Eigen::Index eta = system_->flexible_state(static_cast<std::size_t>(&b - m.flexible.data()));
-      f.modal->buffer.insert(f.modal->buffer.end(), s.state.data() + eta, s.state.data() + eta + b.data->modes());
+    for (std::size_t b = 0; b < m.flexible.size(); ++b) {
+      const double* eta = s.state.data() + system_->flexible_state(b);
+      f.modal->buffer.insert(f.modal->buffer.end(), eta, eta + m.flexible[b].data->modes());
     }
   if (static_cast<hsize_t>(f.time.buffer.size()) >= f.rows_per_chunk || now_seconds() - last_flush_ >= flush_interval_s)
     flush();

@@ -212,13 +212,11 @@ std::string write_file(const std::string& path, const std::string& h5_name, cons
   if (const Eigen::MatrixXd& phi = part.floating.reduced_modes; phi.size() > 0) {
     // Each elastic mode's displacement of the display points: the floating frame's drawn
     // deformation in a run's results.
-    const auto ne = static_cast<hsize_t>(phi.cols());
-    std::vector<double> elastic(ne * d * 3, 0.0);
-    for (hsize_t k = 0; k < ne; ++k)
-      for (hsize_t q = 0; q < r; ++q)
-        if (const double w = phi(static_cast<Eigen::Index>(q), static_cast<Eigen::Index>(k)); w != 0.0)
-          for (hsize_t i = 0; i < d * 3; ++i) elastic[k * d * 3 + i] += w * shape[q * d * 3 + i];
-    h5::write_array(root, "/floating/display_shape", H5T_NATIVE_DOUBLE, elastic, {ne, d, 3});
+    // shape (r x d x 3) is, column-major, 3 d x r: times phi, 3 d x ne, that is ne x d x 3.
+    const auto rows = static_cast<Eigen::Index>(3 * d);
+    const Eigen::MatrixXd elastic = Eigen::Map<const Eigen::MatrixXd>(shape.data(), rows, static_cast<Eigen::Index>(r)) * phi;
+    h5::write_array(root, "/floating/display_shape", H5T_NATIVE_DOUBLE, std::vector<double>(elastic.data(), elastic.data() + elastic.size()),
+                    {static_cast<hsize_t>(phi.cols()), d, 3});
     h5::write_units(root, "/floating/display_shape", "m per unit modal coordinate (part axes)");
   }
   h5::write_units(root, "/reduced/mass", "kg, kg m, kg m^2 (by the coordinates' kinds; modal coordinates mass-normalised)");

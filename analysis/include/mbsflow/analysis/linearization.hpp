@@ -32,6 +32,8 @@ struct FreeCoordinates {
   std::vector<int> flexible;
   std::vector<Eigen::Index> eta;
   Eigen::Index size() const { return start.back(); }
+  Eigen::Index count(std::size_t k) const { return start[k + 1] - start[k]; }  // free body k's coordinates
+  Eigen::Index modes(std::size_t k) const { return count(k) - 6; }            // of them modal (a frame's)
   int flexible_of(std::size_t k) const { return flexible.empty() ? -1 : flexible[k]; }
   // The free body whose coordinates hold coordinate i.
   std::size_t body_of(Eigen::Index i) const;

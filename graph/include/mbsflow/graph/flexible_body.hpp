@@ -90,4 +90,10 @@ struct NodeMotion {
 };
 NodeMotion flexible_node_motion(const FloatingFrameData& d, int node, const Eigen::VectorXd& eta, const Eigen::VectorXd& eta_rate);
 
+// The drawn surface (display_*) in the world, its frame at `origin` turned by r, deformed
+// by eta: a column per point; in *elastic, if given, their elastic displacement alone
+// (world axes). The results' XDMF sidecar and the browser viewer draw it so.
+Eigen::Matrix3Xd flexible_surface_points(const FloatingFrameData& d, const Eigen::Vector3d& origin, const Eigen::Matrix3d& r,
+                                         const Eigen::VectorXd& eta, Eigen::Matrix3Xd* elastic = nullptr);
+
 }  // namespace mbsflow
