@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "jacobian_seeds.hpp"
+#include "mbsflow/error.hpp"
 #include "kinematic_joint_wrench.hpp"
 #include "mbsflow/graph/multibody_system.hpp"
 
@@ -108,7 +109,7 @@ bool MultibodySystem::has_analytic_jacobian(std::string* why) const {
 }
 
 void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::SparseMatrix<double>& jac) {
-  if (std::string why; !has_analytic_jacobian(&why)) throw std::logic_error("no analytic Jacobian: " + why);
+  if (std::string why; !has_analytic_jacobian(&why)) throw InputError("MultibodySystem::jacobian: no analytic Jacobian: " + why);
   // The rates themselves where rigid clusters need them (their accelerations, multipliers
   // and factors, cluster_jacobian.cpp); the kinematics and joint forces in any case (the
   // torques, whose value w' depends on through R(q)^T).

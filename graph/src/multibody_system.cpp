@@ -49,7 +49,7 @@ MultibodySystem::MultibodySystem(Model&& model, int active)
     : MultibodySystem(std::make_shared<const Model>(std::move(model)), active) {}
 
 MultibodySystem::MultibodySystem(std::shared_ptr<const Model> shared, int active) : model_(std::move(shared)) {
-  if (!model_) throw std::invalid_argument("MultibodySystem: no model");
+  if (!model_) throw InputError("MultibodySystem: no model (a null shared_ptr)");
   const Model& model = *model_;
   check_model(model);
   const int n = static_cast<int>(model.bodies.size());

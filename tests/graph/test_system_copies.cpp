@@ -158,3 +158,13 @@ TEST_CASE("a model with a kinematic joint computes its energies through the kine
   sys.energy(0.0, y);
   CHECK(sys.memory_use().workspace >= 176 * m.bodies.size());
 }
+
+TEST_CASE("what an embedding caller can get wrong throws mbsflow::Error, not a standard exception", "[graph]") {
+  CHECK_THROWS_AS(MultibodySystem(std::shared_ptr<const Model>(), 0), InputError);
+  MultibodySystem sys(grid());
+  sys.add_force_element(std::make_shared<Tether>(3, 30));
+  const Eigen::VectorXd y = sys.initial_state();
+  // A user force element leaves no analytic Jacobian; asking for it anyway is a usage error.
+  Eigen::SparseMatrix<double> jac;
+  CHECK_THROWS_AS(sys.jacobian(0, y, jac), InputError);
+}

@@ -5,8 +5,9 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <span>
-#include <stdexcept>
 #include <vector>
+
+#include "mbsflow/error.hpp"
 
 namespace mbsflow {
 
@@ -36,7 +37,7 @@ class Kinematics {
     if (from_.empty()) return body;
     const auto i = std::find(from_.begin(), from_.end(), body);
     if (i == from_.end())
-      throw std::logic_error("force element: read body " + std::to_string(body) + ", which is not one of its bodies()");
+      throw InputError("force element: read body " + std::to_string(body) + ", which is not one of its bodies()");
     return to_[static_cast<std::size_t>(i - from_.begin())];
   }
   const std::vector<Eigen::Matrix3d>& rot_;
