@@ -53,7 +53,7 @@ Measured run_self(const std::vector<std::string>& args, const std::string& log) 
   return {seconds_since(start), static_cast<double>(usage.ru_maxrss) / 1024.0};
 }
 
-struct Row {
+struct LoadRow {
   std::string kind;
   long bodies = 0;
   Measured generate, start;
@@ -65,7 +65,7 @@ int bench_load(const BenchArgs& a) {
   const std::vector<int> sizes = a.bodies.empty() ? std::vector<int>{1000, 10000, 100000, 1000000} : a.bodies;
   const std::vector<std::string> kinds = a.problems.empty() ? std::vector<std::string>{"chain", "grid"} : a.problems;
   if (!std::filesystem::is_directory(a.dir)) throw InputError("--dir: " + a.dir + " is not a folder");
-  std::vector<Row> rows;
+  std::vector<LoadRow> rows;
   std::printf("load: generate, then read, check, set up and take one step (own processes; peak = the process's peak "
               "resident memory)\n");
   std::printf("%-6s %9s %11s %11s %13s %11s %11s\n", "model", "bodies", "generate s", "gen MB", "load+start s", "peak MB",
@@ -83,7 +83,7 @@ int bench_load(const BenchArgs& a) {
       } else {
         gen.insert(gen.end(), {"--bodies", std::to_string(n)});
       }
-      Row r{kind, bodies, run_self(gen, stem + ".log"), {}};
+      LoadRow r{kind, bodies, run_self(gen, stem + ".log"), {}};
       r.start = run_self({"run", stem + ".json", "--t-end", "1e-9", "-q", "-o", stem + ".h5"}, stem + ".log");
       std::filesystem::remove(stem + ".log");
       std::filesystem::remove(stem + ".json");
@@ -97,7 +97,7 @@ int bench_load(const BenchArgs& a) {
   }
   auto [csv_path, csv] = open_csv(a);
   csv << "model,bodies,generate_s,generate_peak_MB,load_start_s,load_start_peak_MB\n";
-  for (const Row& r : rows)
+  for (const LoadRow& r : rows)
     csv << r.kind << ',' << r.bodies << ',' << r.generate.seconds << ',' << r.generate.peak_mb << ',' << r.start.seconds << ','
         << r.start.peak_mb << '\n';
   // Exponents over the sizes from 10 000 bodies on, where a process's fixed cost no
@@ -106,7 +106,7 @@ int bench_load(const BenchArgs& a) {
     std::vector<double> x, t, m;
     for (bool large_only : {true, false}) {
       x.clear(), t.clear(), m.clear();
-      for (const Row& r : rows)
+      for (const LoadRow& r : rows)
         if (r.kind == kind && (!large_only || r.bodies >= 10000)) {
           x.push_back(static_cast<double>(r.bodies));
           t.push_back(r.start.seconds);

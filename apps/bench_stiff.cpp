@@ -117,7 +117,7 @@ double rk4_stable_step(const Model& m) {
   return output_interval / std::ceil(output_interval / h);
 }
 
-struct Row {
+struct StiffRow {
   std::string method;
   int threads = 1;
   double tol = 0;
@@ -133,9 +133,9 @@ std::string row_name(Method method, const std::string& variant) {
 
 // One run of the runtime: implicit methods whole with `threads`, explicit ones cut into
 // submodels on `threads` (one submodel on one thread).
-Row run_method(const Model& m, Method method, double tol, double step, int threads, KeptStates& out,
+StiffRow run_method(const Model& m, Method method, double tol, double step, int threads, KeptStates& out,
                const std::string& variant = "") {
-  Row r;
+  StiffRow r;
   r.method = row_name(method, variant);
   r.threads = threads;
   r.tol = tol;
@@ -164,8 +164,8 @@ Row run_method(const Model& m, Method method, double tol, double step, int threa
   return r;
 }
 
-Row run_cvode_klu(const Model& m, double tol, KeptStates& out) {
-  Row r;
+StiffRow run_cvode_klu(const Model& m, double tol, KeptStates& out) {
+  StiffRow r;
   r.method = "cvode-klu";
   r.tol = tol;
   const auto start = BenchClock::now();
@@ -197,7 +197,7 @@ Row run_cvode_klu(const Model& m, double tol, KeptStates& out) {
   return r;
 }
 
-void print_row(const std::string& name, const Row& r, BenchCsv& csv) {
+void print_row(const std::string& name, const StiffRow& r, BenchCsv& csv) {
   std::printf("%-24s %-10s %3d %8.0e %8ld %9ld %6ld %7ld %9.3f %10.3g %s\n", name.c_str(), r.method.c_str(), r.threads, r.tol,
               r.steps, r.evaluations, r.jacobians, r.factorizations, r.seconds, r.error, r.note.c_str());
   std::fflush(stdout);
@@ -230,13 +230,13 @@ int bench_stiff(const BenchArgs& a) {
   };
   for (const Case& c : cases) {
     KeptStates ref = positions();
-    Row rr = run_method(c.model, Method::tirk, reference_tol, 0, all, ref);
+    StiffRow rr = run_method(c.model, Method::tirk, reference_tol, 0, all, ref);
     rr.method = "reference";
     rr.error = 0;
     print_row(c.name, rr, csv);
     if (!rr.note.empty()) continue;
     std::map<std::string, Best> best;
-    auto record = [&](Row r, const KeptStates& out) {
+    auto record = [&](StiffRow r, const KeptStates& out) {
       if (r.note.empty()) r.error = position_error(out, ref);
       print_row(c.name, r, csv);
       if (r.threads != 1 || !(r.error <= a.target_error)) return;
@@ -251,7 +251,7 @@ int bench_stiff(const BenchArgs& a) {
       const double h = rk4_stable_step(c.model);
       for (int threads : thread_counts) {
         KeptStates out = positions();
-        Row r = run_method(c.model, Method::rk4, 0, h, threads, out);
+        StiffRow r = run_method(c.model, Method::rk4, 0, h, threads, out);
         r.tol = h;  // the step, in the tolerance column
         record(r, out);
       }

@@ -4,11 +4,11 @@
 #include <cmath>
 
 #include "mbsflow/error.hpp"
+#include "vec3.hpp"
 
 namespace mbsflow {
 namespace {
 
-Eigen::Vector3d vec(const Vec3& v) { return {v[0], v[1], v[2]}; }
 Vec3 arr(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
 Quat quat(const Eigen::Matrix3d& r) {
   Eigen::Quaterniond q(r);

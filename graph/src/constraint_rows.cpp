@@ -1,12 +1,14 @@
 #include "constraint_rows.hpp"
 
+#include "vec3.hpp"
+
 namespace mbsflow {
 
 JointGeometry joint_geometry(const Joint& j) {
   JointGeometry g;
   g.type = j.type;
-  g.pa = Eigen::Vector3d(j.point1[0], j.point1[1], j.point1[2]);
-  g.pb = Eigen::Vector3d(j.point2[0], j.point2[1], j.point2[2]);
+  g.pa = vec(j.point1);
+  g.pb = vec(j.point2);
   g.fa = rotation_matrix(Eigen::Vector4d(j.frame1[0], j.frame1[1], j.frame1[2], j.frame1[3]));
   g.fb = rotation_matrix(Eigen::Vector4d(j.frame2[0], j.frame2[1], j.frame2[2], j.frame2[3]));
   g.length = j.rest_length;

@@ -15,11 +15,11 @@
 #include "lanes.hpp"
 #include "rotation.hpp"
 #include "shared_laws.hpp"
+#include "vec3.hpp"
 
 namespace mbsflow {
 namespace {
 
-Eigen::Vector3d vec(const Vec3& a) { return {a[0], a[1], a[2]}; }
 Eigen::Vector4d quat(const Quat& a) { return {a[0], a[1], a[2], a[3]}; }
 
 // in_lane_groups with the kernel of the CPU's instruction set (simd.hpp): four lanes on
