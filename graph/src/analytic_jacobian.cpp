@@ -11,8 +11,8 @@
 #include <stdexcept>
 
 #include "jacobian_seeds.hpp"
-#include "mbsflow/error.hpp"
 #include "kinematic_joint_wrench.hpp"
+#include "mbsflow/error.hpp"
 #include "mbsflow/graph/multibody_system.hpp"
 
 namespace mbsflow {

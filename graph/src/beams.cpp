@@ -4,7 +4,7 @@
 #include <cmath>
 
 #include "mbsflow/error.hpp"
-#include "vec3.hpp"
+#include "as_eigen.hpp"
 
 namespace mbsflow {
 namespace {

@@ -1,6 +1,6 @@
 #include "constraint_rows.hpp"
 
-#include "vec3.hpp"
+#include "as_eigen.hpp"
 
 namespace mbsflow {
 
@@ -9,8 +9,8 @@ JointGeometry joint_geometry(const Joint& j) {
   g.type = j.type;
   g.pa = vec(j.point1);
   g.pb = vec(j.point2);
-  g.fa = rotation_matrix(Eigen::Vector4d(j.frame1[0], j.frame1[1], j.frame1[2], j.frame1[3]));
-  g.fb = rotation_matrix(Eigen::Vector4d(j.frame2[0], j.frame2[1], j.frame2[2], j.frame2[3]));
+  g.fa = rotation_matrix(vec(j.frame1));
+  g.fb = rotation_matrix(vec(j.frame2));
   g.length = j.rest_length;
   g.motor = j.motor.get();
   g.limits = j.limits.get();

@@ -9,6 +9,7 @@
 #include "mbsflow/graph/force_table.hpp"
 #include "mbsflow/graph/model.hpp"
 #include "mbsflow/graph/multibody_system.hpp"  // inertia_matrix
+#include "as_eigen.hpp"
 #include "rotation.hpp"
 
 namespace mbsflow {
@@ -161,18 +162,18 @@ template <class S, class Joint, class Body, class Out>
 template <class S>
 [[gnu::always_inline]] inline void add_load(const Load& l, double s, const Matrix3T<S>& r, const Vector3T<S>& v,
                                             const Vector3T<S>& w, Vector3T<S>& force, Vector3T<S>& torque) {
-  const Eigen::Vector3d f0 = s * Eigen::Vector3d(l.force[0], l.force[1], l.force[2]);
-  const Eigen::Vector3d m0 = s * Eigen::Vector3d(l.torque[0], l.torque[1], l.torque[2]);
+  const Eigen::Vector3d f0 = s * vec(l.force);
+  const Eigen::Vector3d m0 = s * vec(l.torque);
   Vector3T<S> f = as_scalar<S>(f0), m = as_scalar<S>(m0);
   if (l.body_frame) {
     f = r * f;
     m = r * m;
   }
   force += f;
-  torque += m + (r * as_scalar<S>(Eigen::Vector3d(l.point[0], l.point[1], l.point[2]))).cross(f);
+  torque += m + (r * as_scalar<S>(vec(l.point))).cross(f);
   if (l.damped()) {
     const Eigen::Matrix3d angular = inertia_matrix(l.angular_damping);
-    force -= as_scalar<S>(Eigen::Vector3d(l.damping[0], l.damping[1], l.damping[2])).cwiseProduct(v);
+    force -= as_scalar<S>(vec(l.damping)).cwiseProduct(v);
     torque -= r * (as_scalar<S>(angular) * w);
   }
 }

@@ -15,12 +15,11 @@
 #include "lanes.hpp"
 #include "rotation.hpp"
 #include "shared_laws.hpp"
-#include "vec3.hpp"
+#include "as_eigen.hpp"
 
 namespace mbsflow {
 namespace {
 
-Eigen::Vector4d quat(const Quat& a) { return {a[0], a[1], a[2], a[3]}; }
 
 // in_lane_groups with the kernel of the CPU's instruction set (simd.hpp): four lanes on
 // AVX, else Lanes::width (two, SSE2).
@@ -78,8 +77,8 @@ MultibodySystem::MultibodySystem(std::shared_ptr<const Model> shared, int active
     c.spring = j.type == JointType::spring;
     c.pa = vec(j.point1);
     c.pb = vec(j.point2);
-    c.qfa = quat(j.frame1).normalized();
-    c.qfb = quat(j.frame2).normalized();
+    c.qfa = vec(j.frame1).normalized();
+    c.qfb = vec(j.frame2).normalized();
     c.frame1_identity = j.frame1 == Quat{1.0, 0.0, 0.0, 0.0};
     c.frame2_identity = j.frame2 == Quat{1.0, 0.0, 0.0, 0.0};
     c.rfa = rotation_matrix(c.qfa);
@@ -133,7 +132,7 @@ Eigen::VectorXd MultibodySystem::initial_state() const {
   for (Eigen::Index i = 0; i < layout_.bodies; ++i) {
     const Body& b = model().bodies[static_cast<std::size_t>(i)];
     y.segment<3>(layout_.position(i)) = vec(b.position);
-    y.segment<4>(layout_.orientation(i)) = quat(b.orientation).normalized();
+    y.segment<4>(layout_.orientation(i)) = vec(b.orientation).normalized();
     y.segment<3>(layout_.velocity(i)) = vec(b.velocity);
     y.segment<3>(layout_.angular_velocity(i)) = vec(b.angular_velocity);
   }
@@ -195,7 +194,7 @@ void MultibodySystem::drive(const Driver& d, double t) {
     pos_(k, i) = b.position[static_cast<std::size_t>(k)] + d.velocity[static_cast<std::size_t>(k)] * t + memo.value[slot](k);
     vel_(k, i) = d.velocity[static_cast<std::size_t>(k)] + memo.rate[slot](k);
   }
-  quat_.col(i) = quat(b.orientation).normalized();
+  quat_.col(i) = vec(b.orientation).normalized();
   if (!rot_.empty()) rot_[static_cast<std::size_t>(i)] = rotation_matrix(quat_.col(i));
   omega_.col(i).setZero();
 }
@@ -493,7 +492,7 @@ void MultibodySystem::impose(const Driver& d, double t, Eigen::VectorXd& y) cons
     y[layout_.position(i) + k] = b.position[static_cast<std::size_t>(k)] + d.velocity[static_cast<std::size_t>(k)] * t + f.value;
     y[layout_.velocity(i) + k] = d.velocity[static_cast<std::size_t>(k)] + f.rate;
   }
-  y.segment<4>(layout_.orientation(i)) = quat(b.orientation).normalized();
+  y.segment<4>(layout_.orientation(i)) = vec(b.orientation).normalized();
   y.segment<3>(layout_.angular_velocity(i)).setZero();
 }
 
