@@ -22,12 +22,17 @@ struct IvpRun {
   std::string note;
 };
 
-// The tolerances of one run: rtol, and atol_i = rtol * absolute_scale_i.
+// The tolerances of one run: rtol, and atol_i = rtol * absolute_scale_i, or atol = rtol for
+// every component (--scalar-atol: what a user who gives one tolerance gets; on Robertson's
+// problem it leaves the 1e-5 component uncontrolled, and a solution that crosses zero there
+// can grow without bound while every step meets its tolerance).
 struct Tolerance {
   double rtol = 0;
   Eigen::VectorXd atols;
 };
-Tolerance tolerance_for(const OdeProblem& p, double rtol) { return {rtol, rtol * absolute_scales(p)}; }
+Tolerance tolerance_for(const OdeProblem& p, double rtol, bool scalar_atol) {
+  return {rtol, scalar_atol ? Eigen::VectorXd::Constant(p.size, rtol).eval() : (rtol * absolute_scales(p)).eval()};
+}
 
 // Significant correct digits at the end, in the mixed sense of the test set: components
 // below their absolute scale count in absolute terms.
@@ -113,7 +118,7 @@ IvpRun measure(const std::string& method, const OdeProblem& p, const Tolerance& 
 // y(t_end) to measure against: the exact solution, a published value, or else the run of
 // colloc at reference_tol, checked against tirk-newton at the same tolerance; their
 // agreement bounds the digits that can be measured (digits above it are cut to it).
-Reference reference_of(const OdeProblem& p, double reference_tol) {
+Reference reference_of(const OdeProblem& p, double reference_tol) {  // always at the problem's own scales
   if (p.exact) {
     std::printf("%s: exact solution\n", p.name.c_str());
     return {p.exact(p.t_end)};
@@ -127,7 +132,7 @@ Reference reference_of(const OdeProblem& p, double reference_tol) {
   // 10 eps |t|) is loosened tenfold until both succeed, and the printed line says so.
   Eigen::VectorXd colloc, tirk;
   for (double rtol = reference_tol;; rtol *= 10) {
-    const Tolerance tol = tolerance_for(p, rtol);
+    const Tolerance tol = tolerance_for(p, rtol, false);
     const IvpRun a = integrate_once("colloc", p, tol, 0, colloc), b = integrate_once("tirk-newton", p, tol, 0, tirk);
     if (!a.ok || !b.ok) {
       const std::string why = (a.ok ? "tirk-newton: " + b.note : "colloc: " + a.note);
@@ -169,6 +174,7 @@ int bench_ivp(const BenchArgs& a) {
   const std::vector<std::string> methods = a.methods.empty() ? all_methods() : a.methods;
   const double reference_tol = a.reference_tol > 0 ? a.reference_tol : 1e-12;
   BenchCsv csv = open_csv(a);
+  if (a.scalar_atol) std::printf("atol = rtol for every component (--scalar-atol)\n");
   csv.out << "problem,n,solver,threads,rtol,ok,seconds,scd,steps,rejected,rhs_evaluations,jacobians,factorizations,note\n";
   struct Key {
     std::string problem, method;
@@ -196,7 +202,7 @@ int bench_ivp(const BenchArgs& a) {
       }
       for (int threads : thread_counts)
         for (double rtol : rtols) {
-          const IvpRun r = measure(method, p, tolerance_for(p, rtol), threads, reference);
+          const IvpRun r = measure(method, p, tolerance_for(p, rtol, a.scalar_atol), threads, reference);
           runs[{p.name, method, threads}].push_back(r);
           std::printf("%-10s %6ld %-24s %3d %7.0e %9.4f %6.2f %8ld %6ld %9ld %6ld %6ld %s\n", name.c_str(), long(p.size), method.c_str(),
                       threads, rtol, r.seconds, r.scd, r.steps, r.rejected, r.rhs, r.jacobians, r.factorizations,
@@ -210,25 +216,30 @@ int bench_ivp(const BenchArgs& a) {
   }
   // Time relative to CVODE at equal digits: each run's time over CVODE's time interpolated
   // at the digits the run reached (runs outside CVODE's range of digits are not compared).
-  std::printf("\ntime / CVODE's time at equal correct digits (median and best over the runs inside CVODE's range of digits)\n");
-  std::printf("%-10s %-24s %3s %8s %9s %8s %8s\n", "problem", "method", "thr", "ok", "compared", "median", "best");
+  // "wrong": runs that ended without an error but with less than one correct digit (a
+  // silent wrong answer), CVODE's included.
+  std::printf("\ntime / CVODE's time at equal correct digits (median and best over the runs inside CVODE's range of digits);\n"
+              "wrong: runs that ended without an error but with less than one correct digit\n");
+  std::printf("%-10s %-24s %3s %8s %6s %9s %8s %8s\n", "problem", "method", "thr", "ok", "wrong", "compared", "median", "best");
   for (const auto& [key, list] : runs) {
-    if (key.method == "cvode-bdf") continue;
     const auto cvode = runs.find({key.problem, "cvode-bdf", 1});
     std::vector<double> ratios;
-    long ok = 0;
+    long ok = 0, wrong = 0;
     for (const IvpRun& r : list) {
       ok += r.ok;
+      wrong += r.ok && r.scd < 1.0;
+      if (key.method == "cvode-bdf") continue;
       const double c = r.ok && cvode != runs.end() ? cvode_seconds_at(cvode->second, r.scd) : NAN;
       if (std::isfinite(c)) ratios.push_back(r.seconds / c);
     }
     std::sort(ratios.begin(), ratios.end());
     const std::string counted = std::to_string(ok) + "/" + std::to_string(list.size());
     if (ratios.empty()) {
-      std::printf("%-10s %-24s %3d %8s %9d %8s %8s\n", key.problem.c_str(), key.method.c_str(), key.threads, counted.c_str(), 0, "-", "-");
+      std::printf("%-10s %-24s %3d %8s %6ld %9d %8s %8s\n", key.problem.c_str(), key.method.c_str(), key.threads, counted.c_str(), wrong,
+                  0, "-", "-");
     } else {
-      std::printf("%-10s %-24s %3d %8s %9zu %8.2f %8.2f\n", key.problem.c_str(), key.method.c_str(), key.threads, counted.c_str(),
-                  ratios.size(), ratios[ratios.size() / 2], ratios.front());
+      std::printf("%-10s %-24s %3d %8s %6ld %9zu %8.2f %8.2f\n", key.problem.c_str(), key.method.c_str(), key.threads, counted.c_str(),
+                  wrong, ratios.size(), ratios[ratios.size() / 2], ratios.front());
     }
   }
   std::printf("CSV: %s (work-precision plot: /usr/bin/python3 scripts/plot_work_precision.py %s)\n", csv.path.c_str(), csv.path.c_str());

@@ -139,6 +139,7 @@ int run(const OdeArgs& a) {
               s.iteration == BlockIteration::newton ? to_string(st.linear_solver) : "none");
   if (p.exact) std::printf("max error %.3e (against the exact solution, all accepted points)\n", rec.max_error());
   report_end_error(p, r.y);
+  rec.warn_uncontrolled(s.atol, s.atols);
   std::printf("wall time %.3f s\n", seconds);
   rec.write(a.output, r.steps,
             {{"problem", p.name}, {"method", a.method}, {"iteration", to_string(s.iteration)}},

@@ -117,6 +117,7 @@ int run_tirk(const OdeArgs& a) {
   }
   if (p.exact) std::printf("max error %.3e (against the exact solution, all accepted steps)\n", rec.max_error());
   report_end_error(p, r.y);
+  rec.warn_uncontrolled(s.atol, s.atols);
   std::printf("wall time %.3f s\n", seconds);
   rec.write(a.output, r.steps, {{"problem", p.name}, {"method", "tirk"}, {"tableau", tab.name}, {"iteration", to_string(s.iteration)}},
             {{"n", double(p.size)}, {"s", double(tab.stages())}, {"order", double(tab.order)}, {"tol", a.tol}, {"wall_seconds", seconds},

@@ -29,6 +29,11 @@ class OdeRecorder {
   OdeRecorder(const OdeProblem& p, bool keep);
   void add(double t, const Eigen::VectorXd& y);
   double max_error() const { return max_error_; }
+  // Warns on stderr about the components whose size stayed below their absolute tolerance
+  // at every accepted point: they are held to atol in absolute terms only, so none of their
+  // digits need be right (Robertson's 1e-5 component under one scalar atol = 1e-4), and a
+  // run can end "ok" far from the solution. atols: per component, or empty for atol.
+  void warn_uncontrolled(double atol, const Eigen::VectorXd& atols) const;
   // Writes the file (when one was asked for) and says where it is and how to plot it.
   void write(const std::string& path, std::vector<BlockStepRecord> steps, std::vector<std::pair<std::string, std::string>> texts,
              std::vector<std::pair<std::string, double>> numbers, bool quiet);
@@ -38,6 +43,7 @@ class OdeRecorder {
   bool keep_;
   OdeResults out_;
   double max_error_ = 0;
+  Eigen::VectorXd largest_;  // per component, the largest |y| at an accepted point
 };
 
 // A tolerance of the command line: one value (scalar) or one per equation (vector).

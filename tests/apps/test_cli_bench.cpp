@@ -132,6 +132,30 @@ TEST_CASE("cli bench ivp: work-precision against CVODE on Robertson and eq. 11, 
   fs::remove_all(fs::path(dir).parent_path());
 }
 
+TEST_CASE("cli bench ivp --scalar-atol: silent wrong answers are counted, CVODE's too", "[cli][bench]") {
+  // atol = rtol = 1e-4 on Robertson: the second component (< 3.7e-5) has no control, and
+  // tirk-newton and CVODE both end "ok" with y1 grown far below zero (no correct digit).
+  const std::string dir = scratch("bench_ivp_scalar").string();
+  const Result r = run("bench ivp --problems robertson --scalar-atol --tolerances 1e-4 --methods tirk-newton,cvode-bdf --csv ivp.csv",
+                       dir, true);
+  INFO(r.err << r.out);
+  REQUIRE(r.code == 0);
+  CHECK(r.out.find("atol = rtol for every component (--scalar-atol)") != std::string::npos);
+  std::istringstream table(r.out);
+  std::string line;
+  int wrong_rows = 0;
+  while (std::getline(table, line)) {
+    std::istringstream cells(line);
+    std::string problem, method, threads, ok, wrong;
+    if (!(cells >> problem >> method >> threads >> ok >> wrong) || problem != "robertson" || ok.find('/') == std::string::npos) continue;
+    INFO(line);
+    CHECK(std::stol(wrong) >= 1);  // the rtol 1e-4 run: ended without an error, not one digit right
+    ++wrong_rows;
+  }
+  CHECK(wrong_rows == 2);
+  fs::remove_all(fs::path(dir).parent_path());
+}
+
 TEST_CASE("cli bench load: a chain and a grid generated and started in their own processes with time and peak memory", "[cli][bench]") {
   const std::string dir = scratch("bench_load").string();
   const Result r = run("bench load --bodies 200,2000 --csv load.csv", dir, true);
