@@ -203,6 +203,9 @@ OdeProblem builtin_problem(const std::string& name, Eigen::Index n) {
     return p;
   }
   if (name == "robertson") return robertson_problem();
+  if (name == "hires") return hires_problem();
+  if (name == "orego") return oregonator_problem();
+  if (name == "e5") return e5_problem();
   throw InputError("unknown problem '" + name + "' (" + builtin_problem_names + ")");
 }
 
