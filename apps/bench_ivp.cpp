@@ -167,7 +167,7 @@ double cvode_seconds_at(const std::vector<IvpRun>& cvode, double digits) {
 
 int bench_ivp(const BenchArgs& a) {
   const std::vector<std::string> problems =
-      a.problems.empty() ? std::vector<std::string>{"vdp1e3", "vdp1e6", "robertson", "hires", "orego", "e5", "hnw", "b1", "heat1000"} : a.problems;
+      a.problems.empty() ? std::vector<std::string>{"vdp1e3", "vdp1e6", "robertson", "hires", "orego", "e5", "pollu", "hnw", "b1", "heat1000"} : a.problems;
   std::vector<double> tols = a.tolerances;
   if (tols.empty())
     for (int k = 3; k <= 10; ++k) tols.push_back(std::pow(10.0, -k));

@@ -30,7 +30,7 @@ Action add_bench(CLI::App& app) {
       ->check(CLI::IsMember({"rhs", "output", "parallel", "cluster", "latency", "ode", "iterations", "iftomm", "stiff", "ivp", "load", "beams"}));
   sub->add_option("--problems", a->problems,
                   "ode, iterations: hnw, b1, heatN (default ode: hnw,b1,heat1000,heat100000,heat1000000; iterations: hnw,b1,heat200); "
-                  "ivp: also vdpMU, robertson, hires, orego, e5 (default vdp1e3,vdp1e6,robertson,hires,orego,e5,hnw,b1,heat1000); "
+                  "ivp: also vdpMU, robertson, hires, orego, e5, pollu (default vdp1e3,vdp1e6,robertson,hires,orego,e5,pollu,hnw,b1,heat1000); "
                   "stiff: chain, train, a05 (default all); load: chain, grid (default both)")
       ->delimiter(',');
   sub->add_option("--tableau", a->tableau, "iterations: the tirk tableau (default radau3)");

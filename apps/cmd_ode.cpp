@@ -157,7 +157,7 @@ Action add_ode(CLI::App& app) {
       "ode", "Integrate an ODE test problem with the collocation block methods (colloc) or triangularised implicit Runge-Kutta methods (tirk)");
   sub->add_option("--problem", a->problem,
                   "hnw (eq. 10, Hairer-Wanner), b1 (eq. 11, DETEST B1), heat (eq. 12, --n equations) or heatN, vdp (Van der Pol, "
-                  "mu = 1e3, scaled form on [0, 2]) or vdpMU (e.g. vdp1e6), robertson (kinetics on [0, 1e11], per-component atol), hires, orego, e5 (Test Set for IVP Solvers, published end values)");
+                  "mu = 1e3, scaled form on [0, 2]) or vdpMU (e.g. vdp1e6), robertson (kinetics on [0, 1e11], per-component atol), hires, orego, e5, pollu (Test Set for IVP Solvers, published end values)");
   sub->add_option("--n", a->n, "heat: number of equations")->check(CLI::PositiveNumber)->capture_default_str();
   sub->add_option("--method", a->method, "colloc (collocation block methods) or tirk (implicit Runge-Kutta iterated through a triangular T)")
       ->check(CLI::IsMember({"colloc", "tirk"}))->capture_default_str();

@@ -206,6 +206,7 @@ OdeProblem builtin_problem(const std::string& name, Eigen::Index n) {
   if (name == "hires") return hires_problem();
   if (name == "orego") return oregonator_problem();
   if (name == "e5") return e5_problem();
+  if (name == "pollu") return pollution_problem();
   throw InputError("unknown problem '" + name + "' (" + builtin_problem_names + ")");
 }
 

@@ -1,7 +1,9 @@
-// Three more stiff problems of the Test Set for IVP Solvers (Mazzia, Magherini et al.,
-// Bari; Hairer & Wanner II): HIRES, OREGO and E5, each with its exact Jacobian, its
+// Four more stiff problems of the Test Set for IVP Solvers (Mazzia, Magherini et al.,
+// Bari; Hairer & Wanner II): HIRES, OREGO, E5 and POLLU, each with its exact Jacobian, its
 // published y(t_end) and the absolute scale the test set's runs use.
 #include <Eigen/Dense>
+#include <initializer_list>
+#include <utility>
 #include <vector>
 
 #include "mbsflow/methods/ode_problem.hpp"
@@ -112,6 +114,103 @@ OdeProblem e5_problem() {
   p.end_reference.resize(4);
   p.end_reference << 0.1152903278711829e-290, 0.8867655517642120e-22, 0.8854814626268838e-22, 0.0;
   p.end_reference_source = "Test Set for IVP Solvers, problem E5";
+  return p;
+}
+
+namespace {
+
+// A mass-action reaction: rate k times the product of its reactants, and what it does to
+// each species (stoichiometric coefficient).
+struct Reaction {
+  double k;
+  std::vector<int> reactants;
+  std::vector<std::pair<int, double>> effect;
+  double rate(const Eigen::VectorXd& y) const {
+    double r = k;
+    for (int i : reactants) r *= y(i);
+    return r;
+  }
+  // d rate / d y_j, j one of the reactants.
+  double slope(const Eigen::VectorXd& y, int j) const {
+    double r = k;
+    bool skipped = false;
+    for (int i : reactants) {
+      if (i == j && !skipped) {
+        skipped = true;
+        continue;
+      }
+      r *= y(i);
+    }
+    return r;
+  }
+};
+
+// POLLU's 25 reactions on 20 species (the test set numbers them from 1; here from 0).
+std::vector<Reaction> pollution_reactions() {
+  const auto r = [](double k, std::initializer_list<int> in, std::initializer_list<std::pair<int, double>> out) {
+    Reaction x{k, {}, {}};
+    for (int i : in) x.reactants.push_back(i - 1);
+    for (auto [i, c] : out) x.effect.emplace_back(i - 1, c);
+    return x;
+  };
+  return {r(0.35, {1}, {{1, -1}, {2, 1}, {3, 1}}),
+          r(26.6, {2, 4}, {{1, 1}, {2, -1}, {4, -1}}),
+          r(1.23e4, {5, 2}, {{1, 1}, {2, -1}, {5, -1}, {6, 1}}),
+          r(8.6e-4, {7}, {{5, 2}, {7, -1}, {8, 1}}),
+          r(8.2e-4, {7}, {{7, -1}, {8, 1}}),
+          r(1.5e4, {7, 6}, {{5, 1}, {6, -1}, {7, -1}, {8, 1}}),
+          r(1.3e-4, {9}, {{5, 1}, {8, 1}, {9, -1}, {10, 1}}),
+          r(2.4e4, {9, 6}, {{6, -1}, {9, -1}, {11, 1}}),
+          r(1.65e4, {11, 2}, {{1, 1}, {2, -1}, {10, 1}, {11, -1}, {12, 1}}),
+          r(9.0e3, {11, 1}, {{1, -1}, {11, -1}, {13, 1}}),
+          r(2.2e-2, {13}, {{1, 1}, {11, 1}, {13, -1}}),
+          r(1.2e4, {10, 2}, {{1, 1}, {2, -1}, {10, -1}, {14, 1}}),
+          r(1.88, {14}, {{5, 1}, {7, 1}, {14, -1}}),
+          r(1.63e4, {1, 6}, {{1, -1}, {6, -1}, {15, 1}}),
+          r(4.8e6, {3}, {{3, -1}, {4, 1}}),
+          r(3.5e-4, {4}, {{4, -1}, {16, 1}}),
+          r(1.75e-2, {4}, {{3, 1}, {4, -1}}),
+          r(1.0e8, {16}, {{6, 2}, {16, -1}}),
+          r(4.44e11, {16}, {{3, 1}, {16, -1}}),
+          r(1.24e3, {17, 6}, {{5, 1}, {6, -1}, {17, -1}, {18, 1}}),
+          r(2.1, {19}, {{2, 1}, {19, -1}}),
+          r(5.78, {19}, {{1, 1}, {3, 1}, {19, -1}}),
+          r(4.74e-2, {1, 4}, {{1, -1}, {4, -1}, {19, 1}}),
+          r(1.78e3, {19, 1}, {{1, -1}, {19, -1}, {20, 1}}),
+          r(3.12, {20}, {{1, 1}, {19, 1}, {20, -1}})};
+}
+
+}  // namespace
+
+OdeProblem pollution_problem() {
+  const std::vector<Reaction> reactions = pollution_reactions();
+  Eigen::VectorXd y0 = Eigen::VectorXd::Zero(20);
+  y0(1) = 0.2, y0(3) = 0.04, y0(6) = 0.1, y0(7) = 0.3, y0(8) = 0.01, y0(16) = 0.007;
+  OdeProblem p = make_ode_problem("pollu", 0, 60, y0, [reactions](double, const Eigen::VectorXd& y, Eigen::VectorXd& dy) {
+    dy.setZero();
+    for (const Reaction& r : reactions) {
+      const double rate = r.rate(y);
+      for (auto [i, c] : r.effect) dy(i) += c * rate;
+    }
+  });
+  set_dense_jacobian(p, [reactions](double, const Eigen::VectorXd& y) {
+    Eigen::MatrixXd j = Eigen::MatrixXd::Zero(20, 20);
+    for (const Reaction& r : reactions)
+      for (int k : r.reactants) {
+        const double slope = r.slope(y, k);
+        for (auto [i, c] : r.effect) j(i, k) += c * slope;
+      }
+    return j;
+  });
+  // Components from 0.3 down to 4e-18 (y16): held in absolute terms below 1e-12 of rtol's scale.
+  p.absolute_scale = Eigen::VectorXd::Constant(20, 1e-12);
+  p.end_reference.resize(20);
+  p.end_reference << 0.5646255480022769e-1, 0.1342484130422339e+0, 0.4139734331099427e-8, 0.5523140207484359e-2,
+      0.2018977262302196e-6, 0.1464541863493966e-6, 0.7784249118997964e-1, 0.3245075353396018e+0, 0.7494013383880406e-2,
+      0.1622293157301561e-7, 0.1135863833257075e-7, 0.2230505975721359e-2, 0.2087162882798630e-3, 0.1396921016840158e-4,
+      0.8964884856898061e-2, 0.4352846369330103e-17, 0.6899219696263405e-2, 0.1007803037365946e-3, 0.1772146513969984e-5,
+      0.5682943292316392e-4;
+  p.end_reference_source = "Test Set for IVP Solvers, problem POLLU";
   return p;
 }
 

@@ -95,15 +95,17 @@ OdeProblem heat_problem(Eigen::Index n);  // eq. 12 on [0, 4]
 OdeProblem van_der_pol_problem(double mu);
 OdeProblem robertson_problem();
 // More of the test set, each with its published y(t_end): HIRES (8 equations on [0,
-// 321.8122], plant physiology), OREGO (the Oregonator, 3 equations on [0, 360]) and E5
-// (4 equations of chemical pyrolysis on [0, 1e13], components of 1e-290 to 1e-3).
+// 321.8122], plant physiology), OREGO (the Oregonator, 3 equations on [0, 360]), E5
+// (4 equations of chemical pyrolysis on [0, 1e13], components of 1e-290 to 1e-3) and
+// POLLU (air pollution, 25 reactions of 20 species on [0, 60]).
 OdeProblem hires_problem();
 OdeProblem oregonator_problem();
 OdeProblem e5_problem();
+OdeProblem pollution_problem();
 // By name: "hnw", "b1", "heat" (n equations) or "heatN", "vdp" (mu = 1e3) or "vdpMU"
-// ("vdp1e6"), "robertson", "hires", "orego", "e5"; throws InputError otherwise.
+// ("vdp1e6"), "robertson", "hires", "orego", "e5", "pollu"; throws InputError otherwise.
 OdeProblem builtin_problem(const std::string& name, Eigen::Index n);
 // The names builtin_problem knows, for help texts.
-inline constexpr const char* builtin_problem_names = "hnw, b1, heat, heatN, vdp, vdpMU (e.g. vdp1e6), robertson, hires, orego, e5";
+inline constexpr const char* builtin_problem_names = "hnw, b1, heat, heatN, vdp, vdpMU (e.g. vdp1e6), robertson, hires, orego, e5, pollu";
 
 }  // namespace mbsflow
