@@ -33,7 +33,7 @@ struct BenchArgs {
   double reference_tol = 0;
   double target_error = 1e-3;         // stiff: the error at which methods are compared
   std::vector<std::string> methods;   // stiff, ivp: which methods run (default all)
-  bool scalar_atol = false;            // ivp: atol = rtol for every component, not rtol times its scale
+  double atol_ratio = 0;               // ivp: atol = this times rtol for every component; 0: rtol times its scale
 };
 
 // The CSV file of a benchmark: --csv, or bench_WHAT.csv; InputError if it cannot be written.

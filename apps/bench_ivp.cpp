@@ -22,16 +22,16 @@ struct IvpRun {
   std::string note;
 };
 
-// The tolerances of one run: rtol, and atol_i = rtol * absolute_scale_i, or atol = rtol for
-// every component (--scalar-atol: what a user who gives one tolerance gets; on Robertson's
-// problem it leaves the 1e-5 component uncontrolled, and a solution that crosses zero there
-// can grow without bound while every step meets its tolerance).
+// The tolerances of one run: rtol, and atol_i = rtol * absolute_scale_i, or atol = ratio *
+// rtol for every component (--atol-ratio; 1 is what a user who gives one tolerance gets: on
+// Robertson's problem it leaves the 1e-5 component uncontrolled, and a solution that crosses
+// zero there can grow without bound while every step meets its tolerance).
 struct Tolerance {
   double rtol = 0;
   Eigen::VectorXd atols;
 };
-Tolerance tolerance_for(const OdeProblem& p, double rtol, bool scalar_atol) {
-  return {rtol, scalar_atol ? Eigen::VectorXd::Constant(p.size, rtol).eval() : (rtol * absolute_scales(p)).eval()};
+Tolerance tolerance_for(const OdeProblem& p, double rtol, double atol_ratio) {
+  return {rtol, atol_ratio > 0 ? Eigen::VectorXd::Constant(p.size, atol_ratio * rtol).eval() : (rtol * absolute_scales(p)).eval()};
 }
 
 // Significant correct digits at the end, in the mixed sense of the test set: components
@@ -132,7 +132,7 @@ Reference reference_of(const OdeProblem& p, double reference_tol) {  // always a
   // 10 eps |t|) is loosened tenfold until both succeed, and the printed line says so.
   Eigen::VectorXd colloc, tirk;
   for (double rtol = reference_tol;; rtol *= 10) {
-    const Tolerance tol = tolerance_for(p, rtol, false);
+    const Tolerance tol = tolerance_for(p, rtol, 0);
     const IvpRun a = integrate_once("colloc", p, tol, 0, colloc), b = integrate_once("tirk-newton", p, tol, 0, tirk);
     if (!a.ok || !b.ok) {
       const std::string why = (a.ok ? "tirk-newton: " + b.note : "colloc: " + a.note);
@@ -174,7 +174,7 @@ int bench_ivp(const BenchArgs& a) {
   const std::vector<std::string> methods = a.methods.empty() ? all_methods() : a.methods;
   const double reference_tol = a.reference_tol > 0 ? a.reference_tol : 1e-12;
   BenchCsv csv = open_csv(a);
-  if (a.scalar_atol) std::printf("atol = rtol for every component (--scalar-atol)\n");
+  if (a.atol_ratio > 0) std::printf("atol = %g rtol for every component (--atol-ratio)\n", a.atol_ratio);
   csv.out << "problem,n,solver,threads,rtol,ok,seconds,scd,steps,rejected,rhs_evaluations,jacobians,factorizations,note\n";
   struct Key {
     std::string problem, method;
@@ -202,7 +202,7 @@ int bench_ivp(const BenchArgs& a) {
       }
       for (int threads : thread_counts)
         for (double rtol : rtols) {
-          const IvpRun r = measure(method, p, tolerance_for(p, rtol, a.scalar_atol), threads, reference);
+          const IvpRun r = measure(method, p, tolerance_for(p, rtol, a.atol_ratio), threads, reference);
           runs[{p.name, method, threads}].push_back(r);
           std::printf("%-10s %6ld %-24s %3d %7.0e %9.4f %6.2f %8ld %6ld %9ld %6ld %6ld %s\n", name.c_str(), long(p.size), method.c_str(),
                       threads, rtol, r.seconds, r.scd, r.steps, r.rejected, r.rhs, r.jacobians, r.factorizations,

@@ -41,8 +41,9 @@ Action add_bench(CLI::App& app) {
       ->delimiter(',')
       ->check(CLI::PositiveNumber);
   sub->add_option("--t-end", a->t_end, "stiff: model time in s (default: chain 0.2, train 1, A05 its file's 10); beams: of the cantilever (default 5e-5: RK4 takes some 16 000 steps of 3e-9 s on 10 000 elements, the torsion of 1 mm elements)")->check(CLI::PositiveNumber);
-  sub->add_flag("--scalar-atol", a->scalar_atol, "ivp: atol = rtol for every component (the test set's scalar setting), instead of rtol times each "
-                "component's absolute scale (Robertson: 1e-4, 1e-10, 1e-2)");
+  sub->add_option("--atol-ratio", a->atol_ratio, "ivp: atol = R rtol for every component (1: one scalar tolerance, atol = rtol; 1e-4: four "
+                  "decades below), instead of rtol times each component's absolute scale (Robertson: 1e-4, 1e-10, 1e-2)")
+      ->check(CLI::PositiveNumber);
   sub->add_option("--reference-tol", a->reference_tol, "stiff: tolerance of the tirk reference run (default 1e-6); ivp: of the colloc "
                   "reference run where a problem has neither exact solution nor published value (default 1e-12)")->check(CLI::PositiveNumber);
   sub->add_option("--target-error", a->target_error, "stiff: the position error (m) at which the summary compares methods (default 1e-3); an adaptive method none of whose runs reaches it on one thread runs again at tolerances ten times tighter than the tightest of --tolerances, down to 1e-9, until one does")
