@@ -153,3 +153,19 @@ def test_errors_raise_with_their_message():
     # a step-size collapse is a failed result, as in scipy
     r = mbsflow.solve_ivp(lambda t, y: [1 / (1 - t)], (0, 2), [0.0], method="dopri5")
     assert r.status == -1 and not r.success and r.message
+
+
+def robertson(t, y):
+    return [-0.04 * y[0] + 1e4 * y[1] * y[2], 0.04 * y[0] - 1e4 * y[1] * y[2] - 3e7 * y[1] * y[1], 3e7 * y[1] * y[1]]
+
+
+def test_a_component_below_its_absolute_tolerance_is_warned_about():
+    # One atol = 1e-4 leaves Robertson's second component (at most 3.65e-5) without control.
+    with pytest.warns(RuntimeWarning, match=r"component 1 never exceeded its absolute tolerance 0.0001 \(largest \|y\| 3.6"):
+        mbsflow.solve_ivp(robertson, (0, 40), [1, 0, 0], method="tirk", rtol=1e-4, atol=1e-4)
+    # Per component, each below its size: no warning.
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        r = mbsflow.solve_ivp(robertson, (0, 40), [1, 0, 0], method="tirk", rtol=1e-4, atol=[1e-8, 1e-14, 1e-6])
+    assert r.success
