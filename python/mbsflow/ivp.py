@@ -174,7 +174,7 @@ def _warn_uncontrolled(y, atol, every_step):
     i = int(below[0])
     more = f" and so did {below.size - 1} more components" if below.size > 1 else ""
     where = "accepted step" if every_step else "point of t_eval"
-    warnings.warn(f"solve_ivp: component {i} never exceeded its absolute tolerance "
+    warnings.warn(f"solve_ivp: y[{i}] never exceeded its absolute tolerance "
                   f"{float(np.broadcast_to(atol, largest.shape)[i]):g} (largest |y| {largest[i]:.3g} at any {where}){more}: "
                   "held to atol in absolute terms only, none of its digits need be right; give atol per component, "
                   "each below its component's size", RuntimeWarning, stacklevel=3)
