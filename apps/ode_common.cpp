@@ -17,7 +17,10 @@ OdeRecorder::OdeRecorder(const OdeProblem& p, bool keep) : p_(p), keep_(keep) {
 void OdeRecorder::add(double t, const Eigen::VectorXd& y) {
   const double err = p_.exact ? (y - p_.exact(t)).cwiseAbs().maxCoeff() : 0.0;
   max_error_ = std::max(max_error_, err);
-  largest_ = largest_.size() ? largest_.cwiseMax(y.cwiseAbs()).eval() : y.cwiseAbs().eval();
+  if (largest_.size() == 0)
+    largest_ = y.cwiseAbs();
+  else
+    largest_ = largest_.cwiseMax(y.cwiseAbs());  // in place: no vector allocated per point
   if (!keep_) return;
   out_.time.push_back(t);
   for (long c : out_.components) out_.values.push_back(y(c));

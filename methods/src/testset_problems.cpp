@@ -63,6 +63,7 @@ OdeProblem hires_problem() {
   return p;
 }
 
+namespace {
 // The Oregonator's and E5's constants.
 namespace orego {
 constexpr double s = 77.27, w = 0.161, q = 8.375e-6;
@@ -70,6 +71,7 @@ constexpr double s = 77.27, w = 0.161, q = 8.375e-6;
 namespace e5 {
 constexpr double a = 7.89e-10, b = 1.1e7, c = 1.13e3, m = 1e6;
 }
+}  // namespace
 
 OdeProblem oregonator_problem() {
   using namespace orego;
