@@ -148,10 +148,10 @@ StiffRow run_method(const Model& m, Method method, double tol, double step, int 
   plan.options.output_interval = output_interval;
   plan.options.threads = threads;
   plan.parallel.threads = threads;
-  const bool explicit_method = method == Method::rk4 || method == Method::dopri5;
+  const bool stage_split = stepper_entry(method).tight_stages > 0;
   const auto start = BenchClock::now();
   try {
-    if (explicit_method && threads > 1) plan.partition = decompose(m, default_partitions(m, threads));
+    if (stage_split && threads > 1) plan.partition = decompose(m, default_partitions(m, threads));
     const RunSummary s = run(m, plan, &out);
     r.steps = s.steps;
     r.evaluations = s.evaluations;

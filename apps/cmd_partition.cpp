@@ -18,16 +18,12 @@ struct PartitionArgs {
   std::string partitioner = "best";
 };
 
-Partitioner parse_partitioner(const std::string& s) {
-  return s == "band" ? Partitioner::band : s == "metis" ? Partitioner::metis : Partitioner::best;
-}
-
 // Bytes a submodel receives per stage: 13 doubles per ghost body.
 std::size_t stage_bytes(const Submodel& s) { return s.ghosts.size() * 13 * sizeof(double); }
 
 int partition(const PartitionArgs& a) {
   const Model m = read_model_file(a.model);
-  const Decomposition d = decompose(m, a.k, parse_partitioner(a.partitioner));
+  const Decomposition d = decompose(m, a.k, partitioner_named(a.partitioner));
   std::printf("model %s: %zu bodies, %zu joints, %d submodels by %s\n", m.name.c_str(), m.bodies.size(), m.joints.size(),
               a.k, d.partitioner == Partitioner::metis ? "METIS k-way" : "band cuts of the reverse Cuthill-McKee order");
   std::printf("%9s %8s %8s %8s %10s %11s %10s %12s\n", "submodel", "bodies", "joints", "ghosts", "cut joints", "neighbours",

@@ -33,6 +33,19 @@ struct PlanArgs {
   std::string csv;
 };
 
+// The methods whose stages the hosts of a tightly coupled run exchange (their registry
+// entries have a stage scheme), and the same as "rk4 or dopri5".
+std::vector<std::string> tight_methods() {
+  std::vector<std::string> names;
+  for (const StepperEntry& e : stepper_entries())
+    if (e.tight_stages > 0) names.emplace_back(e.method.name());
+  return names;
+}
+
+std::string tight_method_list() {
+  return method_names([](const StepperEntry& e) { return e.tight_stages > 0; }, "or");
+}
+
 struct Measured {
   double seconds_per_stage = 0.0;  // one right-hand side with its share of the integrator's work
   double stages_per_step = 0.0;
@@ -89,15 +102,15 @@ int plan(const PlanArgs& a) {
   if (!a.method.empty()) overrides.method = *find_method(a.method);
   apply_overrides(m, overrides);
   RunOptions o = options_from_model(m);
-  if (o.method != Method::rk4 && o.method != Method::dopri5)
-    throw InputError("plan: runs across hosts integrate with rk4 or dopri5, this model asks for " + std::string(o.method.name()) +
-                     "; give --method rk4 or dopri5");
+  if (stepper_entry(o.method).tight_stages == 0)
+    throw InputError("plan: runs across hosts integrate with " + tight_method_list() + ", this model asks for " +
+                     o.method.name() + "; give --method " + tight_method_list());
   if (!std::isfinite(o.step)) throw InputError(a.model + ": no joints to estimate a step from; give --step");
   std::string net_text;
   const Hockney net = network_model(a, net_text);
   const Measured one = measure_one_thread(m, o);
   const double seconds_per_cost = one.seconds_per_stage / decompose(m, 1).estimated_time();
-  const bool adaptive = find_stepper(o.method.name())->adaptive;
+  const bool adaptive = stepper_entry(o.method).adaptive;
   const double steps = adaptive ? 0.0 : std::ceil((o.t_end - o.t_start) / o.step * (1.0 - 1e-12));
   std::printf("model %s: %zu bodies, %zu joints; %s, step %.4g s%s\n", m.name.c_str(), m.bodies.size(), m.joints.size(),
               o.method.name(), o.step, adaptive ? " (first step; adaptive)" : "");
@@ -150,7 +163,8 @@ Action add_plan(CLI::App& app) {
   sub->add_option("model", a->model, "Model file (JSON)")->required();
   sub->add_option("--hosts", a->hosts, "Hosts (worker processes), one submodel per thread each")->check(CLI::Range(1, 4096));
   sub->add_option("--threads", a->threads, "Threads per host")->check(CLI::Range(1, 4096));
-  sub->add_option("--method", a->method, "rk4 or dopri5 (default: the model's)")->check(CLI::IsMember({"rk4", "dopri5"}));
+  sub->add_option("--method", a->method, tight_method_list() + " (default: the model's)")
+      ->check(CLI::IsMember(tight_methods()));
   sub->add_option("--step", a->step, "Step in s (default: the model's, or the RK4 stability estimate)")->check(CLI::PositiveNumber);
   sub->add_option("--t-end", a->t_end, "End time in s, for the predicted run time")->check(CLI::PositiveNumber);
   sub->add_option("--network", a->network,

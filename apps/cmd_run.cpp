@@ -10,7 +10,6 @@
 #include <cstring>
 #include <memory>
 #include <optional>
-#include <thread>
 
 #include "commands.hpp"
 #include "huge_pages.hpp"
@@ -132,13 +131,10 @@ void print_coupling(const LooseStats& ls, bool adaptive, int max_lag, double tol
 }
 
 // How the run is cut: a partition file, --partitions, or default_k submodels (none when
-// that is 1 and the run is in one process).
-std::optional<Decomposition> choose_decomposition(const Model& m, const RunArgs& a, int default_k, bool one_process = true) {
+// that is 1 and the run is a tight one in one process).
+std::optional<Decomposition> choose_decomposition(const Model& m, const RunArgs& a, int default_k, bool plain_if_one) {
   if (!a.partition_file.empty()) return read_partition_file(m, a.partition_file);
-  const int k = a.partitions ? *a.partitions : default_k;
-  if (k == 1 && !a.partitions && one_process) return std::nullopt;
-  const Partitioner p = a.partitioner == "band" ? Partitioner::band : a.partitioner == "metis" ? Partitioner::metis : Partitioner::best;
-  return decompose(m, k, p);
+  return cut_for_run(m, a.partitions, default_k, partitioner_named(a.partitioner), plain_if_one);
 }
 
 std::string human_bytes(double b) {
@@ -162,7 +158,7 @@ RunOptions choose_options(Model& m, const RunArgs& a, const StableStep& s) {
   o.jacobian = a.jacobian;
   const char* name = method_name(o.method);
   if (m.simulation.step) {
-    if (o.method == Method::rk4 && *m.simulation.step > s.step)
+    if (!stepper_entry(o.method).adaptive && *m.simulation.step > s.step)
       std::fprintf(stderr, "mbsflow: warning: step %.3g s is above the estimated RK4 stability limit %s\n",
                    *m.simulation.step, s.describe(m).c_str());
     return o;
@@ -177,9 +173,9 @@ RunOptions choose_options(Model& m, const RunArgs& a, const StableStep& s) {
     std::fprintf(stderr,
                  "mbsflow: no joint gives RK4 a stable step (no compliant joint): %s, adaptive, %s (--method, --step, "
                  "--rtol and --atol choose)\n", name, tolerances);
-  } else if (o.method == Method::tirk || o.method == Method::colloc) {
+  } else if (stepper_entry(o.method).implicit) {
     std::fprintf(stderr, "mbsflow: no step given: %s picks its first step from the tolerances (%s)\n", name, tolerances);
-  } else if (find_stepper(name)->adaptive) {
+  } else if (stepper_entry(o.method).adaptive) {
     std::fprintf(stderr, "mbsflow: no step given: %s starts with %.4g s (%s) and adapts it to %s\n", name, o.step,
                  std::isfinite(s.step) ? "the RK4 stability estimate" : "a thousandth of the run", tolerances);
   } else {
@@ -299,7 +295,7 @@ int run(const RunArgs& a, const CheckpointFile* resumed = nullptr, const std::st
   FieldSet fields = a.output.empty() ? FieldSet{} : parse_fields(a.fields);
   // A model with beams writes their section forces unless told which fields to write.
   if (!a.output.empty() && !m.beams.empty() && a.fields == RunArgs{}.fields) fields.joint_force = true;
-  const int threads = a.threads > 0 ? a.threads : static_cast<int>(std::thread::hardware_concurrency());
+  const int threads = run_threads(a.threads);
   const bool cluster = !a.cluster.empty() || a.processes > 0 || slurm_workers;
   // The model's text for the results file and the worker processes is written on a
   // thread of its own while the run is cut and set up (1.4 s for a million-body model).
@@ -329,14 +325,11 @@ int run(const RunArgs& a, const CheckpointFile* resumed = nullptr, const std::st
     std::fprintf(stderr, "mbsflow: --slurm with one task: a run on this process's threads\n");
   }
   // Loose coupling cuts the model even into one submodel (then it is a plain run).
-  // The implicit methods integrate a tight run whole: their stages are parallel inside the step.
-  const bool stage_split = o.method == Method::rk4 || o.method == Method::dopri5;
   // Local workers take a submodel each; the model is cut before they are started, so that a
   // model that cannot be cut so far is refused before any process exists.
   const int default_k = a.processes > 0 ? a.processes
-                        : cluster         ? cluster_submodels(cc)
-                        : stage_split || loose ? default_partitions(m, threads)
-                                               : 1;
+                        : cluster       ? cluster_submodels(cc)
+                                        : default_submodels(m, o.method, loose, threads);
   std::optional<Decomposition> d;
   try {
     d = choose_decomposition(m, a, default_k, !cluster && !loose);
@@ -372,7 +365,7 @@ int run(const RunArgs& a, const CheckpointFile* resumed = nullptr, const std::st
     std::fprintf(stderr, "mbsflow: %zu submodels on %d threads (%s), %d cut joints, load imbalance %.1f %%\n",
                  d->submodels.size(), threads, a.executor == "flow" ? "flow graph" : "barrier per stage", d->cut_joints,
                  100.0 * d->imbalance);
-  if (!stage_split && !loose && !cluster && !a.quiet) {  // an implicit method on the whole model
+  if (stepper_entry(o.method).implicit && !loose && !cluster && !a.quiet) {  // an implicit method on the whole model
     std::string why;
     if (o.jacobian == "differences")
       std::fprintf(stderr, "mbsflow: Jacobian by coloured differences (--jacobian differences)\n");

@@ -153,6 +153,13 @@ std::string piece_sizes(const std::vector<int>& piece, int pieces) {
 
 }  // namespace
 
+Partitioner partitioner_named(std::string_view name) {
+  if (name == "best") return Partitioner::best;
+  if (name == "band") return Partitioner::band;
+  if (name == "metis") return Partitioner::metis;
+  throw InputError("{partitioner=" + std::string(name) + "}: best, band or metis");
+}
+
 Decomposition decompose(const Model& m, int k, Partitioner partitioner) {
   const int n = static_cast<int>(m.bodies.size());
   if (k < 1) throw InputError("partitions: must be >= 1 (got " + std::to_string(k) + ")");

@@ -277,7 +277,7 @@ void bind_ivp(py::module_& m) {
         const std::optional<Method> m = find_method(method);
         if (!m) throw InputError("{method=" + method + "}: unknown method (" + method_list() + ")");
         in.method = *m;
-        const bool implicit = in.method == Method::colloc || in.method == Method::tirk;
+        const bool implicit = stepper_entry(in.method).implicit;
         for (auto [given, scalar, vector, name] : {std::tuple{&rtol, &in.settings.rtol, &in.settings.rtols, "rtol"},
                                                   std::tuple{&atol, &in.settings.atol, &in.settings.atols, "atol"}}) {
           const Eigen::VectorXd v = to_vector(*given, -1, name);
@@ -285,7 +285,7 @@ void bind_ivp(py::module_& m) {
             *scalar = v[0];
           } else {
             if (v.size() != in.y0.size()) throw InputError(std::string("{") + name + "}: one value or one per component of y0");
-            if (!implicit) throw InputError(std::string("{") + name + "}: one value per component only with colloc or tirk");
+            if (!implicit) throw InputError(std::string("{") + name + "}: one value per component only with an implicit method (colloc, tirk)");
             *vector = v;
             *scalar = v.maxCoeff();
           }

@@ -2,7 +2,6 @@
 // run_request.hpp, so the same numbers), results to a file that mbsflow.Results reads.
 #include <cmath>
 #include <memory>
-#include <thread>
 
 #include "bindings.hpp"
 #include "mbsflow/graph/stable_step.hpp"
@@ -25,23 +24,15 @@ Method method_named(const std::string& name, const char* setting) {
   return *m;
 }
 
-Partitioner partitioner_named(const std::string& name) {
-  if (name == "best") return Partitioner::best;
-  if (name == "band") return Partitioner::band;
-  if (name == "metis") return Partitioner::metis;
-  throw InputError("{partitioner=" + name + "}: best, band or metis");
-}
-
 // The submodels: a partition file (str), a count (int), or the CLI's default (None).
 std::optional<Decomposition> partition_of(const Model& m, const py::object& partition, Partitioner p, int default_k, bool loose) {
   if (py::isinstance<py::str>(partition)) return read_partition_file(m, partition.cast<std::string>());
+  std::optional<int> given;
   if (!partition.is_none()) {
-    const int k = partition.cast<int>();
-    if (k < 1) throw InputError("{partition=" + std::to_string(k) + "}: at least 1 submodel");
-    return decompose(m, k, p);
+    given = partition.cast<int>();
+    if (*given < 1) throw InputError("{partition=" + std::to_string(*given) + "}: at least 1 submodel");
   }
-  if (default_k == 1 && !loose) return std::nullopt;
-  return decompose(m, default_k, p);
+  return cut_for_run(m, given, default_k, p, !loose);
 }
 
 py::dict run_model(const Model& model, const std::string& output, const std::string& fields, const ModelOverrides& overrides,
@@ -56,12 +47,11 @@ py::dict run_model(const Model& model, const std::string& output, const std::str
   RunOptions o = options_from_model(m, stable.step);
   o.linear_solver = linear_solver;
   o.jacobian = jacobian;
-  const int threads = threads_given > 0 ? threads_given : static_cast<int>(std::thread::hardware_concurrency());
+  const int threads = run_threads(threads_given);
   const bool loose = coupling == "loose";
   check_loose_request(loose, loose_request);
   const LooseOptions lo = loose ? loose_options(loose_request, stable.step, o.step, threads) : LooseOptions{};
-  const bool stage_split = o.method == Method::rk4 || o.method == Method::dopri5;
-  const int default_k = stage_split || loose ? default_partitions(m, threads) : 1;
+  const int default_k = default_submodels(m, o.method, loose, threads);
   RunPlan plan;
   plan.partition = partition_of(m, partition, partitioner_named(partitioner), default_k, loose);
   if (loose) plan.loose = lo;

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "mbsflow/graph/stable_step.hpp"
+#include "mbsflow/methods/stepper.hpp"
 
 namespace mbsflow {
 
@@ -63,12 +64,12 @@ std::string divergence_message(const Model& model, const Divergence& d, double t
   const StableStep s = estimate_stable_step(model);
   char buf[512];
   const char* body = model.bodies.at(static_cast<std::size_t>(d.body)).name.c_str();
-  if (method == Method::rk4) {
+  if (!stepper_entry(method).adaptive) {
     const double suggest = step > s.step ? s.step : 0.5 * step;
     std::snprintf(buf, sizeof buf,
-                  "run diverged at t = %.6g s: body '%s': %s. The RK4 step %.3g s %s the estimated stability limit %s; "
+                  "run diverged at t = %.6g s: body '%s': %s. The %s step %.3g s %s the estimated stability limit %s; "
                   "try {step=%.3g} (or {method=dopri5})",
-                  t, body, d.what.c_str(), step, step > s.step ? "exceeds" : "is within", s.describe(model).c_str(),
+                  t, body, d.what.c_str(), method.name(), step, step > s.step ? "exceeds" : "is within", s.describe(model).c_str(),
                   suggest);
   } else {
     std::snprintf(buf, sizeof buf,
@@ -82,7 +83,7 @@ std::string divergence_message(const Model& model, const Divergence& d, double t
 std::string loose_divergence_message(const Model& model, const Divergence& d, double t, Method method, double step,
                                      double macro_step, int lag, double overlap) {
   const StableStep s = estimate_stable_step(model);
-  if (method == Method::rk4 && step > s.step) return divergence_message(model, d, t, method, step);
+  if (!stepper_entry(method).adaptive && step > s.step) return divergence_message(model, d, t, method, step);
   char advice[160];
   if (lag > 0)
     std::snprintf(advice, sizeof advice, "{max_lag=0} (then each submodel integrates its neighbours' bodies near the cut)");

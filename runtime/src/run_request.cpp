@@ -1,6 +1,10 @@
 #include "mbsflow/runtime/run_request.hpp"
 
 #include <cmath>
+#include <thread>
+
+#include "mbsflow/methods/stepper.hpp"
+#include "mbsflow/runtime/partitioned_run.hpp"
 
 namespace mbsflow {
 
@@ -23,6 +27,19 @@ void apply_overrides(Model& m, const ModelOverrides& o) {
   }
   if (o.output_interval) m.simulation.output_interval = *o.output_interval;
   if (o.assemble) m.simulation.assemble = true;
+}
+
+int run_threads(int given) { return given > 0 ? given : static_cast<int>(std::thread::hardware_concurrency()); }
+
+int default_submodels(const Model& m, Method method, bool loose, int threads) {
+  return stepper_entry(method).tight_stages > 0 || loose ? default_partitions(m, threads) : 1;
+}
+
+std::optional<Decomposition> cut_for_run(const Model& m, std::optional<int> given, int default_k, Partitioner p,
+                                         bool plain_if_one) {
+  const int k = given.value_or(default_k);
+  if (k == 1 && !given && plain_if_one) return std::nullopt;
+  return decompose(m, k, p);
 }
 
 void check_loose_request(bool loose, const LooseRequest& r) {

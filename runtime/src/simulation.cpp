@@ -45,44 +45,32 @@ long restore_point(const Checkpointing& c, ResultSink* sink, const MultibodySyst
   return next;
 }
 
-// Fixed-step methods: a snapshot every output_steps(o) steps and at the end; `first` is
-// the index of the first step to take.
-void run_fixed(MultibodySystem& sys, Stepper& stepper, const RunOptions& o, ResultSink* sink, RunSummary& out, long first) {
+// The loop over a whole model's stepper: after every step the snapshots that fall due (a
+// fixed-step method every output_steps(o) steps and at the end; an adaptive one on the
+// uniform grid from its dense output, then at the end), the guards, progress and
+// checkpoints. `next` is where the loop goes on: the index of the next fixed step, or of
+// the next output time on the grid.
+void run_steps(MultibodySystem& sys, Stepper& stepper, bool adaptive, const RunOptions& o, ResultSink* sink,
+               RunSummary& out, long next) {
   const int every = output_steps(o);
-  CheckpointTimer checkpoint(o.checkpoint);
-  for (long k = first; !stepper.done(); ++k) {
-    stepper.step();
-    const double t = stepper.t();
-    check(sys, stepper.y(), t, o);
-    if (sink && (k % every == 0 || stepper.done())) emit(sys, sink, t, stepper.y(), out);
-    if (o.progress && (k & 15) == 0) o.progress(t, k);
-    if (!stepper.done() && checkpoint.due()) save_point(*o.checkpoint, sink, stepper, o.method, k + 1, out);
-  }
-}
-
-// Adaptive methods: snapshots on the uniform output grid from the dense output, and at
-// the end; `next_out` is the index of the next output time.
-void run_adaptive(MultibodySystem& sys, Stepper& stepper, const RunOptions& o, ResultSink* sink, RunSummary& out,
-                  long next_out) {
-  const double dt_out = output_dt(o);
-  Eigen::VectorXd dense(sys.dimension());
+  Eigen::VectorXd dense(adaptive ? sys.dimension() : 0);
   CheckpointTimer checkpoint(o.checkpoint);
   while (!stepper.done()) {
     stepper.step();
-    const double t_new = stepper.t();
-    while (sink) {
-      const double t_out = o.t_start + static_cast<double>(next_out) * dt_out;
-      if (t_out > t_new || t_out >= o.t_end) break;
-      stepper.dense(t_out, dense);
-      sys.after_step(t_out, dense);
-      emit(sys, sink, t_out, dense, out);
-      ++next_out;
-    }
-    check(sys, stepper.y(), t_new, o);
-    if (o.progress && (stepper.stats().accepted & 15) == 0) o.progress(t_new, stepper.stats().accepted);
-    if (!stepper.done() && checkpoint.due()) save_point(*o.checkpoint, sink, stepper, o.method, next_out, out);
+    const double t = stepper.t();
+    if (adaptive && sink)
+      next = dense_outputs(o, next, t, [&](long, double t_out) {
+        stepper.dense(t_out, dense);
+        sys.after_step(t_out, dense);
+        emit(sys, sink, t_out, dense, out);
+      });
+    check(sys, stepper.y(), t, o);
+    const long steps = adaptive ? stepper.stats().accepted : next++;
+    if (!adaptive && sink && (steps % every == 0 || stepper.done())) emit(sys, sink, t, stepper.y(), out);
+    if (o.progress && (steps & 15) == 0) o.progress(t, steps);
+    if (!stepper.done() && checkpoint.due()) save_point(*o.checkpoint, sink, stepper, o.method, next, out);
   }
-  if (sink) emit(sys, sink, stepper.t(), stepper.y(), out);
+  if (adaptive && sink) emit(sys, sink, stepper.t(), stepper.y(), out);
 }
 
 }  // namespace
@@ -150,10 +138,7 @@ RunSummary run_simulation(MultibodySystem& sys, const RunOptions& o, ResultSink*
   if (sink) phase_done(o, "start the results file");
   run_with_sink(sink, out, [&] {
     if (sink && !resume) emit(sys, sink, o.t_start, y, out);
-    if (entry.adaptive)
-      run_adaptive(sys, *stepper, o, sink, out, next);
-    else
-      run_fixed(sys, *stepper, o, sink, out, next);
+    run_steps(sys, *stepper, entry.adaptive, o, sink, out, next);
   });
   phase_done(o, sink ? "steps, and the results written" : "steps");
   out.steps = stepper->stats().accepted;

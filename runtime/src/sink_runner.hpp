@@ -117,15 +117,23 @@ inline void resume_results(const StateReader& in, const Checkpointing& c, Result
   sink->resume(sys, out.snapshots, results);
 }
 
-// The registry entry of the run's method (InputError naming the methods there are).
-inline const StepperEntry& stepper_entry(Method m) {
-  if (const StepperEntry* e = find_stepper(m.name())) return *e;
-  throw InputError("unknown method '" + std::string(m.name()) + "' (" + method_list() + ")");
-}
-
 // The output grid in s of model time (see RunOptions).
 inline double output_dt(const RunOptions& o) {
   return o.output_interval > 0.0 ? o.output_interval : o.step * o.output_every;
+}
+
+// Adaptive methods: the snapshots between two steps come from the dense output on the
+// uniform grid t_start + k output_dt(o), k = next, next + 1, ... up to t_new and short of
+// t_end (where the last step's end is the snapshot). Calls at(k, t_out) for each; returns
+// the index of the next grid time. Every run loop of an adaptive method goes through it.
+template <class F>
+long dense_outputs(const RunOptions& o, long next, double t_new, F at) {
+  const double dt = output_dt(o);
+  for (;; ++next) {
+    const double t_out = o.t_start + static_cast<double>(next) * dt;
+    if (t_out > t_new || t_out >= o.t_end) return next;
+    at(next, t_out);
+  }
 }
 
 // Fixed-step methods: the steps between snapshots.
@@ -150,8 +158,9 @@ inline void check_options(const RunOptions& o) {
     throw InputError("unknown linear solver '" + o.linear_solver + "' (auto, dense, banded, klu or sparselu)");
   if (o.jacobian != "auto" && o.jacobian != "differences")
     throw InputError("the Jacobian must be auto (analytic where the model has one) or differences, not '" + o.jacobian + "'");
-  if (o.fixed_step && o.method != Method::tirk && o.method != Method::colloc)
-    throw InputError(std::string("a fixed step without error control is for colloc and tirk, not ") + o.method.name());
+  if (o.fixed_step && !stepper_entry(o.method).implicit)
+    throw InputError("a fixed step without error control is for " +
+                     method_names([](const StepperEntry& e) { return e.implicit; }, "and") + ", not " + o.method.name());
   if (o.output_interval < 0.0 || !std::isfinite(o.output_interval))
     throw InputError("the output interval must be a positive finite number");
   if (o.output_interval > 0.0 && !stepper_entry(o.method).adaptive) {
@@ -167,7 +176,7 @@ inline void check_options(const RunOptions& o) {
 
 inline StepperSettings stepper_settings(const RunOptions& o) {
   StepperSettings s;
-  const bool implicit = o.method == Method::tirk || o.method == Method::colloc;
+  const bool implicit = stepper_entry(o.method).implicit;
   s.step = implicit && !o.step_given && !o.fixed_step ? 0.0 : o.step;  // 0: the method's own first step
   s.rtol = o.rtol;
   s.atol = o.atol;

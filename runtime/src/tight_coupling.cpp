@@ -126,44 +126,35 @@ TightCounts run_dopri5(const TightRun& r) {
         });
       },
       r.barriers, remote ? &*remote : nullptr);
-  const double dt_out = output_dt(o);
   while (t < o.t_end) {
     h = std::min(h, o.t_end - t);
-    while (true) {  // attempts until one is accepted
-      if (h < control.h_min(t)) throw RunError(step_collapsed_message(h, t, o.rtol));
+    double taken = 0.0;
+    // The schedule's stages read h: the step of the attempt.
+    const bool ok = control.accepted_step(t, h, taken, counts.rejected, [&] {
       schedule.run(1);
       r.exchange.check();
       counts.evaluations += need_k0 ? 7 : 6;
       need_k0 = false;
-      const double err = std::sqrt(r.exchange.error_sum(attempt, squares) / static_cast<double>(squares.size()));
+      const double sum = r.exchange.error_sum(attempt, squares);
       ++attempt;
-      const dopri5::Controller::Decision decision = control.decide(err, h);
-      if (!decision.accept) {
-        ++counts.rejected;
-        h = decision.h;
-        continue;
+      return std::sqrt(sum / static_cast<double>(squares.size()));
+    });
+    if (!ok) throw RunError(step_collapsed_message(h, t, o.rtol));
+    const double t_new = landed_time(t, taken, o.t_end);
+    for (std::size_t p = 0; p < r.parts.size(); ++p)
+      if (Part* part = r.parts[p]) {
+        partitioned::dopri5_accept(*part, taken, t_new);  // element-wise, cheap
+        if (t_new < o.t_end) r.exchange.offer(p, attempt, 0);
       }
-      const double taken = h;
-      const double t_new = landed_time(t, taken, o.t_end);
-      for (std::size_t p = 0; p < r.parts.size(); ++p)
-        if (Part* part = r.parts[p]) {
-          partitioned::dopri5_accept(*part, taken, t_new);  // element-wise, cheap
-          if (t_new < o.t_end) r.exchange.offer(p, attempt, 0);
-        }
-      while (r.output.wants_dense()) {
-        const double t_out = o.t_start + static_cast<double>(next_out) * dt_out;
-        if (t_out > t_new || t_out >= o.t_end) break;
+    if (r.output.wants_dense())
+      next_out = dense_outputs(o, next_out, t_new, [&](long k, double t_out) {
         for (const Part* part : r.parts)
           if (part) partitioned::dopri5_dense(*part, (t_out - t) / taken, dense);
-        r.output.dense(next_out, t_out, dense);
-        ++next_out;
-      }
-      ++counts.steps;
-      t = t_new;
-      h = decision.h;
-      need_k0 = true;
-      break;
-    }
+        r.output.dense(k, t_out, dense);
+      });
+    ++counts.steps;
+    t = t_new;
+    need_k0 = true;
     r.output.step_done(counts.steps, t, t < o.t_end ? -1 : next_out);
     if (t < o.t_end && r.output.checkpoint_due()) {
       StateWriter w;
@@ -177,8 +168,7 @@ TightCounts run_dopri5(const TightRun& r) {
 }  // namespace
 
 int tight_stages(Method m) {
-  if (m == Method::rk4) return 4;
-  if (m == Method::dopri5) return 7;
+  if (const int stages = stepper_entry(m).tight_stages) return stages;
   throw InputError(std::string("a tightly coupled run of several submodels exchanges RK4 or DOPRI5 stages; ") +
                    method_name(m) +
                    " integrates a whole model (its stages run in parallel inside the step) or each submodel of a "

@@ -76,7 +76,8 @@ Outcome run_tight(Session& s, WorkerIo& io, zmq::context_t& ctx, zmq::socket_t& 
     resumed = read_tight_point(in, global.size(), y);
     for (Part* p : parts)
       if (p) partitioned::scatter(y, global, *p);
-    if (s.o.method == Method::rk4) w.exchange.start_at(resumed->steps);  // DOPRI5 numbers its attempts from 0 again
+    // A fixed-step scheme's exchange counts steps; an adaptive one numbers its attempts from 0 again.
+    if (!stepper_entry(s.o.method).adaptive) w.exchange.start_at(resumed->steps);
   }
   // A proxy waits on its thread (see RemoteInputs): one thread per local submodel at least.
   tbb::task_arena arena(std::max(threads > 0 ? threads : tbb::info::default_concurrency(), static_cast<int>(w.mine.size())));

@@ -47,6 +47,23 @@ TEST_CASE("stepper registry: every method by its name, unknown names listed", "[
   CHECK_THROWS_AS(make_stepper(Method::colloc, sys, bad), InputError);
 }
 
+TEST_CASE("stepper registry: each method's capabilities, and the methods named by one", "[methods][stepper]") {
+  CHECK(method_names([](const StepperEntry& e) { return e.implicit; }, "and") == "colloc and tirk");
+  CHECK(method_names([](const StepperEntry& e) { return e.tight_stages > 0; }, "or") == "rk4 or dopri5");
+  CHECK(method_names([](const StepperEntry& e) { return !e.adaptive; }, "or") == "rk4");
+  CHECK(method_names([](const StepperEntry&) { return false; }, "or").empty());
+  CHECK(stepper_entry(Method::rk4).tight_stages == 4);
+  CHECK(stepper_entry(Method::dopri5).tight_stages == 7);
+  CHECK_THROWS_WITH(stepper_entry(Method("euler")), "unknown method 'euler' (rk4, dopri5, colloc, tirk)");
+  // An implicit method controls its error: fixed_step is its option, not a kind of method.
+  for (const StepperEntry& e : stepper_entries()) {
+    INFO(e.method.name());
+    if (e.implicit) CHECK(e.adaptive);
+    // A tight stage scheme is explicit: its stages are taken one after another.
+    if (e.tight_stages > 0) CHECK_FALSE(e.implicit);
+  }
+}
+
 TEST_CASE("rk4 stepper: order 4, fixed steps landing on t_end", "[methods][stepper]") {
   std::vector<double> h, err;
   for (double step : {0.1, 0.05, 0.025}) {

@@ -4,6 +4,7 @@
 // part, cut into K contiguous pieces of equal cost) and METIS k-way (balanced cost, fewest
 // cut joints). Each piece gets its boundary (ghost) bodies and an exchange plan.
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "mbsflow/graph/model.hpp"
@@ -65,6 +66,9 @@ struct Decomposition {
   double estimated_time() const;  // of the slowest submodel
 };
 
+
+// A partitioner by its name: best, band or metis (InputError naming them).
+Partitioner partitioner_named(std::string_view name);
 
 // K-way decomposition that never cuts a rigid joint; InputError if k < 1 or k is more
 // than the pieces the rigid joints leave (the message gives their sizes).

@@ -121,6 +121,25 @@ class Controller {
   double h_min(double t) const {
     return s_.h_min > 0.0 ? s_.h_min : 16.0 * std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(t));
   }
+  // One accepted step from t, trying h first: attempt() computes the stages for step h and
+  // returns the error norm; each rejected attempt is counted in `rejected`. On return
+  // `taken` is the accepted step and h the next one to try; false when h fell below
+  // h_min(t) (the caller reports it). Dopri5::step and the tightly coupled run, whose
+  // stages are spread over submodels, take their steps through this one loop.
+  template <class Attempt>
+  bool accepted_step(double t, double& h, double& taken, long& rejected, Attempt attempt) {
+    while (true) {
+      if (h < h_min(t)) return false;
+      const Decision d = decide(attempt(), h);
+      if (d.accept) {
+        taken = h;
+        h = d.h;
+        return true;
+      }
+      ++rejected;
+      h = d.h;
+    }
+  }
 
   // What the controller carries from step to step (checkpoints).
   void save(StateWriter& out) const {
@@ -185,31 +204,23 @@ class Dopri5 {
       fsal_ = true;
     }
     auto k = [this](int j) -> const Eigen::VectorXd& { return k_[j]; };
-    while (true) {
-      if (h < control_.h_min(t)) return false;
+    const bool ok = control_.accepted_step(t, h, taken, stats_.rejected, [&] {
       for (int s = 1; s < 7; ++s) {
         dopri5::stage_input(s, y, k, h, tmp_);
         sys.rhs(t + dopri5::c[s] * h, tmp_, k_[s]);
       }
       stats_.evaluations += 6;
       dopri5::error_squares(y, tmp_, k, h, s_.atol, s_.rtol, sq_);
-      const double err = std::sqrt(dopri5::ordered_sum(sq_) / static_cast<double>(sq_.size()));
-      const dopri5::Controller::Decision d = control_.decide(err, h);
-      if (!d.accept) {
-        ++stats_.rejected;
-        h = d.h;
-        continue;
-      }
-      dopri5::dense_setup(y, tmp_, k, h, [this](int i) -> Eigen::VectorXd& { return r_[i]; });
-      t_old_ = t;
-      h_old_ = h;
-      y = tmp_;
-      k_[0].swap(k_[6]);  // first same as last
-      ++stats_.accepted;
-      taken = h;
-      h = d.h;
-      return true;
-    }
+      return std::sqrt(dopri5::ordered_sum(sq_) / static_cast<double>(sq_.size()));
+    });
+    if (!ok) return false;
+    dopri5::dense_setup(y, tmp_, k, taken, [this](int i) -> Eigen::VectorXd& { return r_[i]; });
+    t_old_ = t;
+    h_old_ = taken;
+    y = tmp_;
+    k_[0].swap(k_[6]);  // first same as last
+    ++stats_.accepted;
+    return true;
   }
 
   // Dense output of the last accepted step at time t in [t_old, t_old + h_old].

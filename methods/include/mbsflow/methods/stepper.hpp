@@ -113,19 +113,34 @@ class Stepper {
   mutable StepperStats stats_;  // mutable: dense output may evaluate f (rk4 does, for its slopes)
 };
 
-// The registry: one entry per method.
+// The registry: one entry per method, with what it can do. Every decision a run makes
+// about a method (how it takes its first step, which tolerances it accepts, whether its
+// stages can be spread over submodels) reads these, never the method's name.
 using StepperFactory = std::unique_ptr<Stepper> (*)(const StepperSystem& system, const StepperSettings& settings);
 struct StepperEntry {
   Method method;
   const char* summary;
-  bool adaptive;  // false: fixed steps of StepperSettings::step (snapshots every k steps)
+  // false: fixed steps of StepperSettings::step (snapshots every k steps; a step above the
+  // stability limit diverges, and a smaller step is the advice).
+  bool adaptive;
+  // Solves for its stages with the Jacobian: picks its first step from the tolerances,
+  // takes per-component tolerances, a linear solver and StepperSettings::fixed_step.
+  bool implicit;
+  // The stages a tightly coupled run of several submodels exchanges, one after another
+  // (the stage schemes of runtime/src/partitioned_state.hpp); 0: the method integrates a
+  // whole model (its stages run in parallel inside the step) or a loosely coupled submodel.
+  int tight_stages;
   StepperFactory make;
 };
 std::span<const StepperEntry> stepper_entries();
-// The entry of a method; nullopt for a name no entry has.
+// The entry of a method; nullptr for a name no entry has.
 const StepperEntry* find_stepper(std::string_view name);
+// The entry of a method; InputError naming the methods there are for one no entry has.
+const StepperEntry& stepper_entry(Method method);
 std::optional<Method> find_method(std::string_view name);
 std::string method_list();  // "rk4, dopri5, ..." for messages
+// The methods whose entry passes keep, for messages: "colloc and tirk", "rk4 or dopri5".
+std::string method_names(bool (*keep)(const StepperEntry&), const char* conjunction);
 // InputError naming the methods there are for an unknown method.
 std::unique_ptr<Stepper> make_stepper(Method method, const StepperSystem& system, const StepperSettings& settings);
 

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "mbsflow/graph/decomposition.hpp"
 #include "mbsflow/graph/model.hpp"
 #include "mbsflow/runtime/loose_coupling.hpp"
 
@@ -34,6 +35,19 @@ struct LooseRequest {
     return macro_step || coupling_tol || overlap || max_lag > 0 || exact_lag || !methods.empty();
   }
 };
+
+// The threads of a run on this process: the given count, or all cores (0).
+int run_threads(int given);
+
+// How many submodels a run on this process's threads is cut into by default: one per
+// thread (fewer for a small model) where they exchange a method's stages or run loosely
+// coupled, else 1 (an implicit method's stages are parallel inside its step).
+int default_submodels(const Model& model, Method method, bool loose, int threads);
+
+// The cut of a run: `given` submodels, or default_k; none where neither asks for more
+// than one and a plain run is what one submodel means (a tight run in one process).
+std::optional<Decomposition> cut_for_run(const Model& model, std::optional<int> given, int default_k,
+                                         Partitioner partitioner, bool plain_if_one);
 
 // InputError for loose settings in a tight run, or an exact lag without a lag.
 void check_loose_request(bool loose, const LooseRequest& request);
