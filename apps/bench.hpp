@@ -29,7 +29,7 @@ struct BenchArgs {
   std::vector<double> frequencies;    // stiff: the chain's bushing frequencies (default 1e3, 1e4, 1e5 rad/s)
   double t_end = 0;                   // stiff: model time (default per model)
   // Tolerance of the reference run; 0: stiff 1e-6 (1e-7 is slow on the 2000-body chain at
-  // 1e5: docs/methods.md), ivp 1e-12.
+  // 1e5: notes/methods-measurements.md), ivp 1e-12.
   double reference_tol = 0;
   double target_error = 1e-3;         // stiff: the error at which methods are compared
   std::vector<std::string> methods;   // stiff, ivp: which methods run (default all)

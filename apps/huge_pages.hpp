@@ -32,7 +32,7 @@ bool huge_pages_on();
 // come from other malloc arenas and cannot reuse them; building them frees the copies of
 // their joints, which the first evaluation does not all reuse. A 1000 x 1000 grid's
 // resident memory after the cut fell from 1126 to 705 MB, and with the memory given back
-// after each phase of the run too, its peak from 1.97 to 1.78 GiB (docs/parallel.md).
+// after each phase of the run too, its peak from 1.97 to 1.78 GiB (notes/parallel-measurements.md).
 void give_back_free_memory();
 
 }  // namespace mbsflow::cli

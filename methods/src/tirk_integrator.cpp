@@ -103,8 +103,8 @@ class TirkIntegrator::Driver {
       stages_.build(*graph_);
     });
     // With one thread, or below 1000 equations, where a node's work takes a few
-    // microseconds, about what the dispatch of its task costs (docs/methods.md, "Small
-    // systems"), the graph's jobs run on this thread. Each node writes its own rows only,
+    // microseconds, about what the dispatch of its task costs (notes/methods-measurements.md,
+    // "Small systems"), the graph's jobs run on this thread. Each node writes its own rows only,
     // so the numbers are the same either way. (colloc keeps its graph: its two blocks of a
     // step run side by side, each a whole iteration.)
     here_ = arena_.max_concurrency() == 1 || p.size < 1000;
@@ -318,7 +318,7 @@ const std::vector<Eigen::VectorXd>* TirkIntegrator::Driver::extrapolate(double t
 // tol 1e-4, with differenced Jacobians the cap took 25 924 right-hand sides and 201
 // Jacobians in place of 35 488 and 456, and with its analytic Jacobian 200 Jacobians and
 // 404 factorisations in place of 451 and 1322 (0.14 s in place of 0.20 s); on Van der Pol,
-// Robertson and B1 the cap would take up to 6x more right-hand sides (docs/methods.md).
+// Robertson and B1 the cap would take up to 6x more right-hand sides (notes/methods-measurements.md).
 bool TirkIntegrator::Driver::dear_jacobian() const { return jacobian_.colours() > 2 * tableau_.stages(); }
 
 // After an accepted step of size h. Even with an exact Jacobian the triangular (or

@@ -109,7 +109,7 @@ TEST_CASE("run --coupling loose: newest values with a lag over a slow network, a
   // Messages 20 ms late and macro steps of microseconds: the submodels run ahead on older
   // values, never more than 2 macro steps. H is 0.15 of the stable step: at 0.3 of it,
   // lags that jump between 0 and 2 (slow builds, sanitizers) made the chain ring up to
-  // 0.2 m off, while a steady lag of 2 stays within 1e-5 (docs/parallel.md).
+  // 0.2 m off, while a steady lag of 2 stays within 1e-5 (notes/parallel-measurements.md).
   const Result r = run("run chain.json --t-end 0.05 --step 1e-4 --every 100 --partitions 3 --coupling loose "
                        "--macro-step 1e-4 --extrapolation 2 --processes 2 --exchange-delay 0.02 --max-lag 2 -o async.h5", dir);
   INFO(r.err);

@@ -50,7 +50,7 @@ double newton_tolerance(double rtol);
 struct TirkSettings {
   std::string tableau = "radau3";
   // The full Newton iteration by default: on the stiff multibody models and the seed's
-  // problems it needs a third of the triangular iteration's f evaluations (docs/methods.md).
+  // problems it needs a third of the triangular iteration's f evaluations (docs/methods.md, "Current figures").
   TirkIteration iteration = TirkIteration::newton;
   double rtol = 1e-6, atol = 1e-6;
   // Per-component tolerances (one value per equation), in place of rtol / atol when not
