@@ -7,7 +7,6 @@
 #include <future>
 #include <csignal>
 #include <cstdio>
-#include <cstring>
 #include <memory>
 #include <optional>
 
@@ -380,8 +379,8 @@ int run(const RunArgs& a, const CheckpointFile* resumed = nullptr, const std::st
   // (on worker threads, in arenas the first evaluation's workspaces do not all reuse). Not
   // after the steps: nothing large is allocated after them, and trimming a heap that a
   // thousand snapshots went through took 0.15-0.3 s, a third of a 1 s run.
-  o.phase = [&](const char* phase) {
-    if (std::strncmp(phase, "steps", 5) != 0) give_back_free_memory();
+  o.phase = [&](const char* phase, RunPhase kind) {
+    if (kind != RunPhase::steps) give_back_free_memory();
     if (a.timings) timings.mark(phase, bodies);
   };
   o.stop = install_stop_handlers();

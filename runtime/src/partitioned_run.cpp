@@ -172,7 +172,7 @@ RunSummary run_partitioned(std::shared_ptr<const Model> shared, const Decomposit
       out.evaluations = counts.evaluations;
     });
   });
-  phase_done(o, sink ? "steps, and the results written" : "steps");
+  phase_done(o, sink ? "steps, and the results written" : "steps", RunPhase::steps);
   // The stage vectors go before the final state is gathered, which then takes their place
   // rather than adding to the peak (a million bodies' state is 104 MB).
   for (Part& p : parts) {

@@ -140,7 +140,7 @@ RunSummary run_simulation(MultibodySystem& sys, const RunOptions& o, ResultSink*
     if (sink && !resume) emit(sys, sink, o.t_start, y, out);
     run_steps(sys, *stepper, entry.adaptive, o, sink, out, next);
   });
-  phase_done(o, sink ? "steps, and the results written" : "steps");
+  phase_done(o, sink ? "steps, and the results written" : "steps", RunPhase::steps);
   out.steps = stepper->stats().accepted;
   out.rejected = stepper->stats().rejected;
   out.evaluations = stepper->stats().evaluations;

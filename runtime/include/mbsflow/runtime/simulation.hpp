@@ -17,6 +17,9 @@
 
 namespace mbsflow {
 
+// What a phase of a run was: part of its set-up, or the steps (with the results written).
+enum class RunPhase { set_up, steps };
+
 struct RunOptions {
   Method method = Method::rk4;  // any method of the stepper registry (mbsflow/methods/stepper.hpp)
   bool method_chosen = false;   // the model named none: options_from_model chose it
@@ -52,12 +55,12 @@ struct RunOptions {
   // Told as each part of a run's set-up ends ("build the system", "start the results
   // file", ...) and when the steps end, so that mbsflow run --timings can say what each
   // took and held; may be empty.
-  std::function<void(const char* phase)> phase;
+  std::function<void(const char* phase, RunPhase kind)> phase;
 };
 
-// Calls o.phase(name) if it is set.
-inline void phase_done(const RunOptions& o, const char* name) {
-  if (o.phase) o.phase(name);
+// Calls o.phase(name, kind) if it is set.
+inline void phase_done(const RunOptions& o, const char* name, RunPhase kind = RunPhase::set_up) {
+  if (o.phase) o.phase(name, kind);
 }
 
 struct RunSummary {
