@@ -35,16 +35,16 @@ struct PlanArgs {
 
 // The methods whose stages the hosts of a tightly coupled run exchange (their registry
 // entries have a stage scheme), and the same as "rk4 or dopri5".
+bool has_stage_scheme(const StepperEntry& e) { return e.tight_stages > 0; }
+
 std::vector<std::string> tight_methods() {
   std::vector<std::string> names;
   for (const StepperEntry& e : stepper_entries())
-    if (e.tight_stages > 0) names.emplace_back(e.method.name());
+    if (has_stage_scheme(e)) names.emplace_back(e.method.name());
   return names;
 }
 
-std::string tight_method_list() {
-  return method_names([](const StepperEntry& e) { return e.tight_stages > 0; }, "or");
-}
+std::string tight_method_list() { return method_names(has_stage_scheme, "or"); }
 
 struct Measured {
   double seconds_per_stage = 0.0;  // one right-hand side with its share of the integrator's work
