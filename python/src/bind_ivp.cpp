@@ -285,7 +285,9 @@ void bind_ivp(py::module_& m) {
             *scalar = v[0];
           } else {
             if (v.size() != in.y0.size()) throw InputError(std::string("{") + name + "}: one value or one per component of y0");
-            if (!implicit) throw InputError(std::string("{") + name + "}: one value per component only with an implicit method (colloc, tirk)");
+            if (!implicit)
+              throw InputError(std::string("{") + name + "}: one value per component only with " +
+                               method_names([](const StepperEntry& e) { return e.implicit; }, "or"));
             *vector = v;
             *scalar = v.maxCoeff();
           }
