@@ -1,5 +1,5 @@
 // mbsflow ode --method tirk: the triangularised implicit Runge-Kutta methods (seed 004).
-#include <Eigen/Eigenvalues>
+#include "mbsflow/methods/real_eigen.hpp"
 #include <chrono>
 #include <cstdio>
 #include <iostream>
@@ -22,7 +22,7 @@ void print_matrix(const char* name, const Eigen::MatrixXd& m) {
   }
 }
 
-double spectral_radius(const Eigen::MatrixXd& m) { return m.eigenvalues().cwiseAbs().maxCoeff(); }
+double spectral_radius(const Eigen::MatrixXd& m) { return eigenvalues_of(m).cwiseAbs().maxCoeff(); }
 
 TirkIteration iteration_of(const OdeArgs& a) {
   return a.iteration.empty() ? TirkIteration::newton : tirk_iteration_from_string(a.iteration);
@@ -65,7 +65,7 @@ int describe_tableau(const std::string& name) {
   std::printf("functional iterations contract for tau < 1/(L M), L the Lipschitz constant of f; the Newton-type ones\n"
               "(newton-triangular, newton-diagonal) converge on very stiff components when rho(I - T^-1 A) < 1.\n");
   // The full Newton iteration: one linear system per real eigenvalue or complex pair of A.
-  const Eigen::VectorXcd mu = a.eigenvalues();
+  const Eigen::VectorXcd mu = eigenvalues_of(a);
   std::printf("\nnewton (default): the full simplified Newton iteration, one system per real eigenvalue or complex pair of A:");
   for (Eigen::Index i = 0; i < mu.size(); ++i)
     if (mu(i).imag() >= 0) std::printf(mu(i).imag() > 1e-12 ? " %.6f+-%.6fi" : " %.6f", mu(i).real(), mu(i).imag());

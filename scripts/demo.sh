@@ -6,11 +6,9 @@ cd "$(dirname "$0")/.."
 ./scripts/install-deps.sh
 jobs=$(nproc 2>/dev/null || echo 2)
 cmake --preset release >/dev/null
-# Only what the demo needs: the program and the Python package (test.sh builds the rest
-# with the same configuration, so nothing built here is compiled again).
-targets=(mbsflow_cli)
-grep -q '^MBSFLOW_PYTHON_MODULE:BOOL=ON' build/release/CMakeCache.txt && targets+=(mbsflow_python)
-cmake --build --preset release -j "$jobs" --target "${targets[@]}"
+# Only what the demo needs: the program (test.sh builds the rest, the Python module
+# included, with the same configuration, so nothing built here is compiled again).
+cmake --build --preset release -j "$jobs" --target mbsflow_cli
 exe=build/release/apps/mbsflow
 out=results/demo
 mkdir -p "$out"
@@ -24,4 +22,5 @@ echo "demo: model    $out/chain.json"
 echo "demo: results  $out/chain.h5 (open $out/chain.xdmf in ParaView; mbsflow export $out/chain.h5 --csv DIR for CSV)"
 echo "demo: plot     $out/chain.png"
 echo "demo: motion   $out/chain.html (open it in a browser: play, seek, orbit)"
-echo "demo: python   PYTHONPATH=build/release/python /usr/bin/python3 -c \"import mbsflow; r = mbsflow.Results.open('$out/chain.h5'); print(r.position.shape)\" (docs/python.md)"
+echo "demo: python   cmake --build --preset release --target mbsflow_python (test.sh builds it too), then"
+echo "              PYTHONPATH=build/release/python /usr/bin/python3 -c \"import mbsflow; r = mbsflow.Results.open('$out/chain.h5'); print(r.position.shape)\" (docs/python.md)"

@@ -10,6 +10,7 @@
 #include "constrained.hpp"
 #include "mbsflow/error.hpp"
 #include "mbsflow/methods/klu_lu.hpp"
+#include "mbsflow/methods/real_eigen.hpp"
 
 namespace mbsflow {
 namespace {
@@ -81,12 +82,12 @@ std::vector<Found> dense_modes(const LinearModel& m, bool damped, Eigen::Index& 
   a.topRightCorner(free, free).setIdentity();
   a.bottomLeftCorner(free, free) = -mass.solve(kr);
   a.bottomRightCorner(free, free) = -mass.solve(dr);
-  Eigen::EigenSolver<Eigen::MatrixXd> eig(a);
-  if (eig.info() != Eigen::Success) throw RunError("the dense eigensolver did not converge");
+  const RealEigen eig = real_eigen(a, true);
+  if (!eig.converged) throw RunError("the dense eigensolver did not converge");
   for (Eigen::Index i = 0; i < 2 * free; ++i) {
-    const Complex lambda = eig.eigenvalues()[i];
+    const Complex lambda = eig.values[i];
     if (lambda.imag() < 0.0 || std::abs(lambda) < zero) continue;  // the conjugate's partner; rigid-body motions above
-    out.push_back({lambda, basis * eig.eigenvectors().col(i).head(free)});
+    out.push_back({lambda, basis * eig.vectors.col(i).head(free)});
   }
   return out;
 }

@@ -3,7 +3,7 @@
 #include "mbsflow/error.hpp"
 #include "mbsflow/methods/block_method.hpp"
 
-#include <Eigen/Eigenvalues>
+#include "mbsflow/methods/real_eigen.hpp"
 #include <Eigen/LU>
 #include <boost/multiprecision/cpp_int.hpp>
 #include <algorithm>
@@ -411,7 +411,7 @@ ZeroStability check_zero_stability(const BlockCoefficients& method) {
     else
       map.row(a) = method.q.row(c - m);
   }
-  const Eigen::VectorXcd ev = map.eigenvalues();
+  const Eigen::VectorXcd ev = eigenvalues_of(map);
   int principal = -1;
   for (int i = 0; i < m; ++i)
     if (principal < 0 || std::abs(ev(i) - 1.0) < std::abs(ev(principal) - 1.0)) principal = i;

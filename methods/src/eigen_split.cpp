@@ -1,10 +1,10 @@
 #include "eigen_split.hpp"
 
-#include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 #include <cmath>
 
 #include "mbsflow/error.hpp"
+#include "mbsflow/methods/real_eigen.hpp"
 
 namespace mbsflow {
 
@@ -13,10 +13,10 @@ namespace mbsflow {
 EigenSplit::EigenSplit(const Eigen::MatrixXd& g, Eigen::Index n, const std::string& what,
                        const std::shared_ptr<Elimination>& elimination) {
   const auto k = static_cast<int>(g.rows());
-  Eigen::EigenSolver<Eigen::MatrixXd> eig(g);
-  if (eig.info() != Eigen::Success) throw InputError("cannot diagonalise " + what);
-  const Eigen::VectorXcd mu = eig.eigenvalues();
-  const Eigen::MatrixXcd v = eig.eigenvectors();
+  const RealEigen eig = real_eigen(g, true);
+  if (!eig.converged) throw InputError("cannot diagonalise " + what);
+  const Eigen::VectorXcd& mu = eig.values;
+  const Eigen::MatrixXcd& v = eig.vectors;
   t_.resize(k, k);
   std::vector<bool> done(static_cast<std::size_t>(k), false);
   for (int e = 0; e < k; ++e) {

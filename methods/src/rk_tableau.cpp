@@ -1,7 +1,7 @@
 // The tableaux: Gauss and Radau IIA as collocation methods at the roots of (shifted)
 // Legendre polynomials, computed in long double; Lobatto IIIC exactly; the one-step block
 // methods of seed 001 rewritten as Runge-Kutta methods.
-#include <Eigen/Eigenvalues>
+#include "mbsflow/methods/real_eigen.hpp"
 #include "mbsflow/error.hpp"
 #include "mbsflow/methods/rk_tableau.hpp"
 
@@ -180,7 +180,7 @@ EmbeddedFormula embedded_formula(const RkTableau& t, const TriangularSplitting& 
 }
 
 double largest_real_eigenvalue(const RkTableau& t) {
-  const Eigen::VectorXcd mu = t.implicit_block().eigenvalues();
+  const Eigen::VectorXcd mu = eigenvalues_of(t.implicit_block());
   double best = 0;
   for (const std::complex<double>& m : mu)
     if (std::abs(m.imag()) <= 1e-12 * std::max(1.0, std::abs(m))) best = std::max(best, m.real());

@@ -1,7 +1,7 @@
 // The numerical A-stability check behind StabilityReport.
 #include "mbsflow/methods/stability.hpp"
 
-#include <Eigen/Eigenvalues>
+#include "mbsflow/methods/real_eigen.hpp"
 #include <cmath>
 #include <limits>
 
@@ -12,7 +12,7 @@ StabilityReport stability_report(const std::function<std::complex<double>(std::c
   StabilityReport rep;
   rep.at_infinity = at_infinity;
   rep.min_pole_real_part = std::numeric_limits<double>::infinity();
-  const Eigen::VectorXcd mu = implicit.eigenvalues();
+  const Eigen::VectorXcd mu = eigenvalues_of(implicit);
   for (Eigen::Index i = 0; i < mu.size(); ++i)
     if (std::abs(mu(i)) > 1e-14) rep.min_pole_real_part = std::min(rep.min_pole_real_part, (1.0 / mu(i)).real());
   for (int k = 0; k <= 4000; ++k) {
