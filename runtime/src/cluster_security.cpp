@@ -1,6 +1,6 @@
 // Who may take part in a run across processes (docs/reliability.md): with keys, only the
 // holders of the keys the cluster file lists; without, only what runs on this host.
-#include "cluster_wire.hpp"
+#include "wire_format.hpp"
 #include "mbsflow/error.hpp"
 #include "mbsflow/runtime/cluster.hpp"
 

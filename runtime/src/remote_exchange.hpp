@@ -23,13 +23,13 @@
 #include <zmq.hpp>
 
 #include "mbsflow/graph/decomposition.hpp"
-#include "boundary_exchange.hpp"
 #include "cluster_wire.hpp"
 #include "partitioned_state.hpp"
+#include "worker_transport.hpp"
 
 namespace mbsflow {
 
-class RemoteExchange final : public BoundaryExchange {
+class RemoteExchange final : public WorkerExchange {
  public:
   // parts[q]: local submodel q's state, null where q runs elsewhere; worker_of[q] its worker.
   RemoteExchange(zmq::context_t& ctx, zmq::socket_t& inbox, const Decomposition& d, std::vector<partitioned::Part*> parts,
@@ -37,9 +37,6 @@ class RemoteExchange final : public BoundaryExchange {
                  const std::vector<std::string>& data_addresses, int stages, double send_timeout_s, double delay_s,
                  std::uint64_t run, const wire::Security* security);
   ~RemoteExchange() override;
-  // A run resumed from a checkpoint at step n: every process has the state of step n
-  // (stage input 0), as it has the initial state otherwise.
-  void start_at(long n) { start_step_ = n; }
   // Marked (steady-clock ns) while wait() waits for peers: waiting is not a hung step.
   void set_progress_clock(std::atomic<std::int64_t>* clock) { progress_clock_ = clock; }
 
@@ -52,36 +49,24 @@ class RemoteExchange final : public BoundaryExchange {
   void fail(std::exception_ptr e) override;
   bool stopped() const override { return BoundaryExchange::stopped() || aborted(); }
   void check() const override;
-
   // From a proxy node: returns once remote q's values of stage input s of step n for local
   // p are in, or the exchange was aborted.
   void wait(long n, int s, int q, int p) override;
-  // From local p's stage: its remote ghosts of stage input s of step n, from their slots.
-  void receive(int p, long n, int s);
-  // From local p (loose coupling): remote q's messages of stage input s with a step up to
-  // cap that are in, oldest first, to take(step, values); reads the inbox first unless
-  // another thread does.
-  void take_upto(int p, int q, int s, long cap, const std::function<void(long, const double*)>& take);
-  // From local p's stage: its bodies of stage input s of step n to the remote submodels
-  // that hold them as ghosts.
-  void send(int p, long n, int s);
-  // The same from a state x of local p (a resumed loose run sends its kept macro-step ends again).
-  void send(int p, long n, int s, const Eigen::VectorXd& x);
 
-  // Loose coupling's error control, before a macro step to end n is taken again: the
-  // messages of stage input s of step n that were taken are forgotten, so that waiting
-  // for step n waits for the new ones (any that are in already count).
-  void rewind(int s, long n);
-  // The largest of every worker's `mine` (loose coupling's error control: all take the
-  // same decision); n numbers the call (the same in every worker).
-  double max_over_workers(long n, double mine);
-
-  // Stops the exchange: waiting proxies return and stages skip their work.
-  void abort(const std::string& why);
-  bool aborted() const;
-  std::string why() const;
-  long messages_sent() const;
-  double bytes_per_stage() const;  // payload this worker sends per stage
+  // WorkerExchange (worker_transport.hpp). take_upto reads the inbox first unless another
+  // thread does.
+  void start_at(long n) override { start_step_ = n; }
+  void receive(int p, long n, int s) override;
+  void take_upto(int p, int q, int s, long cap, const std::function<void(long, const double*)>& take) override;
+  void send(int p, long n, int s) override;
+  void send(int p, long n, int s, const Eigen::VectorXd& x) override;
+  void rewind(int s, long n) override;
+  double max_over_workers(long n, double mine) override;
+  void abort(const std::string& why) override;
+  bool aborted() const override;
+  std::string why() const override;
+  long messages_sent() const override;
+  double bytes_per_stage() const override;
 
  private:
   struct Message {

@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-#include "cluster_wire.hpp"
+#include "wire_format.hpp"
 #include "mbsflow/error.hpp"
 #include "partitioned_state.hpp"
 

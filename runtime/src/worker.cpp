@@ -7,6 +7,7 @@
 #include "mbsflow/methods/stepper.hpp"
 #include "mbsflow/runtime/cluster.hpp"
 #include "options_json.hpp"
+#include "worker_io.hpp"
 #include "worker_part.hpp"
 #include "zap_guard.hpp"
 
@@ -221,7 +222,8 @@ void serve_worker(const WorkerOptions& wo) {
   log("running submodels " + list + " of " + std::to_string(s.worker_of.size()) + " (" + std::to_string(own) +
       " bodies), inbox " + data_address);
   const int threads = s.threads > 0 ? s.threads : wo.threads;
-  const Outcome outcome = (s.loose ? run_loose_part : run_tight)(s, io, ctx, inbox, start, threads, wo.stop);
+  const std::unique_ptr<WorkerTransport> transport = zmq_worker_transport(ctx, inbox, io);
+  const Outcome outcome = (s.loose ? run_loose_part : run_tight)(s, *transport, start, threads, wo.stop);
   const auto& [failure, last] = outcome;
   if (!failure.empty()) throw RunError(failure);
   if (last && wire::text(*last, "type") == "finish") io.goodbye();

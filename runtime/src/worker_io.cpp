@@ -2,7 +2,6 @@
 
 #include "cluster_wire.hpp"
 #include "mbsflow/error.hpp"
-#include "remote_exchange.hpp"
 
 namespace mbsflow {
 
@@ -71,7 +70,7 @@ void WorkerIo::goodbye() {
   post_locked([this] { control_.set(zmq::sockopt::linger, 1000); });
 }
 
-void WorkerIo::attach(RemoteExchange* exchange) {
+void WorkerIo::attach(WorkerExchange* exchange) {
   std::lock_guard lock(mutex_);
   exchange_ = exchange;
   if (exchange_ && lost_) exchange_->abort("the coordinator was lost");

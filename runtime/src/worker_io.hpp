@@ -1,7 +1,8 @@
 #pragma once
 // A worker's I/O thread: owns the control socket (ROUTER, bound at --listen), sends
 // heartbeats, notices a silent coordinator and hands commands to the worker's main thread;
-// an abort or a lost coordinator stops the attached RemoteExchange at once.
+// an abort or a lost coordinator stops the attached exchange at once. The ZeroMQ
+// transport's WorkerControl.
 #include <atomic>
 #include <condition_variable>
 #include <deque>
@@ -15,37 +16,36 @@
 
 #include "cluster_wire.hpp"
 #include "mbsflow/runtime/cluster.hpp"
+#include "worker_transport.hpp"
 
 namespace mbsflow {
 
-class RemoteExchange;
-
-class WorkerIo {
+class WorkerIo final : public WorkerControl {
  public:
   // Binds the control socket (InputError if it cannot) and starts the thread.
   // security: CURVE on the control socket (the context's ZapGuard admits the coordinator).
   WorkerIo(zmq::context_t& ctx, const std::string& listen, const wire::Security* security);
-  ~WorkerIo();
+  ~WorkerIo() override;
   WorkerIo(const WorkerIo&) = delete;
   WorkerIo& operator=(const WorkerIo&) = delete;
 
   const std::string& endpoint() const { return endpoint_; }
   // The next command from the coordinator, {"type": "lost"} once it is lost; nullopt
   // after timeout_s (<= 0: wait as long as it takes).
-  std::optional<nlohmann::json> next_command(double timeout_s);
+  std::optional<nlohmann::json> next_command(double timeout_s) override;
   // Sends a control message to the coordinator (on the I/O thread).
   void send(nlohmann::json message);
   // Says goodbye to the coordinator; the control socket then closes with a linger of one
   // second instead of none, so that the goodbye goes out.
   void goodbye();
-  void attach(RemoteExchange* exchange);  // stopped on an abort or when the coordinator is lost
-  ClusterTimeouts timeouts() const;
+  void attach(WorkerExchange* exchange) override;  // stopped on an abort or when the coordinator is lost
+  ClusterTimeouts timeouts() const override;
   // The computation's clock for the watchdog: marked when a step completes and while it
   // waits for peers; heartbeats carry how long ago that was (stalled_s).
-  std::atomic<std::int64_t>* progress_clock() { return &progress_ns_; }  // wire::now_ns()
+  std::atomic<std::int64_t>* progress_clock() override { return &progress_ns_; }  // wire::now_ns()
   // The checkpoint opportunity the coordinator asked for last (its "checkpoint" command,
   // which is not queued), or -1.
-  std::int64_t checkpoint_request() const { return checkpoint_at_.load(); }
+  std::int64_t checkpoint_request() const override { return checkpoint_at_.load(); }
   // Set once the coordinator's set-up has begun to arrive (its model may take a while).
   const std::atomic<bool>* setup_begun() const { return &setup_begun_; }
 
@@ -73,7 +73,7 @@ class WorkerIo {
   std::condition_variable changed_;
   std::deque<nlohmann::json> commands_;
   std::deque<std::function<void()>> posted_;  // run on the I/O thread
-  RemoteExchange* exchange_ = nullptr;
+  WorkerExchange* exchange_ = nullptr;
   ClusterTimeouts timeouts_;
   bool stopping_ = false;
   bool lost_ = false;
@@ -88,5 +88,10 @@ class WorkerIo {
   std::string model_;
   std::size_t model_expected_ = 0;
 };
+
+// The ZeroMQ transport of a worker's run (WorkerTransport): the exchange over the
+// workers' data inboxes (`inbox`: this worker's, bound), results to the coordinator's
+// results inbox, commands through io.
+std::unique_ptr<WorkerTransport> zmq_worker_transport(zmq::context_t& ctx, zmq::socket_t& inbox, WorkerIo& io);
 
 }  // namespace mbsflow

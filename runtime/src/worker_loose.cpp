@@ -33,8 +33,8 @@ bool exchange_past(WorkerPart& w, std::vector<std::unique_ptr<LoosePart>>& lp, i
 
 }  // namespace
 
-Outcome run_loose_part(Session& s, WorkerIo& io, zmq::context_t& ctx, zmq::socket_t& inbox, const nlohmann::json& start,
-                       int threads, const std::atomic<bool>* stop) {
+Outcome run_loose_part(Session& s, WorkerTransport& transport, const nlohmann::json& start, int threads,
+                       const std::atomic<bool>* stop) {
   LooseOptions lo = *s.loose;
   lo.threads = threads;
   s.d = loose_decomposition(s.model, s.d, lo);  // the same overlap in every worker
@@ -43,7 +43,7 @@ Outcome run_loose_part(Session& s, WorkerIo& io, zmq::context_t& ctx, zmq::socke
   std::vector<partitioned::Part*> parts(k, nullptr);
   for (std::size_t q = 0; q < k; ++q)
     if (s.worker_of[q] == s.me) parts[q] = &(lp[q] = loose::make_part(s.model, s.d.submodels[q], s.o, lo, q))->part;
-  WorkerPart w(s, io, ctx, inbox, start, parts, 4, stop);
+  WorkerPart w(s, transport, start, parts, 4, stop);
   const bool adaptive = lo.coupling_tol > 0.0;
   loose::MacroGrid grid(s.o, adaptive ? 0.0 : lo.macro_step);
   const StepGrid tight = step_grid(s.o.t_start, s.o.t_end, s.o.step);  // the coordinator's snapshot times

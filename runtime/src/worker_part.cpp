@@ -9,27 +9,20 @@ namespace mbsflow {
 
 using nlohmann::json;
 
-WorkerPart::WorkerPart(Session& session, WorkerIo& io, zmq::context_t& ctx, zmq::socket_t& inbox, const json& start,
-                       std::vector<partitioned::Part*> local, int stages, const std::atomic<bool>* stop)
-    : s(session), parts(std::move(local)),
-      exchange(ctx, inbox, s.d, parts, s.worker_of, start.at("names").get<std::vector<std::string>>(),
-               start.at("data_addresses").get<std::vector<std::string>>(), stages, io.timeouts().lost_s, s.exchange_delay_s,
-               s.run, s.security ? &*s.security : nullptr),
-      io_(io), results_(wire::make_socket(ctx, zmq::socket_type::push)), stop_(stop) {
+WorkerPart::WorkerPart(Session& session, WorkerTransport& transport, const json& start, std::vector<partitioned::Part*> local,
+                       int stages, const std::atomic<bool>* stop)
+    : s(session), parts(std::move(local)), exchange_(transport.exchange(s, start, parts, stages)), exchange(*exchange_),
+      control_(transport.control()), results_(transport.results(s)), stop_(stop) {
   for (std::size_t q = 0; q < parts.size(); ++q)
     if (parts[q]) {
       mine.push_back(static_cast<int>(q));
       bodies_.insert(bodies_.end(), parts[q]->sub->own.begin(), parts[q]->sub->own.end());
     }
-  io.attach(&exchange);
-  exchange.set_progress_clock(io.progress_clock());
-  io.progress_clock()->store(wire::now_ns());
-  results_.set(zmq::sockopt::sndtimeo, static_cast<int>(io.timeouts().lost_s * 1000.0));
-  if (s.security) wire::curve_client(results_, &*s.security, s.security->coordinator);
-  wire::connect(results_, s.results_address, "the coordinator's results inbox");
+  control_.attach(&exchange);
+  control_.progress_clock()->store(wire::now_ns());
 }
 
-WorkerPart::~WorkerPart() { io_.attach(nullptr); }
+WorkerPart::~WorkerPart() { control_.attach(nullptr); }
 
 void WorkerPart::report(wire::ResultKind kind, long steps, double t, long index, const void* data, std::size_t bytes) {
   wire::ResultHeader h;
@@ -39,18 +32,13 @@ void WorkerPart::report(wire::ResultKind kind, long steps, double t, long index,
   h.index = index;
   h.t = t;
   h.run = s.run;
-  bool ok = false;
-  try {
-    ok = wire::send_framed(results_, h, data, bytes);
-  } catch (const zmq::error_t&) {
-  }
-  if (!ok) exchange.abort("the coordinator stopped taking results");
+  if (!results_->send(h, data, bytes)) exchange.abort("the coordinator stopped taking results");
 }
 
 std::string WorkerPart::check(double t) const {
   if (s.hang_after_s >= 0.0 && wire::seconds_since(started_) > s.hang_after_s)
     while (!exchange.aborted()) std::this_thread::yield();  // tests: a step that never ends
-  io_.progress_clock()->store(wire::now_ns());
+  control_.progress_clock()->store(wire::now_ns());
   if (exchange.aborted()) return exchange.why();
   for (int q : mine)
     if (auto dv = partitioned::check(*parts[static_cast<std::size_t>(q)]))
@@ -97,7 +85,7 @@ void WorkerPart::report_coupling(const std::vector<CouplingRecord>& records) {
 
 bool WorkerPart::checkpoint_due() {
   ++opportunity_;
-  const std::int64_t asked = io_.checkpoint_request();
+  const std::int64_t asked = control_.checkpoint_request();
   if (asked < 0 || asked == answered_ || asked > opportunity_) return false;
   answered_ = asked;
   if (asked == opportunity_) return true;
@@ -121,7 +109,7 @@ Outcome WorkerPart::finish(std::string failure, long steps, double t, double eva
   }
   // The sockets stay open until the coordinator's word: the last results and boundary
   // values may still be on their way (linger 0).
-  return {failure, io_.next_command(io_.timeouts().lost_s + 1.0)};
+  return {failure, control_.next_command(control_.timeouts().lost_s + 1.0)};
 }
 
 }  // namespace mbsflow

@@ -9,13 +9,11 @@
 #include <optional>
 #include <string>
 #include <vector>
-#include <zmq.hpp>
 
-#include "cluster_wire.hpp"
 #include "mbsflow/runtime/loose_coupling.hpp"
 #include "partitioned_state.hpp"
-#include "remote_exchange.hpp"
-#include "worker_io.hpp"
+#include "wire_format.hpp"
+#include "worker_transport.hpp"
 
 namespace mbsflow {
 
@@ -52,14 +50,19 @@ class WorkerPart {
  public:
   // parts[q]: local submodel q's state, null where q runs elsewhere; stages: the stage
   // inputs exchanged per step.
-  WorkerPart(Session& s, WorkerIo& io, zmq::context_t& ctx, zmq::socket_t& inbox, const nlohmann::json& start,
-             std::vector<partitioned::Part*> parts, int stages, const std::atomic<bool>* stop);
+  WorkerPart(Session& s, WorkerTransport& transport, const nlohmann::json& start, std::vector<partitioned::Part*> parts,
+             int stages, const std::atomic<bool>* stop);
   ~WorkerPart();
 
   Session& s;
   std::vector<partitioned::Part*> parts;
   std::vector<int> mine;  // local submodels, ascending
-  RemoteExchange exchange;
+
+ private:
+  std::unique_ptr<WorkerExchange> exchange_;
+
+ public:
+  WorkerExchange& exchange;
 
   // A failure message when the run must stop at time t (aborted, diverged, interrupted).
   std::string check(double t) const;
@@ -87,8 +90,8 @@ class WorkerPart {
 
  private:
   void report(wire::ResultKind kind, long steps, double t, long index, const void* data, std::size_t bytes);
-  WorkerIo& io_;
-  zmq::socket_t results_;
+  WorkerControl& control_;
+  std::unique_ptr<ResultsChannel> results_;
   const std::atomic<bool>* stop_;
   wire::Clock::time_point started_ = wire::Clock::now();
   std::vector<double> snapshot_;
@@ -102,9 +105,9 @@ void prepare_tight(Session& s);
 
 // The loops, each with its local submodels' state: RK4 or DOPRI5 with values exchanged
 // every stage (tight), or macro steps (loose).
-Outcome run_tight(Session& s, WorkerIo& io, zmq::context_t& ctx, zmq::socket_t& inbox, const nlohmann::json& start,
-                  int threads, const std::atomic<bool>* stop);
-Outcome run_loose_part(Session& s, WorkerIo& io, zmq::context_t& ctx, zmq::socket_t& inbox, const nlohmann::json& start,
-                       int threads, const std::atomic<bool>* stop);
+Outcome run_tight(Session& s, WorkerTransport& transport, const nlohmann::json& start, int threads,
+                  const std::atomic<bool>* stop);
+Outcome run_loose_part(Session& s, WorkerTransport& transport, const nlohmann::json& start, int threads,
+                       const std::atomic<bool>* stop);
 
 }  // namespace mbsflow

@@ -1,5 +1,5 @@
 // A worker's part of a tightly coupled run: the loop of tight_coupling.hpp over its local
-// submodels, with the boundary values of the others through the RemoteExchange and the
+// submodels, with the boundary values of the others through the WorkerExchange and the
 // results to the coordinator (docs/cluster.md).
 #include <oneapi/tbb/info.h>
 #include <oneapi/tbb/task_arena.h>
@@ -57,14 +57,14 @@ void prepare_tight(Session& s) {
     if (s.worker_of[q] == s.me) s.tight_parts[q] = std::make_unique<Part>(s.model, s.d.submodels[q], stages, true);
 }
 
-Outcome run_tight(Session& s, WorkerIo& io, zmq::context_t& ctx, zmq::socket_t& inbox, const nlohmann::json& start,
-                  int threads, const std::atomic<bool>* stop) {
+Outcome run_tight(Session& s, WorkerTransport& transport, const nlohmann::json& start, int threads,
+                  const std::atomic<bool>* stop) {
   const int stages = tight_stages(s.o.method);
   // serve_worker made them (prepare_tight) before it said ready: not in the timed run.
   if (s.tight_parts.size() != s.d.submodels.size()) throw std::logic_error("run_tight: the local submodels were not prepared");
   std::vector<Part*> parts;
   for (const auto& p : s.tight_parts) parts.push_back(p.get());
-  WorkerPart w(s, io, ctx, inbox, start, parts, stages, stop);
+  WorkerPart w(s, transport, start, parts, stages, stop);
   CoordinatorOutput output(w);
   std::string failure;
   TightCounts counts;
