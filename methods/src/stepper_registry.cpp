@@ -36,10 +36,10 @@ std::string method_list() {
   return out;
 }
 
-std::string method_names(bool (*keep)(const StepperEntry&), const char* conjunction) {
-  std::vector<const char*> names;
+std::string method_names(bool (*keep)(const StepperEntry&), const char* conjunction, std::string (*spell)(const char*)) {
+  std::vector<std::string> names;
   for (const StepperEntry& e : entries)
-    if (keep(e)) names.push_back(e.method.name());
+    if (keep(e)) names.push_back(spell ? spell(e.method.name()) : std::string(e.method.name()));
   std::string out;
   for (std::size_t i = 0; i < names.size(); ++i)
     out += std::string(i == 0 ? "" : i + 1 == names.size() ? std::string(" ") + conjunction + " " : ", ") + names[i];

@@ -1,5 +1,6 @@
 #include "tight_coupling.hpp"
 
+#include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <optional>
@@ -169,11 +170,18 @@ TightCounts run_dopri5(const TightRun& r) {
 
 int tight_stages(Method m) {
   if (const int stages = stepper_entry(m).tight_stages) return stages;
-  throw InputError(std::string("a tightly coupled run of several submodels exchanges RK4 or DOPRI5 stages; ") +
-                   method_name(m) +
+  // The methods with a stage scheme, from the registry: "RK4 or DOPRI5", "{method=rk4} or {method=dopri5}".
+  const auto staged = [](const StepperEntry& e) { return e.tight_stages > 0; };
+  const std::string upper = method_names(staged, "or", [](const char* name) {
+    std::string u = name;
+    for (char& c : u) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+    return u;
+  });
+  const std::string settings =
+      method_names(staged, "or", [](const char* name) { return "{method=" + std::string(name) + "}"; });
+  throw InputError("a tightly coupled run of several submodels exchanges " + upper + " stages; " + method_name(m) +
                    " integrates a whole model (its stages run in parallel inside the step) or each submodel of a "
-                   "loosely coupled run: give {coupling=loose}, or {method=rk4} or {method=dopri5}, or run it in one "
-                   "process on threads");
+                   "loosely coupled run: give {coupling=loose}, or " + settings + ", or run it in one process on threads");
 }
 
 void save_tight_point(StateWriter& w, const TightPoint& p, const Eigen::VectorXd& y) {

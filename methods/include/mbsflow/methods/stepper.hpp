@@ -139,8 +139,10 @@ const StepperEntry* find_stepper(std::string_view name);
 const StepperEntry& stepper_entry(Method method);
 std::optional<Method> find_method(std::string_view name);
 std::string method_list();  // "rk4, dopri5, ..." for messages
-// The methods whose entry passes keep, for messages: "colloc and tirk", "rk4 or dopri5".
-std::string method_names(bool (*keep)(const StepperEntry&), const char* conjunction);
+// The methods whose entry passes keep, for messages: "colloc and tirk", "rk4 or dopri5";
+// spell writes each name otherwise ("RK4", "{method=rk4}").
+std::string method_names(bool (*keep)(const StepperEntry&), const char* conjunction,
+                         std::string (*spell)(const char* name) = nullptr);
 // InputError naming the methods there are for an unknown method.
 std::unique_ptr<Stepper> make_stepper(Method method, const StepperSystem& system, const StepperSettings& settings);
 
