@@ -59,7 +59,7 @@ class WorkerPart {
   std::vector<int> mine;  // local submodels, ascending
 
  private:
-  std::unique_ptr<WorkerExchange> exchange_;
+  std::unique_ptr<WorkerExchange> exchange_;  // the transport's; made before `exchange` refers to it
 
  public:
   WorkerExchange& exchange;
