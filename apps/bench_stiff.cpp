@@ -148,7 +148,7 @@ StiffRow run_method(const Model& m, Method method, double tol, double step, int 
   plan.options.output_interval = output_interval;
   plan.options.threads = threads;
   plan.parallel.threads = threads;
-  const bool stage_split = stepper_entry(method).tight_stages > 0;
+  const bool stage_split = has_stage_scheme(stepper_entry(method));
   const auto start = BenchClock::now();
   try {
     if (stage_split && threads > 1) plan.partition = decompose(m, default_partitions(m, threads));

@@ -35,8 +35,6 @@ struct PlanArgs {
 
 // The methods whose stages the hosts of a tightly coupled run exchange (their registry
 // entries have a stage scheme), and the same as "rk4 or dopri5".
-bool has_stage_scheme(const StepperEntry& e) { return e.tight_stages > 0; }
-
 std::vector<std::string> tight_methods() {
   std::vector<std::string> names;
   for (const StepperEntry& e : stepper_entries())

@@ -32,7 +32,7 @@ void apply_overrides(Model& m, const ModelOverrides& o) {
 int run_threads(int given) { return given > 0 ? given : static_cast<int>(std::thread::hardware_concurrency()); }
 
 int default_submodels(const Model& m, Method method, bool loose, int threads) {
-  return stepper_entry(method).tight_stages > 0 || loose ? default_partitions(m, threads) : 1;
+  return has_stage_scheme(stepper_entry(method)) || loose ? default_partitions(m, threads) : 1;
 }
 
 std::optional<Decomposition> cut_for_run(const Model& m, std::optional<int> given, int default_k, Partitioner p,

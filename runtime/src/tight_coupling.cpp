@@ -171,14 +171,13 @@ TightCounts run_dopri5(const TightRun& r) {
 int tight_stages(Method m) {
   if (const int stages = stepper_entry(m).tight_stages) return stages;
   // The methods with a stage scheme, from the registry: "RK4 or DOPRI5", "{method=rk4} or {method=dopri5}".
-  const auto staged = [](const StepperEntry& e) { return e.tight_stages > 0; };
-  const std::string upper = method_names(staged, "or", [](const char* name) {
+  const std::string upper = method_names(has_stage_scheme, "or", [](const char* name) {
     std::string u = name;
     for (char& c : u) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
     return u;
   });
   const std::string settings =
-      method_names(staged, "or", [](const char* name) { return "{method=" + std::string(name) + "}"; });
+      method_names(has_stage_scheme, "or", [](const char* name) { return "{method=" + std::string(name) + "}"; });
   throw InputError("a tightly coupled run of several submodels exchanges " + upper + " stages; " + method_name(m) +
                    " integrates a whole model (its stages run in parallel inside the step) or each submodel of a "
                    "loosely coupled run: give {coupling=loose}, or " + settings + ", or run it in one process on threads");

@@ -132,6 +132,8 @@ struct StepperEntry {
   int tight_stages;
   StepperFactory make;
 };
+// Whether a tightly coupled run of several submodels can exchange the method's stages.
+inline bool has_stage_scheme(const StepperEntry& e) { return e.tight_stages > 0; }
 std::span<const StepperEntry> stepper_entries();
 // The entry of a method; nullptr for a name no entry has.
 const StepperEntry* find_stepper(std::string_view name);
