@@ -1,6 +1,8 @@
 #pragma once
 // Helpers shared by the tests: single bodies and joints, fixed-step integration.
 #include <Eigen/Core>
+#include <Eigen/SparseCore>
+#include <catch2/catch.hpp>
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -85,6 +87,40 @@ Eigen::VectorXd integrate_rk4(MultibodySystem& sys, double t_end, long steps, F 
 
 inline Eigen::VectorXd integrate_rk4(MultibodySystem& sys, double t_end, long steps) {
   return integrate_rk4(sys, t_end, steps, [](double, const Eigen::VectorXd&) {});
+}
+
+// The entries of the right-hand side's Jacobian at (t, y), by forward differences of
+// every state in turn, that lie outside and inside `pattern` (the implicit methods'
+// colouring would miss the former), in the rows `counted` takes; each outside one is
+// reported.
+struct PatternCount {
+  long outside = 0, inside = 0;
+};
+
+template <class Rows = bool (*)(Eigen::Index)>
+PatternCount count_against_pattern(MultibodySystem& sys, double t, const Eigen::VectorXd& y, const Eigen::SparseMatrix<double>& pattern,
+                                   Rows counted = [](Eigen::Index) { return true; }) {
+  const Eigen::Index n = sys.dimension();
+  const Eigen::MatrixXd dense = Eigen::MatrixXd(pattern);
+  Eigen::VectorXd f0(n), f1(n);
+  sys.rhs(t, y, f0);
+  PatternCount count;
+  for (Eigen::Index c = 0; c < n; ++c) {
+    const double h = 1e-7 * std::max(1.0, std::abs(y[c]));
+    Eigen::VectorXd yp = y;
+    yp[c] += h;
+    sys.rhs(t, yp, f1);
+    for (Eigen::Index r = 0; r < n; ++r) {
+      if (std::abs(f1[r] - f0[r]) / h <= 1e-6 || !counted(r)) continue;
+      if (dense(r, c) == 0.0) {
+        ++count.outside;
+        UNSCOPED_INFO("d f[" << r << "] / d y[" << c << "] = " << (f1[r] - f0[r]) / h << " is outside the pattern");
+      } else {
+        ++count.inside;
+      }
+    }
+  }
+  return count;
 }
 
 }  // namespace mbsflow::test

@@ -439,17 +439,26 @@ LinearModel linearize(MultibodySystem& sys, double t, const Eigen::VectorXd& y, 
   std::vector<int> joint_of_row;
   const Eigen::SparseMatrix<double> c = sys.constraint_jacobian(t, y, &joint_of_row);
   if (c.rows() > 0) {
-    std::vector<Eigen::Index> column_of(static_cast<std::size_t>(6 * l.bodies), -1);
-    for (std::size_t i = 0; i < bodies.size(); ++i)
-      for (int e = 0; e < 6; ++e) column_of[static_cast<std::size_t>(6 * bodies[i] + e)] = fc.start[i] + e;
     Triplets rows;
     std::vector<char> used(static_cast<std::size_t>(c.rows()), 0);
-    for (Eigen::Index col = 0; col < c.outerSize(); ++col)
-      for (Eigen::SparseMatrix<double>::InnerIterator it(c, col); it; ++it)
-        if (const Eigen::Index to = column_of[static_cast<std::size_t>(it.col())]; to >= 0) {
-          rows.emplace_back(it.row(), to, it.value());
-          used[static_cast<std::size_t>(it.row())] = 1;
-        }
+    auto keep = [&](Eigen::Index row, Eigen::Index col, double value) {
+      rows.emplace_back(row, col, value);
+      used[static_cast<std::size_t>(row)] = 1;
+    };
+    if (!model.flexible.empty()) {
+      // A row at a flexible body's node reads its frame's motion and the modes there.
+      const Eigen::SparseMatrix<double> on_coordinates = c * body_motion(out);
+      for (Eigen::Index col = 0; col < on_coordinates.outerSize(); ++col)
+        for (Eigen::SparseMatrix<double>::InnerIterator it(on_coordinates, col); it; ++it)
+          if (it.value() != 0.0) keep(it.row(), it.col(), it.value());
+    } else {
+      std::vector<Eigen::Index> column_of(static_cast<std::size_t>(6 * l.bodies), -1);
+      for (std::size_t i = 0; i < bodies.size(); ++i)
+        for (int e = 0; e < 6; ++e) column_of[static_cast<std::size_t>(6 * bodies[i] + e)] = fc.start[i] + e;
+      for (Eigen::Index col = 0; col < c.outerSize(); ++col)
+        for (Eigen::SparseMatrix<double>::InnerIterator it(c, col); it; ++it)
+          if (const Eigen::Index to = column_of[static_cast<std::size_t>(it.col())]; to >= 0) keep(it.row(), to, it.value());
+    }
     // Rows on driven bodies or ground only hold nothing here.
     std::vector<Eigen::Index> row_to(used.size(), -1);
     Eigen::Index kept = 0;

@@ -3,6 +3,7 @@
 #include <Eigen/Geometry>
 #include <cmath>
 
+#include "flexible_state.hpp"
 #include "force_laws.hpp"
 #include "mbsflow/error.hpp"
 #include "mbsflow/graph/multibody_system.hpp"
@@ -10,30 +11,6 @@
 
 namespace mbsflow {
 namespace {
-
-// The unit quaternion of a small rotation vector.
-Eigen::Vector4d rotation_quaternion(const Eigen::Vector3d& theta) {
-  const double angle = theta.norm();
-  if (angle < 1e-300) return {1.0, 0.0, 0.0, 0.0};
-  const Eigen::Vector3d axis = std::sin(0.5 * angle) / angle * theta;
-  return {std::cos(0.5 * angle), axis.x(), axis.y(), axis.z()};
-}
-
-// A flexible body's frame index, modal coordinates and rates, and the frame's angular
-// velocity (body axes) at y.
-struct FlexibleAt {
-  const FloatingFrameData& d;
-  int ne, frame;
-  Eigen::Index tail;
-  Eigen::VectorXd eta, eta_rate;
-  Eigen::Vector3d w;
-};
-
-FlexibleAt flexible_at(const FlexibleBody& fb, const StateLayout& l, Eigen::Index offset, const Eigen::VectorXd& y) {
-  const int ne = fb.data->modes();
-  const Eigen::Index tail = l.tail(offset);
-  return {*fb.data, ne, fb.frame, tail, y.segment(tail, ne), y.segment(tail + ne, ne), y.segment<3>(l.angular_velocity(fb.frame))};
-}
 
 // Node k's world kinematics from the frame's (position, velocity, quaternion, rotation).
 struct NodeWorld {
@@ -45,7 +22,7 @@ NodeWorld node_world(const FlexibleAt& f, int k, const Eigen::Vector3d& pos, con
                      const Eigen::Matrix3d& r) {
   const NodeMotion nm = flexible_node_motion(f.d, k, f.eta, f.eta_rate);
   return {pos + r * nm.position, vel + r * (f.w.cross(nm.position) + nm.velocity), r * (f.w + nm.angular_velocity),
-          quat_multiply(quat, rotation_quaternion(nm.rotation))};
+          quat_multiply(quat, quat_exp(nm.rotation))};
 }
 
 }  // namespace
@@ -85,17 +62,7 @@ void MultibodySystem::compile_flexible() {
     compiled_->flexible_tail.push_back(extra);
     extra += 2 * ne;
   }
-  for (std::size_t k = 0; k < compiled_->joints.size(); ++k) {
-    const CompiledJoint& j = compiled_->joints[k];
-    if (j.kinematic < 0) continue;
-    for (int b : {j.a, j.b})
-      if (b < layout_.bodies && compiled_->flexible_of_body[static_cast<std::size_t>(b)] >= 0)
-        throw InputError("joint '" + m.joints[k].name + "': a rigid joint at flexible body '" +
-                         m.flexible[static_cast<std::size_t>(compiled_->flexible_of_body[static_cast<std::size_t>(b)])].name +
-                         "' is not supported yet; join it by a bushing (stiff where the joint holds, free about its axis)");
-  }
   layout_.extra = extra;
-  compiled_->rotations_read = true;  // every evaluation keeps rot_: the frames' and nodes' rotations below read it
 }
 
 void MultibodySystem::follow_flexible(const Eigen::VectorXd& y) {
@@ -116,75 +83,94 @@ void MultibodySystem::follow_flexible(const Eigen::VectorXd& y) {
   }
 }
 
+// Generalised forces: the frame's wrench (gravity on the part's mass at its origin, its
+// loads and joints), gravity's share on the deformation (the centre of mass moves with
+// the modes by L eta), and each node's wrench through its motion.
+Eigen::VectorXd MultibodySystem::flexible_force(std::size_t f, double t, const Eigen::VectorXd& y) const {
+  const FlexibleBody& fb = model().flexible[f];
+  const FloatingFrameData& d = *fb.data;
+  const int ne = d.modes(), i = fb.frame;
+  const Eigen::VectorXd eta = y.segment(layout_.tail(compiled_->flexible_tail[f]), ne);
+  const Eigen::Matrix3d& r = rot_[static_cast<std::size_t>(i)];
+  Eigen::VectorXd q = Eigen::VectorXd::Zero(6 + ne);
+  Eigen::Vector3d force, torque;
+  applied_wrench(i, t, y, force, torque);
+  q.head<3>() = r.transpose() * force;
+  q.segment<3>(3) = r.transpose() * torque;
+  const Eigen::Vector3d g_b = r.transpose() * gravity_;
+  const auto l = d.mass0.block(0, 6, 3, ne);
+  q.segment<3>(3) += Eigen::Vector3d(l * eta).cross(g_b);
+  q.tail(ne) += l.transpose() * g_b;
+  for (std::size_t k = 0; k < fb.nodes.size(); ++k) {
+    applied_wrench(fb.nodes[k], t, y, force, torque);
+    const Eigen::Vector3d f_b = r.transpose() * force, t_b = r.transpose() * torque;
+    const Eigen::MatrixXd& shape = d.node_shape[k];
+    const Eigen::Vector3d at = d.node_position[k] + shape.topRows<3>() * eta;
+    q.head<3>() += f_b;
+    q.segment<3>(3) += at.cross(f_b) + t_b;
+    q.tail(ne) += shape.topRows<3>().transpose() * f_b + shape.bottomRows<3>().transpose() * t_b;
+  }
+  return q;
+}
+
+Eigen::VectorXd MultibodySystem::free_flexible_accelerations(std::size_t f, const Eigen::VectorXd& y, const Eigen::VectorXd& q) const {
+  const FlexibleBody& fb = model().flexible[f];
+  const FlexibleAt at = flexible_at(fb, layout_, compiled_->flexible_tail[f], y);
+  const Eigen::Vector3d v_b = rot_[static_cast<std::size_t>(at.frame)].transpose() * y.segment<3>(layout_.velocity(at.frame));
+  return flexible_accelerations(fb, v_b, at.w, at.eta, at.eta_rate, q);
+}
+
+void MultibodySystem::write_flexible_rates(std::size_t f, const Eigen::VectorXd& xi_rate, const Eigen::VectorXd& y,
+                                           Eigen::VectorXd& dydt) const {
+  const FlexibleBody& fb = model().flexible[f];
+  const FlexibleAt at = flexible_at(fb, layout_, compiled_->flexible_tail[f], y);
+  const int ne = at.ne, i = at.frame;
+  const Eigen::Vector3d& w = at.w;
+  const Eigen::Matrix3d& r = rot_[static_cast<std::size_t>(i)];
+  const Eigen::Vector3d v = y.segment<3>(layout_.velocity(i)), v_b = r.transpose() * v;
+  const Eigen::Vector4d quat = y.segment<4>(layout_.orientation(i));
+  dydt.segment<3>(layout_.position(i)) = v;
+  dydt.segment<4>(layout_.orientation(i)) = quaternion_rate<double>(quat, w);
+  dydt.segment<3>(layout_.velocity(i)) = r * (xi_rate.head<3>() + w.cross(v_b));
+  dydt.segment<3>(layout_.angular_velocity(i)) = xi_rate.segment<3>(3);
+  dydt.segment(at.tail, ne) = at.eta_rate;
+  dydt.segment(at.tail + ne, ne) = xi_rate.tail(ne);
+  // The nodes' states follow the frame (after_step puts them there); between steps they
+  // move with its kinematics, for the dense output.
+  for (int b : fb.nodes) {
+    dydt.segment<3>(layout_.position(b)) = vel_.col(b);
+    dydt.segment<4>(layout_.orientation(b)) = quaternion_rate<double>(
+        Eigen::Vector4d(quat_.col(b)), Eigen::Vector3d(rot_[static_cast<std::size_t>(b)].transpose() * omega_.col(b)));
+    dydt.segment<3>(layout_.velocity(b)).setZero();
+    dydt.segment<3>(layout_.angular_velocity(b)).setZero();
+  }
+}
+
+// A flexible body with a rigid joint at it is solved with its cluster (solve_cluster).
 void MultibodySystem::flexible_derivatives(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const {
-  const Model& m = model();
-  for (std::size_t f = 0; f < m.flexible.size(); ++f) {
-    const FlexibleBody& fb = m.flexible[f];
-    const FlexibleAt at = flexible_at(fb, layout_, compiled_->flexible_tail[f], y);
-    const FloatingFrameData& d = at.d;
-    const int ne = at.ne, i = at.frame;
-    const Eigen::Index tail = at.tail;
-    const Eigen::VectorXd &eta = at.eta, &eta_rate = at.eta_rate;
-    const Eigen::Vector3d& w = at.w;
-    const Eigen::Matrix3d& r = rot_[static_cast<std::size_t>(i)];
-    const Eigen::Vector3d v = y.segment<3>(layout_.velocity(i)), v_b = r.transpose() * v;
-    // Generalised forces: the frame's wrench (gravity on the part's mass at its origin,
-    // its loads and joints), gravity's share on the deformation (the centre of mass moves
-    // with the modes by L eta), and each node's wrench through its motion.
-    Eigen::VectorXd q = Eigen::VectorXd::Zero(6 + ne);
-    Eigen::Vector3d force, torque;
-    applied_wrench(i, t, y, force, torque);
-    q.head<3>() = r.transpose() * force;
-    q.segment<3>(3) = r.transpose() * torque;
-    const Eigen::Vector3d g_b = r.transpose() * gravity_;
-    const auto l = d.mass0.block(0, 6, 3, ne);
-    q.segment<3>(3) += Eigen::Vector3d(l * eta).cross(g_b);
-    q.tail(ne) += l.transpose() * g_b;
-    for (std::size_t k = 0; k < fb.nodes.size(); ++k) {
-      applied_wrench(fb.nodes[k], t, y, force, torque);
-      const Eigen::Vector3d f_b = r.transpose() * force, t_b = r.transpose() * torque;
-      const Eigen::MatrixXd& shape = d.node_shape[k];
-      const Eigen::Vector3d at = d.node_position[k] + shape.topRows<3>() * eta;
-      q.head<3>() += f_b;
-      q.segment<3>(3) += at.cross(f_b) + t_b;
-      q.tail(ne) += shape.topRows<3>().transpose() * f_b + shape.bottomRows<3>().transpose() * t_b;
-    }
-    const Eigen::VectorXd xi_rate = flexible_accelerations(fb, v_b, w, eta, eta_rate, q);
-    const Eigen::Vector4d quat = y.segment<4>(layout_.orientation(i));
-    dydt.segment<3>(layout_.position(i)) = v;
-    dydt.segment<4>(layout_.orientation(i)) = quaternion_rate<double>(quat, w);
-    dydt.segment<3>(layout_.velocity(i)) = r * (xi_rate.head<3>() + w.cross(v_b));
-    dydt.segment<3>(layout_.angular_velocity(i)) = xi_rate.segment<3>(3);
-    dydt.segment(tail, ne) = eta_rate;
-    dydt.segment(tail + ne, ne) = xi_rate.tail(ne);
-    // The nodes' states follow the frame (after_step puts them there); between steps they
-    // move with its kinematics, for the dense output.
-    for (int b : fb.nodes) {
-      dydt.segment<3>(layout_.position(b)) = vel_.col(b);
-      dydt.segment<4>(layout_.orientation(b)) = quaternion_rate<double>(
-          Eigen::Vector4d(quat_.col(b)), Eigen::Vector3d(rot_[static_cast<std::size_t>(b)].transpose() * omega_.col(b)));
-      dydt.segment<3>(layout_.velocity(b)).setZero();
-      dydt.segment<3>(layout_.angular_velocity(b)).setZero();
-    }
+  for (std::size_t f = 0; f < model().flexible.size(); ++f) {
+    if (clusters() > 0 && cluster_of(model().flexible[f].frame) >= 0) continue;
+    write_flexible_rates(f, free_flexible_accelerations(f, y, flexible_force(f, t, y)), y, dydt);
+  }
+}
+
+void MultibodySystem::place_nodes_of(std::size_t f, Eigen::VectorXd& y) const {
+  const FlexibleAt at = flexible_at(model().flexible[f], layout_, compiled_->flexible_tail[f], y);
+  const int i = at.frame;
+  const Eigen::Vector4d qf = y.segment<4>(layout_.orientation(i));
+  const Eigen::Matrix3d r = rotation_matrix(qf);
+  for (std::size_t k = 0; k < model().flexible[f].nodes.size(); ++k) {
+    const int b = model().flexible[f].nodes[k];
+    const NodeWorld n = node_world(at, static_cast<int>(k), y.segment<3>(layout_.position(i)), y.segment<3>(layout_.velocity(i)), qf, r);
+    y.segment<3>(layout_.position(b)) = n.position;
+    y.segment<3>(layout_.velocity(b)) = n.velocity;
+    y.segment<4>(layout_.orientation(b)) = n.quat;
+    y.segment<3>(layout_.angular_velocity(b)) = rotation_matrix(n.quat).transpose() * n.omega;
   }
 }
 
 void MultibodySystem::place_flexible_nodes(Eigen::VectorXd& y) const {
-  const Model& m = model();
-  for (std::size_t f = 0; f < m.flexible.size(); ++f) {
-    const FlexibleAt at = flexible_at(m.flexible[f], layout_, compiled_->flexible_tail[f], y);
-    const int i = at.frame;
-    const Eigen::Vector4d qf = y.segment<4>(layout_.orientation(i));
-    for (std::size_t k = 0; k < m.flexible[f].nodes.size(); ++k) {
-      const int b = m.flexible[f].nodes[k];
-      const NodeWorld n = node_world(at, static_cast<int>(k), y.segment<3>(layout_.position(i)), y.segment<3>(layout_.velocity(i)), qf,
-                                     rotation_matrix(qf));
-      y.segment<3>(layout_.position(b)) = n.position;
-      y.segment<3>(layout_.velocity(b)) = n.velocity;
-      y.segment<4>(layout_.orientation(b)) = n.quat;
-      y.segment<3>(layout_.angular_velocity(b)) = rotation_matrix(n.quat).transpose() * n.omega;
-    }
-  }
+  for (std::size_t f = 0; f < model().flexible.size(); ++f) place_nodes_of(f, y);
 }
 
 void MultibodySystem::flexible_energy(const Eigen::VectorXd& y, Energy& e) const {

@@ -20,6 +20,22 @@ Eigen::SparseMatrix<double> MultibodySystem::jacobian_pattern() const {
   };
   for (const CompiledJoint& j : compiled_->joints) couple({j.a, j.b});  // ground is n: no state
   for (const auto& e : compiled_->elements) couple(e->bodies());
+  // A flexible body's frame, nodes and modes move as one: each of its bodies reads what
+  // any of them reads (before the clusters too: a rigid joint at a flexible body puts it
+  // in a cluster, whose solve reads what the whole part reads).
+  const Model& m = model();
+  std::vector<std::vector<int>> group(m.flexible.size());
+  auto join_group = [&](std::size_t f) {
+    std::vector<int> all;
+    for (int b : group[f]) all.insert(all.end(), reads[static_cast<std::size_t>(b)].begin(), reads[static_cast<std::size_t>(b)].end());
+    for (int b : group[f]) reads[static_cast<std::size_t>(b)] = all;
+    return all;
+  };
+  for (std::size_t f = 0; f < m.flexible.size(); ++f) {
+    group[f] = m.flexible[f].nodes;
+    group[f].push_back(m.flexible[f].frame);
+    join_group(f);
+  }
   // A rigid cluster's reactions come from one solve over the forces on all its bodies, so
   // each of its bodies reads whatever any of them reads.
   for (int c = 0; c < clusters(); ++c) {
@@ -28,17 +44,12 @@ Eigen::SparseMatrix<double> MultibodySystem::jacobian_pattern() const {
     for (int b : cluster_bodies(c)) reads[static_cast<std::size_t>(b)] = all;
   }
 
-  // A flexible body's frame, nodes and modes move as one: each of its bodies reads what
-  // any of them reads, and a body that reads one of them reads all and the modes.
-  const Model& m = model();
-  std::vector<std::vector<int>> group(m.flexible.size()), group_reads(m.flexible.size());
+  // Again after the clusters, and a body that reads one of a flexible body's bodies reads
+  // all of them and the modes.
+  std::vector<std::vector<int>> group_reads(m.flexible.size());
   std::vector<std::vector<char>> reads_modes(m.flexible.size());
   for (std::size_t f = 0; f < m.flexible.size(); ++f) {
-    group[f] = m.flexible[f].nodes;
-    group[f].push_back(m.flexible[f].frame);
-    std::vector<int> all;
-    for (int b : group[f]) all.insert(all.end(), reads[static_cast<std::size_t>(b)].begin(), reads[static_cast<std::size_t>(b)].end());
-    for (int b : group[f]) reads[static_cast<std::size_t>(b)] = all;
+    std::vector<int> all = join_group(f);
     reads_modes[f].assign(static_cast<std::size_t>(n), 0);
     for (Eigen::Index i = 0; i < n; ++i) {
       auto& r = reads[static_cast<std::size_t>(i)];

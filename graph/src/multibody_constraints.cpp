@@ -14,20 +14,6 @@
 #include "rotation.hpp"
 
 namespace mbsflow {
-namespace {
-
-constexpr double position_tolerance = 1e-10;  // largest |phi| a projection leaves (m, or rad)
-constexpr int newton_iterations = 6;
-
-// Rotation by the rotation vector theta, as a quaternion.
-Eigen::Vector4d quat_exp(const Eigen::Vector3d& theta) {
-  const double angle = theta.norm();
-  const double s = angle > 1e-8 ? std::sin(0.5 * angle) / angle : 0.5 - angle * angle / 48.0;
-  return {std::cos(0.5 * angle), s * theta[0], s * theta[1], s * theta[2]};
-}
-
-}  // namespace
-
 std::size_t MultibodySystem::constraint_bytes() const {
   const Constraints& k = *constraints_;
   std::size_t lambda = 0;
@@ -35,7 +21,8 @@ std::size_t MultibodySystem::constraint_bytes() const {
   return sizeof(Constraints) + k.geometry.capacity() * sizeof(JointGeometry) + k.clusters.capacity() * sizeof(RigidCluster) +
          k.cluster_of_body.capacity() * sizeof(int) + k.lambda.capacity() * sizeof(Eigen::VectorXd) + lambda + k.marked.capacity() +
          k.wrench.capacity() * sizeof(Vector6d) + k.motion.capacity() * sizeof(BodyMotion) +
-         (k.force.capacity() + k.torque.capacity()) * sizeof(Eigen::Vector3d);
+         (k.force.capacity() + k.torque.capacity()) * sizeof(Eigen::Vector3d) + k.flexible_of_cluster.capacity() * sizeof(int) +
+         k.flexible.capacity() * sizeof(FlexibleSlots);
 }
 
 void MultibodySystem::compile_constraints() {
@@ -58,7 +45,8 @@ void MultibodySystem::compile_constraints() {
   }
   // The partitioners' rigid pieces, less the bodies without a rigid joint: clusters in
   // the order of their first body, bodies ascending.
-  const std::vector<int> piece = rigid_pieces(model());
+  std::vector<int> piece = rigid_pieces(model());
+  join_flexible_pieces(touched, piece);
   k.cluster_of_body.assign(static_cast<std::size_t>(n), -1);
   std::vector<int> cluster_of_piece(static_cast<std::size_t>(n), -1);
   std::vector<std::vector<int>> bodies;
@@ -97,6 +85,13 @@ void MultibodySystem::compile_constraints() {
     k.lambda.emplace_back(Eigen::VectorXd::Zero(k.clusters.back().row_count()));
   }
   k.marked.assign(k.clusters.size(), 0);
+  if (model().flexible.empty()) return;
+  k.flexible_of_cluster.assign(k.clusters.size(), -1);
+  for (std::size_t c = 0; c < k.clusters.size(); ++c)
+    if (FlexibleSlots fs = flexible_slots(k.clusters[c].bodies()); !fs.flexible.empty()) {
+      k.flexible_of_cluster[c] = static_cast<int>(k.flexible.size());
+      k.flexible.push_back(std::move(fs));
+    }
 }
 
 BodyMotion MultibodySystem::motion_at(int i) const {
@@ -155,19 +150,22 @@ double MultibodySystem::kinematic_energy(const CompiledJoint& j) const {
   return e;
 }
 
-// Applied wrenches, rows, S, multipliers, and the derivatives of the cluster's bodies.
-void MultibodySystem::solve_cluster(int c, double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const {
+// The applied wrenches of cluster c's bodies (k.force, k.torque), their inverse masses
+// (into the cluster) and their accelerations under those alone (k.wrench); a flexible
+// body's slots are left to solve_flexible_cluster.
+void MultibodySystem::unconstrained_cluster(int c, double t, const Eigen::VectorXd& y) const {
   Constraints& k = *constraints_;
   RigidCluster& rc = k.clusters[static_cast<std::size_t>(c)];
   const std::vector<int>& bodies = rc.bodies();
   const std::size_t nb = bodies.size();
   k.force.resize(nb);
   k.torque.resize(nb);
-  std::vector<Vector6d>& accel = k.wrench;  // unconstrained accelerations first
+  std::vector<Vector6d>& accel = k.wrench;
   accel.resize(nb);
   for (std::size_t s = 0; s < nb; ++s) {
     const int i = bodies[s];
     const auto bi = static_cast<std::size_t>(i);
+    if (flexible_owned(i)) continue;
     applied_wrench(i, t, y, k.force[s], k.torque[s]);
     if (const int d = compiled_->driver_of_body[bi]; d >= 0) {
       rc.inv_mass[s] = 0.0;
@@ -185,6 +183,17 @@ void MultibodySystem::solve_cluster(int c, double t, const Eigen::VectorXd& y, E
     accel[s].head<3>() = law.inv_mass * k.force[s];
     accel[s].tail<3>() = r * (law.inv_inertia * (r.transpose() * k.torque[s] - w.cross(law.inertia * w)));
   }
+}
+
+// Applied wrenches, rows, S, multipliers, and the derivatives of the cluster's bodies.
+void MultibodySystem::solve_cluster(int c, double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const {
+  Constraints& k = *constraints_;
+  if (k.flexible_slots_of(c)) return solve_flexible_cluster(c, t, y, dydt);
+  unconstrained_cluster(c, t, y);
+  RigidCluster& rc = k.clusters[static_cast<std::size_t>(c)];
+  const std::vector<int>& bodies = rc.bodies();
+  const std::size_t nb = bodies.size();
+  const std::vector<Vector6d>& accel = k.wrench;  // unconstrained accelerations first
   Eigen::VectorXd& lambda = k.lambda[static_cast<std::size_t>(c)];
   for (const ClusterJoint& cj : rc.joints()) {
     const CompiledJoint& j = compiled_->joints[static_cast<std::size_t>(cj.joint)];
@@ -206,8 +215,6 @@ void MultibodySystem::solve_cluster(int c, double t, const Eigen::VectorXd& y, E
     write_derivative(bodies[s], t, y, dydt, k.force[s] + k.wrench[s].head<3>(), k.torque[s] + k.wrench[s].tail<3>());
 }
 
-namespace {
-
 BodyMotion state_motion(const StateLayout& l, const Eigen::VectorXd& y, Eigen::Index i) {
   BodyMotion m;
   if (i >= l.bodies) return m;  // ground
@@ -218,13 +225,12 @@ BodyMotion state_motion(const StateLayout& l, const Eigen::VectorXd& y, Eigen::I
   return m;
 }
 
-}  // namespace
-
 // Newton iterations on the positions (mass-weighted, so the smallest kinetic-energy-like
 // change), then one projection of the velocities: the state after a step lies on the
-// constraints to within position_tolerance, whatever the method.
+// constraints to within projection_tolerance, whatever the method.
 void MultibodySystem::project_cluster(int c, double t, Eigen::VectorXd& y) const {
   Constraints& k = *constraints_;
+  if (k.flexible_slots_of(c)) return project_flexible_cluster(c, t, y);
   RigidCluster& rc = k.clusters[static_cast<std::size_t>(c)];
   const std::vector<int>& bodies = rc.bodies();
   const std::size_t nb = bodies.size();
@@ -257,8 +263,8 @@ void MultibodySystem::project_cluster(int c, double t, Eigen::VectorXd& y) const
   // 5e5 rad/s. The velocities below are projected with S factored at the final positions.
   Eigen::VectorXd mu(rc.row_count());
   std::vector<Vector6d>& delta = k.wrench;
-  for (int iteration = 0; iteration < newton_iterations; ++iteration) {
-    if (evaluate_rows() <= position_tolerance) break;
+  for (int iteration = 0; iteration < projection_iterations; ++iteration) {
+    if (evaluate_rows() <= projection_tolerance) break;
     for (int r = 0; r < rc.row_count(); ++r) mu[r] = rc.rows[static_cast<std::size_t>(r)].holonomic ? -rc.rows[static_cast<std::size_t>(r)].phi : 0.0;
     rc.factor();
     rc.solve(mu);
@@ -269,17 +275,10 @@ void MultibodySystem::project_cluster(int c, double t, Eigen::VectorXd& y) const
       const Eigen::Vector4d q = quat_multiply(quat_exp(delta[s].tail<3>()), y.segment<4>(layout_.orientation(i)));
       y.segment<4>(layout_.orientation(i)) = q.normalized();
     }
-    if (iteration == newton_iterations - 1) evaluate_rows();
+    if (iteration == projection_iterations - 1) evaluate_rows();
   }
   // Velocities: remove the part that violates phi' = 0.
-  for (const ClusterJoint& cj : rc.joints()) {
-    const CompiledJoint& j = compiled_->joints[static_cast<std::size_t>(cj.joint)];
-    const RowJacobian v = row_velocities<double>(state_motion(layout_, y, j.a), state_motion(layout_, y, j.b));
-    for (int r = 0; r < cj.rows; ++r) {
-      const ConstraintRow& row = rc.rows[static_cast<std::size_t>(cj.first_row + r)];
-      mu[cj.first_row + r] = -(row.j.dot(v) + row.rate);
-    }
-  }
+  velocity_violations(rc, y, mu);
   rc.factor();
   rc.solve(mu);
   rc.motion(mu, delta);
@@ -288,6 +287,17 @@ void MultibodySystem::project_cluster(int c, double t, Eigen::VectorXd& y) const
     const Eigen::Matrix3d r = rotation_matrix(y.segment<4>(layout_.orientation(i)));
     y.segment<3>(layout_.velocity(i)) += delta[s].head<3>();
     y.segment<3>(layout_.angular_velocity(i)) += r.transpose() * delta[s].tail<3>();
+  }
+}
+
+void MultibodySystem::velocity_violations(const RigidCluster& rc, const Eigen::VectorXd& y, Eigen::VectorXd& mu) const {
+  for (const ClusterJoint& cj : rc.joints()) {
+    const CompiledJoint& j = compiled_->joints[static_cast<std::size_t>(cj.joint)];
+    const RowJacobian v = row_velocities<double>(state_motion(layout_, y, j.a), state_motion(layout_, y, j.b));
+    for (int r = 0; r < cj.rows; ++r) {
+      const ConstraintRow& row = rc.rows[static_cast<std::size_t>(cj.first_row + r)];
+      mu[cj.first_row + r] = -(row.j.dot(v) + row.rate);
+    }
   }
 }
 

@@ -121,10 +121,11 @@ MultibodySystem::MultibodySystem(std::shared_ptr<const Model> shared, int active
 
   motor_effort_.setZero(nj);
   for (const auto& e : model.force_elements) add_force_element(e);
+  compile_flexible();  // before the constraints: a flexible body's rigid joints join one cluster
   compile_constraints();
-  compiled_->rotations_read = !model.loads.empty() || !compiled_->elements.empty() ||
+  // Every evaluation keeps rot_ where a flexible body's frame and nodes read it.
+  compiled_->rotations_read = !model.loads.empty() || !compiled_->elements.empty() || !model.flexible.empty() ||
                               std::any_of(compiled_->joints.begin(), compiled_->joints.end(), [&](const CompiledJoint& j) { return !on_lanes(j); });
-  compile_flexible();
 }
 
 Eigen::VectorXd MultibodySystem::initial_state() const {

@@ -11,12 +11,7 @@
 namespace mbsflow {
 namespace {
 constexpr int dense_limit = 48;        // rows up to which the dense factorisation is used
-constexpr double relative_shift = 1e-6;  // eps / diagonal entry (A02 error vs eps: docs/joints.md)
-constexpr int refinements = 2;          // iterative refinement steps against the unshifted S
-// Smallest ratio of a pivot of the unshifted S (dense Cholesky or sparse LDLT) to its
-// diagonal entry at which S is solved as it is: below it S is near singular (a redundant row gives 1e-8 or
-// less, or no Cholesky at all) and gets the shift and refinements.
-constexpr double regular_pivot_ratio = 1e-8;
+using namespace cluster_solve;
 }  // namespace
 
 RigidCluster::RigidCluster(std::vector<int> bodies, std::vector<ClusterJoint> joints)

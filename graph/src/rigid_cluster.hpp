@@ -27,6 +27,15 @@ namespace mbsflow {
 
 using Vector6d = Eigen::Matrix<double, 6, 1>;
 
+namespace cluster_solve {
+inline constexpr double relative_shift = 1e-6;  // eps / diagonal entry (A02 error vs eps: docs/joints.md)
+inline constexpr int refinements = 2;           // iterative refinement steps against the unshifted S
+// Smallest ratio of a pivot of the unshifted S (dense Cholesky or sparse LDLT) to its
+// diagonal entry at which S is solved as it is: below it S is near singular (a redundant
+// row gives 1e-8 or less, or no Cholesky at all) and gets the shift and refinements.
+inline constexpr double regular_pivot_ratio = 1e-8;
+}  // namespace cluster_solve
+
 struct ClusterJoint {
   int joint = 0;      // index in the system's joints
   int a = -1, b = -1;  // body slots in the cluster; -1: ground

@@ -51,6 +51,13 @@ template <class S>
 }
 inline Eigen::Vector4d quat_conjugate(const Eigen::Vector4d& q) { return quat_conjugate<double>(q); }
 
+// The unit quaternion of the rotation vector theta (axis * angle).
+inline Eigen::Vector4d quat_exp(const Eigen::Vector3d& theta) {
+  const double angle = theta.norm();
+  const double s = angle > 1e-8 ? std::sin(0.5 * angle) / angle : 0.5 - angle * angle / 48.0;
+  return {std::cos(0.5 * angle), s * theta[0], s * theta[1], s * theta[2]};
+}
+
 // Logarithm of a rotation: its rotation vector theta (axis * angle, angle in [0, pi]) and
 // the coefficient c of the left Jacobian of SO(3),
 //   J_l(theta)^-T = I + [theta]/2 + c [theta]^2,  c = 1/angle^2 - cot(angle/2) / (2 angle),

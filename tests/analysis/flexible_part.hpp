@@ -5,7 +5,11 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Geometry>
+
+#include "mbsflow/analysis/craig_bampton.hpp"
 #include "mbsflow/graph/model.hpp"
+#include "mbsflow/graph/multibody_system.hpp"
 #include "spring_lattice.hpp"
 
 namespace mbsflow::test {
@@ -56,6 +60,26 @@ inline Model flexible_model(const ReducedPart& part) {
     f.nodes.push_back(add("bar@" + std::to_string(d.node_id[k]), d.mass / 4, d.inertia / 4, d.node_position[k]));
   m.flexible.push_back(std::move(f));
   return m;
+}
+
+// The flexible body's momentum and angular momentum about the world origin (world axes)
+// at y, from its mass matrix M(eta) and its generalised velocities.
+struct Momentum {
+  Eigen::Vector3d linear, angular;
+};
+
+inline Momentum flexible_momentum(const MultibodySystem& sys, const Eigen::VectorXd& y) {
+  const StateLayout& l = sys.layout();
+  const FlexibleBody& f = sys.model().flexible.front();
+  const int ne = f.data->modes();
+  const Eigen::Vector4d q = y.segment<4>(l.orientation(f.frame));
+  const Eigen::Matrix3d r = Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized().toRotationMatrix();
+  const Eigen::VectorXd eta = y.segment(l.tail(0), ne);
+  Eigen::VectorXd xi(6 + ne);
+  xi << r.transpose() * y.segment<3>(l.velocity(f.frame)), y.segment<3>(l.angular_velocity(f.frame)), y.segment(l.tail(ne), ne);
+  const Eigen::VectorXd p = flexible_mass_matrix(*f.data, eta) * xi;
+  const Eigen::Vector3d linear = r * p.head<3>();
+  return {linear, Eigen::Vector3d(y.segment<3>(l.position(f.frame))).cross(linear) + r * p.segment<3>(3)};
 }
 
 }  // namespace mbsflow::test

@@ -19,27 +19,8 @@ using namespace mbsflow;
 using test::bar_part;
 using test::flexible_model;
 
-namespace {
-
-struct Momentum {
-  Eigen::Vector3d linear, angular;  // world; angular about the world origin
-};
-
-Momentum momentum(const MultibodySystem& sys, const Eigen::VectorXd& y) {
-  const StateLayout& l = sys.layout();
-  const FlexibleBody& f = sys.model().flexible.front();
-  const int ne = f.data->modes();
-  const Eigen::Vector4d q = y.segment<4>(l.orientation(f.frame));
-  const Eigen::Matrix3d r = Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized().toRotationMatrix();
-  const Eigen::VectorXd eta = y.segment(l.tail(0), ne);
-  Eigen::VectorXd xi(6 + ne);
-  xi << r.transpose() * y.segment<3>(l.velocity(f.frame)), y.segment<3>(l.angular_velocity(f.frame)), y.segment(l.tail(ne), ne);
-  const Eigen::VectorXd p = flexible_mass_matrix(*f.data, eta) * xi;
-  const Eigen::Vector3d linear = r * p.head<3>();
-  return {linear, Eigen::Vector3d(y.segment<3>(l.position(f.frame))).cross(linear) + r * p.segment<3>(3)};
-}
-
-}  // namespace
+using test::flexible_momentum;
+using test::Momentum;
 
 TEST_CASE("flexible body: the floating frame's invariants are the lattice's mass properties, its modes the free part's",
           "[analysis][flexible]") {
@@ -86,12 +67,12 @@ TEST_CASE("flexible body in free motion conserves energy, momentum and angular m
   MultibodySystem sys(m);
   const Eigen::VectorXd y0 = sys.initial_state();
   const Energy e0 = sys.energy(0.0, y0);
-  const Momentum p0 = momentum(sys, y0);
+  const Momentum p0 = flexible_momentum(sys, y0);
   REQUIRE(e0.elastic > 0.0);
   double worst_energy = 0.0, worst_linear = 0.0, worst_angular = 0.0;
   test::integrate_rk4(sys, 0.5, 50000, [&](double t, const Eigen::VectorXd& y) {
     worst_energy = std::max(worst_energy, std::abs(sys.energy(t, y).total() - e0.total()));
-    const Momentum p = momentum(sys, y);
+    const Momentum p = flexible_momentum(sys, y);
     worst_linear = std::max(worst_linear, (p.linear - p0.linear).norm());
     worst_angular = std::max(worst_angular, (p.angular - p0.angular).norm());
   });
@@ -126,16 +107,4 @@ TEST_CASE("flexible body held at an interface node by a bushing under gravity co
   });
   CHECK(lowest < -1.0);  // it swings: the energy exchanged is large
   CHECK(worst < 1e-7 * std::abs(lowest));
-}
-
-TEST_CASE("flexible body: a rigid joint at it is refused by name", "[analysis][flexible]") {
-  const ReducedPart part = bar_part(2);
-  Model m = flexible_model(part);
-  Joint j;
-  j.name = "pin";
-  j.type = JointType::revolute;
-  j.body1 = ground;
-  j.body2 = m.flexible.front().nodes[0];
-  m.joints.push_back(j);
-  CHECK_THROWS_WITH(MultibodySystem(m), Catch::Contains("joint 'pin'") && Catch::Contains("bushing"));
 }

@@ -1,8 +1,8 @@
 // Small motions of a model with a flexible body (analysis/linearization.hpp): free, its
 // modes are the reduced part's (six rigid motions, then the free part's elastic
 // frequencies, each with its modal damping) wherever the frame is and however it is
-// turned; held at its interface by stiff bushings, the fixed-interface modes the
-// reduction kept; its frequency response at an interface node, far below the first mode,
+// turned; held at its interface by stiff bushings or rigid joints, the fixed-interface
+// modes the reduction kept; its frequency response at an interface node, far below the first mode,
 // the full lattice's static deflection (Craig-Bampton is exact for loads at interface
 // nodes), through a node body's motion (body_motion) both ways.
 #include <catch2/catch.hpp>
@@ -23,18 +23,38 @@ using test::flexible_model;
 namespace {
 
 // Each of the first `count` nodes of the flexible body held to the ground by a bushing of
-// translational stiffness k (the lattice's nodes have no rotation).
+// translational stiffness k (the lattice's nodes have no rotation), or by a rigid
+// spherical joint where k is 0.
 void hold_nodes(Model& m, int count, double k) {
   const FlexibleBody& f = m.flexible.front();
   for (int i = 0; i < count; ++i) {
     Joint j;
     j.name = "hold" + std::to_string(i);
-    j.type = JointType::bushing;
+    j.type = k > 0.0 ? JointType::bushing : JointType::spherical;
     j.body1 = ground;
     j.body2 = f.nodes[static_cast<std::size_t>(i)];
     j.point1 = m.bodies[static_cast<std::size_t>(j.body2)].position;
-    j.stiffness = {k, k, k, 0.0, 0.0, 0.0};
+    if (k > 0.0) j.stiffness = {k, k, k, 0.0, 0.0, 0.0};
     m.joints.push_back(j);
+  }
+}
+
+// The bar reduced at nodes 1-4 with 6 modes, held there (hold_nodes' k): its six lowest
+// modes are the fixed-interface ones the reduction kept, to `epsilon`.
+void check_fixed_interface_modes(double k, double epsilon) {
+  const ReducedPart part = bar_part(6);
+  Model m = flexible_model(part);
+  hold_nodes(m, 4, k);
+  MultibodySystem sys(m);
+  const LinearModel lm = linearize(sys, 0.0, sys.initial_state());
+  ModeOptions o;
+  o.count = 6;
+  o.damped = false;
+  const Modes modes = compute_modes(lm, o);
+  REQUIRE(modes.frequency.size() == 6);
+  for (std::size_t i = 0; i < 6; ++i) {
+    CHECK_FALSE(modes.rigid_body[i]);
+    CHECK(modes.frequency[i] == Approx(part.fixed_frequency[static_cast<Eigen::Index>(i)]).epsilon(epsilon));
   }
 }
 
@@ -71,23 +91,15 @@ TEST_CASE("flexible body, free: its modes are the free part's, with their modal 
 
 TEST_CASE("flexible body held at its interface by stiff bushings: its modes are the fixed-interface ones kept",
           "[analysis][flexible][modes]") {
-  const ReducedPart part = bar_part(6);
-  Model m = flexible_model(part);
   // The lattice's springs are about 2e6 N/m: a bushing's compliance changes the result by
   // about 2e6 / k, the Jacobian's central differences (of forces k h at positions of about
   // 1 m, rounded to 1e-16 m) by about k 1e-16 / h: some 1e-5 at k = 1e11 either way.
-  hold_nodes(m, 4, 1e11);
-  MultibodySystem sys(m);
-  const LinearModel lm = linearize(sys, 0.0, sys.initial_state());
-  ModeOptions o;
-  o.count = 6;
-  o.damped = false;
-  const Modes modes = compute_modes(lm, o);
-  REQUIRE(modes.frequency.size() == 6);
-  for (std::size_t k = 0; k < 6; ++k) {
-    CHECK_FALSE(modes.rigid_body[k]);
-    CHECK(modes.frequency[k] == Approx(part.fixed_frequency[static_cast<Eigen::Index>(k)]).epsilon(3e-5));
-  }
+  check_fixed_interface_modes(1e11, 3e-5);
+}
+
+TEST_CASE("flexible body held at its interface by rigid spherical joints: its modes are the fixed-interface ones kept",
+          "[analysis][flexible][joints][modes]") {
+  check_fixed_interface_modes(0.0, 1e-6);  // the joints' rows hold exactly
 }
 
 TEST_CASE("flexible body: the response at an interface node far below its modes is the lattice's static deflection",

@@ -30,6 +30,8 @@ template <class S>
 struct BodyMotionT;  // constraint_rows.hpp
 using BodyMotion = BodyMotionT<double>;
 struct JointGeometry;  // constraint_rows.hpp
+struct FlexibleSlots;  // multibody_constraints.hpp
+class RigidCluster;    // rigid_cluster.hpp
 struct BodyFrameView;  // force_laws.hpp
 template <class S>
 struct BodyFrameT;  // force_laws.hpp
@@ -211,6 +213,7 @@ class MultibodySystem {
   void kinematic_joint_force(std::size_t k);
   const JointGeometry& geometry_of(const CompiledJoint& j) const;  // a kinematic joint's
   double kinematic_energy(const CompiledJoint& j) const;
+  void unconstrained_cluster(int c, double t, const Eigen::VectorXd& y) const;
   void solve_cluster(int c, double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const;
   // jacobian()'s part for rigid cluster c (cluster_jacobian.cpp). unconstrained[s]: for
   // each body b that the cluster's body s reads, d (v', w') / d (state of b) under the
@@ -225,6 +228,8 @@ class MultibodySystem {
   std::vector<int> clusters_of(std::span<const int> bodies) const;  // ascending, each once
   void add_reactions(Eigen::VectorXd& out);
   void project_cluster(int c, double t, Eigen::VectorXd& y) const;
+  // mu <- -(phi') of the cluster's rows (evaluated at y's positions) at y's velocities.
+  void velocity_violations(const RigidCluster& rc, const Eigen::VectorXd& y, Eigen::VectorXd& mu) const;
   void applied_wrench(Eigen::Index i, double t, const Eigen::VectorXd& y, Eigen::Vector3d& force, Eigen::Vector3d& torque) const;
   void write_derivative(Eigen::Index i, double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt,
                         const Eigen::Vector3d& force, const Eigen::Vector3d& torque) const;
@@ -250,7 +255,22 @@ class MultibodySystem {
   void compile_flexible();
   void follow_flexible(const Eigen::VectorXd& y);
   void flexible_derivatives(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const;
+  // Flexible body f's applied generalised force (6 + ne: frame force and torque in its
+  // axes, modal forces), its accelerations xi' under it alone, and its rates from xi'.
+  Eigen::VectorXd flexible_force(std::size_t f, double t, const Eigen::VectorXd& y) const;
+  Eigen::VectorXd free_flexible_accelerations(std::size_t f, const Eigen::VectorXd& y, const Eigen::VectorXd& q) const;
+  void write_flexible_rates(std::size_t f, const Eigen::VectorXd& xi_rate, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const;
   void place_flexible_nodes(Eigen::VectorXd& y) const;
+  void place_nodes_of(std::size_t f, Eigen::VectorXd& y) const;
+  // A rigid cluster that holds flexible bodies (flexible_joints.cpp): solved and projected
+  // in the generalised velocities of its rigid bodies and flexible bodies.
+  // Where a rigid joint touches a flexible body, its frame and every such body of it are
+  // made one piece (touched: per body, whether a rigid joint holds it; piece: per body, its
+  // rigid piece); a cluster's slots in generalised velocities.
+  void join_flexible_pieces(std::vector<char>& touched, std::vector<int>& piece) const;
+  FlexibleSlots flexible_slots(const std::vector<int>& bodies) const;
+  void solve_flexible_cluster(int c, double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const;
+  void project_flexible_cluster(int c, double t, Eigen::VectorXd& y) const;
   void flexible_energy(const Eigen::VectorXd& y, Energy& e) const;
   bool flexible_owned(Eigen::Index i) const {
     return !compiled_->flexible_of_body.empty() && compiled_->flexible_of_body[static_cast<std::size_t>(i)] >= 0;
