@@ -20,6 +20,7 @@
 #include "mbsflow/methods/jacobian.hpp"
 #include "mbsflow/runtime/partitioned_run.hpp"
 #include "mbsflow/runtime/run.hpp"
+#include "mbsflow/runtime/run_request.hpp"
 
 namespace mbsflow::cli {
 namespace {
@@ -148,10 +149,10 @@ StiffRow run_method(const Model& m, Method method, double tol, double step, int 
   plan.options.output_interval = output_interval;
   plan.options.threads = threads;
   plan.parallel.threads = threads;
-  const bool stage_split = has_stage_scheme(stepper_entry(method));
   const auto start = BenchClock::now();
   try {
-    if (stage_split && threads > 1) plan.partition = decompose(m, default_partitions(m, threads));
+    // Cut as `mbsflow run` cuts it with these threads and no --partitions.
+    plan.partition = cut_for_run(m, std::nullopt, default_submodels(m, method, false, threads), Partitioner::best, true);
     const RunSummary s = run(m, plan, &out);
     r.steps = s.steps;
     r.evaluations = s.evaluations;

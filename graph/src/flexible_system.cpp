@@ -56,7 +56,7 @@ void MultibodySystem::compile_flexible() {
         bad("its bodies must be distinct bodies of the model");
       compiled_->flexible_of_body[static_cast<std::size_t>(b)] = static_cast<int>(f);
       if (compiled_->driver_of_body[static_cast<std::size_t>(b)] >= 0)
-        bad("body '" + m.bodies[static_cast<std::size_t>(b)].name + "' cannot be driven (drive a body joined to it by a bushing)");
+        bad("body '" + m.bodies[static_cast<std::size_t>(b)].name + "' cannot be driven (drive a body and join it to the part by a fixed joint)");
     }
     for (int b : fb.nodes) compiled_->body_law[static_cast<std::size_t>(b)] = massless;
     compiled_->flexible_tail.push_back(extra);

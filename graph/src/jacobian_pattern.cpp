@@ -80,6 +80,19 @@ Eigen::SparseMatrix<double> MultibodySystem::jacobian_pattern() const {
   auto push_rows = [&](Eigen::Index first, int count) {
     for (int c = 0; c < count; ++c) inner.push_back(static_cast<int>(first + c));
   };
+  // A node's position and orientation rates follow its frame's orientation, velocity and
+  // angular velocity and the modes (the dense output's node motion): those columns get the
+  // nodes' rows too, each column's rows then sorted.
+  std::vector<int> frame_of(m.flexible.empty() ? 0 : static_cast<std::size_t>(n), -1);
+  for (std::size_t fl = 0; fl < m.flexible.size(); ++fl) frame_of[static_cast<std::size_t>(m.flexible[fl].frame)] = static_cast<int>(fl);
+  auto push_node_rows = [&](std::size_t fl) {
+    const auto first = static_cast<std::ptrdiff_t>(outer.back());
+    for (int node : m.flexible[fl].nodes) {
+      push_rows(layout_.position(node), 3);
+      push_rows(layout_.orientation(node), 4);
+    }
+    std::sort(inner.begin() + first, inner.end());
+  };
   enum Field { position, orientation, velocity, angular_velocity };
   for (Field f : {position, orientation, velocity, angular_velocity}) {
     const int width = f == orientation ? 4 : 3;
@@ -92,6 +105,8 @@ Eigen::SparseMatrix<double> MultibodySystem::jacobian_pattern() const {
         for (std::size_t fl = 0; fl < m.flexible.size(); ++fl)  // the modes' accelerations
           if (std::binary_search(group_reads[fl].begin(), group_reads[fl].end(), static_cast<int>(b)))
             push_rows(layout_.tail(compiled_->flexible_tail[fl]) + m.flexible[fl].data->modes(), m.flexible[fl].data->modes());
+        if (f != position && !frame_of.empty() && frame_of[static_cast<std::size_t>(b)] >= 0)
+          push_node_rows(static_cast<std::size_t>(frame_of[static_cast<std::size_t>(b)]));
         outer.push_back(static_cast<int>(inner.size()));
       }
   }
@@ -108,6 +123,7 @@ Eigen::SparseMatrix<double> MultibodySystem::jacobian_pattern() const {
           if (reads_modes[fl][static_cast<std::size_t>(i)]) push_rows(layout_.angular_velocity(i), 3);
         if (rate) push_rows(tail + k, 1);  // eta' = eta rate
         push_rows(tail + ne, ne);
+        push_node_rows(fl);
         outer.push_back(static_cast<int>(inner.size()));
       }
   }

@@ -62,7 +62,8 @@ def test_a_cantilever_beam_from_python_bends_at_its_closed_form_frequency():
 def test_modes_of_a_flexible_body_reduced_from_matrix_market_files(tmp_path):
     """A spring lattice written as Matrix Market files, reduced by `mbsflow reduce` and used
     as a flexible body: free, its modes are six rigid-body motions and then the reduced
-    part's own free frequencies; its interface nodes are bodies whose shapes follow."""
+    part's own free frequencies; its interface nodes are bodies whose shapes follow; held
+    there by rigid joints, the fixed-interface frequencies."""
     import os
     import subprocess
     import scipy.linalg
@@ -98,6 +99,16 @@ def test_modes_of_a_flexible_body_reduced_from_matrix_market_files(tmp_path):
     assert np.abs(m.shape[6, 1:, :3]).max() > 0.1 * np.abs(m.shape[6, 0, :3]).max()
     lm = mbsflow.linearize(model, at="initial")
     assert lm.bodies == [0] and lm.start == [0, 6 + 12 + 4 - 6]
+    # Held at its interface nodes by rigid spherical joints: the fixed-interface modes the
+    # reduction kept, those of its matrices with the interface coordinates held.
+    pins = [{"name": f"pin{i}", "type": "spherical", "body1": "ground", "body2": f"part@{i}", "point1": list(nodes[i - 1])}
+            for i in range(1, 5)]
+    held = mbsflow.Model.from_dict({"name": "lattice", "gravity": [0, 0, 0], "joints": pins,
+                                    "bodies": [{"name": "part", "type": "flexible", "file": str(tmp_path / "part.h5")}]})
+    with h5py.File(tmp_path / "part.h5", "r") as h5:
+        k, mm = h5["reduced/stiffness"][:], h5["reduced/mass"][:]
+    fixed = np.sqrt(scipy.linalg.eigh(k[12:, 12:], mm[12:, 12:], eigvals_only=True)) / (2 * np.pi)
+    assert np.allclose(mbsflow.modes(held, n=4, at="initial", damped=False).frequency, fixed, rtol=1e-6)
     # Run from Python, set vibrating in its first elastic mode: its modal coordinates in the
     # results, the frame's centre still (the modes do not move it), the first mode's
     # coordinate back where it began after one period.
