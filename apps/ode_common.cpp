@@ -5,6 +5,8 @@
 #include <iostream>
 
 #include "commands.hpp"
+#include "mbsflow/error.hpp"
+#include "mbsflow/methods/uncontrolled.hpp"
 #include "mbsflow/version.hpp"
 
 namespace mbsflow::cli {
@@ -28,18 +30,9 @@ void OdeRecorder::add(double t, const Eigen::VectorXd& y) {
 }
 
 void OdeRecorder::warn_uncontrolled(double atol, const Eigen::VectorXd& atols) const {
-  std::vector<Eigen::Index> small;
-  for (Eigen::Index i = 0; i < largest_.size(); ++i)
-    if (largest_(i) < (atols.size() ? atols(i) : atol)) small.push_back(i);
-  if (small.empty()) return;
   const auto name = [&](Eigen::Index i) { return p_.describe ? p_.describe(i) : "component " + std::to_string(i + 1); };
-  const Eigen::Index i = small.front();
-  std::fprintf(stderr,
-               "mbsflow ode: warning: %s never exceeded its absolute tolerance %.3g (largest |y| %.3g)%s: held to atol in "
-               "absolute terms only, none of its digits need be right, and a solution that depends on it can end far off "
-               "(give per-component tolerances, --atol A1,A2,..., each below its component's size)\n",
-               name(i).c_str(), atols.size() ? atols(i) : atol, largest_(i),
-               small.size() > 1 ? (" and so did " + std::to_string(small.size() - 1) + " more components").c_str() : "");
+  const std::string warning = uncontrolled_warning(largest_, atol, atols, name, "at any accepted point");
+  if (!warning.empty()) std::fprintf(stderr, "mbsflow ode: warning: %s\n", render(warning, flag_for).c_str());
 }
 
 void set_tolerance(const std::vector<double>& given, double& scalar, Eigen::VectorXd& vector) {

@@ -30,9 +30,7 @@ class OdeRecorder {
   void add(double t, const Eigen::VectorXd& y);
   double max_error() const { return max_error_; }
   // Warns on stderr about the components whose size stayed below their absolute tolerance
-  // at every accepted point: they are held to atol in absolute terms only, so none of their
-  // digits need be right (Robertson's 1e-5 component under one scalar atol = 1e-4), and a
-  // run can end "ok" far from the solution. atols: per component, or empty for atol.
+  // at every accepted point (methods/uncontrolled.hpp). atols: per component, or empty.
   void warn_uncontrolled(double atol, const Eigen::VectorXd& atols) const;
   // Writes the file (when one was asked for) and says where it is and how to plot it.
   void write(const std::string& path, std::vector<BlockStepRecord> steps, std::vector<std::pair<std::string, std::string>> texts,

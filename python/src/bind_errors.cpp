@@ -13,11 +13,6 @@ PyObject* input_error_type = nullptr;
 PyObject* run_error_type = nullptr;
 PyObject* model_error_type = nullptr;
 
-std::string keyword_for(const std::string& setting, const std::string* value) {
-  const std::string name = setting == "methods" ? "submodel_methods" : setting;
-  return value ? name + "=" + *value : name;
-}
-
 PyObject* new_type(const char* name, const char* doc, PyObject* bases) {
   PyObject* t = PyErr_NewExceptionWithDoc(name, doc, bases, nullptr);
   if (!t) throw py::error_already_set();
@@ -25,6 +20,11 @@ PyObject* new_type(const char* name, const char* doc, PyObject* bases) {
 }
 
 }  // namespace
+
+std::string keyword_for(const std::string& setting, const std::string* value) {
+  const std::string name = setting == "methods" ? "submodel_methods" : setting;
+  return value ? name + "=" + *value : name;
+}
 
 void bind_errors(py::module_& m) {
   error_type = new_type("mbsflow.Error", "Every error of mbsflow.", PyExc_Exception);

@@ -2,12 +2,15 @@
 // shape): any registered method on a Python or compiled right-hand side, output at the
 // steps or at t_eval from the method's dense output, events, and samples of the dense
 // output for a continuous solution. Backward integration runs forward in s = -t.
+#include <algorithm>
 #include <cmath>
 #include <memory>
 
 #include "bindings.hpp"
+#include "mbsflow/error.hpp"
 #include "mbsflow/methods/events.hpp"
 #include "mbsflow/methods/stepper.hpp"
+#include "mbsflow/methods/uncontrolled.hpp"
 #include "stop_guard.hpp"
 
 namespace mbsflow::python {
@@ -256,6 +259,16 @@ py::dict solve(IvpInput& in) {
   out["rejected"] = st.rejected;
   out["status"] = status;
   out["message"] = message;
+  // The returned points' largest |y| per component: the warning about those below atol.
+  Eigen::VectorXd largest = Eigen::VectorXd::Zero(n);
+  const py::array_t<double> y_out = out["y"].cast<py::array_t<double>>();
+  const auto y_at = y_out.unchecked<2>();
+  for (py::ssize_t r = 0; r < y_at.shape(0); ++r)
+    for (py::ssize_t c = 0; c < y_at.shape(1); ++c) largest[c] = std::max(largest[c], std::abs(y_at(r, c)));
+  const std::string warning = y_at.shape(0) == 0 ? std::string() : uncontrolled_warning(
+      largest, in.settings.atol, in.settings.atols, [](Eigen::Index i) { return "y[" + std::to_string(i) + "]"; },
+      in.t_eval.empty() ? "at any accepted step" : "at any point of t_eval");
+  out["warning"] = warning.empty() ? std::string() : "solve_ivp: " + render(warning, keyword_for);
   return out;
 }
 

@@ -14,6 +14,8 @@ namespace mbsflow::python {
 namespace py = pybind11;
 
 void bind_errors(py::module_& m);
+// A setting named in a library message ({name} or {name=value}) as the Python keyword.
+std::string keyword_for(const std::string& setting, const std::string* value);
 void bind_model(py::module_& m);
 void bind_results(py::module_& m);
 void bind_run(py::module_& m);
