@@ -62,21 +62,34 @@ inline Model flexible_model(const ReducedPart& part) {
   return m;
 }
 
-// The flexible body's momentum and angular momentum about the world origin (world axes)
-// at y, from its mass matrix M(eta) and its generalised velocities.
+// The model of two parts: b's bodies after a's, b's flexible body after a's.
+inline Model joined_models(Model a, const Model& b) {
+  const int offset = static_cast<int>(a.bodies.size());
+  a.bodies.insert(a.bodies.end(), b.bodies.begin(), b.bodies.end());
+  for (FlexibleBody f : b.flexible) {
+    f.frame += offset;
+    for (int& n : f.nodes) n += offset;
+    a.flexible.push_back(std::move(f));
+  }
+  return a;
+}
+
+// Flexible body `which`'s momentum and angular momentum about the world origin (world
+// axes) at y, from its mass matrix M(eta) and its generalised velocities.
 struct Momentum {
   Eigen::Vector3d linear, angular;
 };
 
-inline Momentum flexible_momentum(const MultibodySystem& sys, const Eigen::VectorXd& y) {
+inline Momentum flexible_momentum(const MultibodySystem& sys, const Eigen::VectorXd& y, std::size_t which = 0) {
   const StateLayout& l = sys.layout();
-  const FlexibleBody& f = sys.model().flexible.front();
+  const FlexibleBody& f = sys.model().flexible[which];
   const int ne = f.data->modes();
   const Eigen::Vector4d q = y.segment<4>(l.orientation(f.frame));
   const Eigen::Matrix3d r = Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized().toRotationMatrix();
-  const Eigen::VectorXd eta = y.segment(l.tail(0), ne);
+  const Eigen::Index tail = sys.flexible_state(which);
+  const Eigen::VectorXd eta = y.segment(tail, ne);
   Eigen::VectorXd xi(6 + ne);
-  xi << r.transpose() * y.segment<3>(l.velocity(f.frame)), y.segment<3>(l.angular_velocity(f.frame)), y.segment(l.tail(ne), ne);
+  xi << r.transpose() * y.segment<3>(l.velocity(f.frame)), y.segment<3>(l.angular_velocity(f.frame)), y.segment(tail + ne, ne);
   const Eigen::VectorXd p = flexible_mass_matrix(*f.data, eta) * xi;
   const Eigen::Vector3d linear = r * p.head<3>();
   return {linear, Eigen::Vector3d(y.segment<3>(l.position(f.frame))).cross(linear) + r * p.segment<3>(3)};
