@@ -214,7 +214,7 @@ void MultibodySystem::solve_flexible_cluster(int c, double t, const Eigen::Vecto
   const std::vector<Eigen::Index>& block = fs.block;
   for (std::size_t i = 0; i < fs.flexible.size(); ++i) {
     const auto f = static_cast<std::size_t>(fs.flexible[i]);
-    accel.segment(block[i], 6 + at[i].ne) = free_flexible_accelerations(f, y, flexible_force(f, t, y));
+    accel.segment(block[i], 6 + at[i].ne) = free_flexible_accelerations(f, at[i], y, flexible_force(f, at[i], t, y));
   }
   for (const ClusterJoint& cj : rc.joints()) {
     const CompiledJoint& j = compiled_->joints[static_cast<std::size_t>(cj.joint)];
@@ -230,7 +230,7 @@ void MultibodySystem::solve_flexible_cluster(int c, double t, const Eigen::Vecto
     if (fs.owner[s] < 0)
       write_derivative(bodies[s], t, y, dydt, k.force[s] + k.wrench[s].head<3>(), k.torque[s] + k.wrench[s].tail<3>());
   for (std::size_t i = 0; i < fs.flexible.size(); ++i)
-    write_flexible_rates(static_cast<std::size_t>(fs.flexible[i]), accel.segment(block[i], 6 + at[i].ne), y, dydt);
+    write_flexible_rates(static_cast<std::size_t>(fs.flexible[i]), at[i], accel.segment(block[i], 6 + at[i].ne), y, dydt);
 }
 
 void MultibodySystem::project_flexible_cluster(int c, double t, Eigen::VectorXd& y) const {

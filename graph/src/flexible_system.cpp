@@ -86,11 +86,11 @@ void MultibodySystem::follow_flexible(const Eigen::VectorXd& y) {
 // Generalised forces: the frame's wrench (gravity on the part's mass at its origin, its
 // loads and joints), gravity's share on the deformation (the centre of mass moves with
 // the modes by L eta), and each node's wrench through its motion.
-Eigen::VectorXd MultibodySystem::flexible_force(std::size_t f, double t, const Eigen::VectorXd& y) const {
+Eigen::VectorXd MultibodySystem::flexible_force(std::size_t f, const FlexibleAt& at, double t, const Eigen::VectorXd& y) const {
   const FlexibleBody& fb = model().flexible[f];
   const FloatingFrameData& d = *fb.data;
   const int ne = d.modes(), i = fb.frame;
-  const Eigen::VectorXd eta = y.segment(layout_.tail(compiled_->flexible_tail[f]), ne);
+  const Eigen::VectorXd& eta = at.eta;
   const Eigen::Matrix3d& r = rot_[static_cast<std::size_t>(i)];
   Eigen::VectorXd q = Eigen::VectorXd::Zero(6 + ne);
   Eigen::Vector3d force, torque;
@@ -105,25 +105,24 @@ Eigen::VectorXd MultibodySystem::flexible_force(std::size_t f, double t, const E
     applied_wrench(fb.nodes[k], t, y, force, torque);
     const Eigen::Vector3d f_b = r.transpose() * force, t_b = r.transpose() * torque;
     const Eigen::MatrixXd& shape = d.node_shape[k];
-    const Eigen::Vector3d at = d.node_position[k] + shape.topRows<3>() * eta;
+    const Eigen::Vector3d arm = d.node_position[k] + shape.topRows<3>() * eta;
     q.head<3>() += f_b;
-    q.segment<3>(3) += at.cross(f_b) + t_b;
+    q.segment<3>(3) += arm.cross(f_b) + t_b;
     q.tail(ne) += shape.topRows<3>().transpose() * f_b + shape.bottomRows<3>().transpose() * t_b;
   }
   return q;
 }
 
-Eigen::VectorXd MultibodySystem::free_flexible_accelerations(std::size_t f, const Eigen::VectorXd& y, const Eigen::VectorXd& q) const {
+Eigen::VectorXd MultibodySystem::free_flexible_accelerations(std::size_t f, const FlexibleAt& at, const Eigen::VectorXd& y,
+                                                             const Eigen::VectorXd& q) const {
   const FlexibleBody& fb = model().flexible[f];
-  const FlexibleAt at = flexible_at(fb, layout_, compiled_->flexible_tail[f], y);
   const Eigen::Vector3d v_b = rot_[static_cast<std::size_t>(at.frame)].transpose() * y.segment<3>(layout_.velocity(at.frame));
   return flexible_accelerations(fb, v_b, at.w, at.eta, at.eta_rate, q);
 }
 
-void MultibodySystem::write_flexible_rates(std::size_t f, const Eigen::VectorXd& xi_rate, const Eigen::VectorXd& y,
-                                           Eigen::VectorXd& dydt) const {
+void MultibodySystem::write_flexible_rates(std::size_t f, const FlexibleAt& at, const Eigen::VectorXd& xi_rate,
+                                           const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const {
   const FlexibleBody& fb = model().flexible[f];
-  const FlexibleAt at = flexible_at(fb, layout_, compiled_->flexible_tail[f], y);
   const int ne = at.ne, i = at.frame;
   const Eigen::Vector3d& w = at.w;
   const Eigen::Matrix3d& r = rot_[static_cast<std::size_t>(i)];
@@ -150,7 +149,8 @@ void MultibodySystem::write_flexible_rates(std::size_t f, const Eigen::VectorXd&
 void MultibodySystem::flexible_derivatives(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const {
   for (std::size_t f = 0; f < model().flexible.size(); ++f) {
     if (clusters() > 0 && cluster_of(model().flexible[f].frame) >= 0) continue;
-    write_flexible_rates(f, free_flexible_accelerations(f, y, flexible_force(f, t, y)), y, dydt);
+    const FlexibleAt at = flexible_at(model().flexible[f], layout_, compiled_->flexible_tail[f], y);
+    write_flexible_rates(f, at, free_flexible_accelerations(f, at, y, flexible_force(f, at, t, y)), y, dydt);
   }
 }
 

@@ -28,12 +28,13 @@ Eigen::Matrix3d rotation_at(const StateLayout& l, const Eigen::VectorXd& y, int 
   return Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized().toRotationMatrix();
 }
 
-// Node k of the model's flexible body in the world at y, from its frame and modes alone.
-Eigen::Vector3d node_in_world(const MultibodySystem& sys, const Eigen::VectorXd& y, int k) {
+// Node k of the model's flexible body `which` in the world at y, from its frame and modes alone.
+Eigen::Vector3d node_in_world(const MultibodySystem& sys, const Eigen::VectorXd& y, int k, std::size_t which = 0) {
   const StateLayout& l = sys.layout();
-  const FlexibleBody& f = sys.model().flexible.front();
+  const FlexibleBody& f = sys.model().flexible[which];
   const int ne = f.data->modes();
-  const NodeMotion n = flexible_node_motion(*f.data, k, y.segment(l.tail(0), ne), y.segment(l.tail(ne), ne));
+  const Eigen::Index tail = sys.flexible_state(which);
+  const NodeMotion n = flexible_node_motion(*f.data, k, y.segment(tail, ne), y.segment(tail + ne, ne));
   return y.segment<3>(l.position(f.frame)) + rotation_at(l, y, f.frame) * n.position;
 }
 
@@ -265,16 +266,7 @@ TEST_CASE("two flexible bodies pinned together at their nodes: the joint holds b
   join_node(m, "pin", JointType::spherical, m.flexible[0].nodes[3], m.flexible[1].nodes[0]);
   MultibodySystem sys(m);
   REQUIRE(sys.clusters() == 1);
-  const auto gap = [&](const Eigen::VectorXd& y) {
-    const StateLayout& l = sys.layout();
-    auto node = [&](std::size_t f, int k) {
-      const FlexibleBody& fb = sys.model().flexible[f];
-      const Eigen::Index tail = sys.flexible_state(f);
-      const NodeMotion n = flexible_node_motion(*fb.data, k, y.segment(tail, ne), y.segment(tail + ne, ne));
-      return Eigen::Vector3d(y.segment<3>(l.position(fb.frame)) + rotation_at(l, y, fb.frame) * n.position);
-    };
-    return (node(0, 3) - node(1, 0)).norm();
-  };
+  const auto gap = [&](const Eigen::VectorXd& y) { return (node_in_world(sys, y, 3, 0) - node_in_world(sys, y, 0, 1)).norm(); };
   const auto momentum = [&](const Eigen::VectorXd& y) {
     test::Momentum p = test::flexible_momentum(sys, y, 0);
     const test::Momentum q = test::flexible_momentum(sys, y, 1);

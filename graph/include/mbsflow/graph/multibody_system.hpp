@@ -31,6 +31,7 @@ struct BodyMotionT;  // constraint_rows.hpp
 using BodyMotion = BodyMotionT<double>;
 struct JointGeometry;  // constraint_rows.hpp
 struct FlexibleSlots;  // multibody_constraints.hpp
+struct FlexibleAt;     // flexible_state.hpp
 class RigidCluster;    // rigid_cluster.hpp
 struct BodyFrameView;  // force_laws.hpp
 template <class S>
@@ -256,10 +257,13 @@ class MultibodySystem {
   void follow_flexible(const Eigen::VectorXd& y);
   void flexible_derivatives(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const;
   // Flexible body f's applied generalised force (6 + ne: frame force and torque in its
-  // axes, modal forces), its accelerations xi' under it alone, and its rates from xi'.
-  Eigen::VectorXd flexible_force(std::size_t f, double t, const Eigen::VectorXd& y) const;
-  Eigen::VectorXd free_flexible_accelerations(std::size_t f, const Eigen::VectorXd& y, const Eigen::VectorXd& q) const;
-  void write_flexible_rates(std::size_t f, const Eigen::VectorXd& xi_rate, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const;
+  // axes, modal forces), its accelerations xi' under it alone, and its rates from xi' (at:
+  // its coordinates as this evaluation read them from y).
+  Eigen::VectorXd flexible_force(std::size_t f, const FlexibleAt& at, double t, const Eigen::VectorXd& y) const;
+  Eigen::VectorXd free_flexible_accelerations(std::size_t f, const FlexibleAt& at, const Eigen::VectorXd& y,
+                                              const Eigen::VectorXd& q) const;
+  void write_flexible_rates(std::size_t f, const FlexibleAt& at, const Eigen::VectorXd& xi_rate, const Eigen::VectorXd& y,
+                            Eigen::VectorXd& dydt) const;
   void place_flexible_nodes(Eigen::VectorXd& y) const;
   void place_nodes_of(std::size_t f, Eigen::VectorXd& y) const;
   // A rigid cluster that holds flexible bodies (flexible_joints.cpp): solved and projected
