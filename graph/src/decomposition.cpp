@@ -106,16 +106,19 @@ std::vector<int> band_partition(const Model& m, const std::vector<double>& cost,
 
 }  // namespace
 
-std::vector<int> rigid_pieces(const Model& m) {
-  const std::size_t n = m.bodies.size();
+namespace {
+
+// The bodies' pieces when join(a, b) is called for each pair joins(join) makes one: numbered
+// in the order of their first body.
+template <class Joins>
+std::vector<int> pieces_joined(std::size_t n, Joins joins) {
   std::vector<int> parent(n);
   std::iota(parent.begin(), parent.end(), 0);
   auto root = [&](int i) {
     while (parent[static_cast<std::size_t>(i)] != i) i = parent[static_cast<std::size_t>(i)] = parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(i)])];
     return i;
   };
-  for (const Joint& j : m.joints)
-    if (is_kinematic(j.type) && j.rigid && is_body(j.body1)) parent[static_cast<std::size_t>(root(j.body1))] = root(j.body2);
+  joins([&](int a, int b) { parent[static_cast<std::size_t>(root(a))] = root(b); });
   std::vector<int> piece(n), of_root(n, -1);
   int count = 0;
   for (std::size_t b = 0; b < n; ++b) {
@@ -124,6 +127,38 @@ std::vector<int> rigid_pieces(const Model& m) {
     piece[b] = p;
   }
   return piece;
+}
+
+template <class Join>
+void join_rigid(const Model& m, Join join) {
+  for (const Joint& j : m.joints)
+    if (is_kinematic(j.type) && j.rigid && is_body(j.body1)) join(j.body1, j.body2);
+}
+
+}  // namespace
+
+std::vector<int> rigid_pieces(const Model& m) {
+  return pieces_joined(m.bodies.size(), [&](auto join) { join_rigid(m, join); });
+}
+
+std::vector<int> uncut_pieces(const Model& m) {
+  if (m.flexible.empty()) return rigid_pieces(m);
+  std::vector<char> node(m.bodies.size(), 0);
+  for (const FlexibleBody& f : m.flexible)
+    for (int b : f.nodes) node[static_cast<std::size_t>(b)] = 1;
+  auto at_node = [&](int b) { return is_body(b) && node[static_cast<std::size_t>(b)] != 0; };
+  return pieces_joined(m.bodies.size(), [&](auto join) {
+    join_rigid(m, join);
+    for (const FlexibleBody& f : m.flexible)
+      for (int b : f.nodes) join(f.frame, b);
+    for (const Joint& j : m.joints)
+      if (is_body(j.body1) && (at_node(j.body1) || at_node(j.body2))) join(j.body1, j.body2);
+    for (const auto& e : m.force_elements) {
+      const std::vector<int> bodies = e->bodies();
+      if (std::any_of(bodies.begin(), bodies.end(), at_node))
+        for (int b : bodies) join(bodies.front(), b);
+    }
+  });
 }
 
 namespace {
@@ -168,12 +203,13 @@ Decomposition decompose(const Model& m, int k, Partitioner partitioner) {
   // Rigid pieces are never cut: the partitioners cut the model with each piece contracted
   // to one vertex (the model itself when there are no rigid joints), then each body goes
   // where its piece went.
-  const std::vector<int> piece = rigid_pieces(m);
+  const std::vector<int> piece = uncut_pieces(m);
   const int pieces = piece.empty() ? 0 : *std::max_element(piece.begin(), piece.end()) + 1;
   if (k > pieces)
-    throw InputError("partitions: " + count_of(k, "submodel") + ", but rigid joints leave only " +
-                     count_of(pieces, "piece") + " that may be cut apart (bodies per piece: " + piece_sizes(piece, pieces) +
-                     "); use fewer submodels or make joints between clusters compliant");
+    throw InputError("partitions: " + count_of(k, "submodel") + ", but rigid joints" +
+                     (m.flexible.empty() ? "" : " and flexible bodies (a part with what is joined to its nodes)") +
+                     " leave only " + count_of(pieces, "piece") + " that may be cut apart (bodies per piece: " +
+                     piece_sizes(piece, pieces) + "); use fewer submodels or make joints between clusters compliant");
   const std::vector<double> body_cost = body_costs(m);
   std::vector<double> cost(static_cast<std::size_t>(pieces), 0.0);
   for (std::size_t b = 0; b < piece.size(); ++b) cost[static_cast<std::size_t>(piece[b])] += body_cost[b];
@@ -227,6 +263,19 @@ Decomposition decompose(const Model& m, const std::vector<int>& part, int k) {
                        m.bodies[static_cast<std::size_t>(j.body2)].name + "' (part " +
                        std::to_string(part[static_cast<std::size_t>(j.body2)]) +
                        "): a cut may only pass through compliant joints, bushings and springs");
+  if (!m.flexible.empty()) {
+    const std::vector<int> piece = uncut_pieces(m);
+    for (std::size_t f = 0; f < m.flexible.size(); ++f) {
+      const int frame = m.flexible[f].frame, p = part[static_cast<std::size_t>(frame)];
+      for (std::size_t b = 0; b < n; ++b)
+        if (piece[b] == piece[static_cast<std::size_t>(frame)] && part[b] != p)
+          throw InputError("partition: body '" + m.bodies[b].name + "' (part " + std::to_string(part[b]) +
+                           ") is joined to flexible body '" + m.flexible[f].name + "' (part " + std::to_string(p) +
+                           ") at a node: a part, its nodes and the bodies joined to them are never cut apart");
+      d.submodels[static_cast<std::size_t>(p)].flexible.push_back(static_cast<int>(f));
+    }
+    d.state_extra = flexible_tail_offsets(m.flexible).back();
+  }
   for (const Joint& j : m.joints)
     if (is_body(j.body1) && part[static_cast<std::size_t>(j.body1)] != part[static_cast<std::size_t>(j.body2)]) ++d.cut_joints;
   link_submodels(m, d);
@@ -240,8 +289,6 @@ Decomposition decompose(const Model& m, const std::vector<int>& part, int k) {
 }
 
 Model submodel_model(const Model& m, const Submodel& s) {
-  if (!m.flexible.empty())
-    throw InputError("flexible body '" + m.flexible.front().name + "': a model with flexible bodies is not cut into submodels yet");
   Model local;
   local.name = m.name;
   local.gravity = m.gravity;
@@ -272,6 +319,13 @@ Model submodel_model(const Model& m, const Submodel& s) {
       copy.body = i;
       local.drivers.push_back(copy);
     }
+  }
+  // Flexible bodies held here, in model order: their state tail is the model's, less the others'.
+  for (int f : s.flexible) {
+    FlexibleBody copy = m.flexible[static_cast<std::size_t>(f)];
+    copy.frame = s.local_index(copy.frame);
+    for (int& b : copy.nodes) b = s.local_index(b);
+    local.flexible.push_back(std::move(copy));
   }
   // Force elements on own and borrowed bodies, in model order, reading their bodies at local indices.
   const int n_own = s.integrated();

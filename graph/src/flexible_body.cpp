@@ -19,6 +19,12 @@ Eigen::Matrix3d rotation_block_rate(const FloatingFrameData& d, int k, const Eig
 
 }  // namespace
 
+std::vector<Eigen::Index> flexible_tail_offsets(const std::vector<FlexibleBody>& flexible) {
+  std::vector<Eigen::Index> at{0};
+  for (const FlexibleBody& f : flexible) at.push_back(at.back() + 2 * f.data->modes());
+  return at;
+}
+
 Eigen::MatrixXd flexible_mass_matrix(const FloatingFrameData& d, const Eigen::VectorXd& eta) {
   const int ne = d.modes();
   Eigen::MatrixXd m = d.mass0;

@@ -1,6 +1,7 @@
 // The flexible bodies' part of MultibodySystem (flexible_body.hpp): their node bodies'
 // motion from the frame and the modes, their rates, and their state tail.
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 
 #include "flexible_state.hpp"
@@ -31,8 +32,6 @@ void MultibodySystem::compile_flexible() {
   const Model& m = *model_;
   if (m.flexible.empty()) return;
   const auto n = static_cast<std::size_t>(layout_.bodies);
-  if (active_ != layout_.bodies)
-    throw InputError("flexible body '" + m.flexible.front().name + "': a model with flexible bodies runs as one system");
   compiled_->flexible_of_body.assign(n, -1);
   // The node bodies' masses serve the stable-step estimates only: their motion is the
   // frame's and the modes', and gravity acts on the part through the frame.
@@ -41,7 +40,6 @@ void MultibodySystem::compile_flexible() {
   none.inertia.setZero();
   none.inv_inertia.setZero();
   compiled_->body_laws.push_back(none);
-  Eigen::Index extra = 0;
   for (std::size_t f = 0; f < m.flexible.size(); ++f) {
     const FlexibleBody& fb = m.flexible[f];
     const auto bad = [&](const std::string& what) { throw InputError("flexible body '" + fb.name + "': " + what); };
@@ -54,32 +52,35 @@ void MultibodySystem::compile_flexible() {
     for (int b : owned) {
       if (b < 0 || static_cast<std::size_t>(b) >= n || compiled_->flexible_of_body[static_cast<std::size_t>(b)] >= 0)
         bad("its bodies must be distinct bodies of the model");
+      if (b >= active_) bad("its bodies must be integrated here (a submodel holds a flexible body whole)");
       compiled_->flexible_of_body[static_cast<std::size_t>(b)] = static_cast<int>(f);
       if (compiled_->driver_of_body[static_cast<std::size_t>(b)] >= 0)
         bad("body '" + m.bodies[static_cast<std::size_t>(b)].name + "' cannot be driven (drive a body and join it to the part by a fixed joint)");
     }
     for (int b : fb.nodes) compiled_->body_law[static_cast<std::size_t>(b)] = massless;
-    compiled_->flexible_tail.push_back(extra);
-    extra += 2 * ne;
   }
-  layout_.extra = extra;
+  const std::vector<Eigen::Index> tail = flexible_tail_offsets(m.flexible);
+  compiled_->flexible_tail.assign(tail.begin(), tail.end() - 1);
+  layout_.extra = tail.back();
 }
 
 void MultibodySystem::follow_flexible(const Eigen::VectorXd& y) {
-  const Model& m = model();
-  for (std::size_t f = 0; f < m.flexible.size(); ++f) {
-    const FlexibleAt at = flexible_at(m.flexible[f], layout_, compiled_->flexible_tail[f], y);
-    const int i = at.frame;
-    const Eigen::Matrix3d& r = rot_[static_cast<std::size_t>(i)];
-    for (std::size_t k = 0; k < m.flexible[f].nodes.size(); ++k) {
-      const int b = m.flexible[f].nodes[k];
-      const NodeWorld n = node_world(at, static_cast<int>(k), pos_.col(i), vel_.col(i), quat_.col(i), r);
-      pos_.col(b) = n.position;
-      vel_.col(b) = n.velocity;
-      omega_.col(b) = n.omega;
-      quat_.col(b) = n.quat;
-      rot_[static_cast<std::size_t>(b)] = rotation_matrix(n.quat);
-    }
+  for (std::size_t f = 0; f < model().flexible.size(); ++f) follow_nodes_of(f, y);
+}
+
+void MultibodySystem::follow_nodes_of(std::size_t f, const Eigen::VectorXd& y) {
+  const FlexibleBody& fb = model().flexible[f];
+  const FlexibleAt at = flexible_at(fb, layout_, compiled_->flexible_tail[f], y);
+  const int i = at.frame;
+  const Eigen::Matrix3d& r = rot_[static_cast<std::size_t>(i)];
+  for (std::size_t k = 0; k < fb.nodes.size(); ++k) {
+    const int b = fb.nodes[k];
+    const NodeWorld n = node_world(at, static_cast<int>(k), pos_.col(i), vel_.col(i), quat_.col(i), r);
+    pos_.col(b) = n.position;
+    vel_.col(b) = n.velocity;
+    omega_.col(b) = n.omega;
+    quat_.col(b) = n.quat;
+    rot_[static_cast<std::size_t>(b)] = rotation_matrix(n.quat);
   }
 }
 
@@ -146,12 +147,24 @@ void MultibodySystem::write_flexible_rates(std::size_t f, const FlexibleAt& at, 
 }
 
 // A flexible body with a rigid joint at it is solved with its cluster (solve_cluster).
+void MultibodySystem::flexible_derivative(std::size_t f, double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const {
+  if (clusters() > 0 && cluster_of(model().flexible[f].frame) >= 0) return;
+  const FlexibleAt at = flexible_at(model().flexible[f], layout_, compiled_->flexible_tail[f], y);
+  write_flexible_rates(f, at, free_flexible_accelerations(f, at, y, flexible_force(f, at, t, y)), y, dydt);
+}
+
 void MultibodySystem::flexible_derivatives(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const {
-  for (std::size_t f = 0; f < model().flexible.size(); ++f) {
-    if (clusters() > 0 && cluster_of(model().flexible[f].frame) >= 0) continue;
-    const FlexibleAt at = flexible_at(model().flexible[f], layout_, compiled_->flexible_tail[f], y);
-    write_flexible_rates(f, at, free_flexible_accelerations(f, at, y, flexible_force(f, at, t, y)), y, dydt);
-  }
+  for (std::size_t f = 0; f < model().flexible.size(); ++f) flexible_derivative(f, t, y, dydt);
+}
+
+std::vector<int> MultibodySystem::flexible_framed(std::span<const int> bodies) const {
+  std::vector<int> out;
+  if (compiled_->flexible_of_body.empty()) return out;
+  for (int i : bodies)
+    if (const int f = compiled_->flexible_of_body[static_cast<std::size_t>(i)]; f >= 0 && model().flexible[static_cast<std::size_t>(f)].frame == i)
+      out.push_back(f);
+  std::sort(out.begin(), out.end());
+  return out;
 }
 
 void MultibodySystem::place_nodes_of(std::size_t f, Eigen::VectorXd& y) const {

@@ -252,7 +252,7 @@ void MultibodySystem::kinematics_of(double t, const Eigen::VectorXd& y, std::spa
   // The last driver of a body wins, as in update_kinematics.
   for (int i : bodies)
     if (const int d = compiled_->driver_of_body[static_cast<std::size_t>(i)]; d >= 0) drive(model().drivers[static_cast<std::size_t>(d)], t);
-  follow_flexible(y);
+  for (int f : flexible_framed(bodies)) follow_nodes_of(static_cast<std::size_t>(f), y);
 }
 
 [[gnu::always_inline]] inline void MultibodySystem::joint_force(std::size_t k) {
@@ -470,12 +470,13 @@ void MultibodySystem::compute_derivatives(double t, const Eigen::VectorXd& y, Ei
   flexible_derivatives(t, y, dydt);
 }
 
-// A listed body of a cluster brings in its whole cluster: the caller lists whole clusters.
+// A listed body of a cluster brings in its whole cluster, a listed frame its flexible
+// body's nodes and modes: the caller lists whole clusters and parts.
 void MultibodySystem::derivatives_of(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt,
                                      std::span<const int> bodies) const {
   derivatives_in(bodies.data(), bodies.size(), t, y, dydt);
   for (int c : clusters_of(bodies)) solve_cluster(c, t, y, dydt);
-  flexible_derivatives(t, y, dydt);  // the whole model's (flexible bodies run as one system)
+  for (int f : flexible_framed(bodies)) flexible_derivative(static_cast<std::size_t>(f), t, y, dydt);
 }
 
 void MultibodySystem::rhs(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) {
@@ -510,7 +511,7 @@ void MultibodySystem::after_step_of(double t, Eigen::VectorXd& y, std::span<cons
     if (const int d = compiled_->driver_of_body[static_cast<std::size_t>(i)]; d >= 0) impose(model().drivers[static_cast<std::size_t>(d)], t, y);
   }
   for (int c : clusters_of(bodies)) project_cluster(c, t, y);
-  place_flexible_nodes(y);
+  for (int f : flexible_framed(bodies)) place_nodes_of(static_cast<std::size_t>(f), y);
 }
 
 template <class Frame>

@@ -376,6 +376,12 @@ void check_cluster_run(const Model& model, const RunOptions& o, const ClusterCou
     throw InputError("the model has " + std::to_string(model.force_elements.size()) +
                      " force elements of this program, which worker processes do not have; run it in this process "
                      "(threads, tight or loose coupling)");
+  // A worker reads the model's text: a part file named in it would have to reach every host,
+  // and a worker's share of the state would carry the part's modes.
+  if (!model.flexible.empty())
+    throw InputError("flexible body '" + model.flexible.front().name +
+                     "': a model with flexible bodies runs in one process (its submodels on threads, tightly or loosely "
+                     "coupled), not on worker processes yet");
 }
 
 RunSummary run_cluster(const Model& model, const std::string& model_json, const Decomposition& d,

@@ -4,6 +4,7 @@
 #include <oneapi/tbb/task_group.h>
 #include <oneapi/tbb/task_arena.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdint>
 #include <memory>
@@ -85,8 +86,10 @@ TightPoint restore_tight(const Checkpointing& c, const RunOptions& o, std::vecto
 }  // namespace
 
 int default_partitions(const Model& model, int threads) {
-  if (!model.flexible.empty()) return 1;  // a flexible body's modes are one system's tail
-  return std::max(1, std::min(threads, static_cast<int>(model.bodies.size() / 64)));
+  const int k = std::max(1, std::min(threads, static_cast<int>(model.bodies.size() / 64)));
+  if (k == 1) return 1;
+  const std::vector<int> piece = uncut_pieces(model);  // never more submodels than pieces
+  return std::min(k, *std::max_element(piece.begin(), piece.end()) + 1);
 }
 
 RunSummary run_partitioned(const Model& model, const Decomposition& d, const RunOptions& o, const ParallelOptions& par,
@@ -146,7 +149,7 @@ RunSummary run_partitioned(std::shared_ptr<const Model> shared, const Decomposit
   for (std::optional<Part>& p : built) parts.push_back(std::move(*p));
   built.clear();
   MultibodySystem* whole = built_whole ? &*built_whole : nullptr;
-  const StateLayout global{static_cast<Eigen::Index>(model.bodies.size())};
+  const StateLayout global = d.layout();
   phase_done(o, whole ? "build the submodels and the whole system" : "build the submodels");
   // Like run_simulation, which gets its system built: the clock starts with the run.
   const auto start = Clock::now();

@@ -21,7 +21,14 @@ void copy_body(const StateLayout& from_layout, const Eigen::VectorXd& from, Eige
 }  // namespace
 
 Part::Part(const Model& model, const Submodel& s, int stages, bool fold)
-    : Part(std::make_shared<Model>(submodel_model(model, s)), s, stages, fold) {}
+    : Part(std::make_shared<Model>(submodel_model(model, s)), s, stages, fold) {
+  const std::vector<Eigen::Index> at = flexible_tail_offsets(model.flexible);
+  global = {static_cast<Eigen::Index>(model.bodies.size()), at.back()};
+  for (std::size_t i = 0; i < s.flexible.size(); ++i) {
+    const auto f = static_cast<std::size_t>(s.flexible[i]);
+    tails.push_back({system.flexible_state(i), global.tail(at[f]), at[f + 1] - at[f], system.model().flexible[i].frame});
+  }
+}
 
 Part::Part(std::shared_ptr<Model> local, const Submodel& s, int stages, bool fold)
     : sub(&s), system(local, s.integrated()), own(static_cast<Eigen::Index>(s.own.size())),
@@ -47,6 +54,10 @@ Part::Part(std::shared_ptr<Model> local, const Submodel& s, int stages, bool fol
     if (std::any_of(bodies.begin(), bodies.end(), [&](int i) { return edge[static_cast<std::size_t>(i)] != 0; }))
       for (int i : bodies) edge[static_cast<std::size_t>(i)] = 1;
   }
+  // So is a flexible body (only its frame may be joined to a ghost: uncut_pieces).
+  for (const FlexibleBody& f : system.model().flexible)
+    if (edge[static_cast<std::size_t>(f.frame)])
+      for (int i : f.nodes) edge[static_cast<std::size_t>(i)] = 1;
   for (int i = 0; i < n_own; ++i) {
     own_bodies.push_back(i);
     (edge[static_cast<std::size_t>(i)] ? edge_bodies : inner_bodies).push_back(i);
@@ -79,7 +90,12 @@ namespace {
 // Own field block `block` (for_own_blocks' order), v, into its places in the global state
 // out: what own_elements lists, computed rather than held (8 bytes per number).
 void to_global(const Part& part, int block, const Eigen::VectorXd& v, Eigen::VectorXd& out) {
-  const StateLayout global{out.size() / body_numbers};
+  if (block >= 4) {
+    const Part::Tail& t = part.tails[static_cast<std::size_t>(block - 4)];
+    out.segment(t.global, t.size) = v;
+    return;
+  }
+  const StateLayout& global = part.global;
   const StateField& field = state_fields[block];
   for (Eigen::Index b = 0; b < part.own; ++b) {
     const Eigen::Index at = (global.*field.offset)(part.sub->own[static_cast<std::size_t>(b)]);
@@ -166,10 +182,13 @@ void for_bodies(const Part& part, const std::vector<int>& bodies, F f) {
   });
 }
 
-// The stage update of rk4_stage, for some own bodies: the next stage input, or after
-// stage 3 the new state (renormalised, drivers imposed).
+// The stage update of rk4_stage, for some own bodies (whole flexible bodies, their modes
+// with their frame): the next stage input, or after stage 3 the new state (renormalised,
+// drivers imposed).
 void rk4_update(Part& part, const std::vector<int>& bodies, int s, double h, double t_next) {
   for_bodies(part, bodies, [&](Eigen::Index at, Eigen::Index n) { rk4_update_entries(part, s, h, at, n); });
+  for (const Part::Tail& t : part.tails)
+    if (std::binary_search(bodies.begin(), bodies.end(), t.frame)) rk4_update_entries(part, s, h, t.local, t.size);
   if (s == 3) part.system.after_step_of(t_next, part.x[0], bodies);
 }
 
@@ -233,6 +252,7 @@ void dopri5_dense(const Part& part, double theta, Eigen::VectorXd& out) {
 
 void gather(const Part& p, const Eigen::VectorXd& local, const StateLayout& global, Eigen::VectorXd& y) {
   for (Eigen::Index i = 0; i < p.own; ++i) copy_body(p.system.layout(), local, i, global, y, p.sub->own[static_cast<std::size_t>(i)]);
+  for (const Part::Tail& t : p.tails) y.segment(t.global, t.size) = local.segment(t.local, t.size);
 }
 
 void gather(const Part& p, const StateLayout& global, Eigen::VectorXd& y) { gather(p, p.x[0], global, y); }
@@ -241,6 +261,7 @@ void scatter(const Eigen::VectorXd& y, const StateLayout& global, Part& p) {
   Eigen::Index i = 0;
   for (const std::vector<int>* bodies : {&p.sub->own, &p.sub->borrowed, &p.sub->ghosts})
     for (int b : *bodies) copy_body(global, y, b, p.system.layout(), p.x[0], i++);
+  for (const Part::Tail& t : p.tails) p.x[0].segment(t.local, t.size) = y.segment(t.global, t.size);
 }
 
 void gather(const std::vector<Part>& parts, const StateLayout& global, Eigen::VectorXd& y) {

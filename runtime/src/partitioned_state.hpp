@@ -42,6 +42,15 @@ struct Part {
   // to a ghost (inner) and with one (edge), the ghosts, and the local joints that reach
   // no ghost and that do.
   std::vector<int> own_bodies, inner_bodies, edge_bodies, ghost_bodies, inner_joints, ghost_joints;
+  // The whole model's state layout, and the flexible bodies held here: where their modal
+  // coordinates and rates (2 ne numbers) sit locally and in the whole state, and their
+  // frame's local index (a stage half that takes the frame takes them).
+  StateLayout global;
+  struct Tail {
+    Eigen::Index local = 0, global = 0, size = 0;
+    int frame = 0;
+  };
+  std::vector<Tail> tails;
 
  private:
   Part(std::shared_ptr<Model> local, const Submodel& sub, int stages, bool rk4_folded);
@@ -63,13 +72,15 @@ void pack_bodies(const StateLayout& l, const Eigen::VectorXd& x, const std::vect
 void unpack_bodies(const StateLayout& l, Eigen::VectorXd& x, const std::vector<int>& bodies, const void* in);
 
 // The places in the global state of a submodel's own entries, field block by field block,
-// bodies in order within each.
+// bodies in order within each (bodies only: a run on workers holds no flexible body).
 std::vector<Eigen::Index> own_elements(const Submodel& sub, const StateLayout& global);
 
-// Calls f(offset, length) for the own entries of each field block of the local state.
+// Calls f(offset, length) for the own entries of each field block of the local state,
+// then for each flexible body's tail.
 template <class F>
 void for_own_blocks(const Part& part, F f) {
   for (const StateField& field : state_fields) f((part.system.layout().*field.offset)(0), field.width * part.own);
+  for (const Part::Tail& t : part.tails) f(t.local, t.size);
 }
 
 // RK4 stage s of the step from t to t_next: k_s = f(x_s); then x_{s+1} = y + c h k_s for

@@ -18,7 +18,7 @@ RemoteExchange::RemoteExchange(zmq::context_t& ctx, zmq::socket_t& inbox, const 
   const std::size_t workers = worker_names.size();
   first_of_.assign(workers, -1);
   elements_of_.resize(workers);
-  const StateLayout global{static_cast<Eigen::Index>(d.part_of_body.size())};
+  const StateLayout global = d.layout();
   for (std::size_t q = 0; q < d.submodels.size(); ++q) {
     local_.push_back(parts_[q] ? 1 : 0);
     const auto w = static_cast<std::size_t>(worker_of_[q]);

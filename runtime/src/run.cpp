@@ -10,9 +10,6 @@ void check_plan(const Model& model, const RunPlan& plan) {
   const RunOptions& o = plan.options;
   check_options(o);
   stepper_entry(o.method);  // a method that exists
-  if (!model.flexible.empty() && (plan.cluster || plan.loose || (plan.partition && plan.partition->submodels.size() > 1)))
-    throw InputError("flexible body '" + model.flexible.front().name +
-                     "': a model with flexible bodies runs as one system yet (no --partitions, --loose or worker processes)");
   if (plan.exchange_delay_s != 0.0 && !plan.cluster)
     throw InputError("{exchange_delay}: only for runs on worker processes");
   if (plan.loose) {

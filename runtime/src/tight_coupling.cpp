@@ -98,7 +98,7 @@ TightCounts run_dopri5(const TightRun& r) {
   settings.rtol = o.rtol;
   settings.atol = o.atol;
   dopri5::Controller control(settings);
-  const StateLayout global{static_cast<Eigen::Index>(r.d.part_of_body.size())};
+  const StateLayout global = r.d.layout();
   Eigen::VectorXd squares = Eigen::VectorXd::Zero(global.size()), dense(global.size());
   double t = o.t_start, h = o.step;
   bool need_k0 = true;

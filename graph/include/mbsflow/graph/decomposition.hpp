@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "mbsflow/graph/model.hpp"
+#include "mbsflow/graph/state_layout.hpp"
 
 namespace mbsflow {
 
@@ -18,6 +19,12 @@ std::vector<int> cuthill_mckee_order(const Model& model);
 // Bodies joined by rigid joints form pieces that no partition cuts: the piece of each
 // body, numbered in the order of their first body (a body without rigid joints is a piece).
 std::vector<int> rigid_pieces(const Model& model);
+
+// The pieces no partition cuts: the rigid pieces, and each flexible body's frame and nodes
+// together with every body joined to a node (by a joint or a force element). A node's
+// motion is its part's, which a neighbour could not compute from a ghost's 13 numbers;
+// joints at a part's frame may be cut. Numbered as rigid_pieces numbers them.
+std::vector<int> uncut_pieces(const Model& model);
 
 // Relative cost of computing a body (its own equations plus half of each joint).
 std::vector<double> body_costs(const Model& model);
@@ -37,6 +44,7 @@ struct Submodel {
   std::vector<int> borrowed;
   std::vector<int> ghosts;  // bodies of other submodels joined to own or borrowed bodies, ascending
   std::vector<int> joints;  // joints with at least one own or borrowed body, ascending global index
+  std::vector<int> flexible;  // the model's flexible bodies whose bodies are own here, ascending
   int cut_joints = 0;       // of those, the ones that reach a ghost
   double cost = 0.0;
   // Per neighbour that owns some of this submodel's borrowed bodies or ghosts: which of its
@@ -62,6 +70,8 @@ struct Decomposition {
   std::vector<Submodel> submodels;
   int cut_joints = 0;
   double imbalance = 0.0;  // max cost / mean cost - 1
+  Eigen::Index state_extra = 0;  // the whole model's state tail (StateLayout::extra)
+  StateLayout layout() const { return {static_cast<Eigen::Index>(part_of_body.size()), state_extra}; }
   Partitioner partitioner = Partitioner::band;  // which one made it
   double estimated_time() const;  // of the slowest submodel
 };
@@ -70,11 +80,11 @@ struct Decomposition {
 // A partitioner by its name: best, band or metis (InputError naming them).
 Partitioner partitioner_named(std::string_view name);
 
-// K-way decomposition that never cuts a rigid joint; InputError if k < 1 or k is more
-// than the pieces the rigid joints leave (the message gives their sizes).
+// K-way decomposition that never cuts an uncut piece; InputError if k < 1 or k is more
+// than the pieces the rigid joints and flexible bodies leave (the message gives their sizes).
 Decomposition decompose(const Model& model, int k, Partitioner partitioner = Partitioner::best);
 // Decomposition from a given assignment of bodies to parts 0..k-1 (every part non-empty,
-// no rigid joint between two parts).
+// no rigid joint between two parts, each uncut piece of a flexible body in one part).
 Decomposition decompose(const Model& model, const std::vector<int>& part_of_body, int k);
 
 // The decomposition with overlapping submodels, for loose coupling: each submodel also

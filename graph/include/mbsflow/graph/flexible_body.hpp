@@ -68,6 +68,10 @@ struct FlexibleBody {
   std::string source;       // the model file's item, written back as it was given
 };
 
+// Where each flexible body's coordinates start in the state's tail (2 ne each, in the
+// list's order), and the tail's length last: one more entry than bodies.
+std::vector<Eigen::Index> flexible_tail_offsets(const std::vector<FlexibleBody>& flexible);
+
 // The mass matrix M(eta) of the frame's quasi-velocities and the modes, (6 + ne)^2.
 Eigen::MatrixXd flexible_mass_matrix(const FloatingFrameData& d, const Eigen::VectorXd& eta);
 

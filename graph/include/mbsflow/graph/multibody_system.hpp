@@ -107,6 +107,9 @@ class MultibodySystem {
   // Where the modal coordinates of the model's flexible body f start in the state (their
   // rates follow, as many again).
   Eigen::Index flexible_state(std::size_t f) const { return layout_.tail(compiled_->flexible_tail[f]); }
+  // The flexible bodies whose frame is listed, ascending (derivatives_of and after_step_of
+  // take those, their nodes and modes with the frame).
+  std::vector<int> flexible_framed(std::span<const int> bodies) const;
 
   // Adds a user-defined force element (see force_element.hpp).
   void add_force_element(std::shared_ptr<const ForceElement> element);
@@ -172,7 +175,7 @@ class MultibodySystem {
 
   // The same phases for some bodies or joints only, item by item the same arithmetic: a
   // submodel computes what does not need its neighbours' values while they travel.
-  // Joints only, no force elements.
+  // Joints only, no force elements. A listed frame brings in its flexible body (nodes, modes).
   void kinematics_of(double t, const Eigen::VectorXd& y, std::span<const int> bodies);
   void joint_forces_of(std::span<const int> joints);
   void derivatives_of(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt, std::span<const int> bodies) const;
@@ -255,7 +258,9 @@ class MultibodySystem {
   // states put where the frame says, the energies.
   void compile_flexible();
   void follow_flexible(const Eigen::VectorXd& y);
+  void follow_nodes_of(std::size_t f, const Eigen::VectorXd& y);
   void flexible_derivatives(double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const;
+  void flexible_derivative(std::size_t f, double t, const Eigen::VectorXd& y, Eigen::VectorXd& dydt) const;
   // Flexible body f's applied generalised force (6 + ne: frame force and torque in its
   // axes, modal forces), its accelerations xi' under it alone, and its rates from xi' (at:
   // its coordinates as this evaluation read them from y).

@@ -35,7 +35,8 @@ RunSummary run_partitioned(const Model& model, const Decomposition& d, const Run
 RunSummary run_partitioned(std::shared_ptr<const Model> model, const Decomposition& d, const RunOptions& options,
                            const ParallelOptions& parallel, ResultSink* sink, ParallelStats* stats = nullptr);
 
-// Partitions for a thread count: one submodel per thread, fewer for small models.
+// Partitions for a thread count: one submodel per thread, fewer for small models (and
+// never more than the pieces uncut_pieces leaves).
 int default_partitions(const Model& model, int threads);
 
 }  // namespace mbsflow
