@@ -274,7 +274,7 @@ Decomposition decompose(const Model& m, const std::vector<int>& part, int k) {
                            ") at a node: a part, its nodes and the bodies joined to them are never cut apart");
       d.submodels[static_cast<std::size_t>(p)].flexible.push_back(static_cast<int>(f));
     }
-    d.state_extra = flexible_tail_offsets(m.flexible).back();
+    d.flexible_tail = flexible_tail_offsets(m.flexible);
   }
   for (const Joint& j : m.joints)
     if (is_body(j.body1) && part[static_cast<std::size_t>(j.body1)] != part[static_cast<std::size_t>(j.body2)]) ++d.cut_joints;

@@ -268,6 +268,8 @@ bool is_reduced_part(const std::string& path) {
 }
 
 ReducedPart read_reduced_part(const std::string& path, ReducedPartInfo* info) {
+  std::error_code missing;
+  if (!std::filesystem::exists(path, missing)) throw InputError(path + ": no such file");
   if (!is_reduced_part(path)) throw InputError(path + ": not a reduced part (mbsflow reduce writes one)");
   const h5::Handle file(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose, "open " + path);
   if (info) {

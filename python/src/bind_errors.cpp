@@ -23,7 +23,11 @@ PyObject* new_type(const char* name, const char* doc, PyObject* bases) {
 
 std::string keyword_for(const std::string& setting, const std::string* value) {
   const std::string name = setting == "methods" ? "submodel_methods" : setting;
-  return value ? name + "=" + *value : name;
+  if (!value) return name;
+  if (value->find(',') == std::string::npos) return name + "=" + *value;
+  std::string list;  // "A1,A2,..." is a list in Python: [A1, A2, ...]
+  for (char c : *value) list += c == ',' ? std::string(", ") : std::string(1, c);
+  return name + "=[" + list + "]";
 }
 
 void bind_errors(py::module_& m) {

@@ -11,9 +11,9 @@
 
 namespace mbsflow::wire {
 
-std::int64_t max_data_bytes(std::size_t bodies) {
-  // 13 numbers a body, twice for headroom, and 64 MiB for the coupling records of a run.
-  return static_cast<std::int64_t>(bodies) * 13 * 8 * 2 + (std::int64_t{64} << 20);
+std::int64_t max_data_bytes(const StateLayout& state) {
+  // The whole state twice for headroom, and 64 MiB for the coupling records of a run.
+  return static_cast<std::int64_t>(state.size()) * 8 * 2 + (std::int64_t{64} << 20);
 }
 
 std::string hex(const std::vector<std::uint8_t>& bytes) {

@@ -34,7 +34,7 @@ struct Peer {
   zmq::socket_t control;  // DEALER connected to the worker's --listen endpoint
   Clock::time_point heard;
   std::string data_address;
-  std::vector<int> bodies;  // global indices of its own bodies, in the order it sends them
+  partitioned::StateShare share;  // its own bodies and modes, in the order it sends them
   std::string submodels;    // "0,1": for messages
   double stalled_s = 0.0;   // its computation's last report of how long it has not advanced
   long completed = 0;       // steps it has reported done
@@ -44,8 +44,8 @@ struct Peer {
 
 class Coordinator {
  public:
-  Coordinator(const ClusterConfig& c, const RunOptions& o, std::size_t bodies)
-      : c_(c), o_(o), results_(wire::make_socket(ctx_, zmq::socket_type::pull, wire::max_data_bytes(bodies))) {
+  Coordinator(const ClusterConfig& c, const RunOptions& o, const StateLayout& state)
+      : c_(c), o_(o), results_(wire::make_socket(ctx_, zmq::socket_type::pull, wire::max_data_bytes(state))) {
     if (c.keys) {
       security_ = wire::Security{*c.keys, c.coordinator_key, {}};
       for (const ClusterWorker& w : c.workers) security_->workers.push_back(w.public_key);
@@ -293,11 +293,11 @@ class ClusterCheckpoints {
     std::optional<TightPoint> point;
     for (std::size_t v = 0; v < states_.size(); ++v) {
       StateReader in(states_[v], co.who(v) + "'s checkpoint");
-      const std::vector<int>& bodies = co.peers()[v].bodies;
-      TightPoint p = read_tight_point(in, static_cast<Eigen::Index>(bodies.size()) * partitioned::body_numbers, own);
+      const partitioned::StateShare& share = co.peers()[v].share;
+      TightPoint p = read_tight_point(in, static_cast<Eigen::Index>(share.numbers()), own);
       if (point && (p.steps != point->steps || p.t != point->t))
         throw RunError(co.who(v) + " sent the state of another step for a checkpoint");
-      partitioned::unpack_bodies(whole.layout(), y, bodies, own.data());
+      partitioned::unpack_share(whole.layout(), y, share, own.data());
       if (!point) point = std::move(p);
     }
     save_tight_point(out_state, *point, y);
@@ -376,12 +376,6 @@ void check_cluster_run(const Model& model, const RunOptions& o, const ClusterCou
     throw InputError("the model has " + std::to_string(model.force_elements.size()) +
                      " force elements of this program, which worker processes do not have; run it in this process "
                      "(threads, tight or loose coupling)");
-  // A worker reads the model's text: a part file named in it would have to reach every host,
-  // and a worker's share of the state would carry the part's modes.
-  if (!model.flexible.empty())
-    throw InputError("flexible body '" + model.flexible.front().name +
-                     "': a model with flexible bodies runs in one process (its submodels on threads, tightly or loosely "
-                     "coupled), not on worker processes yet");
 }
 
 RunSummary run_cluster(const Model& model, const std::string& model_json, const Decomposition& d,
@@ -398,11 +392,11 @@ RunSummary run_cluster(std::shared_ptr<const Model> shared, const std::string& m
   check_cluster_security(cluster);
   if (coupling.loose) check_loose_options(*coupling.loose, d.submodels.size());
   const std::vector<int> worker_of = assign_submodels(cluster, static_cast<int>(d.submodels.size()));
-  Coordinator co(cluster, o, model.bodies.size());
+  Coordinator co(cluster, o, d.layout());
   auto& peers = co.peers();
   for (std::size_t q = 0; q < d.submodels.size(); ++q) {
     Peer& p = peers[static_cast<std::size_t>(worker_of[q])];
-    p.bodies.insert(p.bodies.end(), d.submodels[q].own.begin(), d.submodels[q].own.end());
+    p.share.add(d, d.submodels[q]);
     p.submodels += (p.submodels.empty() ? "" : ",") + std::to_string(q);
   }
   RunSummary out;
@@ -499,11 +493,11 @@ RunSummary run_cluster(std::shared_ptr<const Model> shared, const std::string& m
           }
           case wire::ResultKind::snapshot:
           case wire::ResultKind::dense: {
-            if (payload.size() != p.bodies.size() * partitioned::body_numbers * sizeof(double))
+            if (payload.size() != p.share.numbers() * sizeof(double))
               throw RunError(co.who(w) + " sent a snapshot of the wrong size");
             Pending& s = pending[h.index];
             if (s.y.size() == 0) s.y = y;
-            partitioned::unpack_bodies(layout, s.y, p.bodies, payload.data());
+            partitioned::unpack_share(layout, s.y, p.share, payload.data());
             if (++s.parts == peers.size()) {
               y = std::move(s.y);
               pending.erase(h.index);

@@ -104,12 +104,51 @@ void to_global(const Part& part, int block, const Eigen::VectorXd& v, Eigen::Vec
 }
 }  // namespace
 
-std::vector<Eigen::Index> own_elements(const Submodel& sub, const StateLayout& global) {
+void StateShare::add(const Decomposition& d, const Submodel& s) {
+  bodies.insert(bodies.end(), s.own.begin(), s.own.end());
+  const StateLayout global = d.layout();
+  for (int f : s.flexible) {
+    const auto i = static_cast<std::size_t>(f);
+    tails.push_back({global.tail(d.flexible_tail[i]), d.flexible_tail[i + 1] - d.flexible_tail[i]});
+  }
+}
+
+std::size_t StateShare::numbers() const {
+  std::size_t n = bodies.size() * body_numbers;
+  for (const Span& t : tails) n += static_cast<std::size_t>(t.size);
+  return n;
+}
+
+void pack_share(const StateLayout& global, const Eigen::VectorXd& y, const StateShare& share, void* out) {
+  pack_bodies(global, y, share.bodies, out);
+  auto* at = static_cast<unsigned char*>(out) + share.bodies.size() * body_numbers * sizeof(double);
+  for (const StateShare::Span& t : share.tails) {
+    std::memcpy(at, y.data() + t.at, sizeof(double) * static_cast<std::size_t>(t.size));
+    at += sizeof(double) * static_cast<std::size_t>(t.size);
+  }
+}
+
+void unpack_share(const StateLayout& global, Eigen::VectorXd& y, const StateShare& share, const void* in) {
+  unpack_bodies(global, y, share.bodies, in);
+  const auto* at = static_cast<const unsigned char*>(in) + share.bodies.size() * body_numbers * sizeof(double);
+  for (const StateShare::Span& t : share.tails) {
+    std::memcpy(y.data() + t.at, at, sizeof(double) * static_cast<std::size_t>(t.size));
+    at += sizeof(double) * static_cast<std::size_t>(t.size);
+  }
+}
+
+std::vector<Eigen::Index> own_elements(const Decomposition& d, std::size_t q) {
+  const Submodel& sub = d.submodels[q];
+  const StateLayout global = d.layout();
   std::vector<Eigen::Index> out;
   out.reserve(sub.own.size() * body_numbers);
   for (const StateField& f : state_fields)
     for (int body : sub.own)
       for (int c = 0; c < f.width; ++c) out.push_back((global.*f.offset)(body) + c);
+  StateShare tails;
+  tails.add(d, sub);
+  for (const StateShare::Span& t : tails.tails)
+    for (Eigen::Index i = 0; i < t.size; ++i) out.push_back(t.at + i);
   return out;
 }
 

@@ -71,9 +71,24 @@ constexpr int body_numbers = 13;
 void pack_bodies(const StateLayout& l, const Eigen::VectorXd& x, const std::vector<int>& bodies, void* out);
 void unpack_bodies(const StateLayout& l, Eigen::VectorXd& x, const std::vector<int>& bodies, const void* in);
 
-// The places in the global state of a submodel's own entries, field block by field block,
-// bodies in order within each (bodies only: a run on workers holds no flexible body).
-std::vector<Eigen::Index> own_elements(const Submodel& sub, const StateLayout& global);
+// A worker's share of the whole state, in the order it sends it to the coordinator: its
+// submodels' own bodies (13 numbers each, as pack_bodies), then their flexible bodies'
+// modal coordinates and rates.
+struct StateShare {
+  std::vector<int> bodies;  // global indices
+  struct Span {
+    Eigen::Index at = 0, size = 0;  // in the whole state
+  };
+  std::vector<Span> tails;
+  void add(const Decomposition& d, const Submodel& s);  // s's own bodies and flexible bodies
+  std::size_t numbers() const;
+};
+void pack_share(const StateLayout& global, const Eigen::VectorXd& y, const StateShare& share, void* out);
+void unpack_share(const StateLayout& global, Eigen::VectorXd& y, const StateShare& share, const void* in);
+
+// The places in the whole state of submodel q's own entries: field block by field block
+// (bodies in order within each), then its flexible bodies' tails.
+std::vector<Eigen::Index> own_elements(const Decomposition& d, std::size_t q);
 
 // Calls f(offset, length) for the own entries of each field block of the local state,
 // then for each flexible body's tail.

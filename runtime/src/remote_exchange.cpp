@@ -18,13 +18,12 @@ RemoteExchange::RemoteExchange(zmq::context_t& ctx, zmq::socket_t& inbox, const 
   const std::size_t workers = worker_names.size();
   first_of_.assign(workers, -1);
   elements_of_.resize(workers);
-  const StateLayout global = d.layout();
   for (std::size_t q = 0; q < d.submodels.size(); ++q) {
     local_.push_back(parts_[q] ? 1 : 0);
     const auto w = static_cast<std::size_t>(worker_of_[q]);
     if (parts_[q]) me_ = static_cast<int>(w);
     if (first_of_[w] < 0) first_of_[w] = static_cast<int>(q);
-    const std::vector<Eigen::Index> e = partitioned::own_elements(d.submodels[q], global);
+    const std::vector<Eigen::Index> e = partitioned::own_elements(d, q);
     elements_of_[w].insert(elements_of_[w].end(), e.begin(), e.end());
   }
   // Remote submodel r takes the bodies e.from of its neighbour p: p sends them to r.

@@ -13,6 +13,7 @@
 #include <string_view>
 #include <vector>
 
+#include "mbsflow/graph/state_layout.hpp"
 #include "mbsflow/runtime/curve_keys.hpp"
 
 namespace mbsflow::wire {
@@ -34,8 +35,8 @@ constexpr std::int64_t max_control_bytes = (std::int64_t{1} << 30) + (std::int64
 constexpr std::size_t model_part_bytes = std::size_t{8} << 20;
 // The longest model text a worker takes.
 constexpr std::uint64_t max_model_bytes = std::uint64_t{1} << 38;
-// Boundary values and snapshots of a model of `bodies` bodies; coupling records of a run.
-std::int64_t max_data_bytes(std::size_t bodies);
+// Boundary values and snapshots of a model whose state has this layout; coupling records of a run.
+std::int64_t max_data_bytes(const StateLayout& state);
 
 // Boundary values of submodel `from` for stage input `stage` of step `step`, for `to`.
 struct ExchangeHeader {

@@ -195,7 +195,7 @@ void serve_worker(const WorkerOptions& wo) {
   } catch (const std::exception& e) {
     refuse(io, "cannot set up the run: " + error_text(e));
   }
-  zmq::socket_t inbox = wire::make_socket(ctx, zmq::socket_type::pull, wire::max_data_bytes(s.model.bodies.size()));
+  zmq::socket_t inbox = wire::make_socket(ctx, zmq::socket_type::pull, wire::max_data_bytes(s.d.layout()));
   wire::curve_server(inbox, s.security ? &*s.security : nullptr, "data");
   std::string data_address;
   try {

@@ -88,8 +88,8 @@ Outcome run_loose_part(Session& s, WorkerTransport& transport, const nlohmann::j
     for (int p : w.mine) lp[static_cast<std::size_t>(p)]->start(s.o.t_start, lo.macro_step);
   }
   long& done = at.done;  // macro steps
-  Eigen::VectorXd y = Eigen::VectorXd::Zero(13 * static_cast<Eigen::Index>(s.model.bodies.size()));
-  const StateLayout global{static_cast<Eigen::Index>(s.model.bodies.size())};
+  const StateLayout global = s.d.layout();
+  Eigen::VectorXd y = Eigen::VectorXd::Zero(global.size());
   // At macro-step end m: the coupling records, the snapshots the local submodels kept
   // (projected already), the progress, a checkpoint the coordinator asked for.
   auto at_end = [&](long m) {

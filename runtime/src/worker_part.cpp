@@ -16,7 +16,7 @@ WorkerPart::WorkerPart(Session& session, WorkerTransport& transport, const json&
   for (std::size_t q = 0; q < parts.size(); ++q)
     if (parts[q]) {
       mine.push_back(static_cast<int>(q));
-      bodies_.insert(bodies_.end(), parts[q]->sub->own.begin(), parts[q]->sub->own.end());
+      share_.add(s.d, *parts[q]->sub);
     }
   control_.attach(&exchange);
   control_.progress_clock()->store(wire::now_ns());
@@ -53,12 +53,17 @@ std::string WorkerPart::check(double t) const {
 
 void WorkerPart::pack_own(std::vector<double>& out) const {
   out.clear();
-  for (int q : mine) {
+  out.reserve(share_.numbers());
+  for (int q : mine) {  // share_'s order: the bodies, then the modes
     const partitioned::Part& part = *parts[static_cast<std::size_t>(q)];
     const std::size_t at = out.size();
     out.resize(at + static_cast<std::size_t>(part.own) * partitioned::body_numbers);
     partitioned::pack_bodies(part.system.layout(), part.x[0], part.own_bodies, out.data() + at);
   }
+  for (int q : mine)
+    for (const partitioned::Part::Tail& t : parts[static_cast<std::size_t>(q)]->tails)
+      out.insert(out.end(), parts[static_cast<std::size_t>(q)]->x[0].data() + t.local,
+                 parts[static_cast<std::size_t>(q)]->x[0].data() + t.local + t.size);
 }
 
 void WorkerPart::report_state(long steps, double t, long snapshot) {
@@ -68,8 +73,8 @@ void WorkerPart::report_state(long steps, double t, long snapshot) {
 }
 
 void WorkerPart::report_dense(long steps, double t, long index, const Eigen::VectorXd& y, bool project) {
-  snapshot_.resize(bodies_.size() * partitioned::body_numbers);
-  partitioned::pack_bodies(StateLayout{static_cast<Eigen::Index>(s.model.bodies.size())}, y, bodies_, snapshot_.data());
+  snapshot_.resize(share_.numbers());
+  partitioned::pack_share(s.d.layout(), y, share_, snapshot_.data());
   report(project ? wire::ResultKind::dense : wire::ResultKind::snapshot, steps, t, index, snapshot_.data(),
          snapshot_.size() * sizeof(double));
 }

@@ -97,7 +97,7 @@ class WorkerPart {
   std::vector<double> snapshot_;
   long opportunity_ = 0;
   std::int64_t answered_ = -1;  // the last request answered
-  std::vector<int> bodies_;  // global indices of the local submodels' own bodies, as the coordinator expects them
+  partitioned::StateShare share_;  // the local submodels' own bodies and modes, as the coordinator expects them
 };
 
 // Makes s.tight_parts; run_tight needs them.

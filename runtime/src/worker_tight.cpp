@@ -71,7 +71,7 @@ Outcome run_tight(Session& s, WorkerTransport& transport, const nlohmann::json& 
   std::optional<TightPoint> resumed;
   if (!s.resume.empty()) {  // the coordinator's checkpoint: the point and the global state
     StateReader in(s.resume, "the coordinator's checkpoint");
-    const StateLayout global{static_cast<Eigen::Index>(s.model.bodies.size())};
+    const StateLayout global = s.d.layout();
     Eigen::VectorXd y;
     resumed = read_tight_point(in, global.size(), y);
     for (Part* p : parts)

@@ -161,8 +161,9 @@ def robertson(t, y):
 
 def test_a_component_below_its_absolute_tolerance_is_warned_about():
     # One atol = 1e-4 leaves Robertson's second component (at most 3.65e-5) without control.
-    with pytest.warns(RuntimeWarning, match=r"y\[1\] never exceeded its absolute tolerance 0.0001 \(largest \|y\| 3.6"):
+    with pytest.warns(RuntimeWarning, match=r"y\[1\] never exceeded its absolute tolerance 0.0001 \(largest \|y\| 3.6") as w:
         mbsflow.solve_ivp(robertson, (0, 40), [1, 0, 0], method="tirk", rtol=1e-4, atol=1e-4)
+    assert "atol=[A1, A2, ...]" in str(w[0].message)  # the keyword as Python takes it
     # Per component, each below its size: no warning.
     import warnings
     with warnings.catch_warnings():

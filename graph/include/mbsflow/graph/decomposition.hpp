@@ -70,8 +70,12 @@ struct Decomposition {
   std::vector<Submodel> submodels;
   int cut_joints = 0;
   double imbalance = 0.0;  // max cost / mean cost - 1
-  Eigen::Index state_extra = 0;  // the whole model's state tail (StateLayout::extra)
-  StateLayout layout() const { return {static_cast<Eigen::Index>(part_of_body.size()), state_extra}; }
+  // Where each flexible body's modes start in the whole state's tail, and its length last
+  // (flexible_tail_offsets; empty without flexible bodies).
+  std::vector<Eigen::Index> flexible_tail;
+  StateLayout layout() const {
+    return {static_cast<Eigen::Index>(part_of_body.size()), flexible_tail.empty() ? 0 : flexible_tail.back()};
+  }
   Partitioner partitioner = Partitioner::band;  // which one made it
   double estimated_time() const;  // of the slowest submodel
 };
