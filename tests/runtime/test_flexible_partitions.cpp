@@ -38,6 +38,8 @@ TEST_CASE("a flexible body, its nodes and the bodies joined to them are never cu
       CHECK(d.submodels[holder].flexible == std::vector<int>{0});
       CHECK(d.layout().size() == MultibodySystem(r.m).dimension());
     }
+  // The part weighs what its rates cost (some 3 us, dozens of rigid bodies with their joints).
+  CHECK(body_costs(r.m)[0] > 40 * body_costs(r.m)[static_cast<std::size_t>(r.b)]);
   CHECK_THROWS_WITH(decompose(r.m, 5), Catch::Contains("rigid joints and flexible bodies") && Catch::Contains("4 pieces") &&
                                            Catch::Contains("6, 1, 1, 1"));
   std::vector<int> part = three_parts(r);

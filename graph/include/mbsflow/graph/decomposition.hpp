@@ -26,7 +26,8 @@ std::vector<int> rigid_pieces(const Model& model);
 // joints at a part's frame may be cut. Numbered as rigid_pieces numbers them.
 std::vector<int> uncut_pieces(const Model& model);
 
-// Relative cost of computing a body (its own equations plus half of each joint).
+// Relative cost of computing a body (its own equations plus half of each joint; a flexible
+// body's frame carries its part's, hundreds of rigid bodies' worth).
 std::vector<double> body_costs(const Model& model);
 
 enum class Partitioner {
