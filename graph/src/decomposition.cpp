@@ -168,6 +168,16 @@ std::vector<int> uncut_pieces(const Model& m) {
   });
 }
 
+std::vector<int> flexible_piece_of(const Model& m) {
+  std::vector<int> of(m.bodies.size(), -1);
+  if (m.flexible.empty()) return of;
+  const std::vector<int> piece = uncut_pieces(m);
+  std::vector<int> holder(m.bodies.size(), -1);  // per piece; pieces are at most as many as bodies
+  for (std::size_t f = 0; f < m.flexible.size(); ++f) holder[static_cast<std::size_t>(piece[static_cast<std::size_t>(m.flexible[f].frame)])] = static_cast<int>(f);
+  for (std::size_t b = 0; b < of.size(); ++b) of[b] = holder[static_cast<std::size_t>(piece[b])];
+  return of;
+}
+
 namespace {
 
 // The model with each rigid piece contracted to one body (cost: the piece's), joints
@@ -271,16 +281,18 @@ Decomposition decompose(const Model& m, const std::vector<int>& part, int k) {
                        std::to_string(part[static_cast<std::size_t>(j.body2)]) +
                        "): a cut may only pass through compliant joints, bushings and springs");
   if (!m.flexible.empty()) {
-    const std::vector<int> piece = uncut_pieces(m);
-    for (std::size_t f = 0; f < m.flexible.size(); ++f) {
-      const int frame = m.flexible[f].frame, p = part[static_cast<std::size_t>(frame)];
-      for (std::size_t b = 0; b < n; ++b)
-        if (piece[b] == piece[static_cast<std::size_t>(frame)] && part[b] != p)
-          throw InputError("partition: body '" + m.bodies[b].name + "' (part " + std::to_string(part[b]) +
-                           ") is joined to flexible body '" + m.flexible[f].name + "' (part " + std::to_string(p) +
-                           ") at a node: a part, its nodes and the bodies joined to them are never cut apart");
-      d.submodels[static_cast<std::size_t>(p)].flexible.push_back(static_cast<int>(f));
+    const std::vector<int> holder = flexible_piece_of(m);
+    for (std::size_t b = 0; b < n; ++b) {
+      const int f = holder[b];
+      if (f < 0) continue;
+      const int p = part[static_cast<std::size_t>(m.flexible[static_cast<std::size_t>(f)].frame)];
+      if (part[b] != p)
+        throw InputError("partition: body '" + m.bodies[b].name + "' (part " + std::to_string(part[b]) +
+                         ") is joined to flexible body '" + m.flexible[static_cast<std::size_t>(f)].name + "' (part " +
+                         std::to_string(p) + ") at a node: a part, its nodes and the bodies joined to them are never cut apart");
     }
+    for (std::size_t f = 0; f < m.flexible.size(); ++f)
+      d.submodels[static_cast<std::size_t>(part[static_cast<std::size_t>(m.flexible[f].frame)])].flexible.push_back(static_cast<int>(f));
     d.flexible_tail = flexible_tail_offsets(m.flexible);
   }
   for (const Joint& j : m.joints)

@@ -28,13 +28,7 @@ Decomposition with_overlap(const Model& m, const Decomposition& d, double reach)
   const std::size_t n = m.bodies.size();
   // A flexible body's piece (uncut_pieces) is integrated by its owner alone: a neighbour
   // would have to hold the part whole, modes and all. The overlap stops at it.
-  std::vector<char> flexible_piece(n, 0);
-  if (!m.flexible.empty()) {
-    const std::vector<int> piece = uncut_pieces(m);
-    std::vector<char> holds(n, 0);
-    for (const FlexibleBody& f : m.flexible) holds[static_cast<std::size_t>(piece[static_cast<std::size_t>(f.frame)])] = 1;
-    for (std::size_t b = 0; b < n; ++b) flexible_piece[b] = holds[static_cast<std::size_t>(piece[b])];
-  }
+  const std::vector<int> flexible_piece = flexible_piece_of(m);
   std::vector<double> time(n);
   using Entry = std::pair<double, int>;
   for (std::size_t p = 0; p < out.submodels.size(); ++p) {
@@ -48,7 +42,7 @@ Decomposition with_overlap(const Model& m, const Decomposition& d, double reach)
     }
     auto relax = [&](int to, double t) {
       if (to == ground || t > reach || t >= time[static_cast<std::size_t>(to)]) return;
-      if (flexible_piece[static_cast<std::size_t>(to)] && d.part_of_body[static_cast<std::size_t>(to)] != static_cast<int>(p)) return;
+      if (flexible_piece[static_cast<std::size_t>(to)] >= 0 && d.part_of_body[static_cast<std::size_t>(to)] != static_cast<int>(p)) return;
       time[static_cast<std::size_t>(to)] = t;
       queue.push({t, to});
     };

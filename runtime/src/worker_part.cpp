@@ -60,10 +60,11 @@ void WorkerPart::pack_own(std::vector<double>& out) const {
     out.resize(at + static_cast<std::size_t>(part.own) * partitioned::body_numbers);
     partitioned::pack_bodies(part.system.layout(), part.x[0], part.own_bodies, out.data() + at);
   }
-  for (int q : mine)
-    for (const partitioned::Part::Tail& t : parts[static_cast<std::size_t>(q)]->tails)
-      out.insert(out.end(), parts[static_cast<std::size_t>(q)]->x[0].data() + t.local,
-                 parts[static_cast<std::size_t>(q)]->x[0].data() + t.local + t.size);
+  for (int q : mine) {
+    const partitioned::Part& part = *parts[static_cast<std::size_t>(q)];
+    for (const partitioned::Part::Tail& t : part.tails)
+      out.insert(out.end(), part.x[0].data() + t.local, part.x[0].data() + t.local + t.size);
+  }
 }
 
 void WorkerPart::report_state(long steps, double t, long snapshot) {

@@ -25,6 +25,9 @@ std::vector<int> rigid_pieces(const Model& model);
 // motion is its part's, which a neighbour could not compute from a ghost's 13 numbers;
 // joints at a part's frame may be cut. Numbered as rigid_pieces numbers them.
 std::vector<int> uncut_pieces(const Model& model);
+// Per body, the flexible body whose uncut piece holds it (its frame, its nodes and what is
+// joined to them), -1 for none.
+std::vector<int> flexible_piece_of(const Model& model);
 
 // Relative cost of computing a body (its own equations plus half of each joint; a flexible
 // body's frame carries its part's, hundreds of rigid bodies' worth).
