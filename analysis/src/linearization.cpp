@@ -408,20 +408,23 @@ LinearModel linearize(MultibodySystem& sys, double t, const Eigen::VectorXd& y, 
   out.M.setFromTriplets(masses.begin(), masses.end());
   out.K.resize(n, n);
   out.D.resize(n, n);
-  if (sys.has_analytic_jacobian()) {  // never with flexible bodies: 6 coordinates per body
-    Eigen::SparseMatrix<double> own;
+  const bool analytic = sys.has_analytic_jacobian();
+  Eigen::SparseMatrix<double> own;
+  if (analytic) {
     if (!jacobian) own = sys.jacobian_pattern();
-    Eigen::SparseMatrix<double>& jac = jacobian ? *jacobian : own;
-    sys.jacobian(t, y, jac);
+    sys.jacobian(t, y, jacobian ? *jacobian : own);
+  }
+  const Eigen::SparseMatrix<double>& jac = jacobian ? *jacobian : own;
+  if (analytic && model.flexible.empty()) {  // rate_blocks: 6 coordinates per body
     rate_blocks(l, bodies, y, jac, mass, k, d);
     out.K.setFromTriplets(k.begin(), k.end());
     out.D.setFromTriplets(d.begin(), d.end());
   } else {
-    // Central differences in the tangent directions, then the rate rows of A = tp (J tm):
-    // K = -M A_vx, D = -M A_vv.
+    // The rate rows of A = T+ (J T), J T exact or by central differences in the tangent
+    // directions: K = -M A_vx, D = -M A_vv.
     Eigen::SparseMatrix<double> tm, tp;
     tangent_maps(l, fc, y, tm, tp);
-    const Eigen::SparseMatrix<double> a = tp * differenced(sys, t, y, fc);
+    const Eigen::SparseMatrix<double> a = tp * (analytic ? Eigen::SparseMatrix<double>(jac * tm) : differenced(sys, t, y, fc));
     Triplets avx, avv;
     for (Eigen::Index c = 0; c < a.outerSize(); ++c)
       for (Eigen::SparseMatrix<double>::InnerIterator it(a, c); it; ++it) {

@@ -5,11 +5,15 @@
 // runs), then assembled body by body along the body graph with the chain rule through
 //   v' = F / m,  w' = J^-1 (R(q)^T T - w x J w),  q' = q (x) (0, w) / 2,  r' = v.
 // The bodies of a rigid cluster get their rates' derivatives through the cluster's
-// reactions (cluster_jacobian.cpp). Exact up to rounding, so Newton converges at its own
+// reactions (cluster_jacobian.cpp); a flexible body's frame, modes and nodes through its
+// equations in dual numbers (flexible_jacobian.cpp). Exact up to rounding, so Newton converges at its own
 // rate, and no right-hand-side call is spent on differences.
 #include <algorithm>
 #include <stdexcept>
+#include <unordered_map>
 
+#include "flexible_jacobian.hpp"
+#include "flexible_state.hpp"
 #include "jacobian_seeds.hpp"
 #include "kinematic_joint_wrench.hpp"
 #include "mbsflow/error.hpp"
@@ -96,7 +100,34 @@ bool no_jacobian(std::string* why, std::string reason) {
 bool has_analytic_jacobian(const Model& m, std::string* why) {
   for (const auto& e : m.force_elements)
     if (!e->constant_wrench()) return no_jacobian(why, "the model has user force elements");
-  if (!m.flexible.empty()) return no_jacobian(why, "flexible body '" + m.flexible.front().name + "' (its rates are differenced)");
+  if (m.flexible.empty()) return true;
+  // Per body: its flexible body, and whether it is that body's node; whether a rigid joint holds it.
+  std::vector<int> part(m.bodies.size(), -1);
+  std::vector<char> node(m.bodies.size(), 0), held(m.bodies.size(), 0);
+  auto known = [&](int b) { return b >= 0 && static_cast<std::size_t>(b) < m.bodies.size(); };
+  for (std::size_t f = 0; f < m.flexible.size(); ++f) {
+    if (known(m.flexible[f].frame)) part[static_cast<std::size_t>(m.flexible[f].frame)] = static_cast<int>(f);
+    for (int b : m.flexible[f].nodes)
+      if (known(b)) {
+        part[static_cast<std::size_t>(b)] = static_cast<int>(f);
+        node[static_cast<std::size_t>(b)] = 1;
+      }
+  }
+  auto name_of = [&](int b) { return m.flexible[static_cast<std::size_t>(part[static_cast<std::size_t>(b)])].name; };
+  for (const Joint& j : m.joints)
+    if (is_kinematic(j.type) && j.rigid)
+      for (int b : {j.body1, j.body2})
+        if (known(b)) {
+          if (part[static_cast<std::size_t>(b)] >= 0)
+            return no_jacobian(why, "flexible body '" + name_of(b) + "' is held by rigid joint '" + j.name + "' (its cluster's rates are differenced)");
+          held[static_cast<std::size_t>(b)] = 1;
+        }
+  // A rigid cluster's Jacobian takes what its bodies read body by body: not a node's modes.
+  for (const Joint& j : m.joints)
+    for (auto [a, b] : {std::pair{j.body1, j.body2}, std::pair{j.body2, j.body1}})
+      if (known(a) && known(b) && held[static_cast<std::size_t>(a)] && node[static_cast<std::size_t>(b)])
+        return no_jacobian(why, "body '" + m.bodies[static_cast<std::size_t>(a)].name + "' of a rigid cluster is joined to flexible body '" +
+                                    name_of(b) + "' at a node (the cluster's rates are differenced)");
   return true;
 }
 
@@ -128,6 +159,7 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
   for (int c = 0; c < n_clusters; ++c) unconstrained[static_cast<std::size_t>(c)].resize(cluster_bodies(c).size());
   std::fill_n(jac.valuePtr(), jac.nonZeros(), 0.0);
   const Eigen::Index n = layout_.bodies;
+  const std::vector<FlexibleBody>& flexible = model().flexible;
   // A kinematics index whose state is a variable: not ground (index n), not driven.
   auto free = [&](int k) { return k < n && compiled_->driver_of_body[static_cast<std::size_t>(k)] < 0; };
   auto constant_frame = [&](int k) {
@@ -139,6 +171,27 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
     f.quat = quat_.col(k).cast<Dual>();
     return f;
   };
+  // A flexible body's node: its flexible body and slot. Its numbers are those it follows its
+  // frame and the modes with (its own in y are where the last step left it), and what
+  // reads them reads the frame and the modes through node_maps[f][k].
+  std::vector<std::pair<int, int>> node_of(flexible.empty() ? 0 : static_cast<std::size_t>(n), {-1, -1});
+  std::vector<std::vector<Eigen::MatrixXd>> node_maps(flexible.size());
+  for (std::size_t f = 0; f < flexible.size(); ++f) {
+    const FlexibleAt at = flexible_at(flexible[f], layout_, compiled_->flexible_tail[f], y);
+    const BodyNumbers frame = body_numbers(y, layout_, flexible[f].frame);
+    for (std::size_t k = 0; k < flexible[f].nodes.size(); ++k) {
+      node_of[static_cast<std::size_t>(flexible[f].nodes[k])] = {static_cast<int>(f), static_cast<int>(k)};
+      node_maps[f].push_back(flexible_jacobian::node_map(at.d, static_cast<int>(k), frame, at.eta, at.eta_rate));
+    }
+  }
+  auto is_node = [&](int b) { return !node_of.empty() && b < n && node_of[static_cast<std::size_t>(b)].first >= 0; };
+  auto numbers = [&](int b) -> BodyNumbers {
+    if (!is_node(b)) return body_numbers(y, layout_, b);
+    const auto bb = static_cast<std::size_t>(b);
+    BodyNumbers s;
+    s << pos_.col(b), quat_.col(b), vel_.col(b), rot_[bb].transpose() * omega_.col(b);
+    return s;
+  };
 
   // d (wrench of joint k) / d (states of its body1, then of its body2).
   using JointDerivatives = Eigen::Matrix<double, 9, 2 * body_states>;
@@ -148,8 +201,8 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
   };
   for (std::size_t k = 0; k < compiled_->joints.size(); ++k) {
     const CompiledJoint& j = compiled_->joints[k];
-    const BodyFrameT<Dual> a = free(j.a) ? seeded_frame(y, layout_, j.a, 0) : constant_frame(j.a);
-    const BodyFrameT<Dual> b = free(j.b) ? seeded_frame(y, layout_, j.b, body_states) : constant_frame(j.b);
+    const BodyFrameT<Dual> a = free(j.a) ? seeded_frame(numbers(j.a), 0) : constant_frame(j.a);
+    const BodyFrameT<Dual> b = free(j.b) ? seeded_frame(numbers(j.b), body_states) : constant_frame(j.b);
     Eigen::Matrix<Dual, 9, 1> out;
     if (j.kinematic >= 0) {  // compliant, or the limit stops and effort motor of a rigid one
       out.setZero();
@@ -168,11 +221,21 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
       if (b == body) return m;
     return blocks.emplace_back(body, Block6::Zero()).second;
   };
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const auto bi = static_cast<std::size_t>(i);
-    if (!free(static_cast<int>(i))) continue;  // a driven body's rates do not depend on the state
+  // Per flexible body read through one of its nodes: d (force, torque) / d (eta, eta').
+  std::vector<std::pair<int, Eigen::Matrix<double, 6, Eigen::Dynamic>>> tails;
+  auto tail_of = [&](int f) -> Eigen::Matrix<double, 6, Eigen::Dynamic>& {
+    for (auto& [g, m] : tails)
+      if (g == f) return m;
+    return tails.emplace_back(f, Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, 2 * flexible[static_cast<std::size_t>(f)].data->modes())).second;
+  };
+  // d (force, torque on body i, world) / d (the states it reads) into blocks and tails: its
+  // loads (through its own numbers, returned) and its joints, a node's read through its
+  // frame and modes.
+  auto wrench_blocks = [&](Eigen::Index i) {
     blocks.clear();
-    const SeededState<BodyDual> own = seeded_state<BodyDual>(y, layout_, i, 0);
+    tails.clear();
+    const auto bi = static_cast<std::size_t>(i);
+    const SeededState<BodyDual> own = seeded_state<BodyDual>(numbers(static_cast<int>(i)), 0);
     const Matrix3T<BodyDual> rot = rotation_matrix<BodyDual>(own.q);
     // Loads: through the orientation, and a damping load through the velocities too.
     Vector3T<BodyDual> load_force = Vector3T<BodyDual>::Zero(), load_torque = Vector3T<BodyDual>::Zero();
@@ -201,6 +264,26 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
         m.bottomRows<3>() += cols.middleRows<3>(body2 ? 6 : 3);
       }
     }
+    for (std::size_t p = 0, count = blocks.size(); p < count; ++p) {
+      const int b = blocks[p].first;
+      if (!is_node(b)) continue;
+      const auto [f, k] = node_of[static_cast<std::size_t>(b)];
+      const Eigen::Matrix<double, 6, Eigen::Dynamic> through = blocks[p].second * node_maps[static_cast<std::size_t>(f)][static_cast<std::size_t>(k)];
+      blocks[p].first = -1;
+      block_of(flexible[static_cast<std::size_t>(f)].frame) += through.leftCols<body_states>();
+      tail_of(f) += through.rightCols(through.cols() - body_states);
+    }
+    std::erase_if(blocks, [](const auto& e) { return e.first < 0; });
+    return own;
+  };
+  auto tail_column = [&](int f, Eigen::Index c) { return layout_.tail(compiled_->flexible_tail[static_cast<std::size_t>(f)]) + c; };
+
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const auto bi = static_cast<std::size_t>(i);
+    if (!free(static_cast<int>(i))) continue;  // a driven body's rates do not depend on the state
+    if (!compiled_->flexible_of_body.empty() && compiled_->flexible_of_body[bi] >= 0) continue;  // flexible_rows below
+    const SeededState<BodyDual> own = wrench_blocks(i);
+    const Matrix3T<BodyDual> rot = rotation_matrix<BodyDual>(own.q);
     // w' = J^-1 (R^T T - w x J w): the torque's derivatives through J^-1 R^T; R(q) and the
     // gyroscopic term through the body's own quaternion and angular velocity.
     Eigen::Vector3d force, torque;
@@ -210,6 +293,7 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
     const Vector3T<BodyDual> w_rate = angular_acceleration<BodyDual>(rot, own.w, Vector3T<BodyDual>(torque.cast<BodyDual>()),
                                                                      law.inertia, law.inv_inertia);
     const int cluster = n_clusters > 0 ? cluster_of(static_cast<int>(i)) : -1;
+    if (cluster >= 0 && !tails.empty()) throw std::logic_error("multibody Jacobian: a rigid cluster reads a flexible body's modes");
     for (const auto& [b, m] : blocks) {
       Block6 rows;
       rows.topRows<3>() = law.inv_mass * m.topRows<3>();
@@ -231,6 +315,12 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
         }
       }
     }
+    for (const auto& [f, m] : tails)
+      for (Eigen::Index c = 0; c < m.cols(); ++c) {
+        const Eigen::Vector3d v_col = law.inv_mass * m.col(c).head<3>(), w_col = to_w * m.col(c).tail<3>();
+        std::copy_n(v_col.data(), 3, slots.at(layout_.velocity(i), tail_column(f, c), 3));
+        std::copy_n(w_col.data(), 3, slots.at(layout_.angular_velocity(i), tail_column(f, c), 3));
+      }
     // q' = q (x) (0, w) / 2 and r' = v.
     const Eigen::Matrix<double, 4, body_states> q_rate = derivatives<4>(quaternion_rate<BodyDual>(own.q, own.w), 0);
     for (int c = 0; c < 4; ++c) {
@@ -243,6 +333,77 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
     }
     for (int k = 0; k < 3; ++k) *slots.at(layout_.position(i) + k, layout_.velocity(i) + k) = 1.0;
   }
+
+  // Each flexible body: its frame's and modes' rates in dual numbers over the frame's
+  // numbers, the modes and whatever its frame and nodes read; its nodes' position and
+  // orientation rates through node_maps.
+  for (std::size_t f = 0; f < flexible.size(); ++f) {
+    const FlexibleBody& fb = flexible[f];
+    const int i = fb.frame, ne = fb.data->modes();
+    const Eigen::Index tail = tail_column(static_cast<int>(f), 0);
+    std::vector<Eigen::Index> cols;
+    for (int c = 0; c < body_states; ++c) cols.push_back(state_index(layout_, i, c));
+    for (int c = 0; c < 2 * ne; ++c) cols.push_back(tail + c);
+    std::unordered_map<Eigen::Index, int> local;
+    for (std::size_t c = 0; c < cols.size(); ++c) local.emplace(cols[c], static_cast<int>(c));
+    auto local_of = [&](Eigen::Index col) {
+      const auto [at, added] = local.emplace(col, static_cast<int>(cols.size()));
+      if (added) cols.push_back(col);
+      return at->second;
+    };
+    // Each slot's (frame, then nodes) wrench: its value and, per variable, its derivative.
+    const std::size_t slots_count = 1 + fb.nodes.size();
+    std::vector<std::vector<std::pair<int, Eigen::Matrix<double, 6, 1>>>> parts(slots_count);
+    std::vector<flexible_jacobian::SlotWrench> wrench(slots_count);
+    for (std::size_t s = 0; s < slots_count; ++s) {
+      const int b = s == 0 ? i : fb.nodes[s - 1];
+      wrench_blocks(b);
+      for (const auto& [r, m] : blocks)
+        for (int c = 0; c < body_states; ++c) parts[s].emplace_back(local_of(state_index(layout_, r, c)), m.col(c));
+      for (const auto& [g, m] : tails)
+        for (Eigen::Index c = 0; c < m.cols(); ++c) parts[s].emplace_back(local_of(tail_column(g, c)), m.col(c));
+      Eigen::Vector3d force, torque;
+      applied_wrench(b, t, y, force, torque);
+      wrench[s].value << force, torque;
+    }
+    const auto variables = static_cast<int>(cols.size());
+    for (std::size_t s = 0; s < slots_count; ++s) {
+      wrench[s].derivatives.setZero(6, variables);
+      for (const auto& [c, d] : parts[s]) wrench[s].derivatives.col(c) += d;
+    }
+    const FlexibleAt at = flexible_at(fb, layout_, compiled_->flexible_tail[f], y);
+    const Eigen::MatrixXd d =
+        flexible_jacobian::rate_derivatives(fb, gravity_, body_numbers(y, layout_, i), at.eta, at.eta_rate, wrench, variables);
+    for (int k = 0; k < 3; ++k) *slots.at(layout_.position(i) + k, layout_.velocity(i) + k) = 1.0;
+    for (int c = 0; c < 4; ++c) std::copy_n(d.col(3 + c).data(), 4, slots.at(layout_.orientation(i), layout_.orientation(i) + c, 4));
+    for (int c = 0; c < 3; ++c) std::copy_n(d.col(10 + c).data(), 4, slots.at(layout_.orientation(i), layout_.angular_velocity(i) + c, 4));
+    for (int c = 0; c < variables; ++c) {
+      const Eigen::VectorXd column = d.col(c);
+      std::copy_n(column.data() + 4, 3, slots.at(layout_.velocity(i), cols[static_cast<std::size_t>(c)], 3));
+      std::copy_n(column.data() + 7, 3, slots.at(layout_.angular_velocity(i), cols[static_cast<std::size_t>(c)], 3));
+    }
+    for (int k = 0; k < ne; ++k) *slots.at(tail + k, tail + ne + k) = 1.0;
+    for (int c = 0; c < variables; ++c) {
+      const Eigen::VectorXd column = d.col(c);
+      std::copy_n(column.data() + 10, ne, slots.at(tail + ne, cols[static_cast<std::size_t>(c)], ne));
+    }
+    // A node's r' = its velocity, q' = q (x) (0, w) / 2 at its numbers: through its frame's
+    // orientation, velocity and angular velocity and the modes (not the frame's position).
+    for (std::size_t k = 0; k < fb.nodes.size(); ++k) {
+      const int b = fb.nodes[k];
+      const Eigen::MatrixXd& map = node_maps[f][k];
+      const SeededState<BodyDual> node = seeded_state<BodyDual>(numbers(b), 0);
+      const Eigen::MatrixXd q_rate = derivatives<4>(quaternion_rate<BodyDual>(node.q, node.w), 0) * map;
+      for (Eigen::Index c = 3; c < map.cols(); ++c) {
+        const Eigen::Index col = c < body_states ? state_index(layout_, i, static_cast<int>(c)) : tail + c - body_states;
+        const Eigen::Vector3d r_rate = map.col(c).segment<3>(7);
+        const Eigen::Vector4d o_rate = q_rate.col(c);
+        std::copy_n(r_rate.data(), 3, slots.at(layout_.position(b), col, 3));
+        std::copy_n(o_rate.data(), 4, slots.at(layout_.orientation(b), col, 4));
+      }
+    }
+  }
+
   for (int c = 0; c < n_clusters; ++c) {
     const std::vector<int>& members = cluster_bodies(c);
     cluster_jacobian(c, t, y, rates, unconstrained[static_cast<std::size_t>(c)],

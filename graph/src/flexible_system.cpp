@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "flexible_dynamics.hpp"
 #include "flexible_state.hpp"
 #include "force_laws.hpp"
 #include "mbsflow/error.hpp"
@@ -13,17 +14,12 @@
 namespace mbsflow {
 namespace {
 
-// Node k's world kinematics from the frame's (position, velocity, quaternion, rotation).
-struct NodeWorld {
-  Eigen::Vector3d position, velocity, omega;  // omega: world
-  Eigen::Vector4d quat;
-};
+using flexible_dynamics::node_world;
+using NodeWorld = flexible_dynamics::NodeWorldT<double>;
 
 NodeWorld node_world(const FlexibleAt& f, int k, const Eigen::Vector3d& pos, const Eigen::Vector3d& vel, const Eigen::Vector4d& quat,
                      const Eigen::Matrix3d& r) {
-  const NodeMotion nm = flexible_node_motion(f.d, k, f.eta, f.eta_rate);
-  return {pos + r * nm.position, vel + r * (f.w.cross(nm.position) + nm.velocity), r * (f.w + nm.angular_velocity),
-          quat_multiply(quat, quat_exp(nm.rotation))};
+  return node_world<double>(f.d, k, f.eta, f.eta_rate, pos, vel, quat, r, f.w);
 }
 
 }  // namespace
@@ -84,34 +80,14 @@ void MultibodySystem::follow_nodes_of(std::size_t f, const Eigen::VectorXd& y) {
   }
 }
 
-// Generalised forces: the frame's wrench (gravity on the part's mass at its origin, its
-// loads and joints), gravity's share on the deformation (the centre of mass moves with
-// the modes by L eta), and each node's wrench through its motion.
+// Generalised forces (flexible_dynamics::generalised_force) from the frame's and the
+// nodes' applied wrenches.
 Eigen::VectorXd MultibodySystem::flexible_force(std::size_t f, const FlexibleAt& at, double t, const Eigen::VectorXd& y) const {
   const FlexibleBody& fb = model().flexible[f];
-  const FloatingFrameData& d = *fb.data;
-  const int ne = d.modes(), i = fb.frame;
-  const Eigen::VectorXd& eta = at.eta;
-  const Eigen::Matrix3d& r = rot_[static_cast<std::size_t>(i)];
-  Eigen::VectorXd q = Eigen::VectorXd::Zero(6 + ne);
-  Eigen::Vector3d force, torque;
-  applied_wrench(i, t, y, force, torque);
-  q.head<3>() = r.transpose() * force;
-  q.segment<3>(3) = r.transpose() * torque;
-  const Eigen::Vector3d g_b = r.transpose() * gravity_;
-  const auto l = d.mass0.block(0, 6, 3, ne);
-  q.segment<3>(3) += Eigen::Vector3d(l * eta).cross(g_b);
-  q.tail(ne) += l.transpose() * g_b;
-  for (std::size_t k = 0; k < fb.nodes.size(); ++k) {
-    applied_wrench(fb.nodes[k], t, y, force, torque);
-    const Eigen::Vector3d f_b = r.transpose() * force, t_b = r.transpose() * torque;
-    const Eigen::MatrixXd& shape = d.node_shape[k];
-    const Eigen::Vector3d arm = d.node_position[k] + shape.topRows<3>() * eta;
-    q.head<3>() += f_b;
-    q.segment<3>(3) += arm.cross(f_b) + t_b;
-    q.tail(ne) += shape.topRows<3>().transpose() * f_b + shape.bottomRows<3>().transpose() * t_b;
-  }
-  return q;
+  return flexible_dynamics::generalised_force<double>(
+      *fb.data, rot_[static_cast<std::size_t>(fb.frame)], gravity_, at.eta, [&](int k, Eigen::Vector3d& force, Eigen::Vector3d& torque) {
+        applied_wrench(k < 0 ? fb.frame : fb.nodes[static_cast<std::size_t>(k)], t, y, force, torque);
+      });
 }
 
 Eigen::VectorXd MultibodySystem::free_flexible_accelerations(std::size_t f, const FlexibleAt& at, const Eigen::VectorXd& y,

@@ -21,45 +21,63 @@ Eigen::SparseMatrix<double> MultibodySystem::jacobian_pattern() const {
   for (const CompiledJoint& j : compiled_->joints) couple({j.a, j.b});  // ground is n: no state
   for (const auto& e : compiled_->elements) couple(e->bodies());
   // A flexible body's frame, nodes and modes move as one: each of its bodies reads what
-  // any of them reads (before the clusters too: a rigid joint at a flexible body puts it
-  // in a cluster, whose solve reads what the whole part reads).
+  // any of them reads. A rigid cluster's reactions come from one solve over the forces on
+  // all its bodies, so each of its bodies reads whatever any of them reads. A body that
+  // reads one of a flexible body's bodies reads all of them and its modes. Each rule may
+  // widen what another joined: with flexible bodies, repeated until nothing changes.
   const Model& m = model();
   std::vector<std::vector<int>> group(m.flexible.size());
-  auto join_group = [&](std::size_t f) {
-    std::vector<int> all;
-    for (int b : group[f]) all.insert(all.end(), reads[static_cast<std::size_t>(b)].begin(), reads[static_cast<std::size_t>(b)].end());
-    for (int b : group[f]) reads[static_cast<std::size_t>(b)] = all;
-    return all;
-  };
   for (std::size_t f = 0; f < m.flexible.size(); ++f) {
     group[f] = m.flexible[f].nodes;
     group[f].push_back(m.flexible[f].frame);
-    join_group(f);
+    std::sort(group[f].begin(), group[f].end());
   }
-  // A rigid cluster's reactions come from one solve over the forces on all its bodies, so
-  // each of its bodies reads whatever any of them reads.
-  for (int c = 0; c < clusters(); ++c) {
+  auto join = [&](const std::vector<int>& bodies) {
     std::vector<int> all;
-    for (int b : cluster_bodies(c)) all.insert(all.end(), reads[static_cast<std::size_t>(b)].begin(), reads[static_cast<std::size_t>(b)].end());
-    for (int b : cluster_bodies(c)) reads[static_cast<std::size_t>(b)] = all;
-  }
-
-  // Again after the clusters, and a body that reads one of a flexible body's bodies reads
-  // all of them and the modes.
-  std::vector<std::vector<int>> group_reads(m.flexible.size());
-  std::vector<std::vector<char>> reads_modes(m.flexible.size());
-  for (std::size_t f = 0; f < m.flexible.size(); ++f) {
-    std::vector<int> all = join_group(f);
-    reads_modes[f].assign(static_cast<std::size_t>(n), 0);
-    for (Eigen::Index i = 0; i < n; ++i) {
-      auto& r = reads[static_cast<std::size_t>(i)];
-      if (std::none_of(r.begin(), r.end(), [&](int b) { return compiled_->flexible_of_body[static_cast<std::size_t>(b)] == static_cast<int>(f); }))
-        continue;
-      reads_modes[f][static_cast<std::size_t>(i)] = 1;
-      r.insert(r.end(), group[f].begin(), group[f].end());
-    }
+    for (int b : bodies) all.insert(all.end(), reads[static_cast<std::size_t>(b)].begin(), reads[static_cast<std::size_t>(b)].end());
     std::sort(all.begin(), all.end());
-    group_reads[f] = std::move(all);
+    all.erase(std::unique(all.begin(), all.end()), all.end());
+    bool changed = false;
+    for (int b : bodies) {
+      auto& r = reads[static_cast<std::size_t>(b)];
+      std::sort(r.begin(), r.end());
+      r.erase(std::unique(r.begin(), r.end()), r.end());
+      changed = changed || r != all;
+      r = all;
+    }
+    return changed;
+  };
+  auto reads_group = [&](std::size_t i, std::size_t f) {
+    const auto& r = reads[i];
+    return std::any_of(r.begin(), r.end(), [&](int b) { return compiled_->flexible_of_body[static_cast<std::size_t>(b)] == static_cast<int>(f); });
+  };
+  if (!m.flexible.empty())
+    for (auto& r : reads) {
+      std::sort(r.begin(), r.end());
+      r.erase(std::unique(r.begin(), r.end()), r.end());
+    }
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (std::size_t f = 0; f < m.flexible.size(); ++f) changed = join(group[f]) || changed;
+    for (int c = 0; c < clusters(); ++c) changed = join(cluster_bodies(c)) || changed;
+    if (m.flexible.empty()) break;
+    for (std::size_t f = 0; f < m.flexible.size(); ++f)
+      for (std::size_t i = 0; i < reads.size(); ++i)
+        if (reads_group(i, f) && !std::includes(reads[i].begin(), reads[i].end(), group[f].begin(), group[f].end())) {
+          reads[i].insert(reads[i].end(), group[f].begin(), group[f].end());
+          std::sort(reads[i].begin(), reads[i].end());
+          reads[i].erase(std::unique(reads[i].begin(), reads[i].end()), reads[i].end());
+          changed = true;
+        }
+  }
+  // Which bodies read flexible body f's modes, and what its modes' accelerations read (its
+  // frame's reads: its whole group's).
+  std::vector<std::vector<char>> reads_modes(m.flexible.size());
+  std::vector<std::vector<int>> group_reads(m.flexible.size());
+  for (std::size_t f = 0; f < m.flexible.size(); ++f) {
+    reads_modes[f].assign(static_cast<std::size_t>(n), 0);
+    for (Eigen::Index i = 0; i < n; ++i) reads_modes[f][static_cast<std::size_t>(i)] = reads_group(static_cast<std::size_t>(i), f);
+    group_reads[f] = reads[static_cast<std::size_t>(m.flexible[f].frame)];
   }
   for (auto& r : reads) {
     std::sort(r.begin(), r.end());
@@ -122,8 +140,10 @@ Eigen::SparseMatrix<double> MultibodySystem::jacobian_pattern() const {
         for (Eigen::Index i = 0; i < n; ++i)
           if (reads_modes[fl][static_cast<std::size_t>(i)]) push_rows(layout_.angular_velocity(i), 3);
         if (rate) push_rows(tail + k, 1);  // eta' = eta rate
-        push_rows(tail + ne, ne);
-        push_node_rows(fl);
+        for (std::size_t g = 0; g < m.flexible.size(); ++g)  // the modal accelerations that read these modes
+          if (reads_modes[fl][static_cast<std::size_t>(m.flexible[g].frame)])
+            push_rows(layout_.tail(compiled_->flexible_tail[g]) + m.flexible[g].data->modes(), m.flexible[g].data->modes());
+        push_node_rows(fl);  // sorts the column's rows
         outer.push_back(static_cast<int>(inner.size()));
       }
   }

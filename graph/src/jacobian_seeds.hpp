@@ -18,28 +18,43 @@ using Dual = Eigen::AutoDiffScalar<Eigen::Matrix<double, 2 * body_states, 1>>;
 using BodyDual = Eigen::AutoDiffScalar<Eigen::Matrix<double, body_states, 1>>;
 using Block6 = Eigen::Matrix<double, 6, body_states>;
 
-// Body i's state numbers as the variables first..first+12, in the order position,
-// quaternion, velocity, body-frame angular velocity.
+// A body's 13 state numbers in the variables' order: position, quaternion, velocity,
+// body-frame angular velocity.
+using BodyNumbers = Eigen::Matrix<double, body_states, 1>;
+inline BodyNumbers body_numbers(const Eigen::VectorXd& y, const StateLayout& l, Eigen::Index i) {
+  BodyNumbers s;
+  s << y.segment<3>(l.position(i)), y.segment<4>(l.orientation(i)), y.segment<3>(l.velocity(i)), y.segment<3>(l.angular_velocity(i));
+  return s;
+}
+
+// A body's state numbers s as the variables first..first+12.
 template <class D>
 struct SeededState {
   Vector3T<D> r, v, w;
   Vector4T<D> q;
 };
 template <class D>
-SeededState<D> seeded_state(const Eigen::VectorXd& y, const StateLayout& l, Eigen::Index i, int first) {
+SeededState<D> seeded_state(const BodyNumbers& s, int first) {
   constexpr int variables = D::DerType::SizeAtCompileTime;
-  SeededState<D> s;
+  SeededState<D> out;
   for (int k = 0; k < 3; ++k) {
-    s.r[k] = D(y[l.position(i) + k], variables, first + k);
-    s.v[k] = D(y[l.velocity(i) + k], variables, first + 7 + k);
-    s.w[k] = D(y[l.angular_velocity(i) + k], variables, first + 10 + k);
+    out.r[k] = D(s[k], variables, first + k);
+    out.v[k] = D(s[7 + k], variables, first + 7 + k);
+    out.w[k] = D(s[10 + k], variables, first + 10 + k);
   }
-  for (int k = 0; k < 4; ++k) s.q[k] = D(y[l.orientation(i) + k], variables, first + 3 + k);
-  return s;
+  for (int k = 0; k < 4; ++k) out.q[k] = D(s[3 + k], variables, first + 3 + k);
+  return out;
+}
+template <class D>
+SeededState<D> seeded_state(const Eigen::VectorXd& y, const StateLayout& l, Eigen::Index i, int first) {
+  return seeded_state<D>(body_numbers(y, l, i), first);
+}
+inline BodyFrameT<Dual> seeded_frame(const BodyNumbers& s, int first) {
+  const SeededState<Dual> seeded = seeded_state<Dual>(s, first);
+  return body_frame<Dual>(seeded.r, seeded.q, seeded.v, seeded.w);
 }
 inline BodyFrameT<Dual> seeded_frame(const Eigen::VectorXd& y, const StateLayout& l, Eigen::Index i, int first) {
-  const SeededState<Dual> s = seeded_state<Dual>(y, l, i, first);
-  return body_frame<Dual>(s.r, s.q, s.v, s.w);
+  return seeded_frame(body_numbers(y, l, i), first);
 }
 
 // The kinematic joints' view of a body's frame.

@@ -374,8 +374,12 @@ void MultibodySystem::applied_wrench(Eigen::Index i, double t, const Eigen::Vect
   Eigen::Vector3d f = body_law(bi).mass * gravity_, m = Eigen::Vector3d::Zero();
   for (int p = compiled_->load_start[bi]; p < compiled_->load_start[bi + 1]; ++p) {
     const Load& l = model().loads[static_cast<std::size_t>(compiled_->load_index[static_cast<std::size_t>(p)])];
-    add_load<double>(l, evaluate(l.function, t).value, rot_[bi], y.segment<3>(layout_.velocity(i)),
-                     y.segment<3>(layout_.angular_velocity(i)), f, m);  // loads: rotations kept
+    if (follows_frame(bi))  // a flexible body's node: its velocities are the ones it follows with
+      add_load<double>(l, evaluate(l.function, t).value, rot_[bi], Eigen::Vector3d(vel_.col(i)),
+                       Eigen::Vector3d(rot_[bi].transpose() * omega_.col(i)), f, m);
+    else
+      add_load<double>(l, evaluate(l.function, t).value, rot_[bi], y.segment<3>(layout_.velocity(i)),
+                       y.segment<3>(layout_.angular_velocity(i)), f, m);  // loads: rotations kept
   }
   for (int p = compiled_->incidence_start[bi]; p < compiled_->incidence_start[bi + 1]; ++p) {
     const int code = compiled_->incidence[static_cast<std::size_t>(p)];

@@ -51,12 +51,25 @@ template <class S>
 }
 inline Eigen::Vector4d quat_conjugate(const Eigen::Vector4d& q) { return quat_conjugate<double>(q); }
 
-// The unit quaternion of the rotation vector theta (axis * angle).
-inline Eigen::Vector4d quat_exp(const Eigen::Vector3d& theta) {
-  const double angle = theta.norm();
-  const double s = angle > 1e-8 ? std::sin(0.5 * angle) / angle : 0.5 - angle * angle / 48.0;
-  return {std::cos(0.5 * angle), s * theta[0], s * theta[1], s * theta[2]};
+// The unit quaternion of the rotation vector theta (axis * angle). Below 1e-8 rad the
+// series in angle^2 (whose derivative at zero dual numbers can take, unlike the norm's):
+// 1 - angle^2 / 8 rounds to cos(angle / 2) there.
+template <class S>
+Vector4T<S> quat_exp(const Vector3T<S>& theta) {
+  using std::cos, std::sin, std::sqrt;
+  const S angle2 = theta.squaredNorm();
+  S c, s;
+  if (angle2 > 1e-16) {
+    const S angle = sqrt(angle2);
+    c = cos(0.5 * angle);
+    s = sin(0.5 * angle) / angle;
+  } else {
+    c = 1.0 - angle2 / 8.0;
+    s = 0.5 - angle2 / 48.0;
+  }
+  return {c, s * theta[0], s * theta[1], s * theta[2]};
 }
+inline Eigen::Vector4d quat_exp(const Eigen::Vector3d& theta) { return quat_exp<double>(theta); }
 
 // Logarithm of a rotation: its rotation vector theta (axis * angle, angle in [0, pi]) and
 // the coefficient c of the left Jacobian of SO(3),

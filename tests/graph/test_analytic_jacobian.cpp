@@ -10,10 +10,13 @@
 #include <numbers>
 #include <random>
 
+#include "jacobian_check.hpp"
 #include "mbsflow/graph/multibody_system.hpp"
 #include "test_support.hpp"
 
 using namespace mbsflow;
+using test::central_differences;
+using test::shaken_state;
 
 namespace {
 
@@ -79,44 +82,6 @@ Model jacobian_model() {
   return m;
 }
 
-// A state away from rest: random displacements, large rotations (up to ~1 rad, so the
-// bushings' rotation logarithm runs outside its series), velocities, spin.
-Eigen::VectorXd shaken_state(MultibodySystem& sys, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  Eigen::VectorXd y = sys.initial_state();
-  const StateLayout& l = sys.layout();
-  for (Eigen::Index i = 0; i < l.bodies; ++i) {
-    for (int k = 0; k < 3; ++k) {
-      y[l.position(i) + k] += 0.05 * u(rng);
-      y[l.velocity(i) + k] = 0.5 * u(rng);
-      y[l.angular_velocity(i) + k] = 3.0 * u(rng);
-    }
-    const Eigen::Vector3d axis = Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized();
-    const Eigen::Quaterniond q(Eigen::AngleAxisd(0.6 * (1 + u(rng)) / 2 + 0.1 * i, axis));
-    y.segment<4>(l.orientation(i)) = 1.01 * Eigen::Vector4d(q.w(), q.x(), q.y(), q.z());  // not unit: the rhs normalises
-  }
-  sys.after_step(0.0, y);  // puts the driven body on its motion
-  return y;
-}
-
-// Central differences, column by column, into a dense matrix.
-Eigen::MatrixXd central_differences(MultibodySystem& sys, double t, const Eigen::VectorXd& y) {
-  const Eigen::Index n = sys.dimension();
-  Eigen::MatrixXd j(n, n);
-  Eigen::VectorXd fp(n), fm(n);
-  for (Eigen::Index c = 0; c < n; ++c) {
-    const double h = 1e-6 * std::max(1.0, std::abs(y[c]));
-    Eigen::VectorXd yp = y, ym = y;
-    yp[c] += h;
-    ym[c] -= h;
-    sys.rhs(t, yp, fp);
-    sys.rhs(t, ym, fm);
-    j.col(c) = (fp - fm) / (2 * h);
-  }
-  return j;
-}
-
 }  // namespace
 
 namespace {
@@ -133,11 +98,7 @@ void check_against_differences(MultibodySystem& sys, double bound = 1e-7) {
     Eigen::SparseMatrix<double> jac = sys.jacobian_pattern();
     sys.jacobian(t, y, jac);
     const Eigen::MatrixXd exact = Eigen::MatrixXd(jac), fd = central_differences(sys, t, y);
-    double worst = 0;
-    for (Eigen::Index r = 0; r < exact.rows(); ++r) {
-      const double scale = std::max(1.0, fd.row(r).cwiseAbs().maxCoeff());
-      worst = std::max(worst, (exact.row(r) - fd.row(r)).cwiseAbs().maxCoeff() / scale);
-    }
+    const double worst = test::largest_row_difference(exact, fd);
     INFO("seed " << seed << ": largest difference " << worst << " of the row's largest entry");
     CHECK(worst < bound);
     CHECK(fd.cwiseAbs().maxCoeff() > 1e3);  // the stiff entries are there to be matched

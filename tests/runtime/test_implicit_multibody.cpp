@@ -16,6 +16,7 @@
 #include "mbsflow/runtime/loose_coupling.hpp"
 #include "mbsflow/runtime/simulation.hpp"
 #include "memory_sink.hpp"
+#include "reference_run.hpp"
 #include "test_support.hpp"
 
 using namespace mbsflow;
@@ -74,23 +75,6 @@ TEST_CASE("implicit submodels of a loosely coupled run give the same numbers eve
   }
 }
 
-namespace {
-
-// 0.05 s of the model with DOPRI5 at tolerance 1e-10, snapshots every 5 ms; o is left set
-// for tirk at 1e-7 over the same span and grid.
-test::MemorySink dopri5_reference(MultibodySystem& sys, RunOptions& o) {
-  o.t_end = o.t_start + 0.05;
-  o.output_interval = 0.005;
-  o.method = Method::dopri5;
-  o.rtol = o.atol = 1e-10;
-  test::MemorySink reference;
-  run_simulation(sys, o, &reference);
-  o.method = Method::tirk;
-  o.rtol = o.atol = 1e-7;
-  return reference;
-}
-
-}  // namespace
 
 TEST_CASE("tirk on a stiff chain: analytic and coloured-difference Jacobians, KLU and SparseLU agree, and the dense output "
           "matches DOPRI5",
@@ -102,7 +86,7 @@ TEST_CASE("tirk on a stiff chain: analytic and coloured-difference Jacobians, KL
   MultibodySystem sys(m);
   REQUIRE(sys.has_analytic_jacobian());
   RunOptions o = options_from_model(m);
-  const test::MemorySink reference = dopri5_reference(sys, o);
+  const test::MemorySink reference = test::dopri5_reference(sys, o);
   std::vector<test::MemorySink> runs(3);
   std::vector<RunSummary> summaries;
   for (const auto& [solver, jacobian] : {std::pair{"klu", "auto"}, {"sparselu", "auto"}, {"klu", "differences"}}) {
@@ -175,7 +159,7 @@ TEST_CASE("tirk on a chain of stiff compliant revolute joints: the analytic Jaco
   MultibodySystem sys(m);
   REQUIRE(sys.has_analytic_jacobian());
   RunOptions o = options_from_model(m);
-  const test::MemorySink reference = dopri5_reference(sys, o);
+  const test::MemorySink reference = test::dopri5_reference(sys, o);
   test::MemorySink exact, differenced;
   o.jacobian = "auto";
   const RunSummary a = run_simulation(sys, o, &exact);

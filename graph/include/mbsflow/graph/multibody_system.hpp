@@ -269,6 +269,11 @@ class MultibodySystem {
                                               const Eigen::VectorXd& q) const;
   void write_flexible_rates(std::size_t f, const FlexibleAt& at, const Eigen::VectorXd& xi_rate, const Eigen::VectorXd& y,
                             Eigen::VectorXd& dydt) const;
+  // Whether body i is a flexible body's node (its motion follows the frame and the modes).
+  bool follows_frame(std::size_t i) const {
+    if (compiled_->flexible_of_body.empty() || compiled_->flexible_of_body[i] < 0) return false;
+    return model().flexible[static_cast<std::size_t>(compiled_->flexible_of_body[i])].frame != static_cast<int>(i);
+  }
   void place_flexible_nodes(Eigen::VectorXd& y) const;
   void place_nodes_of(std::size_t f, Eigen::VectorXd& y) const;
   // A rigid cluster that holds flexible bodies (flexible_joints.cpp): solved and projected

@@ -1,0 +1,127 @@
+#pragma once
+// A flexible body's equations of motion (flexible_body.hpp) as templates on the scalar:
+// the right-hand side runs them in double, the analytic Jacobian (flexible_jacobian.cpp)
+// in dual numbers, so both differentiate one arithmetic.
+#include <Eigen/Core>
+
+#include "force_laws.hpp"
+#include "mbsflow/graph/flexible_body.hpp"
+#include "rotation.hpp"
+
+namespace mbsflow::flexible_dynamics {
+
+template <class T>
+using VectorT = Eigen::Matrix<T, Eigen::Dynamic, 1>;
+template <class T>
+using MatrixT = Eigen::Matrix<T, Eigen::Dynamic, Eigen::Dynamic>;
+
+// d M / d eta_k's rotation block: A_k's rotation columns twice (symmetrised) and the
+// quadratic invariants against eta.
+template <class T>
+Matrix3T<T> rotation_block_rate(const FloatingFrameData& d, int k, const VectorT<T>& eta) {
+  const int ne = d.modes();
+  Eigen::Matrix3d twice = d.a[static_cast<std::size_t>(k)].rightCols<3>();
+  twice += twice.transpose().eval();
+  Matrix3T<T> s = as_scalar<T>(twice);
+  for (int l = 0; l < ne; ++l)
+    s += eta[l] * as_scalar<T>(d.c[static_cast<std::size_t>(k * ne + l)] + d.c[static_cast<std::size_t>(l * ne + k)]);
+  return s;
+}
+
+// M(eta), (6 + ne)^2.
+template <class T>
+MatrixT<T> mass_matrix(const FloatingFrameData& d, const VectorT<T>& eta) {
+  const int ne = d.modes();
+  MatrixT<T> m = as_scalar<T>(d.mass0);
+  Matrix3T<T> rr = Matrix3T<T>::Zero();
+  for (int k = 0; k < ne; ++k) {
+    const Eigen::Matrix<double, 3, 6>& a = d.a[static_cast<std::size_t>(k)];
+    const Eigen::MatrixXd& e = d.e[static_cast<std::size_t>(k)];
+    m.template block<3, 3>(3, 0) += eta[k] * as_scalar<T>(a.leftCols<3>());
+    m.template block<3, 3>(0, 3) += eta[k] * as_scalar<T>(a.leftCols<3>().transpose());
+    rr += eta[k] * as_scalar<T>(a.rightCols<3>() + a.rightCols<3>().transpose());
+    m.block(3, 6, 3, ne) += eta[k] * as_scalar<T>(e);
+    m.block(6, 3, ne, 3) += eta[k] * as_scalar<T>(e.transpose());
+    for (int l = 0; l < ne; ++l) rr += eta[k] * eta[l] * as_scalar<T>(d.c[static_cast<std::size_t>(k * ne + l)]);
+  }
+  m.template block<3, 3>(3, 3) += rr;
+  return m;
+}
+
+// The right side of M(eta) xi' = Q + Q_v - K eta - D eta' (M into *m): Lagrange's
+// d/dt (dT/d xi) - dT/d eta in the frame's quasi-velocities xi = [v_b, w, eta'], with the
+// applied generalised force q.
+template <class T>
+VectorT<T> balance(const FloatingFrameData& d, const Eigen::VectorXd& damping, const Vector3T<T>& v_b, const Vector3T<T>& w,
+                   const VectorT<T>& eta, const VectorT<T>& eta_rate, const VectorT<T>& q, MatrixT<T>& m) {
+  const int ne = d.modes();
+  VectorT<T> xi(6 + ne);
+  xi << v_b, w, eta_rate;
+  m = mass_matrix<T>(d, eta);
+  const VectorT<T> p = m * xi;
+  VectorT<T> rhs = q;
+  rhs.template head<3>() -= w.cross(Vector3T<T>(p.template head<3>()));
+  rhs.template segment<3>(3) -= w.cross(Vector3T<T>(p.template segment<3>(3))) + v_b.cross(Vector3T<T>(p.template head<3>()));
+  for (int k = 0; k < ne; ++k) {
+    const Eigen::Matrix<double, 3, 6>& a = d.a[static_cast<std::size_t>(k)];
+    const Eigen::MatrixXd& e = d.e[static_cast<std::size_t>(k)];
+    VectorT<T> mk_xi = VectorT<T>::Zero(6 + ne);  // d M / d eta_k xi
+    mk_xi.template head<3>() = as_scalar<T>(a.leftCols<3>().transpose()) * w;
+    mk_xi.template segment<3>(3) = as_scalar<T>(a.leftCols<3>()) * v_b + rotation_block_rate<T>(d, k, eta) * w + as_scalar<T>(e) * eta_rate;
+    mk_xi.tail(ne) = as_scalar<T>(e.transpose()) * w;
+    rhs -= eta_rate[k] * mk_xi;         // -M' xi
+    rhs[6 + k] += 0.5 * xi.dot(mk_xi);  // + dT / d eta_k
+  }
+  rhs.tail(ne) -= as_scalar<T>(d.omega2).cwiseProduct(eta) + as_scalar<T>(damping).cwiseProduct(eta_rate);
+  return rhs;
+}
+
+// The applied generalised force (6 + ne): the frame's wrench (world axes, about its
+// origin; wrench_at(-1, force, torque)) and gravity on the part's mass at its origin
+// already in it, gravity's share on the deformation (the centre of mass moves with the
+// modes by L eta), and node k's wrench (wrench_at(k, ...)) through its motion.
+template <class T, class WrenchAt>
+VectorT<T> generalised_force(const FloatingFrameData& d, const Matrix3T<T>& r, const Eigen::Vector3d& gravity, const VectorT<T>& eta,
+                             WrenchAt&& wrench_at) {
+  const int ne = d.modes();
+  VectorT<T> q = VectorT<T>::Zero(6 + ne);
+  Vector3T<T> force, torque;
+  wrench_at(-1, force, torque);
+  const Matrix3T<T> rt = r.transpose();
+  q.template head<3>() = rt * force;
+  q.template segment<3>(3) = rt * torque;
+  const Vector3T<T> g_b = rt * as_scalar<T>(gravity);
+  const auto l = d.mass0.block(0, 6, 3, ne);
+  q.template segment<3>(3) += Vector3T<T>(as_scalar<T>(l) * eta).cross(g_b);
+  q.tail(ne) += as_scalar<T>(l.transpose()) * g_b;
+  for (std::size_t k = 0; k < d.node_shape.size(); ++k) {
+    wrench_at(static_cast<int>(k), force, torque);
+    const Vector3T<T> f_b = rt * force, t_b = rt * torque;
+    const Eigen::MatrixXd& shape = d.node_shape[k];
+    const Vector3T<T> arm = as_scalar<T>(d.node_position[k]) + as_scalar<T>(shape.topRows<3>()) * eta;
+    q.template head<3>() += f_b;
+    q.template segment<3>(3) += arm.cross(f_b) + t_b;
+    q.tail(ne) += as_scalar<T>(shape.topRows<3>().transpose()) * f_b + as_scalar<T>(shape.bottomRows<3>().transpose()) * t_b;
+  }
+  return q;
+}
+
+// Node k's world motion from the frame's (position, velocity, quaternion, its rotation r,
+// angular velocity w in body axes) and the modes.
+template <class T>
+struct NodeWorldT {
+  Vector3T<T> position, velocity, omega;  // omega: world axes
+  Vector4T<T> quat;
+};
+template <class T>
+NodeWorldT<T> node_world(const FloatingFrameData& d, int k, const VectorT<T>& eta, const VectorT<T>& eta_rate, const Vector3T<T>& pos,
+                         const Vector3T<T>& vel, const Vector4T<T>& quat, const Matrix3T<T>& r, const Vector3T<T>& w) {
+  const Eigen::MatrixXd& s = d.node_shape[static_cast<std::size_t>(k)];
+  const Vector3T<T> x = as_scalar<T>(d.node_position[static_cast<std::size_t>(k)]) + as_scalar<T>(s.topRows<3>()) * eta;
+  const Vector3T<T> rotation = as_scalar<T>(s.bottomRows<3>()) * eta, velocity = as_scalar<T>(s.topRows<3>()) * eta_rate,
+                    angular_velocity = as_scalar<T>(s.bottomRows<3>()) * eta_rate;
+  return {pos + r * x, vel + r * Vector3T<T>(w.cross(x) + velocity), r * Vector3T<T>(w + angular_velocity),
+          quat_multiply<T>(quat, quat_exp<T>(rotation))};
+}
+
+}  // namespace mbsflow::flexible_dynamics
