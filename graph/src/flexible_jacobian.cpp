@@ -8,18 +8,24 @@
 namespace mbsflow::flexible_jacobian {
 namespace {
 
-using Dual = Eigen::AutoDiffScalar<Eigen::VectorXd>;
+// Dual numbers of up to 64 derivatives on the stack (the heap's allocations were half the
+// time), beyond that on the heap.
+constexpr int stack_variables = 64;
+using StackDual = Eigen::AutoDiffScalar<Eigen::Matrix<double, Eigen::Dynamic, 1, 0, stack_variables, 1>>;
+using HeapDual = Eigen::AutoDiffScalar<Eigen::VectorXd>;
 using flexible_dynamics::VectorT;
 
 // The frame's numbers, eta and eta' as the variables 0 .. 13 + 2 ne - 1 of `variables`.
+template <class Dual>
 struct Seeded {
   Vector3T<Dual> r, v, w;
   Vector4T<Dual> q;
   VectorT<Dual> eta, eta_rate;
 };
-Seeded seeded(const BodyNumbers& s, const Eigen::VectorXd& eta, const Eigen::VectorXd& eta_rate, int variables) {
+template <class Dual>
+Seeded<Dual> seeded(const BodyNumbers& s, const Eigen::VectorXd& eta, const Eigen::VectorXd& eta_rate, int variables) {
   const auto ne = static_cast<int>(eta.size());
-  Seeded out;
+  Seeded<Dual> out;
   for (int k = 0; k < 3; ++k) {
     out.r[k] = Dual(s[k], variables, k);
     out.v[k] = Dual(s[7 + k], variables, 7 + k);
@@ -36,6 +42,7 @@ Seeded seeded(const BodyNumbers& s, const Eigen::VectorXd& eta, const Eigen::Vec
 }
 
 // The derivatives of x by the variables (a constant's are empty: zero).
+template <class Dual>
 Eigen::VectorXd derivatives_of(const Dual& x, int variables) {
   return x.derivatives().size() == variables ? Eigen::VectorXd(x.derivatives()) : Eigen::VectorXd::Zero(variables);
 }
@@ -44,12 +51,11 @@ void put_rows(const V& v, int first, int variables, Eigen::MatrixXd& out) {
   for (Eigen::Index r = 0; r < v.size(); ++r) out.row(first + r) = derivatives_of(v[r], variables).transpose();
 }
 
-}  // namespace
-
-Eigen::MatrixXd node_map(const FloatingFrameData& d, int k, const BodyNumbers& frame, const Eigen::VectorXd& eta,
-                         const Eigen::VectorXd& eta_rate) {
+template <class Dual>
+Eigen::MatrixXd node_map_in(const FloatingFrameData& d, int k, const BodyNumbers& frame, const Eigen::VectorXd& eta,
+                            const Eigen::VectorXd& eta_rate) {
   const int variables = 13 + 2 * d.modes();
-  const Seeded s = seeded(frame, eta, eta_rate, variables);
+  const Seeded<Dual> s = seeded<Dual>(frame, eta, eta_rate, variables);
   const Matrix3T<Dual> r = rotation_matrix<Dual>(s.q);
   const flexible_dynamics::NodeWorldT<Dual> n = flexible_dynamics::node_world<Dual>(d, k, s.eta, s.eta_rate, s.r, s.v, s.q, r, s.w);
   const Vector3T<Dual> w_body = rotation_matrix<Dual>(n.quat).transpose() * n.omega;
@@ -61,12 +67,13 @@ Eigen::MatrixXd node_map(const FloatingFrameData& d, int k, const BodyNumbers& f
   return out;
 }
 
-Eigen::MatrixXd rate_derivatives(const FlexibleBody& fb, const Eigen::Vector3d& gravity, const BodyNumbers& frame,
-                                 const Eigen::VectorXd& eta, const Eigen::VectorXd& eta_rate, const std::vector<SlotWrench>& wrench,
-                                 int variables) {
+template <class Dual>
+Eigen::MatrixXd rate_derivatives_in(const FlexibleBody& fb, const Eigen::Vector3d& gravity, const BodyNumbers& frame,
+                                    const Eigen::VectorXd& eta, const Eigen::VectorXd& eta_rate, const std::vector<SlotWrench>& wrench,
+                                    int variables) {
   const FloatingFrameData& d = *fb.data;
   const int ne = d.modes();
-  const Seeded s = seeded(frame, eta, eta_rate, variables);
+  const Seeded<Dual> s = seeded<Dual>(frame, eta, eta_rate, variables);
   const Matrix3T<Dual> r = rotation_matrix<Dual>(s.q);
   const VectorT<Dual> q = flexible_dynamics::generalised_force<Dual>(d, r, gravity, s.eta, [&](int k, Vector3T<Dual>& force, Vector3T<Dual>& torque) {
     const SlotWrench& at = wrench[static_cast<std::size_t>(k + 1)];
@@ -97,13 +104,28 @@ Eigen::MatrixXd rate_derivatives(const FlexibleBody& fb, const Eigen::Vector3d& 
   for (int i = 0; i < size; ++i) xi_rate[i] = Dual(xi_value[i], d_xi.row(i).transpose());
   // The frame's rates as write_flexible_rates gives them.
   const Vector4T<Dual> q_rate = quaternion_rate<Dual>(s.q, s.w);
-  const Vector3T<Dual> v_rate = r * Vector3T<Dual>(Vector3T<Dual>(xi_rate.head<3>()) + s.w.cross(v_b));
+  const Vector3T<Dual> v_rate = r * Vector3T<Dual>(Vector3T<Dual>(xi_rate.template head<3>()) + s.w.cross(v_b));
   Eigen::MatrixXd out(10 + ne, variables);
   put_rows(q_rate, 0, variables, out);
   put_rows(v_rate, 4, variables, out);
   out.middleRows(7, 3) = d_xi.middleRows(3, 3);
   out.bottomRows(ne) = d_xi.bottomRows(ne);
   return out;
+}
+
+}  // namespace
+
+Eigen::MatrixXd node_map(const FloatingFrameData& d, int k, const BodyNumbers& frame, const Eigen::VectorXd& eta,
+                         const Eigen::VectorXd& eta_rate) {
+  if (13 + 2 * d.modes() <= stack_variables) return node_map_in<StackDual>(d, k, frame, eta, eta_rate);
+  return node_map_in<HeapDual>(d, k, frame, eta, eta_rate);
+}
+
+Eigen::MatrixXd rate_derivatives(const FlexibleBody& fb, const Eigen::Vector3d& gravity, const BodyNumbers& frame,
+                                 const Eigen::VectorXd& eta, const Eigen::VectorXd& eta_rate, const std::vector<SlotWrench>& wrench,
+                                 int variables) {
+  if (variables <= stack_variables) return rate_derivatives_in<StackDual>(fb, gravity, frame, eta, eta_rate, wrench, variables);
+  return rate_derivatives_in<HeapDual>(fb, gravity, frame, eta, eta_rate, wrench, variables);
 }
 
 }  // namespace mbsflow::flexible_jacobian

@@ -115,11 +115,15 @@ TEST_CASE("the analytic Jacobian of a flexible body on joints matches central di
 
 TEST_CASE("the analytic Jacobian of a free flexible body in free motion matches central differences", "[analysis][flexible][jacobian]") {
   // No joint: the frame's and the modes' rates read nothing else, every entry is inertia
-  // coupling (and gravity's share on the deformation).
-  Model m = flexible_model(bar_part(6, {1, 2, 3, 24}));
-  m.gravity = {0.0, 0.0, -9.81};
-  MultibodySystem sys(m);
-  check_against_differences(sys, 1e-6);
+  // coupling (and gravity's share on the deformation). With 26 modes the derivatives are
+  // more than the 64 dual numbers keep on the stack (flexible_jacobian.cpp).
+  for (int kept : {6, 20}) {
+    Model m = flexible_model(bar_part(kept, {1, 2, 3, 24}));
+    m.gravity = {0.0, 0.0, -9.81};
+    MultibodySystem sys(m);
+    INFO(sys.model().flexible.front().data->modes() << " modes");
+    check_against_differences(sys, 1e-6);
+  }
 }
 
 TEST_CASE("the analytic Jacobian of two flexible bodies joined node to node matches central differences",
