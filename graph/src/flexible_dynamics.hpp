@@ -3,6 +3,8 @@
 // the right-hand side runs them in double, the analytic Jacobian (flexible_jacobian.cpp)
 // in dual numbers, so both differentiate one arithmetic.
 #include <Eigen/Core>
+#include <type_traits>
+#include <vector>
 
 #include "force_laws.hpp"
 #include "mbsflow/graph/flexible_body.hpp"
@@ -15,11 +17,50 @@ using VectorT = Eigen::Matrix<T, Eigen::Dynamic, 1>;
 template <class T>
 using MatrixT = Eigen::Matrix<T, Eigen::Dynamic, Eigen::Dynamic>;
 
+// The values of dual numbers, or doubles as they are.
+template <class T>
+Eigen::VectorXd values_of(const VectorT<T>& x) {
+  if constexpr (std::is_same_v<T, double>) {
+    return x;
+  } else {
+    Eigen::VectorXd v(x.size());
+    for (Eigen::Index i = 0; i < x.size(); ++i) v[i] = x[i].value();
+    return v;
+  }
+}
+
+// A dual number for a function of eta alone, by the chain rule: its value, and its
+// derivatives sum_k slope(k) d(eta_k). The inertia terms of M(eta) are quadratic in eta:
+// their arithmetic in dual numbers took ne^2 products of whole derivative vectors.
+template <class T, class Slope>
+T through_eta(double value, const VectorT<T>& eta, Slope&& slope) {
+  typename T::DerType der;
+  bool any = false;
+  for (Eigen::Index k = 0; k < eta.size(); ++k) {
+    const double s = slope(static_cast<int>(k));
+    if (s == 0.0 || eta[k].derivatives().size() == 0) continue;
+    if (!any) der = s * eta[k].derivatives();
+    else der += s * eta[k].derivatives();
+    any = true;
+  }
+  return any ? T(value, der) : T(value);
+}
+
 // d M / d eta_k's rotation block: A_k's rotation columns twice (symmetrised) and the
 // quadratic invariants against eta.
 template <class T>
 Matrix3T<T> rotation_block_rate(const FloatingFrameData& d, int k, const VectorT<T>& eta) {
   const int ne = d.modes();
+  if constexpr (!std::is_same_v<T, double>) {  // linear in eta: d / d eta_l = C_kl + C_lk
+    const Eigen::Matrix3d value = rotation_block_rate<double>(d, k, values_of(eta));
+    Matrix3T<T> s;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        s(i, j) = through_eta<T>(value(i, j), eta, [&](int l) {
+          return d.c[static_cast<std::size_t>(k * ne + l)](i, j) + d.c[static_cast<std::size_t>(l * ne + k)](i, j);
+        });
+    return s;
+  }
   Eigen::Matrix3d twice = d.a[static_cast<std::size_t>(k)].rightCols<3>();
   twice += twice.transpose().eval();
   Matrix3T<T> s = as_scalar<T>(twice);
@@ -32,6 +73,27 @@ Matrix3T<T> rotation_block_rate(const FloatingFrameData& d, int k, const VectorT
 template <class T>
 MatrixT<T> mass_matrix(const FloatingFrameData& d, const VectorT<T>& eta) {
   const int ne = d.modes();
+  if constexpr (!std::is_same_v<T, double>) {  // its value, and d M / d eta_k by the chain rule
+    const Eigen::VectorXd at = values_of(eta);
+    const Eigen::MatrixXd value = mass_matrix<double>(d, at);
+    std::vector<Eigen::MatrixXd> slope(static_cast<std::size_t>(ne), Eigen::MatrixXd::Zero(6 + ne, 6 + ne));
+    for (int k = 0; k < ne; ++k) {
+      const Eigen::Matrix<double, 3, 6>& a = d.a[static_cast<std::size_t>(k)];
+      const Eigen::MatrixXd& e = d.e[static_cast<std::size_t>(k)];
+      Eigen::MatrixXd& s = slope[static_cast<std::size_t>(k)];
+      s.block<3, 3>(3, 0) = a.leftCols<3>();
+      s.block<3, 3>(0, 3) = a.leftCols<3>().transpose();
+      s.block<3, 3>(3, 3) = rotation_block_rate<double>(d, k, at);
+      s.block(3, 6, 3, ne) = e;
+      s.block(6, 3, ne, 3) = e.transpose();
+    }
+    MatrixT<T> m = value.template cast<T>();
+    for (int i = 0; i < 6 + ne; ++i)
+      for (int j = 0; j < 6 + ne; ++j)
+        if ((i >= 3 && i < 6) || (j >= 3 && j < 6))  // the rest is constant
+          m(i, j) = through_eta<T>(value(i, j), eta, [&](int k) { return slope[static_cast<std::size_t>(k)](i, j); });
+    return m;
+  }
   MatrixT<T> m = as_scalar<T>(d.mass0);
   Matrix3T<T> rr = Matrix3T<T>::Zero();
   for (int k = 0; k < ne; ++k) {
