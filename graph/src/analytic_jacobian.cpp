@@ -171,20 +171,21 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
     f.quat = quat_.col(k).cast<Dual>();
     return f;
   };
-  // A flexible body's node: its flexible body and slot. Its numbers are those it follows its
-  // frame and the modes with (its own in y are where the last step left it), and what
-  // reads them reads the frame and the modes through node_maps[f][k].
-  std::vector<std::pair<int, int>> node_of(flexible.empty() ? 0 : static_cast<std::size_t>(n), {-1, -1});
+  // A flexible body's node (follows_frame) and its slot k there. Its numbers are those it
+  // follows its frame and the modes with (its own in y are where the last step left it),
+  // and what reads them reads the frame and the modes through node_maps[f][k].
+  std::vector<int> node_slot(flexible.empty() ? 0 : static_cast<std::size_t>(n), -1);
+  std::vector<FlexibleAt> flexible_now;  // each flexible body's coordinates at y
   std::vector<std::vector<Eigen::MatrixXd>> node_maps(flexible.size());
   for (std::size_t f = 0; f < flexible.size(); ++f) {
-    const FlexibleAt at = flexible_at(flexible[f], layout_, compiled_->flexible_tail[f], y);
+    const FlexibleAt& at = flexible_now.emplace_back(flexible_at(flexible[f], layout_, compiled_->flexible_tail[f], y));
     const BodyNumbers frame = body_numbers(y, layout_, flexible[f].frame);
     for (std::size_t k = 0; k < flexible[f].nodes.size(); ++k) {
-      node_of[static_cast<std::size_t>(flexible[f].nodes[k])] = {static_cast<int>(f), static_cast<int>(k)};
+      node_slot[static_cast<std::size_t>(flexible[f].nodes[k])] = static_cast<int>(k);
       node_maps[f].push_back(flexible_jacobian::node_map(at.d, static_cast<int>(k), frame, at.eta, at.eta_rate));
     }
   }
-  auto is_node = [&](int b) { return !node_of.empty() && b < n && node_of[static_cast<std::size_t>(b)].first >= 0; };
+  auto is_node = [&](int b) { return b < n && follows_frame(static_cast<std::size_t>(b)); };
   auto numbers = [&](int b) -> BodyNumbers {
     if (!is_node(b)) return body_numbers(y, layout_, b);
     const auto bb = static_cast<std::size_t>(b);
@@ -267,7 +268,7 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
     for (std::size_t p = 0, count = blocks.size(); p < count; ++p) {
       const int b = blocks[p].first;
       if (!is_node(b)) continue;
-      const auto [f, k] = node_of[static_cast<std::size_t>(b)];
+      const int f = compiled_->flexible_of_body[static_cast<std::size_t>(b)], k = node_slot[static_cast<std::size_t>(b)];
       const Eigen::Matrix<double, 6, Eigen::Dynamic> through = blocks[p].second * node_maps[static_cast<std::size_t>(f)][static_cast<std::size_t>(k)];
       blocks[p].first = -1;
       block_of(flexible[static_cast<std::size_t>(f)].frame) += through.leftCols<body_states>();
@@ -371,22 +372,20 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
       wrench[s].derivatives.setZero(6, variables);
       for (const auto& [c, d] : parts[s]) wrench[s].derivatives.col(c) += d;
     }
-    const FlexibleAt at = flexible_at(fb, layout_, compiled_->flexible_tail[f], y);
+    const FlexibleAt& at = flexible_now[f];
     const Eigen::MatrixXd d =
         flexible_jacobian::rate_derivatives(fb, gravity_, body_numbers(y, layout_, i), at.eta, at.eta_rate, wrench, variables);
     for (int k = 0; k < 3; ++k) *slots.at(layout_.position(i) + k, layout_.velocity(i) + k) = 1.0;
     for (int c = 0; c < 4; ++c) std::copy_n(d.col(3 + c).data(), 4, slots.at(layout_.orientation(i), layout_.orientation(i) + c, 4));
     for (int c = 0; c < 3; ++c) std::copy_n(d.col(10 + c).data(), 4, slots.at(layout_.orientation(i), layout_.angular_velocity(i) + c, 4));
-    for (int c = 0; c < variables; ++c) {
-      const Eigen::VectorXd column = d.col(c);
-      std::copy_n(column.data() + 4, 3, slots.at(layout_.velocity(i), cols[static_cast<std::size_t>(c)], 3));
-      std::copy_n(column.data() + 7, 3, slots.at(layout_.angular_velocity(i), cols[static_cast<std::size_t>(c)], 3));
+    for (int c = 0; c < variables; ++c) {  // d's column-major: each variable's rows in a run
+      const double* column = d.col(c).data();
+      const Eigen::Index col = cols[static_cast<std::size_t>(c)];
+      std::copy_n(column + 4, 3, slots.at(layout_.velocity(i), col, 3));
+      std::copy_n(column + 7, 3, slots.at(layout_.angular_velocity(i), col, 3));
+      std::copy_n(column + 10, ne, slots.at(tail + ne, col, ne));
     }
     for (int k = 0; k < ne; ++k) *slots.at(tail + k, tail + ne + k) = 1.0;
-    for (int c = 0; c < variables; ++c) {
-      const Eigen::VectorXd column = d.col(c);
-      std::copy_n(column.data() + 10, ne, slots.at(tail + ne, cols[static_cast<std::size_t>(c)], ne));
-    }
     // A node's r' = its velocity, q' = q (x) (0, w) / 2 at its numbers: through its frame's
     // orientation, velocity and angular velocity and the modes (not the frame's position).
     for (std::size_t k = 0; k < fb.nodes.size(); ++k) {

@@ -36,13 +36,8 @@ double flexible_strain_energy(const FloatingFrameData& d, const Eigen::VectorXd&
 }
 
 NodeMotion flexible_node_motion(const FloatingFrameData& d, int node, const Eigen::VectorXd& eta, const Eigen::VectorXd& eta_rate) {
-  const Eigen::MatrixXd& s = d.node_shape[static_cast<std::size_t>(node)];
-  NodeMotion n;
-  n.position = d.node_position[static_cast<std::size_t>(node)] + s.topRows<3>() * eta;
-  n.rotation = s.bottomRows<3>() * eta;
-  n.velocity = s.topRows<3>() * eta_rate;
-  n.angular_velocity = s.bottomRows<3>() * eta_rate;
-  return n;
+  const flexible_dynamics::NodeMotionT<double> n = flexible_dynamics::node_motion<double>(d, node, eta, eta_rate);
+  return {n.position, n.rotation, n.velocity, n.angular_velocity};
 }
 
 Eigen::Matrix3Xd flexible_surface_points(const FloatingFrameData& d, const Eigen::Vector3d& origin, const Eigen::Matrix3d& r,

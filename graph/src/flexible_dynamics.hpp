@@ -168,6 +168,19 @@ VectorT<T> generalised_force(const FloatingFrameData& d, const Matrix3T<T>& r, c
   return q;
 }
 
+// Node k's place and small rotation in the frame (body axes, from the origin) and their
+// rates, at eta, eta' (flexible_node_motion in double).
+template <class T>
+struct NodeMotionT {
+  Vector3T<T> position, rotation, velocity, angular_velocity;
+};
+template <class T>
+NodeMotionT<T> node_motion(const FloatingFrameData& d, int k, const VectorT<T>& eta, const VectorT<T>& eta_rate) {
+  const Eigen::MatrixXd& s = d.node_shape[static_cast<std::size_t>(k)];
+  return {as_scalar<T>(d.node_position[static_cast<std::size_t>(k)]) + as_scalar<T>(s.topRows<3>()) * eta,
+          as_scalar<T>(s.bottomRows<3>()) * eta, as_scalar<T>(s.topRows<3>()) * eta_rate, as_scalar<T>(s.bottomRows<3>()) * eta_rate};
+}
+
 // Node k's world motion from the frame's (position, velocity, quaternion, its rotation r,
 // angular velocity w in body axes) and the modes.
 template <class T>
@@ -178,12 +191,9 @@ struct NodeWorldT {
 template <class T>
 NodeWorldT<T> node_world(const FloatingFrameData& d, int k, const VectorT<T>& eta, const VectorT<T>& eta_rate, const Vector3T<T>& pos,
                          const Vector3T<T>& vel, const Vector4T<T>& quat, const Matrix3T<T>& r, const Vector3T<T>& w) {
-  const Eigen::MatrixXd& s = d.node_shape[static_cast<std::size_t>(k)];
-  const Vector3T<T> x = as_scalar<T>(d.node_position[static_cast<std::size_t>(k)]) + as_scalar<T>(s.topRows<3>()) * eta;
-  const Vector3T<T> rotation = as_scalar<T>(s.bottomRows<3>()) * eta, velocity = as_scalar<T>(s.topRows<3>()) * eta_rate,
-                    angular_velocity = as_scalar<T>(s.bottomRows<3>()) * eta_rate;
-  return {pos + r * x, vel + r * Vector3T<T>(w.cross(x) + velocity), r * Vector3T<T>(w + angular_velocity),
-          quat_multiply<T>(quat, quat_exp<T>(rotation))};
+  const NodeMotionT<T> n = node_motion<T>(d, k, eta, eta_rate);
+  return {pos + r * n.position, vel + r * Vector3T<T>(w.cross(n.position) + n.velocity), r * Vector3T<T>(w + n.angular_velocity),
+          quat_multiply<T>(quat, quat_exp<T>(n.rotation))};
 }
 
 }  // namespace mbsflow::flexible_dynamics

@@ -32,16 +32,18 @@ Eigen::SparseMatrix<double> MultibodySystem::jacobian_pattern() const {
     group[f].push_back(m.flexible[f].frame);
     std::sort(group[f].begin(), group[f].end());
   }
+  auto sort_unique = [](std::vector<int>& r) {
+    std::sort(r.begin(), r.end());
+    r.erase(std::unique(r.begin(), r.end()), r.end());
+  };
   auto join = [&](const std::vector<int>& bodies) {
     std::vector<int> all;
     for (int b : bodies) all.insert(all.end(), reads[static_cast<std::size_t>(b)].begin(), reads[static_cast<std::size_t>(b)].end());
-    std::sort(all.begin(), all.end());
-    all.erase(std::unique(all.begin(), all.end()), all.end());
+    sort_unique(all);
     bool changed = false;
     for (int b : bodies) {
       auto& r = reads[static_cast<std::size_t>(b)];
-      std::sort(r.begin(), r.end());
-      r.erase(std::unique(r.begin(), r.end()), r.end());
+      sort_unique(r);
       changed = changed || r != all;
       r = all;
     }
@@ -52,10 +54,7 @@ Eigen::SparseMatrix<double> MultibodySystem::jacobian_pattern() const {
     return std::any_of(r.begin(), r.end(), [&](int b) { return compiled_->flexible_of_body[static_cast<std::size_t>(b)] == static_cast<int>(f); });
   };
   if (!m.flexible.empty())
-    for (auto& r : reads) {
-      std::sort(r.begin(), r.end());
-      r.erase(std::unique(r.begin(), r.end()), r.end());
-    }
+    for (auto& r : reads) sort_unique(r);
   for (bool changed = true; changed;) {
     changed = false;
     for (std::size_t f = 0; f < m.flexible.size(); ++f) changed = join(group[f]) || changed;
@@ -65,8 +64,7 @@ Eigen::SparseMatrix<double> MultibodySystem::jacobian_pattern() const {
       for (std::size_t i = 0; i < reads.size(); ++i)
         if (reads_group(i, f) && !std::includes(reads[i].begin(), reads[i].end(), group[f].begin(), group[f].end())) {
           reads[i].insert(reads[i].end(), group[f].begin(), group[f].end());
-          std::sort(reads[i].begin(), reads[i].end());
-          reads[i].erase(std::unique(reads[i].begin(), reads[i].end()), reads[i].end());
+          sort_unique(reads[i]);
           changed = true;
         }
   }
@@ -79,10 +77,7 @@ Eigen::SparseMatrix<double> MultibodySystem::jacobian_pattern() const {
     for (Eigen::Index i = 0; i < n; ++i) reads_modes[f][static_cast<std::size_t>(i)] = reads_group(static_cast<std::size_t>(i), f);
     group_reads[f] = reads[static_cast<std::size_t>(m.flexible[f].frame)];
   }
-  for (auto& r : reads) {
-    std::sort(r.begin(), r.end());
-    r.erase(std::unique(r.begin(), r.end()), r.end());
-  }
+  for (auto& r : reads) sort_unique(r);
   // Column by column (compressed, rows ascending), straight into the matrix: the model's
   // sizes make a list of triplets tens of megabytes. Rows of the velocity and angular
   // velocity of every body that reads body b: readers[b], ascending.
