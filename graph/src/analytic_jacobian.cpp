@@ -6,11 +6,12 @@
 //   v' = F / m,  w' = J^-1 (R(q)^T T - w x J w),  q' = q (x) (0, w) / 2,  r' = v.
 // The bodies of a rigid cluster get their rates' derivatives through the cluster's
 // reactions (cluster_jacobian.cpp); a flexible body's frame, modes and nodes through its
-// equations in dual numbers (flexible_jacobian.cpp). Exact up to rounding, so Newton converges at its own
-// rate, and no right-hand-side call is spent on differences.
+// equations in dual numbers (flexible_jacobian.cpp), and where rigid joints hold it
+// through its cluster's solve in generalised velocities (flexible_cluster_jacobian.cpp).
+// Exact up to rounding, so Newton converges at its own rate, and no right-hand-side call
+// is spent on differences.
 #include <algorithm>
 #include <stdexcept>
-#include <unordered_map>
 
 #include "flexible_jacobian.hpp"
 #include "flexible_state.hpp"
@@ -100,34 +101,6 @@ bool no_jacobian(std::string* why, std::string reason) {
 bool has_analytic_jacobian(const Model& m, std::string* why) {
   for (const auto& e : m.force_elements)
     if (!e->constant_wrench()) return no_jacobian(why, "the model has user force elements");
-  if (m.flexible.empty()) return true;
-  // Per body: its flexible body, and whether it is that body's node; whether a rigid joint holds it.
-  std::vector<int> part(m.bodies.size(), -1);
-  std::vector<char> node(m.bodies.size(), 0), held(m.bodies.size(), 0);
-  auto known = [&](int b) { return b >= 0 && static_cast<std::size_t>(b) < m.bodies.size(); };
-  for (std::size_t f = 0; f < m.flexible.size(); ++f) {
-    if (known(m.flexible[f].frame)) part[static_cast<std::size_t>(m.flexible[f].frame)] = static_cast<int>(f);
-    for (int b : m.flexible[f].nodes)
-      if (known(b)) {
-        part[static_cast<std::size_t>(b)] = static_cast<int>(f);
-        node[static_cast<std::size_t>(b)] = 1;
-      }
-  }
-  auto name_of = [&](int b) { return m.flexible[static_cast<std::size_t>(part[static_cast<std::size_t>(b)])].name; };
-  for (const Joint& j : m.joints)
-    if (is_kinematic(j.type) && j.rigid)
-      for (int b : {j.body1, j.body2})
-        if (known(b)) {
-          if (part[static_cast<std::size_t>(b)] >= 0)
-            return no_jacobian(why, "flexible body '" + name_of(b) + "' is held by rigid joint '" + j.name + "' (its cluster's rates are differenced)");
-          held[static_cast<std::size_t>(b)] = 1;
-        }
-  // A rigid cluster's Jacobian takes what its bodies read body by body: not a node's modes.
-  for (const Joint& j : m.joints)
-    for (auto [a, b] : {std::pair{j.body1, j.body2}, std::pair{j.body2, j.body1}})
-      if (known(a) && known(b) && held[static_cast<std::size_t>(a)] && node[static_cast<std::size_t>(b)])
-        return no_jacobian(why, "body '" + m.bodies[static_cast<std::size_t>(a)].name + "' of a rigid cluster is joined to flexible body '" +
-                                    name_of(b) + "' at a node (the cluster's rates are differenced)");
   return true;
 }
 
@@ -278,6 +251,19 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
     return own;
   };
   auto tail_column = [&](int f, Eigen::Index c) { return layout_.tail(compiled_->flexible_tail[static_cast<std::size_t>(f)]) + c; };
+  // q' = q (x) (0, w) / 2 and r' = v of body i, its numbers seeded in own.
+  auto kinematic_rows = [&](Eigen::Index i, const SeededState<BodyDual>& own) {
+    const Eigen::Matrix<double, 4, body_states> q_rate = derivatives<4>(quaternion_rate<BodyDual>(own.q, own.w), 0);
+    for (int c = 0; c < 4; ++c) std::copy_n(q_rate.col(3 + c).data(), 4, slots.at(layout_.orientation(i), layout_.orientation(i) + c, 4));
+    for (int c = 0; c < 3; ++c) std::copy_n(q_rate.col(10 + c).data(), 4, slots.at(layout_.orientation(i), layout_.angular_velocity(i) + c, 4));
+    for (int k = 0; k < 3; ++k) *slots.at(layout_.position(i) + k, layout_.velocity(i) + k) = 1.0;
+  };
+  // The clusters whose rates are solved in generalised velocities here
+  // (flexible_cluster_jacobian.cpp): those that hold flexible bodies, and those whose
+  // bodies read a flexible body's modes (found below).
+  std::vector<char> generalised(static_cast<std::size_t>(n_clusters), 0);
+  for (const FlexibleBody& fb : flexible)
+    if (const int c = n_clusters > 0 ? cluster_of(fb.frame) : -1; c >= 0) generalised[static_cast<std::size_t>(c)] = 1;
 
   for (Eigen::Index i = 0; i < n; ++i) {
     const auto bi = static_cast<std::size_t>(i);
@@ -294,7 +280,7 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
     const Vector3T<BodyDual> w_rate = angular_acceleration<BodyDual>(rot, own.w, Vector3T<BodyDual>(torque.cast<BodyDual>()),
                                                                      law.inertia, law.inv_inertia);
     const int cluster = n_clusters > 0 ? cluster_of(static_cast<int>(i)) : -1;
-    if (cluster >= 0 && !tails.empty()) throw std::logic_error("multibody Jacobian: a rigid cluster reads a flexible body's modes");
+    if (cluster >= 0 && !tails.empty()) generalised[static_cast<std::size_t>(cluster)] = 1;
     for (const auto& [b, m] : blocks) {
       Block6 rows;
       rows.topRows<3>() = law.inv_mass * m.topRows<3>();
@@ -316,74 +302,63 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
         }
       }
     }
-    for (const auto& [f, m] : tails)
-      for (Eigen::Index c = 0; c < m.cols(); ++c) {
-        const Eigen::Vector3d v_col = law.inv_mass * m.col(c).head<3>(), w_col = to_w * m.col(c).tail<3>();
-        std::copy_n(v_col.data(), 3, slots.at(layout_.velocity(i), tail_column(f, c), 3));
-        std::copy_n(w_col.data(), 3, slots.at(layout_.angular_velocity(i), tail_column(f, c), 3));
-      }
-    // q' = q (x) (0, w) / 2 and r' = v.
-    const Eigen::Matrix<double, 4, body_states> q_rate = derivatives<4>(quaternion_rate<BodyDual>(own.q, own.w), 0);
-    for (int c = 0; c < 4; ++c) {
-      double* q = slots.at(layout_.orientation(i), layout_.orientation(i) + c, 4);
-      for (int r = 0; r < 4; ++r) q[r] = q_rate(r, 3 + c);
-    }
-    for (int c = 0; c < 3; ++c) {
-      double* q = slots.at(layout_.orientation(i), layout_.angular_velocity(i) + c, 4);
-      for (int r = 0; r < 4; ++r) q[r] = q_rate(r, 10 + c);
-    }
-    for (int k = 0; k < 3; ++k) *slots.at(layout_.position(i) + k, layout_.velocity(i) + k) = 1.0;
+    if (cluster < 0)
+      for (const auto& [f, m] : tails)
+        for (Eigen::Index c = 0; c < m.cols(); ++c) {
+          const Eigen::Vector3d v_col = law.inv_mass * m.col(c).head<3>(), w_col = to_w * m.col(c).tail<3>();
+          std::copy_n(v_col.data(), 3, slots.at(layout_.velocity(i), tail_column(f, c), 3));
+          std::copy_n(w_col.data(), 3, slots.at(layout_.angular_velocity(i), tail_column(f, c), 3));
+        }
+    kinematic_rows(i, own);
   }
 
+  // The applied wrench on body b (world force, torque) and its derivatives by the state
+  // numbers it reads, a node's read through its frame and modes.
+  auto wrench_of = [&](int b, Eigen::Matrix<double, 6, 1>& value, WrenchParts& parts) {
+    wrench_blocks(b);
+    parts.clear();
+    for (const auto& [r, m] : blocks)
+      for (int c = 0; c < body_states; ++c) parts.emplace_back(state_index(layout_, r, c), m.col(c));
+    for (const auto& [g, m] : tails)
+      for (Eigen::Index c = 0; c < m.cols(); ++c) parts.emplace_back(tail_column(g, c), m.col(c));
+    Eigen::Vector3d force, torque;
+    applied_wrench(b, t, y, force, torque);
+    value << force, torque;
+  };
+
   // Each flexible body: its frame's and modes' rates in dual numbers over the frame's
-  // numbers, the modes and whatever its frame and nodes read; its nodes' position and
-  // orientation rates through node_maps.
+  // numbers, the modes and whatever its frame and nodes read (with its cluster's, below,
+  // where rigid joints hold it); its nodes' position and orientation rates through
+  // node_maps.
   for (std::size_t f = 0; f < flexible.size(); ++f) {
     const FlexibleBody& fb = flexible[f];
     const int i = fb.frame, ne = fb.data->modes();
     const Eigen::Index tail = tail_column(static_cast<int>(f), 0);
-    std::vector<Eigen::Index> cols;
-    for (int c = 0; c < body_states; ++c) cols.push_back(state_index(layout_, i, c));
-    for (int c = 0; c < 2 * ne; ++c) cols.push_back(tail + c);
-    std::unordered_map<Eigen::Index, int> local;
-    for (std::size_t c = 0; c < cols.size(); ++c) local.emplace(cols[c], static_cast<int>(c));
-    auto local_of = [&](Eigen::Index col) {
-      const auto [at, added] = local.emplace(col, static_cast<int>(cols.size()));
-      if (added) cols.push_back(col);
-      return at->second;
-    };
-    // Each slot's (frame, then nodes) wrench: its value and, per variable, its derivative.
-    const std::size_t slots_count = 1 + fb.nodes.size();
-    std::vector<std::vector<std::pair<int, Eigen::Matrix<double, 6, 1>>>> parts(slots_count);
-    std::vector<flexible_jacobian::SlotWrench> wrench(slots_count);
-    for (std::size_t s = 0; s < slots_count; ++s) {
-      const int b = s == 0 ? i : fb.nodes[s - 1];
-      wrench_blocks(b);
-      for (const auto& [r, m] : blocks)
-        for (int c = 0; c < body_states; ++c) parts[s].emplace_back(local_of(state_index(layout_, r, c)), m.col(c));
-      for (const auto& [g, m] : tails)
-        for (Eigen::Index c = 0; c < m.cols(); ++c) parts[s].emplace_back(local_of(tail_column(g, c)), m.col(c));
-      Eigen::Vector3d force, torque;
-      applied_wrench(b, t, y, force, torque);
-      wrench[s].value << force, torque;
-    }
-    const auto variables = static_cast<int>(cols.size());
-    for (std::size_t s = 0; s < slots_count; ++s) {
-      wrench[s].derivatives.setZero(6, variables);
-      for (const auto& [c, d] : parts[s]) wrench[s].derivatives.col(c) += d;
-    }
-    const FlexibleAt& at = flexible_now[f];
-    const Eigen::MatrixXd d =
-        flexible_jacobian::rate_derivatives(fb, gravity_, body_numbers(y, layout_, i), at.eta, at.eta_rate, wrench, variables);
-    for (int k = 0; k < 3; ++k) *slots.at(layout_.position(i) + k, layout_.velocity(i) + k) = 1.0;
-    for (int c = 0; c < 4; ++c) std::copy_n(d.col(3 + c).data(), 4, slots.at(layout_.orientation(i), layout_.orientation(i) + c, 4));
-    for (int c = 0; c < 3; ++c) std::copy_n(d.col(10 + c).data(), 4, slots.at(layout_.orientation(i), layout_.angular_velocity(i) + c, 4));
-    for (int c = 0; c < variables; ++c) {  // d's column-major: each variable's rows in a run
-      const double* column = d.col(c).data();
-      const Eigen::Index col = cols[static_cast<std::size_t>(c)];
-      std::copy_n(column + 4, 3, slots.at(layout_.velocity(i), col, 3));
-      std::copy_n(column + 7, 3, slots.at(layout_.angular_velocity(i), col, 3));
-      std::copy_n(column + 10, ne, slots.at(tail + ne, col, ne));
+    kinematic_rows(i, seeded_state<BodyDual>(numbers(i), 0));
+    if (n_clusters == 0 || cluster_of(i) < 0) {
+      Variables vars;  // the frame's numbers, eta, eta', then what the wrenches read
+      for (int c = 0; c < body_states; ++c) vars.of(state_index(layout_, i, c));
+      for (int c = 0; c < 2 * ne; ++c) vars.of(tail + c);
+      // Each slot's (frame, then nodes) wrench: its value and, per variable, its derivative.
+      const std::size_t slots_count = 1 + fb.nodes.size();
+      std::vector<WrenchParts> read(slots_count);
+      std::vector<flexible_jacobian::SlotWrench> wrench(slots_count);
+      for (std::size_t s = 0; s < slots_count; ++s) {
+        wrench_of(s == 0 ? i : fb.nodes[s - 1], wrench[s].value, read[s]);
+        for (const auto& [col, d] : read[s]) vars.of(col);
+      }
+      const int variables = vars.count();
+      for (std::size_t s = 0; s < slots_count; ++s) wrench[s].derivatives = vars.gather(read[s], 6);
+      const FlexibleAt& at = flexible_now[f];
+      const Eigen::MatrixXd d =
+          flexible_jacobian::rate_derivatives(fb, gravity_, body_numbers(y, layout_, i), at.eta, at.eta_rate, wrench, variables);
+      for (int c = 0; c < variables; ++c) {  // d's column-major: each variable's rows in a run
+        const double* column = d.col(c).data();
+        const Eigen::Index col = vars.cols[static_cast<std::size_t>(c)];
+        std::copy_n(column + 4, 3, slots.at(layout_.velocity(i), col, 3));
+        std::copy_n(column + 7, 3, slots.at(layout_.angular_velocity(i), col, 3));
+        std::copy_n(column + 10, ne, slots.at(tail + ne, col, ne));
+      }
     }
     for (int k = 0; k < ne; ++k) *slots.at(tail + k, tail + ne + k) = 1.0;
     // A node's r' = its velocity, q' = q (x) (0, w) / 2 at its numbers: through its frame's
@@ -404,6 +379,12 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
   }
 
   for (int c = 0; c < n_clusters; ++c) {
+    if (generalised[static_cast<std::size_t>(c)]) {
+      flexible_cluster_jacobian(c, t, y, rates, wrench_of, [&](Eigen::Index col, Eigen::Index row, int count, const double* values) {
+        std::copy_n(values, count, slots.at(row, col, count));
+      });
+      continue;
+    }
     const std::vector<int>& members = cluster_bodies(c);
     cluster_jacobian(c, t, y, rates, unconstrained[static_cast<std::size_t>(c)],
                      [&](int b, int k, const Eigen::VectorXd& d) {

@@ -8,47 +8,24 @@
 namespace mbsflow::flexible_jacobian {
 namespace {
 
-// Dual numbers of up to 64 derivatives on the stack (the heap's allocations were half the
-// time), beyond that on the heap.
-constexpr int stack_variables = 64;
-using StackDual = Eigen::AutoDiffScalar<Eigen::Matrix<double, Eigen::Dynamic, 1, 0, stack_variables, 1>>;
-using HeapDual = Eigen::AutoDiffScalar<Eigen::VectorXd>;
+using jacobian_seeds::body_states;
+using jacobian_seeds::HeapDual;
+using jacobian_seeds::put_rows;
+using jacobian_seeds::stack_variables;
+using jacobian_seeds::StackDual;
 using flexible_dynamics::VectorT;
 
 // The frame's numbers, eta and eta' as the variables 0 .. 13 + 2 ne - 1 of `variables`.
 template <class Dual>
-struct Seeded {
-  Vector3T<Dual> r, v, w;
-  Vector4T<Dual> q;
+struct Seeded : jacobian_seeds::SeededState<Dual> {
   VectorT<Dual> eta, eta_rate;
 };
 template <class Dual>
 Seeded<Dual> seeded(const BodyNumbers& s, const Eigen::VectorXd& eta, const Eigen::VectorXd& eta_rate, int variables) {
-  const auto ne = static_cast<int>(eta.size());
-  Seeded<Dual> out;
-  for (int k = 0; k < 3; ++k) {
-    out.r[k] = Dual(s[k], variables, k);
-    out.v[k] = Dual(s[7 + k], variables, 7 + k);
-    out.w[k] = Dual(s[10 + k], variables, 10 + k);
-  }
-  for (int k = 0; k < 4; ++k) out.q[k] = Dual(s[3 + k], variables, 3 + k);
-  out.eta.resize(ne);
-  out.eta_rate.resize(ne);
-  for (int k = 0; k < ne; ++k) {
-    out.eta[k] = Dual(eta[k], variables, 13 + k);
-    out.eta_rate[k] = Dual(eta_rate[k], variables, 13 + ne + k);
-  }
+  Seeded<Dual> out{jacobian_seeds::seeded_state<Dual>(s, 0, variables), {}, {}};
+  out.eta = jacobian_seeds::seeded_values<Dual>(eta, body_states, variables);
+  out.eta_rate = jacobian_seeds::seeded_values<Dual>(eta_rate, body_states + static_cast<int>(eta.size()), variables);
   return out;
-}
-
-// The derivatives of x by the variables (a constant's are empty: zero).
-template <class Dual>
-Eigen::VectorXd derivatives_of(const Dual& x, int variables) {
-  return x.derivatives().size() == variables ? Eigen::VectorXd(x.derivatives()) : Eigen::VectorXd::Zero(variables);
-}
-template <class V>
-void put_rows(const V& v, int first, int variables, Eigen::MatrixXd& out) {
-  for (Eigen::Index r = 0; r < v.size(); ++r) out.row(first + r) = derivatives_of(v[r], variables).transpose();
 }
 
 template <class Dual>

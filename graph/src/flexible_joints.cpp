@@ -2,12 +2,8 @@
 // body's frame or nodes is solved in generalised velocities u: each rigid body's (v, w),
 // world axes, and each flexible body's xi = [v_b, w, eta'] (flexible_body.hpp) once for
 // its frame and all its nodes. A slot of a flexible body moves by
-//   (v, w) = T xi,  (a, alpha) = T xi' + gamma,
-// node k at x = p_k + U_k eta (frame axes), small rotation Theta_k eta:
-//   T = [R, -R [x]x, R U_k; 0, R, R Theta_k],
-//   gamma = [R (w x v_b + w x (w x x) + 2 w x U_k eta'); R (w x Theta_k eta')],
-// the frame itself T = [R, 0, 0; 0, R, 0], gamma = [R (w x v_b); 0]. The rows become
-// G = J T, their bias grows by J gamma, and the multipliers solve
+//   (v, w) = T xi,  (a, alpha) = T xi' + gamma  (flexible_cluster.hpp).
+// The rows become G = J T, their bias grows by J gamma, and the multipliers solve
 //   G M^-1 G^T lambda = -(G u'_free + bias),  M = blockdiag(m I, I_world, M(eta) ...),
 // shifted and refined where the rows are redundant as RigidCluster does. The projection
 // after a step moves the frame (body axes), its turn and the modal coordinates the same
@@ -16,6 +12,7 @@
 #include <algorithm>
 
 #include "constraint_rows.hpp"
+#include "flexible_cluster.hpp"
 #include "flexible_state.hpp"
 #include "mbsflow/graph/multibody_system.hpp"
 #include "multibody_constraints.hpp"
@@ -25,39 +22,13 @@
 namespace mbsflow {
 namespace {
 
-using Matrix6X = Eigen::Matrix<double, 6, Eigen::Dynamic>;
-
-Eigen::Matrix3d cross_matrix(const Eigen::Vector3d& x) {
-  Eigen::Matrix3d m;
-  m << 0.0, -x.z(), x.y(), x.z(), 0.0, -x.x(), -x.y(), x.x(), 0.0;
-  return m;
-}
-
-struct SlotMap {
-  Matrix6X t;
-  Vector6d gamma;
-};
+using flexible_cluster::solve_rows;
+using SlotMap = flexible_cluster::SlotMapT<double>;
 
 // Slot `node` (-1: the frame) of the flexible body at f, its frame turned by r, moving
 // with v_b (frame axes).
 SlotMap slot_map(const FlexibleAt& f, const Eigen::Matrix3d& r, const Eigen::Vector3d& v_b, int node) {
-  SlotMap m{Matrix6X::Zero(6, 6 + f.ne), Vector6d::Zero()};
-  m.t.block<3, 3>(0, 0) = r;
-  m.t.block<3, 3>(3, 3) = r;
-  const Eigen::Vector3d frame_turn = f.w.cross(v_b);
-  if (node < 0) {
-    m.gamma.head<3>() = r * frame_turn;
-    return m;
-  }
-  const Eigen::MatrixXd& shape = f.d.node_shape[static_cast<std::size_t>(node)];
-  const Eigen::Vector3d x = f.d.node_position[static_cast<std::size_t>(node)] + shape.topRows<3>() * f.eta;
-  const Eigen::Vector3d u_rate = shape.topRows<3>() * f.eta_rate, turn_rate = shape.bottomRows<3>() * f.eta_rate;
-  m.t.block<3, 3>(0, 3) = -r * cross_matrix(x);
-  m.t.block(0, 6, 3, f.ne) = r * shape.topRows<3>();
-  m.t.block(3, 6, 3, f.ne) = r * shape.bottomRows<3>();
-  m.gamma.head<3>() = r * (frame_turn + f.w.cross(f.w.cross(x)) + 2.0 * f.w.cross(u_rate));
-  m.gamma.tail<3>() = r * f.w.cross(turn_rate);
-  return m;
+  return flexible_cluster::slot_map<double>(f.d, r, v_b, f.w, f.eta, f.eta_rate, node);
 }
 
 // One evaluation of a cluster in generalised velocities.
@@ -132,25 +103,6 @@ std::vector<FlexibleAt> flexible_members(const Model& m, const StateLayout& l, c
       gen.map[s] = slot_map(at[k], r[k], v_b[k], fs.node[s]);
     }
   return at;
-}
-
-// x <- S^-1 x: S as it is where its Cholesky pivots show it regular, else shifted by eps
-// of its diagonal and refined against it (redundant rows, singular positions), the
-// policy of RigidCluster::factor.
-void solve_rows(const Eigen::MatrixXd& s, Eigen::VectorXd& x) {
-  using namespace cluster_solve;
-  const Eigen::LLT<Eigen::MatrixXd> plain(s);
-  if (plain.info() == Eigen::Success &&
-      (plain.matrixLLT().diagonal().array().square() >= regular_pivot_ratio * s.diagonal().array()).all()) {
-    x = plain.solve(x);
-    return;
-  }
-  Eigen::MatrixXd shifted = s;
-  shifted.diagonal().array() += relative_shift * s.diagonal().array() + 1e-300;
-  const Eigen::LDLT<Eigen::MatrixXd> factors(shifted);
-  const Eigen::VectorXd rhs = x;
-  x = factors.solve(rhs);
-  for (int k = 0; k < refinements; ++k) x += factors.solve(rhs - s * x);
 }
 
 }  // namespace

@@ -3,7 +3,9 @@
 // a body's 13 state numbers seeded as variables, and the views of them that the force
 // laws and the constraint rows take.
 #include <Eigen/Core>
+#include <unordered_map>
 #include <unsupported/Eigen/AutoDiff>
+#include <vector>
 
 #include "constraint_rows.hpp"
 #include "force_laws.hpp"
@@ -33,9 +35,9 @@ struct SeededState {
   Vector3T<D> r, v, w;
   Vector4T<D> q;
 };
+// (A dual number of run-time size takes the variables' count.)
 template <class D>
-SeededState<D> seeded_state(const BodyNumbers& s, int first) {
-  constexpr int variables = D::DerType::SizeAtCompileTime;
+SeededState<D> seeded_state(const BodyNumbers& s, int first, int variables = D::DerType::SizeAtCompileTime) {
   SeededState<D> out;
   for (int k = 0; k < 3; ++k) {
     out.r[k] = D(s[k], variables, first + k);
@@ -43,6 +45,13 @@ SeededState<D> seeded_state(const BodyNumbers& s, int first) {
     out.w[k] = D(s[10 + k], variables, first + 10 + k);
   }
   for (int k = 0; k < 4; ++k) out.q[k] = D(s[3 + k], variables, first + 3 + k);
+  return out;
+}
+// x's numbers as the variables first.. (of `variables`).
+template <class D>
+Eigen::Matrix<D, Eigen::Dynamic, 1> seeded_values(const Eigen::VectorXd& x, int first, int variables) {
+  Eigen::Matrix<D, Eigen::Dynamic, 1> out(x.size());
+  for (Eigen::Index k = 0; k < x.size(); ++k) out[k] = D(x[k], variables, first + static_cast<int>(k));
   return out;
 }
 template <class D>
@@ -74,5 +83,43 @@ inline Eigen::Index state_index(const StateLayout& l, Eigen::Index b, int c) {
   if (c < 10) return l.velocity(b) + c - 7;
   return l.angular_velocity(b) + c - 10;
 }
+
+// Dual numbers over a number of variables known at run time: up to 64 derivatives on the
+// stack (the heap's allocations were half the time of a flexible body's Jacobian), beyond
+// that on the heap.
+constexpr int stack_variables = 64;
+using StackDual = Eigen::AutoDiffScalar<Eigen::Matrix<double, Eigen::Dynamic, 1, 0, stack_variables, 1>>;
+using HeapDual = Eigen::AutoDiffScalar<Eigen::VectorXd>;
+
+// The derivatives of x by the variables (a constant's are empty: zero).
+template <class D>
+Eigen::VectorXd derivatives_of(const D& x, int variables) {
+  return x.derivatives().size() == variables ? Eigen::VectorXd(x.derivatives()) : Eigen::VectorXd::Zero(variables);
+}
+// Rows of the derivatives of a vector of dual numbers into out, from row `first`.
+template <class V>
+void put_rows(const V& v, Eigen::Index first, int variables, Eigen::MatrixXd& out) {
+  for (Eigen::Index r = 0; r < v.size(); ++r) out.row(first + r) = derivatives_of(v[r], variables).transpose();
+}
+
+// The variables of an evaluation in dual numbers over a varying set of state numbers:
+// indices into y, numbered in the order first met.
+struct Variables {
+  std::vector<Eigen::Index> cols;
+  std::unordered_map<Eigen::Index, int> number;
+  int of(Eigen::Index col) {
+    const auto [at, added] = number.emplace(col, static_cast<int>(cols.size()));
+    if (added) cols.push_back(col);
+    return at->second;
+  }
+  int count() const { return static_cast<int>(cols.size()); }
+  // Derivatives given as (index into y, column) pairs, summed into columns by variable.
+  template <class Parts>
+  Eigen::MatrixXd gather(const Parts& parts, Eigen::Index rows) const {
+    Eigen::MatrixXd out = Eigen::MatrixXd::Zero(rows, count());
+    for (const auto& [col, d] : parts) out.col(number.at(col)) += d;
+    return out;
+  }
+};
 
 }  // namespace mbsflow::jacobian_seeds

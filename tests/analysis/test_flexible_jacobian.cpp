@@ -1,8 +1,8 @@
 // The analytic Jacobian of models with flexible bodies against central differences: the
 // frame's and the modes' rates through M(eta) and the inertia coupling, the wrenches at the
 // nodes (bushings, springs, a compliant joint, loads, a damping load) through the nodes'
-// motion, the bodies joined to nodes, two parts joined node to node; and the refusals where
-// a rigid joint puts a flexible body in a cluster; an implicit run with it.
+// motion, the bodies joined to nodes, two parts joined node to node, rigid joints at a part
+// and a rigid cluster reading its modes; an implicit run with it.
 #include <catch2/catch.hpp>
 
 #include "analysis/flexible_part.hpp"
@@ -82,6 +82,15 @@ Model bar_on_joints() {
   return m;
 }
 
+// bar_on_joints with S held by a rigid revolute joint at node 3 (on its axis): the bar in
+// a rigid cluster.
+Model with_rigid_hinge(Model m) {
+  Joint& hinge = m.joints[2];
+  hinge.rigid = true;
+  hinge.point2 = minus(at(m, m.flexible.front().nodes[2]), at(m, hinge.body2));
+  return m;
+}
+
 // The analytic Jacobian against central differences at three shaken states (modes and
 // their rates shaken too); entries relative to their row's largest.
 void check_against_differences(MultibodySystem& sys, double bound) {
@@ -146,26 +155,43 @@ TEST_CASE("the analytic Jacobian of two flexible bodies joined node to node matc
   check_against_differences(sys, 1e-6);
 }
 
-TEST_CASE("a flexible body held by a rigid joint has its Jacobian differenced, and says so", "[analysis][flexible][jacobian]") {
-  std::string why;
-  SECTION("a rigid joint at a node") {
-    Model m = bar_on_joints();
-    m.joints[2].rigid = true;  // the revolute joint at node 3
-    MultibodySystem sys(m);
-    CHECK_FALSE(sys.has_analytic_jacobian(&why));
-    CHECK(why == "flexible body 'bar' is held by rigid joint 'j2' (its cluster's rates are differenced)");
+TEST_CASE("the analytic Jacobian of a flexible body held by rigid joints matches central differences", "[analysis][flexible][jacobian]") {
+  // The cluster is solved in generalised velocities (flexible_joints.cpp): its rates'
+  // derivatives through the multipliers' (flexible_cluster_jacobian.cpp).
+  SECTION("a rigid revolute joint from a node to a rigid body") {
+    MultibodySystem sys(with_rigid_hinge(bar_on_joints()));
+    REQUIRE(sys.clusters() == 1);
+    check_against_differences(sys, 1e-7);
   }
-  SECTION("a rigid cluster's body on a bushing at a node") {
+  SECTION("a driven body holding the frame by a rigid spherical joint") {
+    Model m = bar_on_joints();
+    const FlexibleBody& f = m.flexible.front();
+    const int d = m.drivers.front().body;
+    m.joints[3] = test::make_joint(JointType::spherical, f.frame, d, minus(at(m, d), at(m, f.frame)), {});
+    MultibodySystem sys(m);
+    REQUIRE(sys.clusters() == 1);
+    check_against_differences(sys, 1e-7);
+  }
+  SECTION("a rigid spherical joint from the ground to a node, and a rigid joint at the frame") {
+    Model m = bar_on_joints();
+    const FlexibleBody& f = m.flexible.front();
+    m.joints[0] = test::make_joint(JointType::spherical, ground, f.nodes[0], at(m, f.nodes[0]), {});
+    const int p = add_body(m, "P", 1.2, {0.5, -0.3, 0.0});
+    m.joints.push_back(test::make_joint(JointType::revolute, f.frame, p, minus(at(m, p), at(m, f.frame)), {}));
+    MultibodySystem sys(m);
+    REQUIRE(sys.clusters() == 1);
+    check_against_differences(sys, 1e-7);
+  }
+  SECTION("a rigid cluster on a bushing at a node") {
+    // R and Q on a revolute joint: a cluster of rigid bodies that reads the bar's modes.
     Model m = bar_on_joints();
     const int r = 5;  // body R, on a bushing at node 24
     REQUIRE(m.bodies[static_cast<std::size_t>(r)].name == "R");
     const int q = add_body(m, "Q", 1.0, {1.4, 0.1, 0.1});
-    Joint hinge = test::make_joint(JointType::revolute, r, q, {0.1, 0, 0}, {-0.1, 0, 0});
-    hinge.name = "rq";
-    m.joints.push_back(hinge);
+    m.joints.push_back(test::make_joint(JointType::revolute, r, q, {0.1, 0, 0}, {-0.1, 0, 0}));
     MultibodySystem sys(m);
-    CHECK_FALSE(sys.has_analytic_jacobian(&why));
-    CHECK(why == "body 'R' of a rigid cluster is joined to flexible body 'bar' at a node (the cluster's rates are differenced)");
+    REQUIRE(sys.clusters() == 1);
+    check_against_differences(sys, 1e-7);
   }
 }
 
@@ -186,7 +212,9 @@ TEST_CASE("the analytic Jacobian of a rigid cluster joined to a flexible body's 
 
 TEST_CASE("tirk on a flexible body with the analytic Jacobian matches the differenced one and DOPRI5, with fewer evaluations",
           "[analysis][flexible][jacobian][implicit]") {
-  const Model m = bar_on_joints();
+  const bool rigid = GENERATE(false, true);
+  const Model m = rigid ? with_rigid_hinge(bar_on_joints()) : bar_on_joints();
+  INFO((rigid ? "a rigid hinge at node 3" : "compliant joints"));
   MultibodySystem sys(m);
   RunOptions o = options_from_model(m);
   const test::MemorySink reference = test::dopri5_reference(sys, o);

@@ -228,6 +228,15 @@ class MultibodySystem {
   void cluster_jacobian(int c, double t, const Eigen::VectorXd& y, const Eigen::VectorXd& dydt,
                         const std::vector<RateBlocks>& unconstrained,
                         const std::function<void(int body, int k, const Eigen::VectorXd& rates)>& column) const;
+  // jacobian()'s part for a rigid cluster that holds flexible bodies or whose bodies read
+  // a flexible body's modes (flexible_cluster_jacobian.cpp). wrench_of(body, value, parts):
+  // the applied wrench on a body (world force, torque) and its derivatives by the state
+  // numbers it reads, each as (index in y, derivative); write(col, row, count, values):
+  // the derivatives by y[col] of the rates at rows row..row+count-1.
+  using WrenchParts = std::vector<std::pair<Eigen::Index, Eigen::Matrix<double, 6, 1>>>;
+  void flexible_cluster_jacobian(int c, double t, const Eigen::VectorXd& y, const Eigen::VectorXd& dydt,
+                                 const std::function<void(int body, Eigen::Matrix<double, 6, 1>& value, WrenchParts& parts)>& wrench_of,
+                                 const std::function<void(Eigen::Index col, Eigen::Index row, int count, const double* values)>& write) const;
   BodyMotion motion_at(int i) const;  // kinematics index i of the current evaluation
   std::vector<int> clusters_of(std::span<const int> bodies) const;  // ascending, each once
   void add_reactions(Eigen::VectorXd& out);
