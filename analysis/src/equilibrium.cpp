@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <Eigen/Geometry>
+#include <limits>
 #include <optional>
 
 #include "constrained.hpp"
@@ -49,12 +50,39 @@ Eigen::VectorXd step(const LinearModel& lm, const Eigen::VectorXd& f, double h, 
     factor.outer.assign(outer, outer + outer_count);
     factor.inner.assign(inner, inner + inner_count);
   }
-  KluLu<double>& lu = factor.lu;
-  lu.factorize(a);
+  factor.lu.factorize(a);
   Eigen::VectorXd rhs = Eigen::VectorXd::Zero(n + r);
   rhs.head(n) = f;
-  lu.solve(rhs);
+  factor.lu.solve(rhs);
   return rhs.head(n);
+}
+
+// Moves y back onto the rigid joints after a step: Newton on the joints' values phi with
+// the step's own factors, [S C^T; C 0] [dx; mu] = [0; -phi], so that the move is the
+// least in S = K + M / h^2. The mass-weighted projection of after_step alone would move a
+// stiff part's modes (or a beam's nodes) by the joints' second-order drift, which the
+// stiffness turns into forces far above the residual (the bar of examples/fe on its
+// pivot: 1e5 N of axial force from 1e-5 m), and every Newton step would be spent on them.
+void settle_on_joints(const MultibodySystem& sys, double t, const LinearModel& lm, const Factor& factor, Eigen::VectorXd& y) {
+  const Eigen::Index n = lm.size(), r = lm.C.rows();
+  if (r == 0 || static_cast<Eigen::Index>(lm.constraint_row.size()) != r) return;
+  // The factors are the step's start's, so the iteration converges linearly, at a rate
+  // about the step's turn: a few tens of iterations at most, each a constraint evaluation
+  // and a solve.
+  double last = std::numeric_limits<double>::infinity();
+  for (int iteration = 0; iteration < 30; ++iteration) {
+    const Eigen::VectorXd values = sys.constraint_values(t, y);
+    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(n + r);
+    double worst = 0.0;
+    for (Eigen::Index k = 0; k < r; ++k) {
+      rhs[n + k] = -values[lm.constraint_row[static_cast<std::size_t>(k)]];
+      worst = std::max(worst, std::abs(rhs[n + k]));
+    }
+    if (worst <= 1e-12 || worst > 0.5 * last) return;  // on the joints, or no longer closing in
+    last = worst;
+    factor.lu.solve(rhs);
+    apply_tangent_step(sys.layout(), lm.coords, rhs.head(n), y);
+  }
 }
 
 // The potential energy the steps lower: gravity, the elastic energy, and the loads' (a
@@ -162,6 +190,7 @@ Equilibrium find_equilibrium(MultibodySystem& sys, double t, const Eigen::Vector
     for (int half = 0; half < 3 && !taken; ++half, dx *= 0.5) {
       next = y;
       apply_tangent_step(l, coords, dx, next);
+      settle_on_joints(sys, t, *lm, factor, next);
       sys.after_step(t, next);
       f_next = static_residual(sys, t, next, coords);
       e_next = potential(sys, t, next);

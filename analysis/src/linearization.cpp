@@ -469,6 +469,7 @@ LinearModel linearize(MultibodySystem& sys, double t, const Eigen::VectorXd& y, 
       if (used[r]) {
         row_to[r] = kept++;
         out.constraint_joint.push_back(joint_of_row[r]);
+        out.constraint_row.push_back(static_cast<Eigen::Index>(r));
       }
     for (auto& e : rows) e = Eigen::Triplet<double>(row_to[static_cast<std::size_t>(e.row())], e.col(), e.value());
     out.C.resize(kept, n);

@@ -301,46 +301,53 @@ void MultibodySystem::velocity_violations(const RigidCluster& rc, const Eigen::V
   }
 }
 
-double MultibodySystem::constraint_violation(double t, const Eigen::VectorXd& y, int* joint) const {
-  double worst = 0.0;
+void MultibodySystem::for_each_rigid_row(double t, const Eigen::VectorXd& y,
+                                         const std::function<void(const CompiledJoint&, std::size_t, const ConstraintRow&)>& row) const {
   std::array<ConstraintRow, max_joint_rows> rows;
   for (std::size_t k = 0; k < compiled_->joints.size(); ++k) {
     const CompiledJoint& j = compiled_->joints[k];
     if (j.kinematic < 0 || !j.rigid) continue;
     const JointGeometry& g = constraints_->geometry[static_cast<std::size_t>(j.kinematic)];
     evaluate_constraint(g, state_motion(layout_, y, j.a), state_motion(layout_, y, j.b), t, rows.data());
-    for (int r = 0; r < constraint_rows(g); ++r)
-      if (const auto& row = rows[static_cast<std::size_t>(r)]; row.holonomic && std::abs(row.phi) > worst) {
-        worst = std::abs(row.phi);
-        if (joint) *joint = static_cast<int>(k);
-      }
+    for (int r = 0; r < constraint_rows(g); ++r) row(j, k, rows[static_cast<std::size_t>(r)]);
   }
+}
+
+double MultibodySystem::constraint_violation(double t, const Eigen::VectorXd& y, int* joint) const {
+  double worst = 0.0;
+  for_each_rigid_row(t, y, [&](const CompiledJoint&, std::size_t k, const ConstraintRow& row) {
+    if (row.holonomic && std::abs(row.phi) > worst) {
+      worst = std::abs(row.phi);
+      if (joint) *joint = static_cast<int>(k);
+    }
+  });
   return worst;
+}
+
+Eigen::VectorXd MultibodySystem::constraint_values(double t, const Eigen::VectorXd& y) const {
+  Eigen::VectorXd placed = y;
+  place_flexible_nodes(placed);
+  std::vector<double> values;
+  for_each_rigid_row(t, placed, [&](const CompiledJoint&, std::size_t, const ConstraintRow& row) { values.push_back(row.holonomic ? row.phi : 0.0); });
+  return Eigen::Map<const Eigen::VectorXd>(values.data(), static_cast<Eigen::Index>(values.size()));
 }
 
 Eigen::SparseMatrix<double> MultibodySystem::constraint_jacobian(double t, const Eigen::VectorXd& y,
                                                                 std::vector<int>* joint_of_row) const {
   std::vector<Eigen::Triplet<double>> entries;
-  std::array<ConstraintRow, max_joint_rows> rows;
   const int n = static_cast<int>(layout_.bodies);
   int row = 0;
   if (joint_of_row) joint_of_row->clear();
-  for (std::size_t k = 0; k < compiled_->joints.size(); ++k) {
-    const CompiledJoint& j = compiled_->joints[k];
-    if (j.kinematic < 0 || !j.rigid) continue;
-    const JointGeometry& g = constraints_->geometry[static_cast<std::size_t>(j.kinematic)];
-    evaluate_constraint(g, state_motion(layout_, y, j.a), state_motion(layout_, y, j.b), t, rows.data());
-    for (int r = 0; r < constraint_rows(g); ++r, ++row) {
-      const ConstraintRow& c = rows[static_cast<std::size_t>(r)];
-      for (int side = 0; side < 2; ++side) {
-        const int body = side == 0 ? j.a : j.b;
-        if (body >= n) continue;  // ground
-        for (int e = 0; e < 6; ++e)
-          if (const double v = c.j[6 * side + e]; v != 0.0) entries.emplace_back(row, 6 * body + e, v);
-      }
-      if (joint_of_row) joint_of_row->push_back(static_cast<int>(k));
+  for_each_rigid_row(t, y, [&](const CompiledJoint& j, std::size_t k, const ConstraintRow& c) {
+    for (int side = 0; side < 2; ++side) {
+      const int body = side == 0 ? j.a : j.b;
+      if (body >= n) continue;  // ground
+      for (int e = 0; e < 6; ++e)
+        if (const double v = c.j[6 * side + e]; v != 0.0) entries.emplace_back(row, 6 * body + e, v);
     }
-  }
+    if (joint_of_row) joint_of_row->push_back(static_cast<int>(k));
+    ++row;
+  });
   Eigen::SparseMatrix<double> out(row, 6 * n);
   out.setFromTriplets(entries.begin(), entries.end());
   return out;

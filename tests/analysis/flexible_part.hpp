@@ -15,9 +15,9 @@
 namespace mbsflow::test {
 
 // Nodes on a 6 x 2 x 2 grid (0.2 m along x, 0.1 m across), 0.5 .. 1.5 kg each, springs of
-// 2e5 / length N/m between nodes at most a cell's diagonal apart (bar_lattice), reduced
-// at `interface`: nodes 1-4 are the end x = 0, 21-24 the end x = 1.
-inline SpringLattice bar_lattice() {
+// stiffness / length N/m between nodes at most a cell's diagonal apart (bar_lattice),
+// reduced at `interface`: nodes 1-4 are the end x = 0, 21-24 the end x = 1.
+inline SpringLattice bar_lattice(double stiffness = 2e5) {
   std::vector<Eigen::Vector3d> node;
   std::vector<double> mass;
   for (int i = 0; i < 6; ++i)
@@ -26,11 +26,11 @@ inline SpringLattice bar_lattice() {
         node.emplace_back(0.2 * i, 0.1 * j, 0.1 * k + 0.01 * i);
         mass.push_back(0.5 + 0.1 * static_cast<double>(node.size() % 11));
       }
-  return spring_lattice(node, mass, 0.26, 2e5);
+  return spring_lattice(node, mass, 0.26, stiffness);
 }
 
-inline ReducedPart bar_part(int modes, std::vector<long> interface = {1, 2, 3, 4}) {
-  const SpringLattice lattice = bar_lattice();
+inline ReducedPart bar_part(int modes, std::vector<long> interface = {1, 2, 3, 4}, double stiffness = 2e5) {
+  const SpringLattice lattice = bar_lattice(stiffness);
   CraigBamptonOptions o;
   o.interface_nodes = std::move(interface);
   o.modes = modes;

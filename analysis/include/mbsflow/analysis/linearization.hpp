@@ -45,6 +45,7 @@ struct LinearModel {
   Eigen::SparseMatrix<double> M, D, K;  // n x n, n = coords.size()
   Eigen::SparseMatrix<double> C;        // rows x n; no rows without rigid joints
   std::vector<int> constraint_joint;    // per row of C, its joint
+  std::vector<Eigen::Index> constraint_row;  // per row of C, its row of MultibodySystem::constraint_jacobian
   double t = 0.0;
   Eigen::VectorXd state;  // the state linearised about (the system's layout)
   bool at_rest = true;    // the bodies' velocities are zero there

@@ -30,6 +30,9 @@ template <class S>
 struct BodyMotionT;  // constraint_rows.hpp
 using BodyMotion = BodyMotionT<double>;
 struct JointGeometry;  // constraint_rows.hpp
+template <class S>
+struct ConstraintRowT;  // constraint_rows.hpp
+using ConstraintRow = ConstraintRowT<double>;
 struct FlexibleSlots;  // multibody_constraints.hpp
 struct FlexibleAt;     // flexible_state.hpp
 class RigidCluster;    // rigid_cluster.hpp
@@ -130,6 +133,9 @@ class MultibodySystem {
   // Largest violation of a rigid joint's position constraints at y (0 without any), and
   // which joint has it.
   double constraint_violation(double t, const Eigen::VectorXd& y, int* joint = nullptr) const;
+  // The value of each of constraint_jacobian's rows at y (0 for a row on velocities), with
+  // the flexible bodies' nodes placed where their frames and modes put them.
+  Eigen::VectorXd constraint_values(double t, const Eigen::VectorXd& y) const;
   // The rigid joints' constraint rows at y (their motors' rows included), each a row over
   // the bodies' 6 velocity coordinates (velocity and angular velocity, world frame) at
   // columns 6 i .. 6 i + 5 of body i: C v = 0 holds the joints. joint_of_row, if given,
@@ -238,6 +244,9 @@ class MultibodySystem {
                                  const std::function<void(int body, Eigen::Matrix<double, 6, 1>& value, WrenchParts& parts)>& wrench_of,
                                  const std::function<void(Eigen::Index col, Eigen::Index row, int count, const double* values)>& write) const;
   BodyMotion motion_at(int i) const;  // kinematics index i of the current evaluation
+  // Each rigid joint's constraint rows at y, in constraint_jacobian's order.
+  void for_each_rigid_row(double t, const Eigen::VectorXd& y, const std::function<void(const CompiledJoint&, std::size_t joint,
+                                                                                       const ConstraintRow&)>& row) const;
   std::vector<int> clusters_of(std::span<const int> bodies) const;  // ascending, each once
   void add_reactions(Eigen::VectorXd& out);
   void project_cluster(int c, double t, Eigen::VectorXd& y) const;
