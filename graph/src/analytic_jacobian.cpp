@@ -269,6 +269,11 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
     const auto bi = static_cast<std::size_t>(i);
     if (!free(static_cast<int>(i))) continue;  // a driven body's rates do not depend on the state
     if (!compiled_->flexible_of_body.empty() && compiled_->flexible_of_body[bi] >= 0) continue;  // flexible_rows below
+    const int cluster = n_clusters > 0 ? cluster_of(static_cast<int>(i)) : -1;
+    if (cluster >= 0 && generalised[static_cast<std::size_t>(cluster)]) {  // its rates come with its cluster's, below
+      kinematic_rows(i, seeded_state<BodyDual>(numbers(static_cast<int>(i)), 0));
+      continue;
+    }
     const SeededState<BodyDual> own = wrench_blocks(i);
     const Matrix3T<BodyDual> rot = rotation_matrix<BodyDual>(own.q);
     // w' = J^-1 (R^T T - w x J w): the torque's derivatives through J^-1 R^T; R(q) and the
@@ -279,7 +284,6 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
     const Eigen::Matrix3d to_w = law.inv_inertia * rot_[bi].transpose();
     const Vector3T<BodyDual> w_rate = angular_acceleration<BodyDual>(rot, own.w, Vector3T<BodyDual>(torque.cast<BodyDual>()),
                                                                      law.inertia, law.inv_inertia);
-    const int cluster = n_clusters > 0 ? cluster_of(static_cast<int>(i)) : -1;
     if (cluster >= 0 && !tails.empty()) generalised[static_cast<std::size_t>(cluster)] = 1;
     for (const auto& [b, m] : blocks) {
       Block6 rows;

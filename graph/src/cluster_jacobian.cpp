@@ -40,15 +40,6 @@ std::array<Eigen::Matrix3d, 4> rotation_derivatives(const Eigen::Vector4d& q) {
   return d;
 }
 
-BodyMotionT<Dual> constant_motion(const BodyMotion& m) {
-  BodyMotionT<Dual> d;
-  d.r = m.r.cast<Dual>();
-  d.R = m.R.cast<Dual>();
-  d.v = m.v.cast<Dual>();
-  d.w = m.w.cast<Dual>();
-  return d;
-}
-
 }  // namespace
 
 void MultibodySystem::cluster_jacobian(int c, double t, const Eigen::VectorXd& y, const Eigen::VectorXd& dydt,
@@ -92,7 +83,7 @@ void MultibodySystem::cluster_jacobian(int c, double t, const Eigen::VectorXd& y
     const ClusterJoint& cj = rc.joints()[q];
     const CompiledJoint& j = compiled_->joints[static_cast<std::size_t>(cj.joint)];
     auto frame = [&](int body, int first) {
-      return free(body) ? motion(seeded_frame(y, layout_, body, first)) : constant_motion(motion_at(body));
+      return free(body) ? motion(seeded_frame(y, layout_, body, first)) : constant_motion<Dual>(motion_at(body));
     };
     evaluate_constraint<Dual>(k.geometry[static_cast<std::size_t>(j.kinematic)], frame(j.a, 0), frame(j.b, body_states), t,
                               rows.data());

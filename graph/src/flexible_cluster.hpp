@@ -5,6 +5,7 @@
 // double, its analytic Jacobian (flexible_cluster_jacobian.cpp) in dual numbers.
 #include <Eigen/Cholesky>
 
+#include "flexible_dynamics.hpp"
 #include "force_laws.hpp"
 #include "mbsflow/graph/flexible_body.hpp"
 #include "rigid_cluster.hpp"
@@ -29,11 +30,12 @@ struct SlotMapT {
 // v_b and w (frame axes), its modes at eta, eta_rate:
 //   T = [R, -R [x]x, R U_k; 0, R, R Theta_k],
 //   gamma = [R (w x v_b + w x (w x x) + 2 w x U_k eta'); R (w x Theta_k eta')],
-// node k at x = p_k + U_k eta (frame axes), small rotation Theta_k eta; the frame itself
+// node k at x = p_k + U_k eta (frame axes, flexible_dynamics::node_motion), small
+// rotation Theta_k eta; the frame itself
 // T = [R, 0, 0; 0, R, 0], gamma = [R (w x v_b); 0].
 template <class T>
 SlotMapT<T> slot_map(const FloatingFrameData& d, const Matrix3T<T>& r, const Vector3T<T>& v_b, const Vector3T<T>& w,
-                     const Eigen::Matrix<T, Eigen::Dynamic, 1>& eta, const Eigen::Matrix<T, Eigen::Dynamic, 1>& eta_rate, int node) {
+                     const flexible_dynamics::VectorT<T>& eta, const flexible_dynamics::VectorT<T>& eta_rate, int node) {
   const int ne = d.modes();
   SlotMapT<T> m{Eigen::Matrix<T, 6, Eigen::Dynamic>::Zero(6, 6 + ne), Eigen::Matrix<T, 6, 1>::Zero()};
   m.t.template block<3, 3>(0, 0) = r;
@@ -44,15 +46,13 @@ SlotMapT<T> slot_map(const FloatingFrameData& d, const Matrix3T<T>& r, const Vec
     return m;
   }
   const Eigen::MatrixXd& shape = d.node_shape[static_cast<std::size_t>(node)];
-  const auto u = as_scalar<T>(Eigen::Matrix<double, 3, Eigen::Dynamic>(shape.topRows<3>()));
-  const auto theta = as_scalar<T>(Eigen::Matrix<double, 3, Eigen::Dynamic>(shape.bottomRows<3>()));
-  const Vector3T<T> x = as_scalar<T>(d.node_position[static_cast<std::size_t>(node)]) + u * eta;
-  const Vector3T<T> u_rate = u * eta_rate, turn_rate = theta * eta_rate;
-  m.t.template block<3, 3>(0, 3) = -r * cross_matrix<T>(x);
-  m.t.block(0, 6, 3, ne) = r * u;
-  m.t.block(3, 6, 3, ne) = r * theta;
-  m.gamma.template head<3>() = r * Vector3T<T>(frame_turn + w.cross(Vector3T<T>(w.cross(x))) + T(2.0) * w.cross(u_rate));
-  m.gamma.template tail<3>() = r * Vector3T<T>(w.cross(turn_rate));
+  const flexible_dynamics::NodeMotionT<T> n = flexible_dynamics::node_motion<T>(d, node, eta, eta_rate);
+  m.t.template block<3, 3>(0, 3) = -r * cross_matrix<T>(n.position);
+  m.t.block(0, 6, 3, ne) = r * as_scalar<T>(shape.topRows<3>());
+  m.t.block(3, 6, 3, ne) = r * as_scalar<T>(shape.bottomRows<3>());
+  m.gamma.template head<3>() =
+      r * Vector3T<T>(frame_turn + w.cross(Vector3T<T>(w.cross(n.position))) + T(2.0) * w.cross(n.velocity));
+  m.gamma.template tail<3>() = r * Vector3T<T>(w.cross(n.angular_velocity));
   return m;
 }
 

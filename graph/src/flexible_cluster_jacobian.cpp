@@ -44,8 +44,9 @@ struct Slot {
   int first = -1;                // a free rigid body's first variable; -1: driven (a fixed motion)
   BodyNumbers numbers;           // a rigid body's state numbers
   BodyMotion fixed;              // a driven body's motion
-  double mass = 0.0;
-  Eigen::Matrix3d inertia, inv_inertia;
+  double mass = 0.0, inv_mass = 0.0;  // inv_mass 0 for a driven body
+  Eigen::Matrix3d inertia;           // body axes
+  Eigen::Matrix3d inv_inertia;       // world axes, as the right-hand side's solve took it (0: driven)
   AppliedWrench wrench;  // a free rigid body's applied wrench
 };
 
@@ -90,13 +91,13 @@ Eigen::MatrixXd derivatives_of(const VectorT<D>& x, int variables) {
   return out;
 }
 
-// Per slot of a flexible member: its motion and its map.
+// A flexible member in dual numbers: its frame's numbers and modes seeded, its rotation
+// and its velocity in its own axes.
 template <class D>
 struct FlexibleEval {
+  jacobian_seeds::SeededModes<D> frame;
   Matrix3T<D> r;
   Vector3T<D> v_b;
-  jacobian_seeds::SeededState<D> frame;
-  VectorT<D> eta, eta_rate;
 };
 
 // The derivatives of the cluster's rates by the variables: per free rigid slot v' (world)
@@ -115,10 +116,7 @@ Eigen::MatrixXd rates(const ClusterInputs& in) {
     if (slot.flexible >= 0) continue;
     const Eigen::Index at = in.start[s];
     if (slot.first < 0) {
-      motion[s].r = slot.fixed.r.cast<D>();
-      motion[s].R = slot.fixed.R.cast<D>();
-      motion[s].v = slot.fixed.v.cast<D>();
-      motion[s].w = slot.fixed.w.cast<D>();
+      motion[s] = jacobian_seeds::constant_motion<D>(slot.fixed);
       continue;
     }
     own[s] = jacobian_seeds::seeded_state<D>(slot.numbers, slot.first, vars);
@@ -141,12 +139,10 @@ Eigen::MatrixXd rates(const ClusterInputs& in) {
     const FloatingFrameData& d = *mb.body->data;
     const int ne = d.modes();
     FlexibleEval<D>& e = flex[i];
-    e.frame = jacobian_seeds::seeded_state<D>(mb.frame, mb.first, vars);
-    e.eta = jacobian_seeds::seeded_values<D>(mb.eta, mb.first + body_states, vars);
-    e.eta_rate = jacobian_seeds::seeded_values<D>(mb.eta_rate, mb.first + body_states + ne, vars);
+    e.frame = jacobian_seeds::seeded_modes<D>(mb.frame, mb.eta, mb.eta_rate, mb.first, vars);
     e.r = rotation_matrix<D>(e.frame.q);
     e.v_b = e.r.transpose() * e.frame.v;
-    const VectorT<D> q = flexible_dynamics::generalised_force<D>(d, e.r, in.gravity, e.eta, [&](int k, Vector3T<D>& force, Vector3T<D>& torque) {
+    const VectorT<D> q = flexible_dynamics::generalised_force<D>(d, e.r, in.gravity, e.frame.eta, [&](int k, Vector3T<D>& force, Vector3T<D>& torque) {
       const AppliedWrench& w = mb.wrench[static_cast<std::size_t>(k + 1)];
       for (int c = 0; c < 3; ++c) {
         force[c] = dual<D>(w.value[c], w.derivatives, c);
@@ -154,7 +150,7 @@ Eigen::MatrixXd rates(const ClusterInputs& in) {
       }
     });
     MatrixT<D> m;
-    const VectorT<D> rhs = flexible_dynamics::balance<D>(d, mb.body->damping, e.v_b, e.frame.w, e.eta, e.eta_rate, q, m);
+    const VectorT<D> rhs = flexible_dynamics::balance<D>(d, mb.body->damping, e.v_b, e.frame.w, e.frame.eta, e.frame.eta_rate, q, m);
     r1.segment(in.block[i], 6 + ne) = rhs - m * in.u_rate.segment(in.block[i], 6 + ne).cast<D>();
   }
   for (std::size_t s = 0; s < nb; ++s) {
@@ -163,13 +159,13 @@ Eigen::MatrixXd rates(const ClusterInputs& in) {
     const Member& mb = in.members[static_cast<std::size_t>(slot.flexible)];
     const FlexibleEval<D>& e = flex[static_cast<std::size_t>(slot.flexible)];
     const FloatingFrameData& d = *mb.body->data;
-    map[s] = flexible_cluster::slot_map<D>(d, e.r, e.v_b, e.frame.w, e.eta, e.eta_rate, slot.node);
+    map[s] = flexible_cluster::slot_map<D>(d, e.r, e.v_b, e.frame.w, e.frame.eta, e.frame.eta_rate, slot.node);
     if (slot.node < 0) {
       motion[s] = {e.frame.r, e.r, e.frame.v, e.r * e.frame.w};
       continue;
     }
     const flexible_dynamics::NodeWorldT<D> n =
-        flexible_dynamics::node_world<D>(d, slot.node, e.eta, e.eta_rate, e.frame.r, e.frame.v, e.frame.q, e.r, e.frame.w);
+        flexible_dynamics::node_world<D>(d, slot.node, e.frame.eta, e.frame.eta_rate, e.frame.r, e.frame.v, e.frame.q, e.r, e.frame.w);
     motion[s] = {n.position, rotation_matrix<D>(n.quat), n.velocity, n.omega};
   }
   // G = J T and b = bias + J gamma.
@@ -178,8 +174,7 @@ Eigen::MatrixXd rates(const ClusterInputs& in) {
   std::array<ConstraintRowT<D>, max_joint_rows> rows;
   for (const ClusterInputs::Joint& j : in.joints) {
     auto side_motion = [&](int s, const BodyMotion& ground) {
-      if (s >= 0) return motion[static_cast<std::size_t>(s)];
-      return BodyMotionT<D>{ground.r.cast<D>(), ground.R.cast<D>(), ground.v.cast<D>(), ground.w.cast<D>()};
+      return s >= 0 ? motion[static_cast<std::size_t>(s)] : jacobian_seeds::constant_motion<D>(ground);
     };
     evaluate_constraint<D>(*j.geometry, side_motion(j.a, j.ground_a), side_motion(j.b, j.ground_b), in.t, rows.data());
     for (int k = 0; k < j.rows; ++k) {
@@ -204,9 +199,7 @@ Eigen::MatrixXd rates(const ClusterInputs& in) {
   r1 += g.transpose() * in.lambda.cast<D>();
   const VectorT<D> r2 = -(g * in.u_rate.cast<D>() + b);
   const Eigen::MatrixXd d1 = derivatives_of<D>(r1, vars), d2 = derivatives_of<D>(r2, vars);
-  Eigen::MatrixXd g_value(in.rows, in.size);
-  for (Eigen::Index i = 0; i < g.rows(); ++i)
-    for (Eigen::Index k = 0; k < g.cols(); ++k) g_value(i, k) = g(i, k).value();
+  const Eigen::MatrixXd g_value = g.unaryExpr([](const D& x) { return x.value(); });
   // W x, block by block at the values.
   std::vector<Eigen::LDLT<Eigen::MatrixXd>> mass(in.members.size());
   for (std::size_t i = 0; i < in.members.size(); ++i)
@@ -215,13 +208,10 @@ Eigen::MatrixXd rates(const ClusterInputs& in) {
     Eigen::MatrixXd out = Eigen::MatrixXd::Zero(x.rows(), x.cols());
     for (std::size_t s = 0; s < nb; ++s) {
       const Slot& slot = in.slots[s];
-      if (slot.flexible >= 0 || slot.first < 0) continue;
+      if (slot.flexible >= 0) continue;
       const Eigen::Index at = in.start[s];
-      Eigen::Matrix3d r;
-      for (int i = 0; i < 3; ++i)
-        for (int k = 0; k < 3; ++k) r(i, k) = rot[s](i, k).value();
-      out.middleRows<3>(at) = x.middleRows<3>(at) / slot.mass;
-      out.middleRows<3>(at + 3) = r * slot.inv_inertia * r.transpose() * x.middleRows<3>(at + 3);
+      out.middleRows<3>(at) = slot.inv_mass * x.middleRows<3>(at);
+      out.middleRows<3>(at + 3) = slot.inv_inertia * x.middleRows<3>(at + 3);
     }
     for (std::size_t i = 0; i < in.members.size(); ++i)
       out.middleRows(in.block[i], mass[i].rows()) = mass[i].solve(x.middleRows(in.block[i], mass[i].rows()));
@@ -291,6 +281,8 @@ void MultibodySystem::flexible_cluster_jacobian(int c, double t, const Eigen::Ve
       continue;
     }
     in.start[s] = fs ? fs->start[s] : static_cast<Eigen::Index>(6 * s);
+    slot.inv_mass = rc.inv_mass[s];  // set by the right-hand side's solve just before
+    slot.inv_inertia = rc.inv_inertia[s];
     if (compiled_->driver_of_body[bi] >= 0) {
       slot.fixed = motion_at(i);
       continue;
@@ -301,7 +293,6 @@ void MultibodySystem::flexible_cluster_jacobian(int c, double t, const Eigen::Ve
     const BodyLaw& law = body_law(bi);
     slot.mass = law.mass;
     slot.inertia = law.inertia;
-    slot.inv_inertia = law.inv_inertia;
   }
   in.size = fs ? fs->size : static_cast<Eigen::Index>(6 * nb);
   if (fs)

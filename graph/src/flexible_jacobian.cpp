@@ -8,31 +8,17 @@
 namespace mbsflow::flexible_jacobian {
 namespace {
 
-using jacobian_seeds::body_states;
 using jacobian_seeds::HeapDual;
 using jacobian_seeds::put_rows;
 using jacobian_seeds::stack_variables;
 using jacobian_seeds::StackDual;
 using flexible_dynamics::VectorT;
 
-// The frame's numbers, eta and eta' as the variables 0 .. 13 + 2 ne - 1 of `variables`.
-template <class Dual>
-struct Seeded : jacobian_seeds::SeededState<Dual> {
-  VectorT<Dual> eta, eta_rate;
-};
-template <class Dual>
-Seeded<Dual> seeded(const BodyNumbers& s, const Eigen::VectorXd& eta, const Eigen::VectorXd& eta_rate, int variables) {
-  Seeded<Dual> out{jacobian_seeds::seeded_state<Dual>(s, 0, variables), {}, {}};
-  out.eta = jacobian_seeds::seeded_values<Dual>(eta, body_states, variables);
-  out.eta_rate = jacobian_seeds::seeded_values<Dual>(eta_rate, body_states + static_cast<int>(eta.size()), variables);
-  return out;
-}
-
 template <class Dual>
 Eigen::MatrixXd node_map_in(const FloatingFrameData& d, int k, const BodyNumbers& frame, const Eigen::VectorXd& eta,
                             const Eigen::VectorXd& eta_rate) {
   const int variables = 13 + 2 * d.modes();
-  const Seeded<Dual> s = seeded<Dual>(frame, eta, eta_rate, variables);
+  const jacobian_seeds::SeededModes<Dual> s = jacobian_seeds::seeded_modes<Dual>(frame, eta, eta_rate, 0, variables);
   const Matrix3T<Dual> r = rotation_matrix<Dual>(s.q);
   const flexible_dynamics::NodeWorldT<Dual> n = flexible_dynamics::node_world<Dual>(d, k, s.eta, s.eta_rate, s.r, s.v, s.q, r, s.w);
   const Vector3T<Dual> w_body = rotation_matrix<Dual>(n.quat).transpose() * n.omega;
@@ -50,7 +36,7 @@ Eigen::MatrixXd rate_derivatives_in(const FlexibleBody& fb, const Eigen::Vector3
                                     int variables) {
   const FloatingFrameData& d = *fb.data;
   const int ne = d.modes();
-  const Seeded<Dual> s = seeded<Dual>(frame, eta, eta_rate, variables);
+  const jacobian_seeds::SeededModes<Dual> s = jacobian_seeds::seeded_modes<Dual>(frame, eta, eta_rate, 0, variables);
   const Matrix3T<Dual> r = rotation_matrix<Dual>(s.q);
   const VectorT<Dual> q = flexible_dynamics::generalised_force<Dual>(d, r, gravity, s.eta, [&](int k, Vector3T<Dual>& force, Vector3T<Dual>& torque) {
     const SlotWrench& at = wrench[static_cast<std::size_t>(k + 1)];

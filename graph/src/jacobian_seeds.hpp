@@ -54,6 +54,20 @@ Eigen::Matrix<D, Eigen::Dynamic, 1> seeded_values(const Eigen::VectorXd& x, int 
   for (Eigen::Index k = 0; k < x.size(); ++k) out[k] = D(x[k], variables, first + static_cast<int>(k));
   return out;
 }
+// A flexible body's frame numbers, then its eta and eta', as the variables first..
+// first + 13 + 2 ne - 1 of `variables`.
+template <class D>
+struct SeededModes : SeededState<D> {
+  Eigen::Matrix<D, Eigen::Dynamic, 1> eta, eta_rate;
+};
+template <class D>
+SeededModes<D> seeded_modes(const BodyNumbers& frame, const Eigen::VectorXd& eta, const Eigen::VectorXd& eta_rate, int first,
+                            int variables) {
+  SeededModes<D> out{seeded_state<D>(frame, first, variables), {}, {}};
+  out.eta = seeded_values<D>(eta, first + body_states, variables);
+  out.eta_rate = seeded_values<D>(eta_rate, first + body_states + static_cast<int>(eta.size()), variables);
+  return out;
+}
 template <class D>
 SeededState<D> seeded_state(const Eigen::VectorXd& y, const StateLayout& l, Eigen::Index i, int first) {
   return seeded_state<D>(body_numbers(y, l, i), first);
@@ -74,6 +88,17 @@ inline BodyMotionT<Dual> motion(const BodyFrameT<Dual>& f) {
   m.v = f.vel;
   m.w = f.omega;
   return m;
+}
+
+// A motion that is no variable's (ground, a driven body) in dual numbers.
+template <class D>
+BodyMotionT<D> constant_motion(const BodyMotion& m) {
+  BodyMotionT<D> d;
+  d.r = m.r.cast<D>();
+  d.R = m.R.cast<D>();
+  d.v = m.v.cast<D>();
+  d.w = m.w.cast<D>();
+  return d;
 }
 
 // The index in y of body b's state number c (0..12, in seeded_frame's order).
