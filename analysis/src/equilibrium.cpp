@@ -167,7 +167,7 @@ Equilibrium find_equilibrium(MultibodySystem& sys, double t, const Eigen::Vector
                      " (is it held against gravity and its loads? --at-initial linearises where it is)");
     }
     // A rejected step leaves y where it was: its linearisation serves the next try.
-    if (!lm) lm = linearize(sys, t, y, jacobian.size() ? &jacobian : nullptr);
+    if (!lm) lm = linearize(sys, t, y, jacobian.size() ? &jacobian : nullptr, false);  // no damping: at rest
     Eigen::VectorXd dx;
     try {
       dx = step(*lm, f, h, factor);

@@ -3,6 +3,8 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include "mbsflow/error.hpp"
 
@@ -168,49 +170,56 @@ Eigen::VectorXd at_rest_rates(const StateLayout& l, int frame, Eigen::Index eta,
 // J's rows (orientation, velocity, angular velocity) of r and columns (all 13) of c, L_r is
 // the tangent map's rate rows and T_c its columns. Equal to the products tp J tm of the
 // general path without forming them (which took most of an equilibrium iteration on large
-// models); every entry of a coupled pair is kept, so the pattern follows J's alone.
+// models); every entry of a coupled pair is kept, so the pattern follows J's alone. K and
+// D are written in place, column body by column body on all cores (a pair's 36 entries by
+// one thread: the same numbers whatever the thread count); d == nullptr: K alone (the
+// equilibrium needs no damping).
 void rate_blocks(const StateLayout& l, const std::vector<int>& bodies, const Eigen::VectorXd& y,
                  const Eigen::SparseMatrix<double>& jac, const std::vector<Eigen::Matrix<double, 6, 6>>& mass,
-                 Triplets& k_out, Triplets& d_out) {
+                 Eigen::SparseMatrix<double>& k, Eigen::SparseMatrix<double>* d) {
   const Eigen::Index nb = l.bodies;
+  const auto count = static_cast<Eigen::Index>(bodies.size());
   std::vector<int> index_of(static_cast<std::size_t>(nb), -1);  // system body -> free index
-  for (std::size_t k = 0; k < bodies.size(); ++k) index_of[static_cast<std::size_t>(bodies[k])] = static_cast<int>(k);
+  for (std::size_t i = 0; i < bodies.size(); ++i) index_of[static_cast<std::size_t>(bodies[i])] = static_cast<int>(i);
   using Left = Eigen::Matrix<double, 6, 10>;
   using Right = Eigen::Matrix<double, 13, 12>;
   std::vector<Left> left(bodies.size());
   std::vector<Right> right(bodies.size());
-  for (std::size_t k = 0; k < bodies.size(); ++k) {
-    const int b = bodies[k];
+  tbb::parallel_for(Eigen::Index(0), count, [&](Eigen::Index i) {
+    const int b = bodies[static_cast<std::size_t>(i)];
     const Eigen::Vector4d q = y.segment<4>(l.orientation(b)).normalized();
     const Eigen::Matrix3d R = rotation(y, l, b);
     const Eigen::Vector3d omega = R * y.segment<3>(l.angular_velocity(b));
     const Eigen::Matrix<double, 4, 3> h = half_map(q);
-    Left& L = left[k];  // rows: v (3), omega (3); columns: q (4), v (3), w (3) of the state
+    Left& L = left[static_cast<std::size_t>(i)];  // rows: v (3), omega (3); columns: q (4), v (3), w (3) of the state
     L.setZero();
     L.block<3, 3>(0, 4).setIdentity();
     L.block<3, 4>(3, 0) = -skew(omega) * (2.0 * h.transpose());
     L.block<3, 3>(3, 7) = R;
-    Right& T = right[k];  // rows: p, q, v, w of the state; columns: x (3 + 3), v (3 + 3)
+    Right& T = right[static_cast<std::size_t>(i)];  // rows: p, q, v, w of the state; columns: x (3 + 3), v (3 + 3)
     T.setZero();
     T.block<3, 3>(0, 0).setIdentity();
     T.block<4, 3>(3, 3) = 0.5 * h;
     T.block<3, 3>(7, 6).setIdentity();
     T.block<3, 3>(10, 3) = R.transpose() * skew(omega);
     T.block<3, 3>(10, 9) = R.transpose();
-  }
+  });
   // Where row s of the state lies: body, and row in J_rc (-1: a position row, not needed).
-  const auto locate_row = [&](Eigen::Index s, Eigen::Index& body) -> int {
+  const auto locate_row = [nb](Eigen::Index s, Eigen::Index& body) -> int {
     if (s < 3 * nb) return -1;
     if (s < 7 * nb) return body = (s - 3 * nb) / 4, static_cast<int>((s - 3 * nb) % 4);
     if (s < 10 * nb) return body = (s - 7 * nb) / 3, 4 + static_cast<int>((s - 7 * nb) % 3);
     return body = (s - 10 * nb) / 3, 7 + static_cast<int>((s - 10 * nb) % 3);
   };
-  std::vector<int> slot(bodies.size(), -1);
-  std::vector<int> rows_of;  // the free bodies coupled to column body c
-  std::vector<Eigen::Matrix<double, 10, 13>> blocks;
-  for (std::size_t c = 0; c < bodies.size(); ++c) {
+  // The free bodies whose rates read column body c, in the order met, and with
+  // with_blocks their J_rc (scratch reused from one column body to the next).
+  struct Coupled {
+    std::vector<int> rows;
+    std::vector<Eigen::Matrix<double, 10, 13>> blocks;
+  };
+  const auto coupled = [&](std::size_t c, Coupled& out, bool with_blocks) {
+    out.rows.clear();
     const int b = bodies[c];
-    rows_of.clear();
     const Eigen::Index columns[13] = {l.position(b),        l.position(b) + 1,    l.position(b) + 2,    l.orientation(b),
                                       l.orientation(b) + 1, l.orientation(b) + 2, l.orientation(b) + 3, l.velocity(b),
                                       l.velocity(b) + 1,    l.velocity(b) + 2,    l.angular_velocity(b),
@@ -222,25 +231,61 @@ void rate_blocks(const StateLayout& l, const std::vector<int>& bodies, const Eig
         if (row < 0) continue;
         const int r = index_of[static_cast<std::size_t>(body)];
         if (r < 0) continue;  // a driven body's rows: no coordinates
-        if (slot[static_cast<std::size_t>(r)] < 0) {
-          slot[static_cast<std::size_t>(r)] = static_cast<int>(rows_of.size());
-          rows_of.push_back(r);
-          if (blocks.size() < rows_of.size()) blocks.emplace_back();
-          blocks[rows_of.size() - 1].setZero();
+        const auto slot = static_cast<std::size_t>(std::find(out.rows.begin(), out.rows.end(), r) - out.rows.begin());
+        if (slot == out.rows.size()) {
+          out.rows.push_back(r);
+          if (with_blocks && out.blocks.size() < out.rows.size()) out.blocks.emplace_back();
+          if (with_blocks) out.blocks[slot].setZero();
         }
-        blocks[static_cast<std::size_t>(slot[static_cast<std::size_t>(r)])](row, j) = it.value();
+        if (with_blocks) out.blocks[slot](row, j) = it.value();
       }
-    for (std::size_t i = 0; i < rows_of.size(); ++i) {
-      const auto r = static_cast<std::size_t>(rows_of[i]);
-      const Eigen::Matrix<double, 6, 12> a = -mass[r] * (left[r] * blocks[i] * right[c]);
-      for (int row = 0; row < 6; ++row)
-        for (int col = 0; col < 6; ++col) {
-          k_out.emplace_back(static_cast<int>(6 * r) + row, static_cast<int>(6 * c) + col, a(row, col));
-          d_out.emplace_back(static_cast<int>(6 * r) + row, static_cast<int>(6 * c) + col, a(row, 6 + col));
-        }
-      slot[r] = -1;
+  };
+  // Each column of body c holds 6 rows per coupled body: the columns' starts, then the values.
+  const Eigen::Index n = 6 * count;
+  std::vector<int> pairs(bodies.size() + 1, 0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, bodies.size()), [&](const tbb::blocked_range<std::size_t>& range) {
+    Coupled scratch;
+    for (std::size_t c = range.begin(); c != range.end(); ++c) {
+      coupled(c, scratch, false);
+      pairs[c + 1] = static_cast<int>(scratch.rows.size());
     }
+  });
+  for (std::size_t c = 0; c < bodies.size(); ++c) pairs[c + 1] += pairs[c];
+  for (Eigen::SparseMatrix<double>* m : {&k, d}) {
+    if (!m) continue;
+    m->resize(n, n);
+    m->resizeNonZeros(36 * static_cast<Eigen::Index>(pairs.back()));
+    for (Eigen::Index col = 0; col <= n; ++col)
+      m->outerIndexPtr()[col] = 36 * pairs[static_cast<std::size_t>(col / 6)] + (col % 6) * 6 *
+                                (col < n ? pairs[static_cast<std::size_t>(col / 6) + 1] - pairs[static_cast<std::size_t>(col / 6)] : 0);
   }
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, bodies.size()), [&](const tbb::blocked_range<std::size_t>& range) {
+    Coupled scratch;
+    for (std::size_t c = range.begin(); c != range.end(); ++c) {
+      coupled(c, scratch, true);
+      const auto coupled_count = static_cast<Eigen::Index>(scratch.rows.size());
+      for (std::size_t i = 0; i < scratch.rows.size(); ++i) {
+        const auto r = static_cast<std::size_t>(scratch.rows[i]);
+        // Its place in the columns: the rows ascend, so after every coupled body below it.
+        const auto place = std::count_if(scratch.rows.begin(), scratch.rows.end(), [&](int other) { return other < scratch.rows[i]; });
+        const Eigen::Matrix<double, 6, 13> lj = left[r] * scratch.blocks[i];
+        Eigen::Matrix<double, 6, 12> a;
+        a.leftCols<6>() = -mass[r] * (lj * right[c].leftCols<6>());
+        if (d) a.rightCols<6>() = -mass[r] * (lj * right[c].rightCols<6>());
+        for (int col = 0; col < 6; ++col) {
+          const Eigen::Index at = 36 * static_cast<Eigen::Index>(pairs[c]) + col * 6 * coupled_count + 6 * place;
+          for (int row = 0; row < 6; ++row) {
+            k.innerIndexPtr()[at + row] = static_cast<int>(6 * r) + row;
+            k.valuePtr()[at + row] = a(row, col);
+            if (d) {
+              d->innerIndexPtr()[at + row] = static_cast<int>(6 * r) + row;
+              d->valuePtr()[at + row] = a(row, 6 + col);
+            }
+          }
+        }
+      }
+    }
+  });
 }
 
 }  // namespace
@@ -370,7 +415,8 @@ Eigen::SparseMatrix<double> body_motion(const LinearModel& lm) {
   return w;
 }
 
-LinearModel linearize(MultibodySystem& sys, double t, const Eigen::VectorXd& y, Eigen::SparseMatrix<double>* jacobian) {
+LinearModel linearize(MultibodySystem& sys, double t, const Eigen::VectorXd& y, Eigen::SparseMatrix<double>* jacobian,
+                      bool with_damping) {
   const StateLayout& l = sys.layout();
   const Model& model = sys.model();
   LinearModel out;
@@ -383,7 +429,7 @@ LinearModel linearize(MultibodySystem& sys, double t, const Eigen::VectorXd& y, 
   const Eigen::Index n = fc.size();
   if (bodies.empty()) throw InputError("every body is driven: nothing moves freely to linearise");
   std::vector<Eigen::Matrix<double, 6, 6>> mass(bodies.size());
-  Triplets masses, k, d;
+  Triplets masses;
   double fastest = 0.0;
   for (std::size_t i = 0; i < bodies.size(); ++i) {
     const int b = bodies[i];
@@ -416,9 +462,7 @@ LinearModel linearize(MultibodySystem& sys, double t, const Eigen::VectorXd& y, 
   }
   const Eigen::SparseMatrix<double>& jac = jacobian ? *jacobian : own;
   if (analytic && model.flexible.empty()) {  // rate_blocks: 6 coordinates per body
-    rate_blocks(l, bodies, y, jac, mass, k, d);
-    out.K.setFromTriplets(k.begin(), k.end());
-    out.D.setFromTriplets(d.begin(), d.end());
+    rate_blocks(l, bodies, y, jac, mass, out.K, with_damping ? &out.D : nullptr);
   } else {
     // The rate rows of A = T+ (J T), J T exact or by central differences in the tangent
     // directions: K = -M A_vx, D = -M A_vv.
@@ -435,7 +479,7 @@ LinearModel linearize(MultibodySystem& sys, double t, const Eigen::VectorXd& y, 
     dadx.setFromTriplets(avx.begin(), avx.end());
     dadv.setFromTriplets(avv.begin(), avv.end());
     out.K = -(out.M * dadx);
-    out.D = -(out.M * dadv);
+    if (with_damping) out.D = -(out.M * dadv);
   }
   out.at_rest = fastest <= 1e-12;
   // The rigid joints' rows on the free bodies' coordinates (a driven body's are held).

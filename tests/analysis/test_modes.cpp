@@ -184,9 +184,9 @@ TEST_CASE("a free body has six rigid-body modes, reported as such", "[analysis][
   }
 }
 
-TEST_CASE("the sparse shift-invert solver finds the dense solver's lowest modes of a chain of bushings", "[analysis][modes]") {
+// A hanging chain of n bodies on damped bushings.
+std::string bushing_chain(int n) {
   std::string bodies, joints;
-  const int n = 60;
   for (int i = 0; i < n; ++i) {
     bodies += std::string(i ? "," : "") + R"({"name": "l)" + std::to_string(i) +
               R"(", "mass": 1.0, "inertia": [0.01, 0.02, 0.02], "position": [)" + std::to_string(0.5 * i) + ", 0, 0]}";
@@ -194,8 +194,36 @@ TEST_CASE("the sparse shift-invert solver finds the dense solver's lowest modes 
               (i ? "l" + std::to_string(i - 1) : std::string("ground")) + R"(", "body2": "l)" + std::to_string(i) +
               R"(", "point1": [)" + (i ? "0.25" : "-0.25") + R"(, 0, 0], "point2": [-0.25, 0, 0], "stiffness": [4e4, 3e4, 3e4, 50, 80, 80], "damping": [5, 5, 5, 0.01, 0.01, 0.01]})";
   }
-  const Linearised l = linearised(R"({"name": "chain", "gravity": [0, -9.81, 0], "bodies": [)" + bodies + R"(], "joints": [)" + joints +
-                                  "]}");
+  return R"({"name": "chain", "gravity": [0, -9.81, 0], "bodies": [)" + bodies + R"(], "joints": [)" + joints + "]}";
+}
+
+TEST_CASE("the stiffness is minus the static residual's derivative at the equilibrium, and K alone where no damping is asked",
+          "[analysis][modes]") {
+  const Linearised l = linearised(bushing_chain(12));
+  const LinearModel stiff = linearize(*l.sys, 0.0, l.lm.state, nullptr, false);
+  CHECK(stiff.D.nonZeros() == 0);
+  CHECK(stiff.D.rows() == l.lm.size());
+  CHECK((stiff.K - l.lm.K).norm() == 0.0);
+  CHECK(l.lm.D.norm() > 0.0);
+  // Central differences of the residual (M a at rest) along each coordinate: at an
+  // equilibrium (a = 0) its derivative is -K, the mass matrix's own change times a vanishing.
+  const StateLayout& layout = l.sys->layout();
+  const Eigen::Index n = l.lm.size();
+  const double h = 1e-6;
+  Eigen::MatrixXd differenced(n, n);
+  for (Eigen::Index j = 0; j < n; ++j) {
+    Eigen::VectorXd plus = l.lm.state, minus = l.lm.state, step = Eigen::VectorXd::Zero(n);
+    step[j] = h;
+    apply_tangent_step(layout, l.lm.coords, step, plus);
+    apply_tangent_step(layout, l.lm.coords, -step, minus);
+    differenced.col(j) = -(static_residual(*l.sys, 0.0, plus, l.lm.coords) - static_residual(*l.sys, 0.0, minus, l.lm.coords)) / (2.0 * h);
+  }
+  const Eigen::MatrixXd k = l.lm.K;
+  CHECK((k - differenced).cwiseAbs().maxCoeff() < 1e-6 * k.cwiseAbs().maxCoeff());
+}
+
+TEST_CASE("the sparse shift-invert solver finds the dense solver's lowest modes of a chain of bushings", "[analysis][modes]") {
+  const Linearised l = linearised(bushing_chain(60));
   const Modes dense = modes_of(l.lm, 8, true, ModeSolver::dense), sparse = modes_of(l.lm, 8, true, ModeSolver::sparse);
   REQUIRE(dense.frequency.size() == 8);
   REQUIRE(sparse.frequency.size() >= 8);

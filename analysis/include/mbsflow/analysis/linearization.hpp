@@ -58,8 +58,10 @@ struct LinearModel {
 // call, kept by a caller that linearises again and again (the equilibrium): the pattern
 // costs about as much as the Jacobian, and a large model's (600 MB at 100 000 bodies)
 // would be allocated and its pages zeroed afresh at every call.
+// with_damping = false: D is left empty (n x n, no entries), for a caller that needs M and
+// K only (the equilibrium's steps).
 LinearModel linearize(MultibodySystem& sys, double t, const Eigen::VectorXd& y,
-                      Eigen::SparseMatrix<double>* jacobian = nullptr);
+                      Eigen::SparseMatrix<double>* jacobian = nullptr, bool with_damping = true);
 
 // The generalised force on each free body at (t, y) with the velocities taken as zero:
 // M times the accelerations (force, torque; world frame; the modal forces), the rigid
