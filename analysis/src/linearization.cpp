@@ -7,11 +7,27 @@
 #include <tbb/parallel_for.h>
 
 #include "mbsflow/error.hpp"
+#include "tsan_annotations.hpp"
 
 namespace mbsflow {
 namespace {
 
 using Triplets = std::vector<Eigen::Triplet<double>>;
+
+// body(begin, end) over [0, count) on all cores, with the orderings tbb::parallel_for
+// guarantees stated to ThreadSanitizer (Debian's libtbb is not instrumented): the tasks see
+// what the caller wrote before, the caller what the tasks wrote.
+template <class F>
+void parallel_over(std::size_t count, F body) {
+  int token = 0;
+  happens_before(&token);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& range) {
+    happens_after(&token);
+    const ReleaseOnExit release{&token};
+    body(range.begin(), range.end());
+  });
+  happens_after(&token);
+}
 
 Eigen::Matrix3d rotation(const Eigen::VectorXd& y, const StateLayout& l, int b) {
   const auto q = y.segment<4>(l.orientation(b));
@@ -178,31 +194,32 @@ void rate_blocks(const StateLayout& l, const std::vector<int>& bodies, const Eig
                  const Eigen::SparseMatrix<double>& jac, const std::vector<Eigen::Matrix<double, 6, 6>>& mass,
                  Eigen::SparseMatrix<double>& k, Eigen::SparseMatrix<double>* d) {
   const Eigen::Index nb = l.bodies;
-  const auto count = static_cast<Eigen::Index>(bodies.size());
   std::vector<int> index_of(static_cast<std::size_t>(nb), -1);  // system body -> free index
   for (std::size_t i = 0; i < bodies.size(); ++i) index_of[static_cast<std::size_t>(bodies[i])] = static_cast<int>(i);
   using Left = Eigen::Matrix<double, 6, 10>;
   using Right = Eigen::Matrix<double, 13, 12>;
   std::vector<Left> left(bodies.size());
   std::vector<Right> right(bodies.size());
-  tbb::parallel_for(Eigen::Index(0), count, [&](Eigen::Index i) {
-    const int b = bodies[static_cast<std::size_t>(i)];
-    const Eigen::Vector4d q = y.segment<4>(l.orientation(b)).normalized();
-    const Eigen::Matrix3d R = rotation(y, l, b);
-    const Eigen::Vector3d omega = R * y.segment<3>(l.angular_velocity(b));
-    const Eigen::Matrix<double, 4, 3> h = half_map(q);
-    Left& L = left[static_cast<std::size_t>(i)];  // rows: v (3), omega (3); columns: q (4), v (3), w (3) of the state
-    L.setZero();
-    L.block<3, 3>(0, 4).setIdentity();
-    L.block<3, 4>(3, 0) = -skew(omega) * (2.0 * h.transpose());
-    L.block<3, 3>(3, 7) = R;
-    Right& T = right[static_cast<std::size_t>(i)];  // rows: p, q, v, w of the state; columns: x (3 + 3), v (3 + 3)
-    T.setZero();
-    T.block<3, 3>(0, 0).setIdentity();
-    T.block<4, 3>(3, 3) = 0.5 * h;
-    T.block<3, 3>(7, 6).setIdentity();
-    T.block<3, 3>(10, 3) = R.transpose() * skew(omega);
-    T.block<3, 3>(10, 9) = R.transpose();
+  parallel_over(bodies.size(), [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const int b = bodies[i];
+      const Eigen::Vector4d q = y.segment<4>(l.orientation(b)).normalized();
+      const Eigen::Matrix3d R = rotation(y, l, b);
+      const Eigen::Vector3d omega = R * y.segment<3>(l.angular_velocity(b));
+      const Eigen::Matrix<double, 4, 3> h = half_map(q);
+      Left& L = left[i];  // rows: v (3), omega (3); columns: q (4), v (3), w (3) of the state
+      L.setZero();
+      L.block<3, 3>(0, 4).setIdentity();
+      L.block<3, 4>(3, 0) = -skew(omega) * (2.0 * h.transpose());
+      L.block<3, 3>(3, 7) = R;
+      Right& T = right[i];  // rows: p, q, v, w of the state; columns: x (3 + 3), v (3 + 3)
+      T.setZero();
+      T.block<3, 3>(0, 0).setIdentity();
+      T.block<4, 3>(3, 3) = 0.5 * h;
+      T.block<3, 3>(7, 6).setIdentity();
+      T.block<3, 3>(10, 3) = R.transpose() * skew(omega);
+      T.block<3, 3>(10, 9) = R.transpose();
+    }
   });
   // Where row s of the state lies: body, and row in J_rc (-1: a position row, not needed).
   const auto locate_row = [nb](Eigen::Index s, Eigen::Index& body) -> int {
@@ -241,11 +258,11 @@ void rate_blocks(const StateLayout& l, const std::vector<int>& bodies, const Eig
       }
   };
   // Each column of body c holds 6 rows per coupled body: the columns' starts, then the values.
-  const Eigen::Index n = 6 * count;
+  const auto n = 6 * static_cast<Eigen::Index>(bodies.size());
   std::vector<int> pairs(bodies.size() + 1, 0);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, bodies.size()), [&](const tbb::blocked_range<std::size_t>& range) {
+  parallel_over(bodies.size(), [&](std::size_t begin, std::size_t end) {
     Coupled scratch;
-    for (std::size_t c = range.begin(); c != range.end(); ++c) {
+    for (std::size_t c = begin; c != end; ++c) {
       coupled(c, scratch, false);
       pairs[c + 1] = static_cast<int>(scratch.rows.size());
     }
@@ -259,9 +276,9 @@ void rate_blocks(const StateLayout& l, const std::vector<int>& bodies, const Eig
       m->outerIndexPtr()[col] = 36 * pairs[static_cast<std::size_t>(col / 6)] + (col % 6) * 6 *
                                 (col < n ? pairs[static_cast<std::size_t>(col / 6) + 1] - pairs[static_cast<std::size_t>(col / 6)] : 0);
   }
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, bodies.size()), [&](const tbb::blocked_range<std::size_t>& range) {
+  parallel_over(bodies.size(), [&](std::size_t begin, std::size_t end) {
     Coupled scratch;
-    for (std::size_t c = range.begin(); c != range.end(); ++c) {
+    for (std::size_t c = begin; c != end; ++c) {
       coupled(c, scratch, true);
       const auto coupled_count = static_cast<Eigen::Index>(scratch.rows.size());
       for (std::size_t i = 0; i < scratch.rows.size(); ++i) {
