@@ -272,15 +272,15 @@ void rate_blocks(const StateLayout& l, const std::vector<int>& bodies, const Eig
     if (!m) continue;
     m->resize(n, n);
     m->resizeNonZeros(36 * static_cast<Eigen::Index>(pairs.back()));
-    for (Eigen::Index col = 0; col <= n; ++col)
-      m->outerIndexPtr()[col] = 36 * pairs[static_cast<std::size_t>(col / 6)] + (col % 6) * 6 *
-                                (col < n ? pairs[static_cast<std::size_t>(col / 6) + 1] - pairs[static_cast<std::size_t>(col / 6)] : 0);
+    int* outer = m->outerIndexPtr();
+    for (std::size_t c = 0; c < bodies.size(); ++c)
+      for (int col = 0; col < 6; ++col) outer[6 * c + static_cast<std::size_t>(col)] = 36 * pairs[c] + 6 * col * (pairs[c + 1] - pairs[c]);
+    outer[n] = 36 * pairs.back();
   }
   parallel_over(bodies.size(), [&](std::size_t begin, std::size_t end) {
     Coupled scratch;
     for (std::size_t c = begin; c != end; ++c) {
       coupled(c, scratch, true);
-      const auto coupled_count = static_cast<Eigen::Index>(scratch.rows.size());
       for (std::size_t i = 0; i < scratch.rows.size(); ++i) {
         const auto r = static_cast<std::size_t>(scratch.rows[i]);
         // Its place in the columns: the rows ascend, so after every coupled body below it.
@@ -290,7 +290,7 @@ void rate_blocks(const StateLayout& l, const std::vector<int>& bodies, const Eig
         a.leftCols<6>() = -mass[r] * (lj * right[c].leftCols<6>());
         if (d) a.rightCols<6>() = -mass[r] * (lj * right[c].rightCols<6>());
         for (int col = 0; col < 6; ++col) {
-          const Eigen::Index at = 36 * static_cast<Eigen::Index>(pairs[c]) + col * 6 * coupled_count + 6 * place;
+          const Eigen::Index at = k.outerIndexPtr()[6 * c + static_cast<std::size_t>(col)] + 6 * place;
           for (int row = 0; row < 6; ++row) {
             k.innerIndexPtr()[at + row] = static_cast<int>(6 * r) + row;
             k.valuePtr()[at + row] = a(row, col);
