@@ -94,10 +94,10 @@ Hockney network_model(const PlanArgs& a, std::string& described) {
 
 int plan(const PlanArgs& a) {
   Model m = read_model_file(a.model);
-  ModelOverrides overrides;
+  RunRequest overrides;
   overrides.step = a.step;
   overrides.t_end = a.t_end;
-  if (!a.method.empty()) overrides.method = *find_method(a.method);
+  if (!a.method.empty()) overrides.method = a.method;
   apply_overrides(m, overrides);
   RunOptions o = options_from_model(m);
   if (stepper_entry(o.method).tight_stages == 0)

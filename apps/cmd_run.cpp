@@ -35,65 +35,18 @@
 #include "mbsflow/runtime/simulation.hpp"
 #include "phase_timings.hpp"
 #include "progress.hpp"
+#include "run_flags.hpp"
 #include "mbsflow/runtime/stop_signals.hpp"
 
 namespace mbsflow::cli {
 namespace {
 
-struct RunArgs {
+// The settings (mbsflow/runtime/run_settings.hpp) with the model file and --resume.
+struct RunArgs : RunRequest {
   std::string model;
-  std::optional<double> t_end, step, rtol, atol, output_interval;
-  std::string method;
-  std::optional<std::string> variant;
-  std::string linear_solver = "auto";
-  std::string jacobian = "auto";
-  std::optional<int> every;
-  std::string output;
   bool output_given = false;  // -o "" is refused, not taken as no -o
-  bool force = false;         // -o may replace a regular file that is not a results file
-  std::string fields = "position,orientation,velocity,angular_velocity,energy";
-  bool quiet = false;
-  bool timings = false;
-  int threads = 0;  // 0: all cores
-  std::optional<int> partitions;
-  std::string executor = "flow";
-  std::string partition_file;
-  std::string partitioner = "best";
-  std::string cluster;  // cluster file
-  int processes = 0;    // local worker processes
-  bool insecure = false, insecure_network = false;  // a cluster run without keys
-  std::string transport = "tcp";
-  bool slurm = false;      // a task of a Slurm step: task 0 coordinates, the others serve
-  int slurm_port = 0;      // 0: from the job id
-  std::string slurm_key;   // key pair stem; "": $HOME/.mbsflow/cluster
-  std::string coupling = "tight";
-  std::optional<double> macro_step;
-  int extrapolation = 1;
-  std::optional<double> coupling_tol;
-  double exchange_delay = 0.0;  // s, added to every boundary message between processes
-  int max_lag = 0;
-  std::optional<double> overlap;
-  bool exact_lag = false;
-  std::string submodel_methods;  // comma-separated, one per submodel
-  double checkpoint_every = 0.0;  // wall-clock s; 0: no checkpoints
-  std::string checkpoint;         // the checkpoint file; default OUTPUT.ckpt
-  bool assemble = false;          // move bodies onto violated rigid joints
-  std::string resume;             // a checkpoint file to go on from
+  std::string resume;         // a checkpoint file to go on from
 };
-
-std::vector<Method> parse_methods(const std::string& list) {
-  std::vector<Method> out;
-  std::size_t at = 0;
-  while (at <= list.size() && !list.empty()) {
-    const std::size_t comma = std::min(list.find(',', at), list.size());
-    const std::string name = list.substr(at, comma - at);
-    const std::optional<Method> m = find_method(name);
-    if (!m) throw InputError("--submodel-methods: unknown method '" + name + "' (" + method_list() + ")");
-    out.push_back(*m);
-    at = comma + 1;
-  }
-  return out;
-}
 
 // How many bodies the submodels of a loose run borrow, all together.
 std::size_t borrowed_bodies(const Model& m, const Decomposition& d, const LooseOptions& lo) {
@@ -148,21 +101,17 @@ std::string human_bytes(double b) {
   return buf;
 }
 
-// The run's options from the model and the flags; says in one line which method and step
-// were chosen where the model and the flags leave them open (a warning for a given RK4
-// step above the stability estimate s of the model).
-RunOptions choose_options(Model& m, const RunArgs& a, const StableStep& s) {
-  RunOptions o = options_from_model(m, s.step);
-  o.linear_solver = a.linear_solver;
-  o.jacobian = a.jacobian;
+// Says in one line which method and step were chosen where the model and the flags leave
+// them open (a warning for a given RK4 step above the stability estimate s of the model).
+void say_options(const Model& m, const RunArgs& a, const StableStep& s, const RunOptions& o) {
   const char* name = method_name(o.method);
   if (m.simulation.step) {
     if (!stepper_entry(o.method).adaptive && *m.simulation.step > s.step)
       std::fprintf(stderr, "mbsflow: warning: step %.3g s is above the estimated RK4 stability limit %s\n",
                    *m.simulation.step, s.describe(m).c_str());
-    return o;
+    return;
   }
-  if (a.quiet) return o;
+  if (a.quiet) return;
   char tolerances[64];
   std::snprintf(tolerances, sizeof tolerances, "rtol %.3g, atol %.3g", o.rtol, o.atol);
   if (o.method_chosen && !m.beams.empty()) {
@@ -185,7 +134,6 @@ RunOptions choose_options(Model& m, const RunArgs& a, const StableStep& s) {
     std::fprintf(stderr, "mbsflow: no step given: RK4 with the stability estimate %s%s%s\n", s.describe(m).c_str(), fit,
                  every);
   }
-  return o;
 }
 
 // InputError naming the file for rigid joints that the initial positions violate (unless
@@ -282,31 +230,28 @@ int run(const RunArgs& a, const CheckpointFile* resumed = nullptr, const std::st
   timings.mark("parse and check the model", bodies);
   std::string model_text = a.checkpoint_every > 0.0 ? std::string(source) : std::string();
   file.reset();
-  ModelOverrides overrides{a.t_end, a.step, a.rtol, a.atol, a.output_interval, a.every, std::nullopt, a.variant, a.assemble};
-  if (!a.method.empty()) overrides.method = *find_method(a.method);
-  apply_overrides(m, overrides);
+  apply_overrides(m, a);
   // Rigid joints that the bodies do not meet are refused before anything else is said.
   if (std::any_of(m.joints.begin(), m.joints.end(), [](const Joint& j) { return is_kinematic(j.type) && j.rigid; }))
     check_assembly(model, resumed ? resumed_path : a.model, m.simulation.assemble && !a.quiet);
-  const StableStep stable = estimate_stable_step(m);
-  RunOptions o = choose_options(m, a, stable);
+  const SettledRun settled = settle_run(m, a);
+  const StableStep& stable = settled.stable;
+  RunOptions o = settled.options;
+  say_options(m, a, stable, o);
   timings.mark("stable step and options", bodies);
   FieldSet fields = a.output.empty() ? FieldSet{} : parse_fields(a.fields);
   // A model with beams writes their section forces unless told which fields to write.
   if (!a.output.empty() && !m.beams.empty() && a.fields == RunArgs{}.fields) fields.joint_force = true;
-  const int threads = run_threads(a.threads);
+  const int threads = settled.threads;
   const bool cluster = !a.cluster.empty() || a.processes > 0 || slurm_workers;
   // The model's text for the results file and the worker processes is written on a
   // thread of its own while the run is cut and set up (1.4 s for a million-body model).
   // Nothing changes the model from here on.
   std::future<std::string> model_json;
   if (!a.output.empty() || cluster) model_json = std::async(std::launch::async, [&m] { return model_to_json(m); });
-  const bool loose = a.coupling == "loose";
-  if (a.exchange_delay > 0.0 && !cluster) throw InputError("--exchange-delay: only with --cluster or --processes");
-  LooseRequest request{a.macro_step, a.coupling_tol, a.overlap, a.extrapolation, a.max_lag, a.exact_lag,
-                       parse_methods(a.submodel_methods)};
-  check_loose_request(loose, request);
-  const LooseOptions lo = loose ? loose_options(request, stable.step, o.step, threads) : LooseOptions{};
+  const bool loose = settled.loose.has_value();
+  if (a.exchange_delay > 0.0 && !cluster) throw InputError("{exchange_delay}: only with {cluster} or {processes}");
+  const LooseOptions lo = settled.loose.value_or(LooseOptions{});
   const double macro_step = lo.macro_step;
   const ClusterCoupling coupling{loose ? &lo : nullptr, a.exchange_delay};
   if (cluster) check_cluster_run(m, o, coupling);  // before any worker is started
@@ -425,7 +370,7 @@ int run(const RunArgs& a, const CheckpointFile* resumed = nullptr, const std::st
   plan.options = o;
   plan.partition = d;
   if (loose) plan.loose = lo;
-  plan.parallel = {threads, a.executor == "flow" ? Executor::flow_graph : Executor::barrier};
+  plan.parallel = settled.parallel;
   if (cluster) {
     plan.cluster = cc;
     plan.model_json = std::move(text);
@@ -544,127 +489,8 @@ namespace {
 void add_run_options(CLI::App* sub, RunArgs& args) {
   RunArgs* a = &args;
   sub->add_option("model", a->model, "Model file (JSON, see docs/model-format.md)");
-  sub->add_option("--t-end", a->t_end, "End time in s (overrides simulation.t_end)");
-  sub->add_option("--step", a->step, "Step in s; RK4 default: the stability estimate from the stiffest joint")
-      ->check(CLI::PositiveNumber);
-  std::vector<std::string> methods;
-  for (const StepperEntry& e : stepper_entries()) methods.push_back(e.method.name());
-  sub->add_option("--method", a->method, "Integration method")->check(CLI::IsMember(methods));
-  sub->add_option("--variant", a->variant,
-                  "tirk: tableau and/or iteration, e.g. radau5 or radau3,newton-triangular (default radau3,newton); "
-                  "colloc: m,s[,order] (overrides simulation.variant)");
-  sub->add_option("--every", a->every, "Write every K-th step (overrides simulation.output_every)")
-      ->check(CLI::Range(1, 1 << 30));
-  sub->add_option("--output-interval", a->output_interval,
-                  "Write every S s of model time, whatever the method's steps (overrides simulation.output_every and "
-                  "simulation.output_interval)")
-      ->check(CLI::PositiveNumber);
-  sub->get_option("--every")->excludes(sub->get_option("--output-interval"));
-  sub->add_option("--linear-solver", a->linear_solver,
-                  "colloc, tirk: the Newton matrices' LU: auto (dense up to 100 equations, banded when narrow, else klu), "
-                  "dense, banded, klu (SuiteSparse) or sparselu (Eigen)")
-      ->check(CLI::IsMember({"auto", "dense", "banded", "klu", "sparselu"}))->capture_default_str();
-  sub->add_option("--jacobian", a->jacobian,
-                  "colloc, tirk: auto (analytic when every force comes from bushings, springs, compliant joints, loads and gravity; else "
-                  "differences grouped by the pattern's colouring) or differences")
-      ->check(CLI::IsMember({"auto", "differences"}))->capture_default_str();
-  sub->add_option("--rtol", a->rtol, "Adaptive methods (dopri5, colloc, tirk): relative tolerance")->check(CLI::PositiveNumber);
-  sub->add_option("--atol", a->atol, "Adaptive methods (dopri5, colloc, tirk): absolute tolerance")->check(CLI::PositiveNumber);
-  sub->add_option("-o,--output", a->output,
-                  "Results file (HDF5, with an XDMF sidecar for ParaView); without it a final-state summary is printed. "
-                  "Replaces only an earlier results file (else --force)")
-      ->each([a](const std::string&) { a->output_given = true; });
-  sub->add_flag("--force", a->force, "With -o: replace the file there even if it is not an mbsflow results file");
-  sub->add_flag("--assemble", a->assemble,
-                "Move the bodies onto rigid joints that their initial positions violate (reported); without it such a "
-                "model is refused with the joint and its violation");
-  sub->add_option("--fields", a->fields,
-                  "What to write: position, orientation, velocity, angular_velocity, energy, joint_force, or all")
-      ->capture_default_str();
-  sub->add_flag("-q,--quiet", a->quiet, "Print only warnings, errors and the closing line");
-  sub->add_flag("--timings", a->timings,
-                "Print each set-up phase's time and the memory held after it (resident, peak, bytes per body)");
-  sub->add_option("--threads", a->threads, "Threads (0, the default: all cores)")->check(CLI::Range(0, 4096));
-  sub->add_option("--partitions", a->partitions,
-                  "Submodels (default: one per thread, fewer for small models); results are the same bit for bit")
-      ->check(CLI::Range(1, 1 << 30));
-  sub->add_option("--executor", a->executor, "flow: oneTBB flow graph, neighbours only; barrier: a barrier per stage (the classical scheme)")
-      ->check(CLI::IsMember({"flow", "barrier"}))
-      ->capture_default_str();
-  sub->add_option("--partition-file", a->partition_file, "Use the assignment written by mbsflow partition -o");
-  sub->add_option("--partitioner", a->partitioner, "best, band (band cuts of the reverse Cuthill-McKee order) or metis; see mbsflow partition")
-      ->check(CLI::IsMember({"best", "band", "metis"}))
-      ->capture_default_str();
-  sub->add_option("--cluster", a->cluster,
-                  "Run on the workers of this cluster file (docs/cluster.md); this process coordinates and writes the results");
-  sub->add_option("--processes", a->processes,
-                  "Run on N worker processes on this host, started and stopped here (one submodel each unless --partitions)")
-      ->check(CLI::Range(1, 1024));
-  sub->add_option("--transport", a->transport, "With --processes: tcp (loopback) or ipc")
-      ->check(CLI::IsMember({"tcp", "ipc"}))
-      ->capture_default_str();
-  sub->get_option("--cluster")->excludes(sub->get_option("--processes"));
-  sub->add_flag("--slurm", a->slurm,
-                "Run as a task of a Slurm step (srun -N H -n N mbsflow run MODEL --slurm -o r.h5): task 0 coordinates and "
-                "writes the results, the other tasks serve as its workers; hosts from the step's node list, keys from "
-                "--slurm-key (docs/cluster.md)")
-      ->excludes(sub->get_option("--cluster"))
-      ->excludes(sub->get_option("--processes"));
-  sub->add_option("--slurm-port", a->slurm_port,
-                  "With --slurm: the first of the run's ports (task 0's results inbox; a task with local index l takes "
-                  "base + 2l and base + 2l + 1); default 20000 + 40 (job id mod 1000)")
-      ->check(CLI::Range(1, 65535))
-      ->needs(sub->get_option("--slurm"));
-  sub->add_option("--slurm-key", a->slurm_key,
-                  "With --slurm: the key pair every task uses, STEM.key as written by mbsflow keygen STEM, in a folder the "
-                  "nodes share (default $HOME/.mbsflow/cluster)")
-      ->needs(sub->get_option("--slurm"));
-  sub->add_flag("--insecure", a->insecure,
-                "With --cluster: run without the cluster file's keys, on this host only (loopback endpoints): any local user "
-                "who can reach the ports could join the run.")
-      ->needs(sub->get_option("--cluster"));
-  sub->add_flag("--insecure-network", a->insecure_network,
-                "With --cluster: run without keys on any network: only where everyone who can reach the ports is trusted.")
-      ->needs(sub->get_option("--cluster"));
-  sub->add_option("--coupling", a->coupling,
-                  "tight: neighbours exchange every stage (bitwise the one-thread run); loose: each submodel integrates a "
-                  "macro step on its own with extrapolated neighbours (co-simulation)")
-      ->check(CLI::IsMember({"tight", "loose"}))
-      ->capture_default_str();
-  sub->add_option("--macro-step", a->macro_step,
-                  "Loose coupling: the exchange interval H in s, fixed (default: 16 RK4 stable steps, the first and "
-                  "largest try of error control; with --max-lag, a tenth of one)")
-      ->check(CLI::PositiveNumber);
-  sub->add_option("--coupling-tol", a->coupling_tol,
-                  "Loose coupling: take a macro step again, shorter, when the neighbours' bodies at the cut are off by "
-                  "more than this many m (default 1e-06 without --max-lag or --macro-step, also across processes, "
-                  "which all take the same macro steps); 0: fixed macro step")
-      ->check(CLI::NonNegativeNumber);
-  sub->add_option("--max-lag", a->max_lag,
-                  "Loose coupling: a submodel may run up to L macro steps ahead of its slowest neighbour, taking the "
-                  "newest neighbour values it has, while messages travel (results then depend on timing)")
-      ->check(CLI::Range(0, 1000))
-      ->capture_default_str();
-  sub->add_flag("--exact-lag", a->exact_lag,
-                "With --max-lag L: take the neighbours' values exactly L macro steps back instead of the newest "
-                "(repeatable whatever the timing)");
-  sub->add_option("--submodel-methods", a->submodel_methods,
-                  "Loose coupling: each submodel's method, comma-separated in submodel order (rk4 with substeps of "
-                  "--step, dopri5 with its own steps), e.g. rk4,dopri5,rk4; default: --method for all");
-  sub->add_option("--exchange-delay", a->exchange_delay,
-                  "With --cluster or --processes: hold every boundary message back this many s (a slow network, for tests)")
-      ->check(CLI::NonNegativeNumber);
-  sub->add_option("--overlap", a->overlap,
-                  "Loose coupling: each submodel also integrates the neighbours' bodies that a disturbance at the cut "
-                  "reaches within this many s, extrapolating only beyond them; 0: none (default: one macro step)");
-  sub->add_option("--extrapolation", a->extrapolation, "Loose coupling: order of the neighbours' extrapolation, 0, 1 or 2")
-      ->check(CLI::Range(0, 2))
-      ->capture_default_str();
-  sub->add_option("--checkpoint-every", a->checkpoint_every,
-                  "Write a checkpoint every S s of wall-clock time (between steps or macro steps; any method and coupling, on threads or worker processes), to "
-                  "resume with --resume after a crash or kill")
-      ->check(CLI::PositiveNumber);
-  sub->add_option("--checkpoint", a->checkpoint, "The checkpoint file (default: the results file's name + .ckpt)");
+  add_run_settings(sub, args);
+  sub->get_option("--output")->each([a](const std::string&) { a->output_given = true; });
 }
 
 }  // namespace

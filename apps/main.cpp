@@ -107,11 +107,6 @@ std::string closest_name(const std::string& given,
   return best.empty() ? "" : " (did you mean " + best + "?)";
 }
 
-std::string flag_for(const std::string& setting, const std::string* value) {
-  std::string flag = setting == "methods" ? "submodel-methods" : setting;
-  std::replace(flag.begin(), flag.end(), '_', '-');
-  return "--" + flag + (value ? " " + *value : "");
-}
 void set_invocation(int argc, char** argv) {
   command_line.clear();
   arguments.assign(argv, argv + argc);

@@ -159,12 +159,12 @@ bool JsonNode::has(const char* key) const {
 }
 
 namespace {
-[[noreturn]] void unknown_field(const JsonNode& member, std::initializer_list<const char*> keys) {
+[[noreturn]] void unknown_field(const JsonNode& member, std::span<const char* const> keys) {
   std::string list;
   for (const char* k : keys) list += (list.empty() ? "" : ", ") + std::string(k);
   member.fail_at_key("unknown field (expected one of: " + list + ")");
 }
-bool known(std::string_view key, std::initializer_list<const char*> keys) {
+bool known(std::string_view key, std::span<const char* const> keys) {
   for (const char* k : keys)
     if (key == k) return true;
   return false;
@@ -172,6 +172,10 @@ bool known(std::string_view key, std::initializer_list<const char*> keys) {
 }  // namespace
 
 void JsonNode::allow_only(std::initializer_list<const char*> keys) const {
+  allow_only(std::span<const char* const>(keys.begin(), keys.size()));
+}
+
+void JsonNode::allow_only(std::span<const char* const> keys) const {
   expect_object();
   if (tape_) {
     const auto& e = tape_->entries;

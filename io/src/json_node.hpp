@@ -5,6 +5,7 @@
 #include <initializer_list>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -40,6 +41,7 @@ class JsonNode {
   // Objects.
   void expect_object() const;
   void allow_only(std::initializer_list<const char*> keys) const;  // unknown field -> error
+  void allow_only(std::span<const char* const> keys) const;
   bool has(const char* key) const;
   JsonNode operator[](const char* key) const;                        // required member
   std::optional<JsonNode> find(const char* key) const;               // optional member

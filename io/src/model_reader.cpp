@@ -21,6 +21,8 @@
 #include "mbsflow/io/file_text.hpp"
 #include "mbsflow/io/reduced_part_file.hpp"
 #include "mbsflow/methods/stepper.hpp"
+#include "mbsflow/runtime/run_request.hpp"
+#include "mbsflow/runtime/run_settings.hpp"
 #include "model_fields.hpp"
 #include "model_reading.hpp"
 #include "name_index.hpp"
@@ -549,26 +551,50 @@ class Reader {
     m_.drivers.push_back(d);
   }
 
+  // The block's fields are the settings declared in_model (run_settings.hpp), each read
+  // and checked as declared, then applied as a run's settings are.
   void simulation(const JsonNode& n) {
-    n.allow_only({"t_start", "t_end", "step", "method", "variant", "output_every", "output_interval", "rtol", "atol", "assemble"});
-    SimulationSettings& s = m_.simulation;
-    if (auto v = n.find("t_start")) s.t_start = v->number();
-    if (auto v = n.find("t_end")) {
-      s.t_end = v->number();
-      if (!(s.t_end > s.t_start)) v->fail("must be > t_start (" + number_text(s.t_start) + ", got " + number_text(s.t_end) + ")");
-    }
-    if (auto v = n.find("step")) s.step = v->positive();
-    if (auto v = n.find("method")) {
-      const auto m = find_method(v->string());
-      if (!m) v->fail("must be one of " + method_list() + " (got '" + v->string() + "')");
-      s.method = *m;
-    }
-    if (auto v = n.find("variant")) s.variant = v->string();
-    if (auto v = n.find("output_every")) s.output_every = static_cast<int>(v->integer(1, std::numeric_limits<int>::max()));
-    if (auto v = n.find("output_interval")) s.output_interval = v->positive();
-    if (auto v = n.find("rtol")) s.rtol = v->positive();
-    if (auto v = n.find("atol")) s.atol = v->positive();
-    if (auto v = n.find("assemble")) s.assemble = v->boolean();
+    static const std::vector<const char*> keys = [] {
+      std::vector<const char*> k;
+      for (const RunSetting& s : run_settings())
+        if (s.places & in_model) k.push_back(s.name);
+      return k;
+    }();
+    n.allow_only(keys);
+    RunRequest r;
+    for (const RunSetting& s : run_settings())
+      if (s.places & in_model)
+        if (auto v = n.find(s.name)) read_setting(*v, s, r);
+    const double t_start = r.t_start.value_or(m_.simulation.t_start);
+    if (auto v = n.find("t_end"); v && !(*r.t_end > t_start))
+      v->fail("must be > t_start (" + number_text(t_start) + ", got " + number_text(*r.t_end) + ")");
+    apply_overrides(m_, r);
+  }
+
+  static void read_setting(const JsonNode& v, const RunSetting& s, RunRequest& r) {
+    struct Read {
+      const JsonNode& v;
+      const RunSetting& s;
+      std::string got;
+      bool flag() const { return v.boolean(); }
+      double number() {
+        const double x = v.number();
+        got = number_text(x);
+        return x;
+      }
+      std::string text() {
+        std::string t = v.string();
+        got = "'" + t + "'";
+        return t;
+      }
+      [[noreturn]] void fail(const std::string& what) const {
+        if (s.allowed().empty()) v.fail(what + " (got " + got + ")");
+        std::string list;  // the model format's own words for a choice
+        for (const std::string& c : s.allowed()) list += (list.empty() ? "" : ", ") + c;
+        v.fail("must be one of " + list + " (got " + got + ")");
+      }
+    };
+    set_setting(s, r, Read{v, s, {}});
   }
 
   const JsonSource& src_;

@@ -1,49 +1,45 @@
 """mbsflow.run: a model run as `mbsflow run` runs it."""
+import inspect
 import os
 import tempfile
 
 from . import _core
 from .results import Results
 
-_ALL_FIELDS = "position,orientation,velocity,angular_velocity,energy"
+# The settings are declared once, in C++ (mbsflow/runtime/run_settings.hpp): their keywords,
+# defaults and help make run's signature and docstring here.
+_SETTINGS = _core._run_settings()
+_POSITIONAL = ("t_end", "method", "threads", "partition", "coupling")  # after the model, in this order
 
 
-def run(model, t_end=None, method=None, threads=0, partition=None, coupling="tight", output=None, *,
-        fields=None, step=None, rtol=None, atol=None, output_interval=None, output_every=None, variant=None,
-        linear_solver="auto", jacobian="auto", partitioner="best", macro_step=None, coupling_tol=None,
-        overlap=None, extrapolation=1, max_lag=0, exact_lag=False, submodel_methods=None, executor="flow",
-        progress=None, assemble=False):
-    """Runs `model` (a Model, or the path of a model file) and returns its Results.
+def _signature():
+    P = inspect.Parameter
+    defaults = {keyword: default for keyword, default, _ in _SETTINGS}
+    params = [P("model", P.POSITIONAL_OR_KEYWORD)]
+    params += [P(k, P.POSITIONAL_OR_KEYWORD, default=defaults[k]) for k in _POSITIONAL]
+    params.append(P("output", P.POSITIONAL_OR_KEYWORD, default=None))
+    params += [P(k, P.KEYWORD_ONLY, default=d) for k, d, _ in _SETTINGS if k not in _POSITIONAL]
+    params.append(P("progress", P.KEYWORD_ONLY, default=None))
+    return inspect.Signature(params)
 
-    The keywords are those of `mbsflow run` (`--t-end` is `t_end`, and so on) with the same
-    defaults, so the same settings give the same numbers, bit for bit:
-      method: rk4, dopri5, colloc or tirk (default: the model's);
-      threads: 0 for all cores; partition: a number of submodels, a partition file, or
-      None for the CLI's choice; coupling: "tight" or "loose" (then macro_step,
-      coupling_tol, overlap, extrapolation, max_lag, exact_lag, submodel_methods);
-      fields: as --fields ("all" adds joint forces); progress: called as progress(t, steps);
-      assemble: move the bodies onto rigid joints their initial positions violate (else
-      such a model is refused, naming the joint).
-    output: a results file to write (it stays); without it the results are read into
-    memory and the temporary file removed. Ctrl-C stops the run after its current step
-    (KeyboardInterrupt; a results file keeps what was written). The GIL is released
-    while the run goes.
-    """
+
+_SIGNATURE = _signature()
+
+
+def run(*args, **kwargs):
+    bound = _SIGNATURE.bind(*args, **kwargs)  # TypeError for a keyword that is no setting
+    settings = dict(bound.arguments)
+    model = settings.pop("model")
+    output = settings.pop("output", None)
+    progress = settings.pop("progress", None)
     path = None
     if not isinstance(model, _core.Model):
         path = os.fspath(model)
         model = _core.Model.load(path)
-    fields = fields or _ALL_FIELDS
-    args = dict(t_end=t_end, step=step, rtol=rtol, atol=atol, output_interval=output_interval,
-                output_every=output_every, method=method, variant=variant, linear_solver=linear_solver,
-                jacobian=jacobian, threads=threads, partition=os.fspath(partition) if isinstance(partition, os.PathLike)
-                else partition, partitioner=partitioner, coupling=coupling, macro_step=macro_step,
-                coupling_tol=coupling_tol, overlap=overlap, extrapolation=extrapolation, max_lag=max_lag,
-                exact_lag=exact_lag, submodel_methods=list(submodel_methods or []), executor=executor,
-                progress=progress, assemble=assemble)
+
     def run_to(file):
         try:
-            return _core._run(model, file, fields, **args)
+            return _core._run(model, file, settings, progress)
         except _core.ModelError as e:  # named with the model's file, as the CLI does
             if path is None:
                 raise
@@ -61,3 +57,17 @@ def run(model, t_end=None, method=None, threads=0, partition=None, coupling="tig
         results = Results.open(os.path.join(folder, "results.h5")).detach()
     results.summary = summary
     return results
+
+
+run.__signature__ = _SIGNATURE
+run.__doc__ = """Runs `model` (a Model, or the path of a model file) and returns its Results.
+
+The settings are those of `mbsflow run` (`--t-end` is `t_end`, and so on) with the same
+defaults, so the same settings give the same numbers, bit for bit. output: a results file
+to write (it stays); without it the results are read into memory and the temporary file
+removed. progress: called as progress(t, steps). Ctrl-C stops the run after its current
+step (KeyboardInterrupt; a results file keeps what was written). The GIL is released while
+the run goes.
+
+Settings (None: the model's, or chosen for it):
+""" + "\n".join(f"  {keyword} = {default!r}: {help}" for keyword, default, help in _SETTINGS)

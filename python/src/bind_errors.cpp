@@ -2,6 +2,7 @@
 // written as the Python keyword that sets it ("macro_step=0.5", not "--macro-step 0.5").
 #include "bindings.hpp"
 #include "mbsflow/error.hpp"
+#include "mbsflow/runtime/run_settings.hpp"
 
 namespace mbsflow::python {
 namespace {
@@ -22,7 +23,8 @@ PyObject* new_type(const char* name, const char* doc, PyObject* bases) {
 }  // namespace
 
 std::string keyword_for(const std::string& setting, const std::string* value) {
-  const std::string name = setting == "methods" ? "submodel_methods" : setting;
+  const RunSetting* s = find_run_setting(setting);
+  const std::string name = s ? s->keyword() : setting;
   if (!value) return name;
   if (value->find(',') == std::string::npos) return name + "=" + *value;
   std::string list;  // "A1,A2,..." is a list in Python: [A1, A2, ...]

@@ -1,6 +1,7 @@
 // mbsflow.run: a model run as `mbsflow run` runs it (the same defaults through
 // run_request.hpp, so the same numbers), results to a file that mbsflow.Results reads.
 #include <cmath>
+#include <functional>
 #include <memory>
 
 #include "bindings.hpp"
@@ -13,49 +14,106 @@
 #include "mbsflow/runtime/async_sink.hpp"
 #include "mbsflow/runtime/run.hpp"
 #include "mbsflow/runtime/run_request.hpp"
+#include "mbsflow/runtime/run_settings.hpp"
 #include "stop_guard.hpp"
 
 namespace mbsflow::python {
 namespace {
 
-Method method_named(const std::string& name, const char* setting) {
-  const std::optional<Method> m = find_method(name);
-  if (!m) throw InputError("{" + std::string(setting) + "=" + name + "}: unknown method (" + method_list() + ")");
-  return *m;
+// The setting of Python's keyword `keyword`, or null.
+const RunSetting* python_setting(const std::string& keyword) {
+  for (const RunSetting& s : run_settings())
+    if ((s.places & in_python) && keyword == s.keyword()) return &s;
+  return nullptr;
 }
 
-// The submodels: a partition file (str), a count (int), or the CLI's default (None).
-std::optional<Decomposition> partition_of(const Model& m, const py::object& partition, Partitioner p, int default_k, bool loose) {
-  if (py::isinstance<py::str>(partition)) return read_partition_file(m, partition.cast<std::string>());
-  std::optional<int> given;
-  if (!partition.is_none()) {
-    given = partition.cast<int>();
-    if (*given < 1) throw InputError("{partition=" + std::to_string(*given) + "}: at least 1 submodel");
+// A request from mbsflow.run's keywords, each checked as its declaration says: its type,
+// range or choices (InputError naming it and its value).
+RunRequest request_of(const py::dict& settings) {
+  RunRequest r;
+  for (const auto& [key, value] : settings) {
+    const std::string keyword = key.cast<std::string>();
+    const RunSetting* s = python_setting(keyword);
+    if (!s) throw InputError("mbsflow.run: no setting " + keyword);
+    // A list is shown as the message's list, "a,b" (rendered [a, b]).
+    std::string shown;
+    if (py::isinstance<py::list>(value) || py::isinstance<py::tuple>(value))
+      for (const py::handle item : value) shown += (shown.empty() ? "" : ",") + py::str(item).cast<std::string>();
+    else
+      shown = py::str(value).cast<std::string>();
+    auto fail = [&](const std::string& what) { throw InputError("{" + std::string(s->name) + "=" + shown + "}: " + what); };
+    if (value.is_none()) {
+      if (!s->optional()) fail("give a value");
+      continue;
+    }
+    // Python's partition is a count or a partition file.
+    if (std::string(s->name) == "partitions" && (py::isinstance<py::str>(value) || py::hasattr(value, "__fspath__"))) {
+      r.partition_file = py::module_::import("os").attr("fspath")(value).cast<std::string>();
+      continue;
+    }
+    struct Read {
+      const RunSetting& s;
+      const py::handle value;
+      std::function<void(const std::string&)> fail;
+      bool flag() const {
+        if (!py::isinstance<py::bool_>(value)) fail("must be True or False");
+        return value.cast<bool>();
+      }
+      double number() const {
+        const bool ok = !py::isinstance<py::bool_>(value) &&
+                        (py::isinstance<py::int_>(value) || (!s.is_integer() && py::isinstance<py::float_>(value)));
+        if (!ok) fail(s.is_integer() ? "must be an integer" : "must be a number");
+        return value.cast<double>();
+      }
+      std::string text() const {
+        std::string t;
+        if (s.list && (py::isinstance<py::list>(value) || py::isinstance<py::tuple>(value))) {
+          for (const py::handle item : value) {
+            if (!py::isinstance<py::str>(item)) fail("must be a list of names");
+            t += (t.empty() ? "" : ",") + item.cast<std::string>();
+          }
+        } else if (!py::isinstance<py::str>(value)) {
+          fail("must be a string");
+        } else {
+          t = value.cast<std::string>();
+        }
+        return t;
+      }
+    };
+    set_setting(*s, r, Read{*s, value, fail});
   }
-  return cut_for_run(m, given, default_k, p, !loose);
+  return r;
 }
 
-py::dict run_model(const Model& model, const std::string& output, const std::string& fields, const ModelOverrides& overrides,
-                   const std::string& linear_solver, const std::string& jacobian, int threads_given,
-                   const py::object& partition, const std::string& partitioner, const std::string& coupling,
-                   const LooseRequest& loose_request, const std::string& executor, const py::object& progress) {
+// Python's default of a setting: None where it has none.
+py::object python_default(const RunSetting& s) {
+  const RunRequest r;
+  return std::visit(
+      [&](auto member) -> py::object {
+        const auto& v = r.*member;
+        using V = std::decay_t<decltype(v)>;
+        if constexpr (std::is_same_v<V, bool> || std::is_same_v<V, int> || std::is_same_v<V, double> ||
+                      std::is_same_v<V, std::string>)
+          return py::cast(v);
+        else
+          return py::none();
+      },
+      s.field);
+}
+
+py::dict run_model(const Model& model, const std::string& output, const RunRequest& request, const py::object& progress) {
   Model m = model;
-  apply_overrides(m, overrides);
-  if (coupling != "tight" && coupling != "loose") throw InputError("{coupling=" + coupling + "}: tight or loose");
-  if (executor != "flow" && executor != "barrier") throw InputError("{executor=" + executor + "}: flow or barrier");
-  const StableStep stable = estimate_stable_step(m);
-  RunOptions o = options_from_model(m, stable.step);
-  o.linear_solver = linear_solver;
-  o.jacobian = jacobian;
-  const int threads = run_threads(threads_given);
-  const bool loose = coupling == "loose";
-  check_loose_request(loose, loose_request);
-  const LooseOptions lo = loose ? loose_options(loose_request, stable.step, o.step, threads) : LooseOptions{};
-  const int default_k = default_submodels(m, o.method, loose, threads);
+  apply_overrides(m, request);
+  const SettledRun settled = settle_run(m, request);
+  RunOptions o = settled.options;
+  const bool loose = settled.loose.has_value();
+  const int default_k = default_submodels(m, o.method, loose, settled.threads);
   RunPlan plan;
-  plan.partition = partition_of(m, partition, partitioner_named(partitioner), default_k, loose);
-  if (loose) plan.loose = lo;
-  plan.parallel = {threads, executor == "flow" ? Executor::flow_graph : Executor::barrier};
+  plan.partition = !request.partition_file.empty()
+                       ? std::optional<Decomposition>(read_partition_file(m, request.partition_file))
+                       : cut_for_run(m, request.partitions, default_k, partitioner_named(request.partitioner), !loose);
+  plan.loose = settled.loose;
+  plan.parallel = settled.parallel;
   if (!progress.is_none())
     o.progress = [&progress](double t, long steps) {
       py::gil_scoped_acquire gil;
@@ -66,7 +124,7 @@ py::dict run_model(const Model& model, const std::string& output, const std::str
     check_output_path(output, {{}, false, "output"});
     RunInfo info{model_to_json(m), method_name(o.method), o.step, o.t_start, o.t_end, o.output_every, "python: mbsflow.run"};
     info.output_interval = o.output_interval;
-    sink = std::make_unique<AsyncSink>(std::make_unique<Hdf5Sink>(output, parse_fields(fields), std::move(info)));
+    sink = std::make_unique<AsyncSink>(std::make_unique<Hdf5Sink>(output, parse_fields(request.fields), std::move(info)));
   }
   StopGuard guard;
   o.stop = guard.flag();
@@ -98,39 +156,32 @@ py::dict run_model(const Model& model, const std::string& output, const std::str
   out["t_end"] = o.t_end;
   out["submodels"] = plan.partition ? plan.partition->submodels.size() : std::size_t{1};
   if (loose) {
-    out["macro_step"] = lo.macro_step;
+    out["macro_step"] = settled.loose->macro_step;
     out["macro_steps"] = stats.loose.macro_steps;
     out["max_coupling_error"] = stats.loose.max_position_error;
   }
   return out;
 }
 
+py::dict run_model_with(const Model& model, const std::string& output, const py::dict& settings,
+                        const py::object& progress) {
+  return run_model(model, output, request_of(settings), progress);
+}
+
 }  // namespace
 
 void bind_run(py::module_& m) {
+  m.def("_run", &run_model_with, py::arg("model"), py::arg("output"), py::arg("settings"), py::arg("progress"));
   m.def(
-      "_run",
-      [](const Model& model, const std::string& output, const std::string& fields, std::optional<double> t_end,
-         std::optional<double> step, std::optional<double> rtol, std::optional<double> atol,
-         std::optional<double> output_interval, std::optional<int> output_every, std::optional<std::string> method,
-         std::optional<std::string> variant, const std::string& linear_solver, const std::string& jacobian, int threads,
-         const py::object& partition, const std::string& partitioner, const std::string& coupling,
-         std::optional<double> macro_step, std::optional<double> coupling_tol, std::optional<double> overlap,
-         int extrapolation, int max_lag, bool exact_lag, const std::vector<std::string>& submodel_methods,
-         const std::string& executor, const py::object& progress, bool assemble) {
-        ModelOverrides ov{t_end, step, rtol, atol, output_interval, output_every, std::nullopt, variant, assemble};
-        if (method) ov.method = method_named(*method, "method");
-        LooseRequest lr{macro_step, coupling_tol, overlap, extrapolation, max_lag, exact_lag, {}};
-        for (const std::string& s : submodel_methods) lr.methods.push_back(method_named(s, "methods"));
-        return run_model(model, output, fields, ov, linear_solver, jacobian, threads, partition, partitioner, coupling, lr,
-                         executor, progress);
+      "_run_settings",
+      [] {
+        py::list out;
+        for (const RunSetting& s : run_settings())
+          if (s.places & in_python)
+            out.append(py::make_tuple(s.keyword(), python_default(s), render(s.help, keyword_for)));
+        return out;
       },
-      py::arg("model"), py::arg("output"), py::arg("fields"), py::arg("t_end"), py::arg("step"), py::arg("rtol"),
-      py::arg("atol"), py::arg("output_interval"), py::arg("output_every"), py::arg("method"), py::arg("variant"),
-      py::arg("linear_solver"), py::arg("jacobian"), py::arg("threads"), py::arg("partition"), py::arg("partitioner"),
-      py::arg("coupling"), py::arg("macro_step"), py::arg("coupling_tol"), py::arg("overlap"), py::arg("extrapolation"),
-      py::arg("max_lag"), py::arg("exact_lag"), py::arg("submodel_methods"), py::arg("executor"), py::arg("progress"),
-      py::arg("assemble") = false);
+      "The settings mbsflow.run takes: (keyword, default, help) each, in the order of run_settings().");
 }
 
 }  // namespace mbsflow::python

@@ -13,7 +13,7 @@
 namespace mbsflow::python {
 namespace {
 
-std::unique_ptr<Simulation> make_simulation(const Model& model, const ModelOverrides& overrides, int threads,
+std::unique_ptr<Simulation> make_simulation(const Model& model, const RunRequest& overrides, int threads,
                                             const std::string& linear_solver, const std::string& jacobian) {
   Model m = model;
   apply_overrides(m, overrides);
@@ -63,11 +63,13 @@ void bind_simulation(py::module_& m) {
                        std::optional<double> rtol, std::optional<double> atol, std::optional<double> t_end,
                        std::optional<std::string> variant, int threads, const std::string& linear_solver,
                        const std::string& jacobian) {
-             ModelOverrides ov{t_end, step, rtol, atol, std::nullopt, std::nullopt, std::nullopt, variant};
-             if (method) {
-               ov.method = find_method(*method);
-               if (!ov.method) throw InputError("{method=" + *method + "}: unknown method (" + method_list() + ")");
-             }
+             RunRequest ov;
+             ov.t_end = t_end;
+             ov.step = step;
+             ov.rtol = rtol;
+             ov.atol = atol;
+             ov.method = method;
+             ov.variant = variant;
              return make_simulation(model, ov, threads, linear_solver, jacobian);
            }),
            py::arg("model"), py::arg("method") = py::none(), py::arg("step") = py::none(), py::arg("rtol") = py::none(),

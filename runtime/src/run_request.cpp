@@ -1,5 +1,6 @@
 #include "mbsflow/runtime/run_request.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <thread>
 
@@ -7,15 +8,29 @@
 #include "mbsflow/runtime/partitioned_run.hpp"
 
 namespace mbsflow {
+namespace {
 
-void apply_overrides(Model& m, const ModelOverrides& o) {
+
+Method method_named(const std::string& name, const char* setting) {
+  const std::optional<Method> m = find_method(name);
+  if (!m) throw InputError("{" + std::string(setting) + "=" + name + "}: unknown method (" + method_list() + ")");
+  return *m;
+}
+
+}  // namespace
+
+void apply_overrides(Model& m, const RunRequest& o) {
+  if (o.t_start) m.simulation.t_start = *o.t_start;
   if (o.t_end) {
     if (!(*o.t_end > m.simulation.t_start)) throw InputError("{t_end}: must be > t_start of the model");
     m.simulation.t_end = *o.t_end;
   }
-  if (o.method && m.simulation.method != *o.method) {
-    m.simulation.method = *o.method;
-    m.simulation.variant.clear();  // the model's variant belongs to its own method
+  if (o.method) {
+    const Method method = method_named(*o.method, "method");
+    if (m.simulation.method != method) {
+      m.simulation.method = method;
+      m.simulation.variant.clear();  // the model's variant belongs to its own method
+    }
   }
   if (o.variant) m.simulation.variant = *o.variant;
   if (o.rtol) m.simulation.rtol = *o.rtol;
@@ -27,6 +42,17 @@ void apply_overrides(Model& m, const ModelOverrides& o) {
   }
   if (o.output_interval) m.simulation.output_interval = *o.output_interval;
   if (o.assemble) m.simulation.assemble = true;
+}
+
+std::vector<Method> methods_named(const std::string& list) {
+  std::vector<Method> out;
+  std::size_t at = 0;
+  while (at <= list.size() && !list.empty()) {
+    const std::size_t comma = std::min(list.find(',', at), list.size());
+    out.push_back(method_named(list.substr(at, comma - at), "submodel_methods"));
+    at = comma + 1;
+  }
+  return out;
 }
 
 int run_threads(int given) { return given > 0 ? given : static_cast<int>(std::thread::hardware_concurrency()); }
@@ -42,13 +68,16 @@ std::optional<Decomposition> cut_for_run(const Model& m, std::optional<int> give
   return decompose(m, k, p);
 }
 
-void check_loose_request(bool loose, const LooseRequest& r) {
-  if (!loose && r.any_given())
-    throw InputError("{macro_step}, {coupling_tol}, {max_lag}, {exact_lag}, {methods}, {overlap}: only with {coupling=loose}");
+void check_loose_request(const RunRequest& r) {
+  const bool any_given = r.macro_step || r.coupling_tol || r.overlap || r.max_lag > 0 || r.exact_lag ||
+                         !r.submodel_methods.empty();
+  if (r.coupling != "loose" && any_given)
+    throw InputError(
+        "{macro_step}, {coupling_tol}, {max_lag}, {exact_lag}, {submodel_methods}, {overlap}: only with {coupling=loose}");
   if (r.exact_lag && r.max_lag == 0) throw InputError("{exact_lag}: needs {max_lag} L > 0");
 }
 
-LooseOptions loose_options(const LooseRequest& r, double stable_step, double step, int threads) {
+LooseOptions loose_options(const RunRequest& r, double stable_step, double step, int threads) {
   // Many steps per exchange: the overlap keeps even stiff cut joints stable (loose_coupling.hpp).
   // A lag rules the overlap out: then a tenth of a step, well inside the joints' period.
   const double h = std::isfinite(stable_step) ? stable_step : step;
@@ -56,9 +85,22 @@ LooseOptions loose_options(const LooseRequest& r, double stable_step, double ste
   if (!std::isfinite(macro_step))
     throw InputError("{coupling=loose}: no joints to estimate a macro step from; give {macro_step}");
   const double tol = r.coupling_tol.value_or(r.max_lag > 0 || r.macro_step ? 0.0 : default_coupling_tol);
-  LooseOptions lo{macro_step, r.extrapolation, threads, tol, r.max_lag, r.exact_lag, r.methods};
+  LooseOptions lo{macro_step, r.extrapolation, threads, tol, r.max_lag, r.exact_lag, methods_named(r.submodel_methods)};
   if (r.overlap) lo.overlap = *r.overlap;
   return lo;
+}
+
+SettledRun settle_run(const Model& m, const RunRequest& r) {
+  SettledRun s;
+  s.stable = estimate_stable_step(m);
+  s.options = options_from_model(m, s.stable.step);
+  s.options.linear_solver = r.linear_solver;
+  s.options.jacobian = r.jacobian;
+  s.threads = run_threads(r.threads);
+  check_loose_request(r);
+  if (r.coupling == "loose") s.loose = loose_options(r, s.stable.step, s.options.step, s.threads);
+  s.parallel = {s.threads, r.executor == "flow" ? Executor::flow_graph : Executor::barrier};
+  return s;
 }
 
 }  // namespace mbsflow

@@ -3,6 +3,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <set>
 #include <unistd.h>
 #include <nlohmann/json.hpp>
 
@@ -10,6 +11,7 @@
 #include "mbsflow/graph/generators.hpp"
 #include "mbsflow/io/model_reader.hpp"
 #include "mbsflow/io/model_writer.hpp"
+#include "mbsflow/runtime/run_settings.hpp"
 
 using namespace mbsflow;
 
@@ -136,4 +138,47 @@ TEST_CASE("a list that is not an array fails as a missing one does: with its pat
   CHECK_THROWS_WITH(read_model_text("{\"bodies\": 3}", "m.json"), "m.json:1:12: bodies: must be an array (got number)");
   CHECK_THROWS_WITH(read_model_text("{\"bodies\": []}", "m.json"), "m.json:1:12: bodies: must list at least one body");
   CHECK_THROWS_WITH(read_model_text("{}", "m.json"), "m.json:1:1: missing field 'bodies'");
+}
+
+TEST_CASE("the simulation block takes the settings declared for models, each checked as declared", "[io]") {
+  const nlohmann::json block = {{"t_start", 0.5}, {"t_end", 2.0},          {"step", 1e-3},
+                                {"method", "tirk"}, {"variant", "radau5"}, {"output_every", 5},
+                                {"output_interval", 0.01}, {"rtol", 1e-5}, {"atol", 1e-7}, {"assemble", true}};
+  std::set<std::string> declared;
+  for (const RunSetting& s : run_settings())
+    if (s.places & in_model) declared.insert(s.name);
+  std::set<std::string> given;
+  for (const auto& [key, value] : block.items()) given.insert(key);
+  CHECK(given == declared);  // a setting declared for models is read here too
+  auto model = [](const nlohmann::json& sim) {
+    const nlohmann::json m = {{"bodies", {{{"name", "a"}, {"mass", 1.0}, {"inertia", {1.0, 1.0, 1.0}}}}}, {"simulation", sim}};
+    return read_model_text(m.dump(), "m.json");
+  };
+  const Model m = model(block);
+  CHECK(m.simulation.t_start == 0.5);
+  CHECK(m.simulation.t_end == 2.0);
+  CHECK(m.simulation.method == Method::tirk);
+  CHECK(m.simulation.variant == "radau5");
+  CHECK(m.simulation.output_every == 5);
+  CHECK(m.simulation.output_interval == 0.01);
+  CHECK(m.simulation.assemble);
+  CHECK(read_model_text(model_to_json(m), "back").simulation.output_interval == 0.01);
+  auto error = [&](const char* key, const nlohmann::json& value) {
+    nlohmann::json sim = block;
+    sim[key] = value;
+    try {
+      model(sim);
+    } catch (const InputError& e) {
+      const std::string text = e.what();
+      return text.substr(text.find("simulation"));
+    }
+    return std::string("no error");
+  };
+  CHECK(error("step", 0) == "simulation.step: must be > 0 (got 0)");
+  CHECK(error("output_every", 0) == "simulation.output_every: must be >= 1 (got 0)");
+  CHECK(error("output_every", 2.5) == "simulation.output_every: must be an integer (got 2.5)");
+  CHECK(error("method", "euler") == "simulation.method: must be one of rk4, dopri5, colloc, tirk (got 'euler')");
+  CHECK(error("t_end", 0.25) == "simulation.t_end: must be > t_start (0.5, got 0.25)");
+  CHECK(error("assemble", 1).find("simulation.assemble:") == 0);
+  CHECK(error("threads", 2).find("simulation.threads: unknown field (expected one of: t_start, t_end") == 0);
 }

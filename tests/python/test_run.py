@@ -162,3 +162,25 @@ def test_results_of_a_run_still_going(tmp_path):
     r = None
     done = mbsflow.Results.open(out)
     assert not done.live and len(done.t) >= first
+
+
+def test_the_keywords_are_the_declared_settings_each_checked_as_declared(chain):
+    import inspect
+    declared = [k for k, _, _ in mbsflow._core._run_settings()]
+    params = inspect.signature(mbsflow.run).parameters
+    assert set(params) == set(declared) | {"model", "output", "progress"}
+    assert params["threads"].default == 0 and params["coupling"].default == "tight" and params["step"].default is None
+    assert "macro_step" in mbsflow.run.__doc__
+    m = mbsflow.Model.load(str(chain))
+    with pytest.raises(mbsflow.InputError, match=r"extrapolation=3: must be <= 2"):
+        mbsflow.run(m, extrapolation=3)
+    with pytest.raises(mbsflow.InputError, match=r"partition=0: must be >= 1"):
+        mbsflow.run(m, partition=0)
+    with pytest.raises(mbsflow.InputError, match=r"coupling=losse: unknown coupling \(tight, loose\)"):
+        mbsflow.run(m, coupling="losse")
+    with pytest.raises(mbsflow.InputError, match=r"threads=1.5: must be an integer"):
+        mbsflow.run(m, threads=1.5)
+    with pytest.raises(mbsflow.InputError, match=r"submodel_methods=\[rk4, eul\]: unknown method 'eul'"):
+        mbsflow.run(m, coupling="loose", submodel_methods=["rk4", "eul"])
+    with pytest.raises(TypeError):
+        mbsflow.run(m, nonsense=1)

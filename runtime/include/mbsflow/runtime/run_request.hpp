@@ -8,33 +8,22 @@
 
 #include "mbsflow/graph/decomposition.hpp"
 #include "mbsflow/graph/model.hpp"
+#include "mbsflow/graph/stable_step.hpp"
 #include "mbsflow/runtime/loose_coupling.hpp"
+#include "mbsflow/runtime/partitioned_run.hpp"
+#include "mbsflow/runtime/run_settings.hpp"
+#include "mbsflow/runtime/simulation.hpp"
 
 namespace mbsflow {
 
-// Settings that replace the model's simulation block.
-struct ModelOverrides {
-  std::optional<double> t_end, step, rtol, atol, output_interval;
-  std::optional<int> output_every;  // replaces an output interval too
-  std::optional<Method> method;     // another method than the model's drops the model's variant
-  std::optional<std::string> variant;
-  bool assemble = false;  // move the bodies onto violated rigid joints (else they are refused)
-};
+// The model's simulation block with the request's settings of it (run_settings.hpp's
+// in_model ones) in place of its own: another method drops the model's variant, an
+// output_every drops its output interval. InputError for a t_end not after t_start or an
+// unknown method.
+void apply_overrides(Model& model, const RunRequest& request);
 
-// InputError for a t_end not after the model's t_start.
-void apply_overrides(Model& model, const ModelOverrides& overrides);
-
-// What a loose run was asked for; unset: the defaults.
-struct LooseRequest {
-  std::optional<double> macro_step, coupling_tol, overlap;
-  int extrapolation = 1;
-  int max_lag = 0;
-  bool exact_lag = false;
-  std::vector<Method> methods;  // per submodel
-  bool any_given() const {
-    return macro_step || coupling_tol || overlap || max_lag > 0 || exact_lag || !methods.empty();
-  }
-};
+// The methods of a comma-separated list ({submodel_methods}); InputError naming an unknown one.
+std::vector<Method> methods_named(const std::string& list);
 
 // The threads of a run on this process: the given count, or all cores (0).
 int run_threads(int given);
@@ -50,12 +39,25 @@ std::optional<Decomposition> cut_for_run(const Model& model, std::optional<int> 
                                          Partitioner partitioner, bool plain_if_one);
 
 // InputError for loose settings in a tight run, or an exact lag without a lag.
-void check_loose_request(bool loose, const LooseRequest& request);
+void check_loose_request(const RunRequest& request);
 
 // The loose options of a request: the macro step default_macro_steps RK4 stable steps
 // (stable_step, else `step` when the model has no joints to estimate it from), a tenth of
 // one with a lag (then no overlap); error control with default_coupling_tol unless a lag or
 // a macro step was given (a given macro step alone is a fixed one).
-LooseOptions loose_options(const LooseRequest& request, double stable_step, double step, int threads);
+LooseOptions loose_options(const RunRequest& request, double stable_step, double step, int threads);
+
+// A run's settings from a request, on a model that apply_overrides has given the request's
+// simulation settings: the options (method, step, grid, tolerances, linear algebra), the
+// threads and, for a loosely coupled run, the loose options. The CLI and Python settle a
+// run here, so that the same request gives the same run.
+struct SettledRun {
+  StableStep stable;
+  RunOptions options;
+  int threads = 1;
+  std::optional<LooseOptions> loose;
+  ParallelOptions parallel;  // threads and executor
+};
+SettledRun settle_run(const Model& model, const RunRequest& request);
 
 }  // namespace mbsflow
