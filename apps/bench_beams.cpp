@@ -44,14 +44,14 @@ Cost cost_per_joint(const Model& m, double seconds) {
           1e9 * time_per_call(seconds, [&] { sys.jacobian(0.0, y, jac); }) / joints};
 }
 
-struct Outcome {
+struct BeamOutcome {
   long steps = 0, factorizations = 0;
   double seconds = 0;
   Eigen::VectorXd last;
   std::string note;
 };
 
-Outcome run_with(const Model& m, Method method, double tol, double step) {
+BeamOutcome run_with(const Model& m, Method method, double tol, double step) {
   RunPlan plan;
   plan.options = options_from_model(m);
   plan.options.method = method;
@@ -60,7 +60,7 @@ Outcome run_with(const Model& m, Method method, double tol, double step) {
   if (step > 0) plan.options.step = span / std::ceil(span / step);  // a whole number of steps
   plan.options.output_interval = span;
   KeptStates out;
-  Outcome o;
+  BeamOutcome o;
   const auto start = BenchClock::now();
   try {
     const RunSummary s = run(m, plan, &out);
@@ -106,7 +106,7 @@ int bench_beams(const BenchArgs& a) {
     m.gravity = {0, -9.81, 0};
     m.simulation.t_end = t_end;
     const double stable = estimate_stable_step(m).step;
-    const Outcome rk4 = run_with(m, Method::rk4, 0, stable), tirk = run_with(m, Method::tirk, 1e-4, 0);
+    const BeamOutcome rk4 = run_with(m, Method::rk4, 0, stable), tirk = run_with(m, Method::tirk, 1e-4, 0);
     for (const auto& [name, tol, o] : {std::tuple{"rk4", 0.0, &rk4}, std::tuple{"tirk", 1e-4, &tirk}}) {
       const double tip = o->last.size() ? o->last[3 * n + 1] : NAN;
       std::printf("%8d %-8s %8.0e %8ld %8ld %9.3f  %.6g %s\n", n, name, tol, o->steps, o->factorizations, o->seconds, tip,
@@ -118,7 +118,7 @@ int bench_beams(const BenchArgs& a) {
 
   const Model boom = read_model_file(examples_dir(a) + "/flexible_boom.json");
   const int tip_body = static_cast<int>(boom.bodies.size()) - 1;
-  const Outcome reference = run_with(boom, Method::tirk, 1e-10, 0);
+  const BeamOutcome reference = run_with(boom, Method::tirk, 1e-10, 0);
   if (reference.last.size() == 0) throw RunError("bench beams: the reference run failed: " + reference.note);
   const Eigen::Vector3d tip_ref = reference.last.segment<3>(3 * tip_body);
   std::printf("\n3. the flexible boom's spin-up, tip position at %.3g s against tirk at 1e-10 (%ld steps, %.2f s)\n%-8s %8s %8s %8s %9s %12s\n",
@@ -126,7 +126,7 @@ int bench_beams(const BenchArgs& a) {
   const std::vector<double> tols = a.tolerances.empty() ? std::vector<double>{1e-3, 1e-4, 1e-5, 1e-6, 1e-7} : a.tolerances;
   for (Method method : {Method::tirk, Method::dopri5})
     for (double tol : tols) {
-      const Outcome o = run_with(boom, method, tol, 0);
+      const BeamOutcome o = run_with(boom, method, tol, 0);
       const double error = o.last.size() ? (o.last.segment<3>(3 * tip_body) - tip_ref).norm() : NAN;
       std::printf("%-8s %8.0e %8ld %8ld %9.3f %12.3e %s\n", method_name(method), tol, o.steps, o.factorizations, o.seconds, error,
                   o.note.c_str());

@@ -36,6 +36,7 @@
 #include "phase_timings.hpp"
 #include "progress.hpp"
 #include "run_flags.hpp"
+#include "run_report.hpp"
 #include "mbsflow/runtime/stop_signals.hpp"
 
 namespace mbsflow::cli {
@@ -47,94 +48,6 @@ struct RunArgs : RunRequest {
   bool output_given = false;  // -o "" is refused, not taken as no -o
   std::string resume;         // a checkpoint file to go on from
 };
-
-// How many bodies the submodels of a loose run borrow, all together.
-std::size_t borrowed_bodies(const Model& m, const Decomposition& d, const LooseOptions& lo) {
-  std::size_t n = 0;
-  for (const Submodel& s : loose_decomposition(m, d, lo).submodels) n += s.borrowed.size();
-  return n;
-}
-
-// The closing lines of a loosely coupled run: its coupling errors, lags and macro steps.
-void print_coupling(const LooseStats& ls, bool adaptive, int max_lag, double tol, bool cluster) {
-  char adapt[128] = "", lag[96] = "";
-  if (adaptive && ls.over_tolerance > 0)
-    std::fprintf(stderr,
-                 "mbsflow: warning: %ld macro steps kept a coupling error above --coupling-tol %.3g m at the smallest "
-                 "macro step (1/1024 of --macro-step); a larger --overlap may help\n",
-                 ls.over_tolerance, tol);
-  if (!adaptive && tol > 0.0 && ls.max_position_error > tol)
-    std::fprintf(stderr,
-                 "mbsflow: warning: the coupling error %.3g m is above %.3g m with a fixed macro step: give a "
-                 "smaller --macro-step, a larger --overlap or --coupling-tol\n",
-                 ls.max_position_error, tol);
-  if (adaptive && cluster)  // the workers do not report how many they took again
-    std::snprintf(adapt, sizeof adapt, "; macro step %.3g .. %.3g s", ls.smallest_macro_step, ls.largest_macro_step);
-  else if (adaptive)
-    std::snprintf(adapt, sizeof adapt, "; macro step %.3g .. %.3g s, %ld taken again", ls.smallest_macro_step,
-                  ls.largest_macro_step, ls.rejected);
-  if (max_lag > 0) {
-    long lagged = 0;
-    for (int l : ls.lag) lagged += l > 0 ? 1 : 0;
-    std::snprintf(lag, sizeof lag, "; %ld macro steps from older values, at most %d steps old", lagged, ls.largest_lag);
-  }
-  std::fprintf(stderr, "mbsflow: coupling error over %ld macro steps: ghost positions off by at most %.3g m, last %.3g m%s%s\n",
-               ls.macro_steps, ls.max_position_error, ls.position_error.empty() ? 0.0 : ls.position_error.back(), adapt, lag);
-}
-
-// How the run is cut: a partition file, --partitions, or default_k submodels (none when
-// that is 1 and the run is a tight one in one process).
-std::optional<Decomposition> choose_decomposition(const Model& m, const RunArgs& a, int default_k, bool plain_if_one) {
-  if (!a.partition_file.empty()) return read_partition_file(m, a.partition_file);
-  return cut_for_run(m, a.partitions, default_k, partitioner_named(a.partitioner), plain_if_one);
-}
-
-std::string human_bytes(double b) {
-  const char* unit[] = {"B", "KiB", "MiB", "GiB", "TiB"};
-  int u = 0;
-  while (b >= 1024.0 && u < 4) {
-    b /= 1024.0;
-    ++u;
-  }
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.3g %s", b, unit[u]);
-  return buf;
-}
-
-// Says in one line which method and step were chosen where the model and the flags leave
-// them open (a warning for a given RK4 step above the stability estimate s of the model).
-void say_options(const Model& m, const RunArgs& a, const StableStep& s, const RunOptions& o) {
-  const char* name = method_name(o.method);
-  if (m.simulation.step) {
-    if (!stepper_entry(o.method).adaptive && *m.simulation.step > s.step)
-      std::fprintf(stderr, "mbsflow: warning: step %.3g s is above the estimated RK4 stability limit %s\n",
-                   *m.simulation.step, s.describe(m).c_str());
-    return;
-  }
-  if (a.quiet) return;
-  char tolerances[64];
-  std::snprintf(tolerances, sizeof tolerances, "rtol %.3g, atol %.3g", o.rtol, o.atol);
-  if (o.method_chosen && !m.beams.empty()) {
-    std::fprintf(stderr, "mbsflow: beams are stiff: %s, adaptive, %s (--method, --step, --rtol and --atol choose)\n", name,
-                 tolerances);
-  } else if (o.method_chosen && o.method != Method::rk4) {
-    std::fprintf(stderr,
-                 "mbsflow: no joint gives RK4 a stable step (no compliant joint): %s, adaptive, %s (--method, --step, "
-                 "--rtol and --atol choose)\n", name, tolerances);
-  } else if (stepper_entry(o.method).implicit) {
-    std::fprintf(stderr, "mbsflow: no step given: %s picks its first step from the tolerances (%s)\n", name, tolerances);
-  } else if (stepper_entry(o.method).adaptive) {
-    std::fprintf(stderr, "mbsflow: no step given: %s starts with %.4g s (%s) and adapts it to %s\n", name, o.step,
-                 std::isfinite(s.step) ? "the RK4 stability estimate" : "a thousandth of the run", tolerances);
-  } else {
-    char fit[96] = "", every[64] = "";
-    if (o.step != s.step) std::snprintf(fit, sizeof fit, ", shortened to %.4g s to fit the output interval", o.step);
-    if (!m.simulation.output_every && o.output_interval <= 0.0 && o.output_every > 1)
-      std::snprintf(every, sizeof every, "; a snapshot every %d steps", o.output_every);
-    std::fprintf(stderr, "mbsflow: no step given: RK4 with the stability estimate %s%s%s\n", s.describe(m).c_str(), fit,
-                 every);
-  }
-}
 
 // InputError naming the file for rigid joints that the initial positions violate (unless
 // assembly was asked for) or that cannot be assembled; with `report`, which bodies the
@@ -170,26 +83,6 @@ void check_assembly(const std::shared_ptr<Model>& model, const std::string& file
                  count == 1 ? "body" : "bodies", moved.c_str(), count > 10 ? ", ..." : "");
 }
 
-void print_summary(const Model& m, MultibodySystem& sys, const RunOptions& o, const RunSummary& r) {
-  const Energy e0 = sys.energy(o.t_start, sys.initial_state());
-  const Energy e1 = sys.energy(o.t_end, r.final_state);
-  const StateLayout& l = sys.layout();
-  std::printf("model %s: %s, %s; %s, step %.4g s, t = %g..%g s\n", m.name.c_str(),
-              count_of(static_cast<long long>(m.bodies.size()), "body", "bodies").c_str(),
-              count_of(static_cast<long long>(m.joints.size()), "joint").c_str(), method_name(o.method), o.step, o.t_start, o.t_end);
-  std::printf("energy (kinetic + gravity + elastic): initial %.10g J, final %.10g J\n", e0.total(), e1.total());
-  const std::size_t shown = std::min<std::size_t>(m.bodies.size(), 10);
-  std::printf("final state of %s%s:\n", shown < m.bodies.size() ? "the first " : "",
-              shown == 1 ? "the body" : count_of(static_cast<long long>(shown), "body", "bodies").c_str());
-  std::printf("  %-16s %14s %14s %14s %14s %14s %14s\n", "body", "x", "y", "z", "vx", "vy", "vz");
-  for (std::size_t i = 0; i < shown; ++i) {
-    const auto k = static_cast<Eigen::Index>(i);
-    const auto& y = r.final_state;
-    std::printf("  %-16s %14.6g %14.6g %14.6g %14.6g %14.6g %14.6g\n", m.bodies[i].name.c_str(), y[l.position(k)],
-                y[l.position(k) + 1], y[l.position(k) + 2], y[l.velocity(k)], y[l.velocity(k) + 1], y[l.velocity(k) + 2]);
-  }
-}
-
 // The arguments after "run" of this process's command line, for a checkpoint.
 std::vector<std::string> run_arguments() {
   const std::vector<std::string>& all = invocation_arguments();
@@ -201,6 +94,55 @@ std::string checkpoint_path(const RunArgs& a) {
   if (!a.checkpoint.empty()) return a.checkpoint;
   if (a.output.empty()) throw InputError("--checkpoint-every: give -o FILE (the checkpoint is FILE.ckpt) or --checkpoint FILE");
   return a.output + ".ckpt";
+}
+
+// A run's checkpoints: the file holds the arguments, folder and model text with the run's
+// state, every --checkpoint-every s; a resumed run goes on from its checkpoint's state.
+struct RunCheckpoints {
+  Checkpointing checkpointing;
+  CheckpointFile file;
+  long written = 0;
+  std::string path;
+
+  // What RunOptions::checkpoint takes: null where the run neither writes nor resumes one.
+  Checkpointing* set_up(const RunArgs& a, std::string model_text, const CheckpointFile* resumed,
+                        const std::string& resumed_path) {
+    if (a.checkpoint_every > 0.0) {
+      path = checkpoint_path(a);
+      file.arguments = resumed ? resumed->arguments : run_arguments();
+      file.directory = resumed ? resumed->directory : std::filesystem::current_path().string();
+      file.model_text = std::move(model_text);
+      checkpointing.every_s = a.checkpoint_every;
+      checkpointing.write = [this](std::vector<std::uint8_t>&& state) {
+        file.state = std::move(state);
+        write_checkpoint_file(path, file);
+        ++written;
+      };
+    }
+    if (resumed) {
+      checkpointing.resume = resumed->state;
+      checkpointing.resume_from = "checkpoint " + resumed_path;
+      if (!a.quiet) std::fprintf(stderr, "mbsflow: going on from checkpoint %s\n", resumed_path.c_str());
+    }
+    return checkpointing.write || resumed ? &checkpointing : nullptr;
+  }
+};
+
+// The worker processes of a cluster file or of a Slurm step's other tasks (none: empty).
+ClusterConfig cluster_of(const RunArgs& a, const std::optional<SlurmLaunch>& slurm) {
+  ClusterConfig cc;
+  if (!a.cluster.empty()) {
+    cc = read_cluster_file(a.cluster);
+    cc.insecure = a.insecure_network ? Insecure::anywhere : a.insecure ? Insecure::loopback : Insecure::no;
+    check_cluster_security(cc);  // before the run is set up
+  }
+  if (slurm && slurm->step.tasks() > 1) {
+    cc = slurm_cluster(slurm->step, slurm->base_port, slurm->keys);
+    check_cluster_security(cc);
+  } else if (slurm && !a.quiet) {
+    std::fprintf(stderr, "mbsflow: --slurm with one task: a run on this process's threads\n");
+  }
+  return cc;
 }
 
 // resumed: the checkpoint to go on from (its path in resumed_path), whose model text
@@ -252,22 +194,10 @@ int run(const RunArgs& a, const CheckpointFile* resumed = nullptr, const std::st
   const bool loose = settled.loose.has_value();
   if (a.exchange_delay > 0.0 && !cluster) throw InputError("{exchange_delay}: only with {cluster} or {processes}");
   const LooseOptions lo = settled.loose.value_or(LooseOptions{});
-  const double macro_step = lo.macro_step;
   const ClusterCoupling coupling{loose ? &lo : nullptr, a.exchange_delay};
   if (cluster) check_cluster_run(m, o, coupling);  // before any worker is started
   std::optional<LocalWorkers> local;
-  ClusterConfig cc;
-  if (!a.cluster.empty()) {
-    cc = read_cluster_file(a.cluster);
-    cc.insecure = a.insecure_network ? Insecure::anywhere : a.insecure ? Insecure::loopback : Insecure::no;
-    check_cluster_security(cc);  // before the run is set up
-  }
-  if (slurm_workers) {
-    cc = slurm_cluster(slurm->step, slurm->base_port, slurm->keys);
-    check_cluster_security(cc);
-  } else if (slurm && !a.quiet) {
-    std::fprintf(stderr, "mbsflow: --slurm with one task: a run on this process's threads\n");
-  }
+  ClusterConfig cc = cluster_of(a, slurm);
   // Loose coupling cuts the model even into one submodel (then it is a plain run).
   // Local workers take a submodel each; the model is cut before they are started, so that a
   // model that cannot be cut so far is refused before any process exists.
@@ -276,7 +206,7 @@ int run(const RunArgs& a, const CheckpointFile* resumed = nullptr, const std::st
                                         : default_submodels(m, o.method, loose, threads);
   std::optional<Decomposition> d;
   try {
-    d = choose_decomposition(m, a, default_k, !cluster && !loose);
+    d = cut_of_request(m, a, default_k, !cluster && !loose);
   } catch (const InputError& e) {
     if (a.processes == 0) throw;
     throw InputError("--processes " + std::to_string(a.processes) + " needs as many submodels: " + e.text() +
@@ -290,34 +220,7 @@ int run(const RunArgs& a, const CheckpointFile* resumed = nullptr, const std::st
 
   give_back_free_memory();  // what reading and cutting the model freed, before the submodels are built
   timings.mark("cut into submodels", bodies);
-  if (cluster && !a.quiet) {
-    char coupling[96] = "";
-    if (loose) std::snprintf(coupling, sizeof coupling, ", loosely coupled: macro step %.4g s", macro_step);
-    std::fprintf(stderr, "mbsflow: %zu submodels on %zu worker processes (%s), %d cut joints, load imbalance %.1f %%%s\n",
-                 d->submodels.size(), cc.workers.size(), cc.transport.c_str(), d->cut_joints, 100.0 * d->imbalance, coupling);
-  }
-  else if (loose && !a.quiet && d->submodels.size() == 1)
-    std::fprintf(stderr, "mbsflow: 1 submodel: nothing to couple loosely, a plain run (--partitions N cuts the model "
-                         "into N submodels)\n");
-  else if (loose && !a.quiet)
-    std::fprintf(stderr,
-                 "mbsflow: %zu submodels on %d threads, loosely coupled: macro step %.4g s (%.3g x the cut joints' "
-                 "RK4 stable step), extrapolation order %d, overlap %.4g s (%zu bodies borrowed)%s\n",
-                 d->submodels.size(), threads, macro_step, macro_step / cut_joint_stable_step(m, *d), a.extrapolation,
-                 overlap_reach(lo), borrowed_bodies(m, *d, lo), lo.coupling_tol > 0.0 ? ", error control" : "");
-  else if (d && !a.quiet)
-    std::fprintf(stderr, "mbsflow: %zu submodels on %d threads (%s), %d cut joints, load imbalance %.1f %%\n",
-                 d->submodels.size(), threads, a.executor == "flow" ? "flow graph" : "barrier per stage", d->cut_joints,
-                 100.0 * d->imbalance);
-  if (stepper_entry(o.method).implicit && !loose && !cluster && !a.quiet) {  // an implicit method on the whole model
-    std::string why;
-    if (o.jacobian == "differences")
-      std::fprintf(stderr, "mbsflow: Jacobian by coloured differences (--jacobian differences)\n");
-    else if (has_analytic_jacobian(m, &why))
-      std::fprintf(stderr, "mbsflow: analytic Jacobian\n");
-    else
-      std::fprintf(stderr, "mbsflow: Jacobian by coloured differences: no analytic one for %s\n", why.c_str());
-  }
+  say_cut(m, a, o, d, cluster ? &cc : nullptr, settled.loose, threads);
   ProgressLine progress(o.t_start, o.t_end, !a.quiet);
   o.progress = [&](double t, long steps) { progress.update(t, steps); };
   // After each phase of the set-up: building the submodels frees the copies of their joints
@@ -329,29 +232,8 @@ int run(const RunArgs& a, const CheckpointFile* resumed = nullptr, const std::st
     if (a.timings) timings.mark(phase, bodies);
   };
   o.stop = install_stop_handlers();
-  // Checkpoints: the file holds the arguments, folder and model text with the run's state.
-  Checkpointing checkpointing;
-  CheckpointFile checkpoint_file;
-  long checkpoints = 0;
-  std::string checkpoint_at;
-  if (a.checkpoint_every > 0.0) {
-    checkpoint_at = checkpoint_path(a);
-    checkpoint_file.arguments = resumed ? resumed->arguments : run_arguments();
-    checkpoint_file.directory = resumed ? resumed->directory : std::filesystem::current_path().string();
-    checkpoint_file.model_text = std::move(model_text);
-    checkpointing.every_s = a.checkpoint_every;
-    checkpointing.write = [&](std::vector<std::uint8_t>&& state) {
-      checkpoint_file.state = std::move(state);
-      write_checkpoint_file(checkpoint_at, checkpoint_file);
-      ++checkpoints;
-    };
-  }
-  if (resumed) {
-    checkpointing.resume = resumed->state;
-    checkpointing.resume_from = "checkpoint " + resumed_path;
-    if (!a.quiet) std::fprintf(stderr, "mbsflow: going on from checkpoint %s\n", resumed_path.c_str());
-  }
-  if (checkpointing.write || resumed) o.checkpoint = &checkpointing;
+  RunCheckpoints checkpoints;
+  o.checkpoint = checkpoints.set_up(a, std::move(model_text), resumed, resumed_path);
   std::string text = model_json.valid() ? model_json.get() : std::string();
   timings.mark("the model's text (written alongside)", bodies);
   std::unique_ptr<AsyncSink> sink;
@@ -402,38 +284,7 @@ int run(const RunArgs& a, const CheckpointFile* resumed = nullptr, const std::st
     MultibodySystem sys(model, static_cast<int>(m.bodies.size()));  // shares the model: a copy is 450 B per body or more
     print_summary(m, sys, o, r);
   }
-  const double body_steps = static_cast<double>(r.steps) * static_cast<double>(m.bodies.size());
-  std::string output;
-  if (sink) {
-    const double bytes = static_cast<double>(std::filesystem::file_size(a.output));
-    output = ", " + std::to_string(r.snapshots) + " snapshots, " + human_bytes(bytes) + " in " + a.output;
-    if (sink->stats().waits > 0)
-      output += " (the writer held the run back " + std::to_string(sink->stats().waits) + " times)";
-  }
-  const std::string newton = r.jacobians > 0 ? " (" + std::to_string(r.jacobians) + " Jacobians, " +
-                                                   std::to_string(r.factorizations) + " factorisations)"
-                                             : "";
-  if (r.resumed_at) {
-    char from[96];
-    std::snprintf(from, sizeof from, "; went on from the checkpoint at t = %.6g s", *r.resumed_at);
-    output += from;
-  }
-  if (checkpoints > 0) output += "; " + std::to_string(checkpoints) + " checkpoints, the last in " + checkpoint_at;
-  // The process's peak resident memory: model, systems, workspace and output buffers (on
-  // worker processes, theirs are their own).
-  if (const double peak = memory_use().peak_bytes; peak > 0.0) {
-    char mem[96];
-    // Per body only where the bodies, not the program, take most of it.
-    if (m.bodies.size() >= 1000)
-      std::snprintf(mem, sizeof mem, "; peak memory %s (%.0f B per body)", human_bytes(peak).c_str(),
-                    peak / static_cast<double>(m.bodies.size()));
-    else
-      std::snprintf(mem, sizeof mem, "; peak memory %s", human_bytes(peak).c_str());
-    output += mem;
-  }
-  std::fprintf(stderr, "mbsflow: done: %ld steps (%ld rejected), %ld evaluations%s, %.3f s wall, %.3g body-steps/s%s\n",
-               r.steps, r.rejected, r.evaluations, newton.c_str(), r.wall_seconds,
-               body_steps / std::max(r.wall_seconds, 1e-9), output.c_str());
+  say_done(m, r, sink.get(), a.output, checkpoints.written, checkpoints.path);
   return 0;
 }
 

@@ -1,4 +1,5 @@
 #include "mbsflow/io/partition_file.hpp"
+#include "mbsflow/runtime/run_request.hpp"
 
 #include <algorithm>
 #include <fstream>
@@ -40,6 +41,11 @@ Decomposition read_partition_file(const Model& model, const std::string& path) {
   } catch (const InputError& e) {
     throw InputError(path + ": " + e.what());
   }
+}
+
+std::optional<Decomposition> cut_of_request(const Model& m, const RunRequest& r, int default_k, bool plain_if_one) {
+  if (!r.partition_file.empty()) return read_partition_file(m, r.partition_file);
+  return cut_for_run(m, r.partitions, default_k, partitioner_named(r.partitioner), plain_if_one);
 }
 
 }  // namespace mbsflow

@@ -109,9 +109,7 @@ py::dict run_model(const Model& model, const std::string& output, const RunReque
   const bool loose = settled.loose.has_value();
   const int default_k = default_submodels(m, o.method, loose, settled.threads);
   RunPlan plan;
-  plan.partition = !request.partition_file.empty()
-                       ? std::optional<Decomposition>(read_partition_file(m, request.partition_file))
-                       : cut_for_run(m, request.partitions, default_k, partitioner_named(request.partitioner), !loose);
+  plan.partition = cut_of_request(m, request, default_k, !loose);
   plan.loose = settled.loose;
   plan.parallel = settled.parallel;
   if (!progress.is_none())
