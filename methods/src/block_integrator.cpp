@@ -81,6 +81,10 @@ class BlockIntegrator::Driver {
         small_(generate_block_method(s.method), p, s, slice_),
         large_(generate_block_method(step_control_partner(s.method)), p, s, slice_) {
     if (s.method.m > 1) starter_ = std::make_unique<BlockSolve>(generate_block_method(start_up_method(s.method)), p, s, slice_);
+    // On one thread the graph only adds a task's dispatch per node: the blocks' jobs run on
+    // this thread, in one of the graph's orders (the same numbers). With more threads the
+    // graph stays even for small systems: its two blocks of a step run side by side.
+    inline_ = arena_.max_concurrency() == 1;
     // A flow graph runs its nodes in the arena it was made in.
     arena_.execute([&] {
       graph_ = std::make_unique<tbb::flow::graph>();
@@ -129,6 +133,7 @@ class BlockIntegrator::Driver {
   std::function<void(const AcceptedBlock&)> on_block_;
   std::function<void(double, Eigen::VectorXd&)> project_;
   bool fixed_;
+  bool inline_ = false;  // the blocks' iterations on this thread, not through the graph
   Eigen::Index slice_;
   tbb::task_arena arena_;
   std::unique_ptr<tbb::flow::graph> graph_;  // declared first: destroyed after the nodes below
@@ -187,10 +192,13 @@ bool BlockIntegrator::Driver::factorize(std::initializer_list<BlockSolve*> block
   }
   st.linear_solver = kind;
   factorized_for_ = nullptr;
-  arena_.execute([&] {
-    for (BlockSolve* b : blocks) b->start_factorization();
-    graph_->wait_for_all();
-  });
+  if (inline_)
+    for (BlockSolve* b : blocks) b->factorize_inline();
+  else
+    arena_.execute([&] {
+      for (BlockSolve* b : blocks) b->start_factorization();
+      graph_->wait_for_all();
+    });
   bool ok = true;
   for (BlockSolve* b : blocks) {
     b->finished();
@@ -210,10 +218,13 @@ bool BlockIntegrator::Driver::solve(std::initializer_list<BlockSolve*> blocks, d
     for (BlockSolve* b : blocks) b->failed = true;
     return false;
   }
-  arena_.execute([&] {
-    for (BlockSolve* b : blocks) b->start();
-    graph_->wait_for_all();
-  });
+  if (inline_)
+    for (BlockSolve* b : blocks) b->run_inline();
+  else
+    arena_.execute([&] {
+      for (BlockSolve* b : blocks) b->start();
+      graph_->wait_for_all();
+    });
   bool ok = true;
   for (BlockSolve* b : blocks) {
     b->finished();

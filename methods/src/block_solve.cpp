@@ -234,6 +234,29 @@ void BlockSolve::start() {
 
 void BlockSolve::finished() { happens_after(&token_); }
 
+void BlockSolve::run_inline() {
+  const Eigen::Index n_slices = slices();
+  const Eigen::Index f_slices = problem_.sliceable ? n_slices : 1, per_node = problem_.sliceable ? 1 : n_slices;
+  for (Eigen::Index r = 0; r < n_slices; ++r) prepare(r);
+  for (;;) {
+    for (int i = 0; i < points(); ++i)
+      for (Eigen::Index r = 0; r < f_slices; ++r) evaluate(i, r * per_node, per_node);
+    if (!gate()) return;
+    ++iterations;
+    if (kind_ == BlockIteration::functional) {
+      for (Eigen::Index r = 0; r < n_slices; ++r) functional_update(r);
+      continue;
+    }
+    for (Eigen::Index r = 0; r < n_slices; ++r) residual(r);
+    for (int e = 0; e < systems(); ++e) solve(e);
+    for (Eigen::Index r = 0; r < n_slices; ++r) update(r);
+  }
+}
+
+void BlockSolve::factorize_inline() {
+  for (int e = 0; e < systems(); ++e) factorize(e);
+}
+
 
 
 }  // namespace mbsflow

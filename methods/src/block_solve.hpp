@@ -47,6 +47,11 @@ class BlockSolve {
   void build(tbb::flow::graph& g);
   void start();     // call before g.wait_for_all()
   void finished();  // call after it
+  // The same iteration (or factorisations) on the calling thread, layer by layer in the
+  // graph's order: for systems too small for the graph's scheduling to pay. The same
+  // numbers, since every node writes its own rows and the norms are maxima.
+  void run_inline();
+  void factorize_inline();
 
   // Checkpoints: what carries over from one block to the next (the iteration's eta and
   // the Newton matrices' factors; `pattern`: a Jacobian of the run's pattern).

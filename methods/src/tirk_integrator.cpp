@@ -105,8 +105,8 @@ class TirkIntegrator::Driver {
     // With one thread, or below 1000 equations, where a node's work takes a few
     // microseconds, about what the dispatch of its task costs (notes/methods-measurements.md,
     // "Small systems"), the graph's jobs run on this thread. Each node writes its own rows only,
-    // so the numbers are the same either way. (colloc keeps its graph: its two blocks of a
-    // step run side by side, each a whole iteration.)
+    // so the numbers are the same either way. (colloc does so on one thread only: with more,
+    // its two blocks of a step run side by side, each a whole iteration.)
     here_ = arena_.max_concurrency() == 1 || p.size < 1000;
     monitor_.tol = s.iteration_tol > 0 ? s.iteration_tol : newton_tolerance(s.rtol);
     monitor_.predict_failure = full_newton();

@@ -173,6 +173,27 @@ TEST_CASE("block integrator: parallel and sequential runs give bitwise the same 
   }
 }
 
+TEST_CASE("block integrator: on one thread the blocks run on the calling thread with the graph's numbers", "[methods][block]") {
+  // One thread: every block (the multistep method's start-up block too) iterates on the
+  // calling thread; two: through the flow graph, its two blocks side by side.
+  for (const OdeProblem& p : {detest_b1_problem(), hairer_wanner_problem()}) {
+    for (BlockMethodSpec spec : {BlockMethodSpec{2, 2, 4}, BlockMethodSpec{1, 3, 0}}) {
+      BlockSettings s;
+      s.method = spec;
+      s.rtol = s.atol = 1e-7;
+      s.threads = 1;
+      const BlockResult one = integrate_block(p, s);
+      s.threads = 2;
+      const BlockResult two = integrate_block(p, s);
+      REQUIRE(one.steps.size() == two.steps.size());
+      for (std::size_t i = 0; i < one.steps.size(); ++i) CHECK(one.steps[i].error == two.steps[i].error);
+      CHECK(one.stats.rhs_evaluations == two.stats.rhs_evaluations);
+      CHECK(one.stats.iterations == two.stats.iterations);
+      CHECK((one.y.array() == two.y.array()).all());
+    }
+  }
+}
+
 TEST_CASE("block integrator: Newton solves heat with N = 1e5 far beyond the explicit stability limit", "[methods][block]") {
   const OdeProblem p = heat_problem(100000);
   // Explicit methods need tau < 2 / lambda_max ~ 2 / (4 (N+1)^2) = 5e-11 here.
