@@ -123,6 +123,17 @@ class BlockIntegrator::Driver {
   bool newton() const { return s_.iteration == BlockIteration::newton; }
   void rebuild_window(double tau);
   bool solve(std::initializer_list<BlockSolve*> blocks, double tau);
+  // A job of the blocks: each on this thread (inline_), or all through the graph.
+  void run_blocks(std::initializer_list<BlockSolve*> blocks, void (BlockSolve::*here)(), void (BlockSolve::*start)()) {
+    if (inline_) {
+      for (BlockSolve* b : blocks) (b->*here)();
+      return;
+    }
+    arena_.execute([&] {
+      for (BlockSolve* b : blocks) (b->*start)();
+      graph_->wait_for_all();
+    });
+  }
   bool factorize(std::initializer_list<BlockSolve*> blocks, double tau);
   void accept(const BlockSolve& b, double tau);
   void record(double tau, int taken, double error, const BlockSolve& a, const BlockSolve* b = nullptr);
@@ -192,13 +203,7 @@ bool BlockIntegrator::Driver::factorize(std::initializer_list<BlockSolve*> block
   }
   st.linear_solver = kind;
   factorized_for_ = nullptr;
-  if (inline_)
-    for (BlockSolve* b : blocks) b->factorize_inline();
-  else
-    arena_.execute([&] {
-      for (BlockSolve* b : blocks) b->start_factorization();
-      graph_->wait_for_all();
-    });
+  run_blocks(blocks, &BlockSolve::factorize_inline, &BlockSolve::start_factorization);
   bool ok = true;
   for (BlockSolve* b : blocks) {
     b->finished();
@@ -218,13 +223,7 @@ bool BlockIntegrator::Driver::solve(std::initializer_list<BlockSolve*> blocks, d
     for (BlockSolve* b : blocks) b->failed = true;
     return false;
   }
-  if (inline_)
-    for (BlockSolve* b : blocks) b->run_inline();
-  else
-    arena_.execute([&] {
-      for (BlockSolve* b : blocks) b->start();
-      graph_->wait_for_all();
-    });
+  run_blocks(blocks, &BlockSolve::run_inline, &BlockSolve::start);
   bool ok = true;
   for (BlockSolve* b : blocks) {
     b->finished();
