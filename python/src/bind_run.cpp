@@ -42,10 +42,7 @@ RunRequest request_of(const py::dict& settings) {
     else
       shown = py::str(value).cast<std::string>();
     auto fail = [&](const std::string& what) { throw InputError("{" + std::string(s->name) + "=" + shown + "}: " + what); };
-    if (value.is_none()) {
-      if (!s->optional()) fail("give a value");
-      continue;
-    }
+    if (value.is_none()) continue;  // the default, as not given
     // Python's partition is a count or a partition file.
     if (std::string(s->name) == "partitions" && (py::isinstance<py::str>(value) || py::hasattr(value, "__fspath__"))) {
       r.partition_file = py::module_::import("os").attr("fspath")(value).cast<std::string>();

@@ -184,3 +184,5 @@ def test_the_keywords_are_the_declared_settings_each_checked_as_declared(chain):
         mbsflow.run(m, coupling="loose", submodel_methods=["rk4", "eul"])
     with pytest.raises(TypeError):
         mbsflow.run(m, nonsense=1)
+    # None is the default, as if not given
+    assert mbsflow.run(m, threads=1, fields=None, submodel_methods=None, step=None).summary["steps"] > 0
