@@ -44,8 +44,8 @@ RunSetting one_of(RunSetting s, std::vector<std::string> choices) {
 std::vector<RunSetting> declare() {
   std::vector<RunSetting> s;
   // The model's simulation block.
-  s.push_back({"t_start", "", in_model, &R::t_start, "Start time in s"});
-  s.push_back({"t_end", "--t-end", everywhere, &R::t_end, "End time in s; must be after the model's t_start"});
+  s.push_back({"t_start", "", in_model, &R::t_start, "Start time in s (default 0)"});
+  s.push_back({"t_end", "--t-end", everywhere, &R::t_end, "End time in s (default 1); must be after the model's t_start"});
   s.push_back(positive({"step", "--step", everywhere, &R::step,
                         "Step in s; RK4 default: the stability estimate from the stiffest joint; the adaptive methods' "
                         "first step"}));
