@@ -74,11 +74,7 @@ void add_run_settings(CLI::App* sub, RunRequest& request) {
   for (const RunSetting& s : run_settings()) {
     if (!(s.places & in_cli)) continue;
     if (*s.needs) made.at(s.name)->needs(made.at(s.needs));
-    for (std::string list = s.excludes; !list.empty();) {
-      const std::size_t comma = std::min(list.find(','), list.size());
-      made.at(s.name)->excludes(made.at(list.substr(0, comma)));
-      list.erase(0, std::min(comma + 1, list.size()));
-    }
+    for (const std::string& other : comma_items(s.excludes)) made.at(s.name)->excludes(made.at(other));
   }
 }
 

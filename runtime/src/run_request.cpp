@@ -46,12 +46,7 @@ void apply_overrides(Model& m, const RunRequest& o) {
 
 std::vector<Method> methods_named(const std::string& list) {
   std::vector<Method> out;
-  std::size_t at = 0;
-  while (at <= list.size() && !list.empty()) {
-    const std::size_t comma = std::min(list.find(',', at), list.size());
-    out.push_back(method_named(list.substr(at, comma - at), "submodel_methods"));
-    at = comma + 1;
-  }
+  for (const std::string& name : comma_items(list)) out.push_back(method_named(name, "submodel_methods"));
   return out;
 }
 

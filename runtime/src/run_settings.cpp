@@ -13,7 +13,6 @@ namespace {
 using R = RunRequest;
 constexpr unsigned everywhere = in_cli | in_python | in_model;
 constexpr unsigned front_ends = in_cli | in_python;
-constexpr double inf = std::numeric_limits<double>::infinity();
 
 std::vector<std::string> method_names() {
   std::vector<std::string> out;
@@ -203,6 +202,16 @@ std::string joined(const std::vector<std::string>& items, const char* between) {
 
 }  // namespace
 
+std::vector<std::string> comma_items(std::string_view list) {
+  std::vector<std::string> out;
+  for (std::size_t at = 0; !list.empty() && at <= list.size();) {
+    const std::size_t comma = std::min(list.find(',', at), list.size());
+    out.emplace_back(list.substr(at, comma - at));
+    at = comma + 1;
+  }
+  return out;
+}
+
 std::string RunSetting::long_flag() const {
   const std::string f = flag;
   const std::size_t comma = f.find(',');
@@ -251,16 +260,7 @@ std::string setting_error(const RunSetting& s, double v) {
 std::string setting_error(const RunSetting& s, const std::string& value) {
   const std::vector<std::string> allowed = s.allowed();
   if (allowed.empty()) return "";
-  std::vector<std::string> items{value};
-  if (s.list) {
-    items.clear();
-    std::size_t at = 0;
-    while (at <= value.size()) {
-      const std::size_t comma = std::min(value.find(',', at), value.size());
-      items.push_back(value.substr(at, comma - at));
-      at = comma + 1;
-    }
-  }
+  const std::vector<std::string> items = s.list ? comma_items(value) : std::vector<std::string>{value};
   std::string noun = s.list ? "method" : s.name;  // the one list setting lists methods
   for (char& c : noun) c = c == '_' ? ' ' : c;
   for (const std::string& item : items)
@@ -325,12 +325,9 @@ std::string run_settings_table() {
     const std::string model = s.places & in_model ? "`simulation." + std::string(s.name) + "`" : "";
     std::string also;
     if (*s.excludes) {
-      std::string list = s.excludes, names;
-      for (std::size_t at = 0; at <= list.size();) {
-        const std::size_t comma = std::min(list.find(',', at), list.size());
-        names += (names.empty() ? "" : ", ") + render("{" + list.substr(at, comma - at) + "}", name_of);
-        at = comma + 1;
-      }
+      std::string names;
+      for (const std::string& other : comma_items(s.excludes))
+        names += (names.empty() ? "" : ", ") + render("{" + other + "}", name_of);
       also += " Not with " + names + ".";
     }
     const std::string d = default_text(s);

@@ -186,3 +186,4 @@ def test_the_keywords_are_the_declared_settings_each_checked_as_declared(chain):
         mbsflow.run(m, nonsense=1)
     # None is the default, as if not given
     assert mbsflow.run(m, threads=1, fields=None, submodel_methods=None, step=None).summary["steps"] > 0
+    assert mbsflow.run(m, threads=1, submodel_methods=[]).summary["steps"] > 0  # an empty list: none given

@@ -44,6 +44,11 @@ TEST_CASE("run settings: values out of range or not among the choices are named"
   CHECK(setting_error(*find_run_setting("submodel_methods"), std::string("rk4,dopri5")).empty());
   CHECK(setting_error(*find_run_setting("submodel_methods"), std::string("rk4,euler")) ==
         "unknown method 'euler' (rk4, dopri5, colloc, tirk)");
+  // An empty list is no list (none given), as before the settings were declared.
+  CHECK(setting_error(*find_run_setting("submodel_methods"), std::string()).empty());
+  CHECK(comma_items("").empty());
+  CHECK(comma_items("a,,b") == std::vector<std::string>{"a", "", "b"});
+  CHECK(methods_named("").empty());
 }
 
 TEST_CASE("run settings: a request overrides the model's block, as the reader reads it", "[settings]") {

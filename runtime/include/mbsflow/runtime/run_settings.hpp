@@ -94,6 +94,10 @@ const RunSetting* find_run_setting(std::string_view name);
 template <class Read>
 void set_setting(const RunSetting& s, RunRequest& request, Read&& read);
 
+// The items of a comma-separated list ("rk4,dopri5", a list setting's value, `excludes`);
+// none for empty text.
+std::vector<std::string> comma_items(std::string_view list);
+
 // What is wrong with a value of `s` (a number, or text for text settings), in the reader's
 // terms ("must be > 0", "unknown method (rk4, ...)"); empty where nothing is.
 std::string setting_error(const RunSetting& s, double value);
