@@ -10,6 +10,7 @@
 #include <memory>
 
 #include "loose_part.hpp"
+#include "loose_advancer.hpp"
 #include "loose_rounds.hpp"
 #include "mbsflow/error.hpp"
 #include "mbsflow/graph/stable_step.hpp"
@@ -76,47 +77,6 @@ void summarise_records(LooseStats& st) {
 
 namespace {
 
-// Checkpoints of a loosely coupled run, at a macro-step end that every submodel has
-// reached and whose snapshots were written (between flow-graph runs): where the walk is,
-// the macro-step ends, the coupling records so far, then every submodel's part. The
-// numbers depend on the partition, so a resumed run must have the same one (its
-// submodels' states are checked against it).
-struct LooseCheckpoint {
-  std::vector<std::unique_ptr<LoosePart>>& parts;
-  loose::MacroGrid& grid;
-  loose::LooseRounds& rounds;
-  loose::CouplingLog& log;
-  LooseStats& st;
-  loose::LoosePosition at;
-
-  void save(const RunOptions& o, ResultSink* sink, const RunSummary& out) {
-    StateWriter w = checkpoint_head("loose", o.method, sink, out);
-    rounds.drain(log);  // records merge by their macro-step end: when does not matter
-    w.integer(static_cast<std::int64_t>(parts.size()));
-    loose::save_position(w, at, grid);
-    w.integer(st.rejected);
-    w.integer(st.over_tolerance);
-    log.save(w);
-    for (const auto& p : parts) p->save(w);
-    o.checkpoint->write(w.take());
-  }
-
-  void restore(const Checkpointing& c, const RunOptions& o, ResultSink* sink, const MultibodySystem& whole, RunSummary& out) {
-    StateReader in(c.resume, c.resume_from);
-    const std::string results = read_checkpoint_head(in, "loose", o.method, out);
-    const auto submodels = in.integer(1, INT32_MAX);
-    if (submodels != static_cast<std::int64_t>(parts.size()))
-      in.fail("it is of a run cut into " + std::to_string(submodels) + " submodels, not " + std::to_string(parts.size()));
-    loose::restore_position(in, at, grid);
-    st.rejected = in.integer(0, INT64_MAX);
-    st.over_tolerance = in.integer(0, INT64_MAX);
-    log.restore(in);
-    for (auto& p : parts) p->restore(in);
-    out.resumed_at = grid.end(at.done);
-    resume_results(in, c, sink, whole, results, out);
-  }
-};
-
 }  // namespace
 
 RunSummary run_loose(const Model& model, const Decomposition& cut, const RunOptions& o, const LooseOptions& lo,
@@ -135,66 +95,49 @@ RunSummary run_loose(std::shared_ptr<const Model> shared, const Decomposition& c
     parts.push_back(loose::make_part(model, d.submodels[q], o, lo, q));
   MultibodySystem whole(std::move(shared), static_cast<int>(model.bodies.size()));
   const StateLayout& global = whole.layout();
-  RunSummary out;
   LooseStats local_stats;
   LooseStats& st = stats ? *stats : local_stats;
   const auto start = Clock::now();
-  Eigen::VectorXd y = whole.initial_state();
   const bool adaptive = lo.coupling_tol > 0.0;
   loose::MacroGrid grid(o, adaptive ? 0.0 : lo.macro_step);
   loose::LooseRounds rounds(model, d, o, lo, parts, grid, grid.steps_per_run());
   rounds.keep_snapshots = sink != nullptr;
+  loose::LooseAdvancer advancer(o, lo, parts, rounds, grid, st, global, whole.initial_state());
+  // Checkpoints, at a macro-step end that every submodel has reached and whose snapshots
+  // were written (between flow-graph runs): the advancer's part, then the coupling records
+  // so far. The numbers depend on the partition, so a resumed run must have the same one
+  // (its submodels' states are checked against it).
   loose::CouplingLog log;
-  LooseCheckpoint point{parts, grid, rounds, log, st, {0, 1, loose::adaptive_start(o, lo)}};
-  const bool resume = o.checkpoint && !o.checkpoint->resume.empty();
-  if (resume)
-    point.restore(*o.checkpoint, o, sink, whole, out);
-  else if (sink)
-    sink->begin(whole);
-  CheckpointTimer checkpoint(o.checkpoint);
-  // At macro-step end m: the snapshots up to it (the submodels kept them from their dense
-  // output), the stop request, the progress, a checkpoint if one is due.
-  auto at_end = [&](long m) {
-    point.at.done = m;
-    const double t = grid.end(m);
-    for (long& k = point.at.next_output; sink && k <= grid.outputs() && loose::at_or_before(grid.output_time(k), t); ++k) {
-      for (auto& p : parts) p->take_snapshot(k, global, y);
-      emit(whole, sink, grid.output_time(k), y, out);
-    }
-    check_stop(o, t);
-    if (o.progress) o.progress(t, m);
-    if (t < o.t_end && checkpoint.due()) point.save(o, sink, out);
+  LocalRun::Hooks hooks;
+  hooks.restore = [&](StateReader& in) {
+    const double t = advancer.restore(in);
+    log.restore(in);
+    return t;
   };
-  run_with_sink(
-      sink, out,
-      [&] {
-        if (!resume) {
-          if (sink) emit(whole, sink, o.t_start, y, out);
-          for (auto& p : parts) p->make_past(o.t_start, lo.macro_step);
-          for (int j = 1; j <= lo.extrapolation; ++j) loose::copy_local_ghosts(parts, j);
-          for (auto& p : parts) p->start(o.t_start, lo.macro_step);
-        }
-        if (adaptive) {
-          loose::adaptive_macro_steps(o, lo, parts, rounds, grid, st, point.at.walk, at_end);
-        } else {
-          loose::for_each_run(
-              grid, loose::ends_kept(lo),
-              [&](long m, int n) {
-                const std::string failure = rounds.run(m, n);
-                if (!failure.empty()) throw RunError(failure);
-                at_end(m + n);
-                return true;
-              },
-              point.at.done);
-        }
-        rounds.catch_up(point.at.done);  // the coupling errors of the last macro steps
-      },
-      [&] {
-        rounds.drain(log);
-        st.records = log.records();
-        summarise_records(st);
-        if (sink) sink->write_coupling(st.records);
-      });
+  hooks.save_state = [&](StateWriter& w) {
+    rounds.drain(log);  // records merge by their macro-step end: when does not matter
+    log.save(w);
+  };
+  LocalRun run("loose", o, &whole, sink, std::move(hooks));
+  run.begin();
+  run.run([&] { return whole.initial_state(); },
+          [&] {
+            if (!run.resuming()) {
+              for (auto& p : parts) p->make_past(o.t_start, lo.macro_step);
+              for (int j = 1; j <= lo.extrapolation; ++j) loose::copy_local_ghosts(parts, j);
+              for (auto& p : parts) p->start(o.t_start, lo.macro_step);
+            }
+            drive(advancer, run);
+            rounds.catch_up(advancer.at.done);  // the coupling errors of the last macro steps
+          },
+          [&] {
+            rounds.drain(log);
+            st.records = log.records();
+            summarise_records(st);
+            if (sink) sink->write_coupling(st.records);
+          });
+  RunSummary& out = run.out;
+  Eigen::VectorXd y = whole.initial_state();
   for (auto& p : parts) partitioned::gather(p->part, global, y);
   for (const auto& p : parts) {
     out.steps = std::max(out.steps, p->steps);
@@ -203,7 +146,7 @@ RunSummary run_loose(std::shared_ptr<const Model> shared, const Decomposition& c
   }
   out.wall_seconds = std::chrono::duration<double>(Clock::now() - start).count();
   out.final_state = std::move(y);
-  return out;
+  return std::move(out);
 }
 
 }  // namespace mbsflow

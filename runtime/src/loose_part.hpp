@@ -147,7 +147,8 @@ class MacroGrid {
   // The tight grid's step nearest to end m (progress reports).
   long tight_step(long m) const { return std::lround((end(m) - grid_.t_start) / grid_.h); }
   long last() const { return base_ + static_cast<long>(ends_.size()) - 1; }  // the latest end known
-  bool complete() const { return end(last()) >= grid_.t_end; }
+  bool complete() const { return reached_end(last()); }
+  bool reached_end(long m) const { return end(m) >= grid_.t_end; }
   // Fixed macro step: makes the ends up to m known (or up to t_end, if it comes first).
   void extend(long m);
   // End m + 1, a macro step H after end m, or t_end where it reaches it; any later ends
@@ -175,22 +176,5 @@ class MacroGrid {
 
 // Within rounding of a macro-step end: what counts as on or before it.
 inline bool at_or_before(double t, double end) { return t <= end + 1e-12 * std::max(1.0, std::abs(end)); }
-
-// Walks the run's macro steps in flow-graph runs of steps_per_run() macro steps (fewer at
-// the end): run(m, n) takes macro steps m .. m + n - 1, and stops the walk when it returns
-// false. Ends more than `keep` behind are forgotten.
-// `first`: the macro step to begin with (a resumed run's).
-template <class Run>
-void for_each_run(MacroGrid& g, long keep, Run run, long first = 0) {
-  const int most = g.steps_per_run();
-  for (long m = first;;) {
-    g.extend(m + most);
-    if (m >= g.last()) return;
-    const int n = static_cast<int>(std::min<long>(most, g.last() - m));
-    if (!run(m, n)) return;
-    m += n;
-    g.forget_before(m - keep);
-  }
-}
 
 }  // namespace mbsflow::loose

@@ -12,7 +12,7 @@
 
 #include "mbsflow/error.hpp"
 #include "partitioned_state.hpp"
-#include "sink_runner.hpp"
+#include "run_loop.hpp"
 #include "tsan_annotations.hpp"
 #include "tight_coupling.hpp"
 
@@ -24,64 +24,6 @@ const char build_start = 0, build_done = 0;
 
 using Clock = std::chrono::steady_clock;
 using partitioned::Part;
-
-// The results of a run in one process: checks and snapshots of the gathered state.
-class SinkOutput final : public TightOutput {
- public:
-  // whole: null where there is neither a sink nor checkpoints.
-  SinkOutput(const Model& model, const RunOptions& o, const std::vector<Part>& parts, MultibodySystem* whole,
-             ResultSink* sink, RunSummary& out, Eigen::VectorXd& y)
-      : model_(model), o_(o), parts_(parts), whole_(whole), sink_(sink), out_(out), y_(y) {}
-
-  void step_done(long steps, double t, long snapshot) override {
-    if (auto dv = partitioned::check(parts_)) throw RunError(divergence_message(model_, *dv, t, o_.method, o_.step));
-    check_stop(o_, t);
-    if (sink_ && snapshot >= 0) {
-      // Every body is some part's own, so y_ is gathered whole again whenever it is needed;
-      // here once the writer has room for it.
-      sink_->make_room();
-      partitioned::gather(parts_, whole_->layout(), y_);
-      emit(*whole_, sink_, t, std::move(y_), out_);
-    }
-    if (o_.progress) o_.progress(t, steps);
-  }
-  void dense(long, double t, Eigen::VectorXd& y) override {
-    whole_->after_step(t, y);
-    emit(*whole_, sink_, t, y, out_);
-  }
-  bool wants_dense() const override { return sink_ != nullptr; }
-  bool checkpoint_due() override { return timer_.due(); }
-  // The state whatever the partition: the global state and where the loop is.
-  void checkpoint(const TightPoint& p) override {
-    StateWriter w = checkpoint_head("tight", o_.method, sink_, out_);
-    partitioned::gather(parts_, whole_->layout(), y_);
-    save_tight_point(w, p, y_);
-    o_.checkpoint->write(w.take());
-  }
-
- private:
-  const Model& model_;
-  const RunOptions& o_;
-  const std::vector<Part>& parts_;
-  MultibodySystem* whole_;
-  ResultSink* sink_;
-  RunSummary& out_;
-  Eigen::VectorXd& y_;
-  CheckpointTimer timer_{o_.checkpoint};
-};
-
-// A state SinkOutput::checkpoint wrote: where the loop is, and the parts' x[0] set.
-TightPoint restore_tight(const Checkpointing& c, const RunOptions& o, std::vector<Part>& parts, const MultibodySystem& whole,
-                         ResultSink* sink, RunSummary& out) {
-  StateReader in(c.resume, c.resume_from);
-  const std::string results = read_checkpoint_head(in, "tight", o.method, out);
-  Eigen::VectorXd y;
-  const TightPoint p = read_tight_point(in, whole.dimension(), y);
-  out.resumed_at = p.t;
-  for (Part& part : parts) partitioned::scatter(y, whole.layout(), part);
-  resume_results(in, c, sink, whole, results, out);
-  return p;
-}
 
 }  // namespace
 
@@ -105,7 +47,6 @@ RunSummary run_partitioned(std::shared_ptr<const Model> shared, const Decomposit
   const int stages = tight_stages(o.method);
   const int threads = par.threads > 0 ? par.threads : tbb::info::default_concurrency();
   tbb::task_arena arena(threads);
-  RunSummary out;
   BusyClock clock;
   // The parts and the whole system (for the sink: layout, names, energies, and for
   // checkpoints; it shares the model) are built side by side: each is a pass over its
@@ -156,25 +97,35 @@ RunSummary run_partitioned(std::shared_ptr<const Model> shared, const Decomposit
   // The gathered state, for the sink and checkpoints (then whole is built), and at the end.
   Eigen::VectorXd y = whole ? whole->initial_state() : Eigen::VectorXd();
   std::optional<TightPoint> resumed;
-  if (o.checkpoint && !o.checkpoint->resume.empty())
-    resumed = restore_tight(*o.checkpoint, o, parts, *whole, sink, out);
-  else if (sink)
-    sink->begin(*whole);
-  if (sink) phase_done(o, "start the results file");
+  LocalRun run("tight", o, whole, sink,
+                {.check = [&](double t) {
+                   if (auto dv = partitioned::check(parts)) throw RunError(divergence_message(model, *dv, t, o.method, o.step));
+                 },
+                 .state = [&](Eigen::VectorXd& x) { partitioned::gather(parts, whole->layout(), x); },
+                 .restore = [&](StateReader& in) {  // where the loop is, and the parts' x[0] set
+                   resumed = read_tight_point(in, whole->dimension(), y);
+                   for (Part& part : parts) partitioned::scatter(y, whole->layout(), part);
+                   return resumed->t;
+                 },
+                 .save_state = [&](StateWriter& w) {  // the state whatever the partition: the global state
+                   partitioned::gather(parts, whole->layout(), y);
+                   w.vector(y);
+                 }});
+  run.begin();
   std::vector<Part*> local;
   for (Part& p : parts) local.push_back(&p);
   LocalExchange exchange(local);
-  SinkOutput output(model, o, parts, whole, sink, out, y);
-  run_with_sink(sink, out, [&] {
-    if (sink && !resumed) emit(*whole, sink, o.t_start, std::move(y), out);  // gathered again when needed
-    arena.execute([&] {
-      const TightCounts counts = run_tight_coupling(
-          {d, local, o, exchange, output, par.executor == Executor::barrier, &clock, resumed ? &*resumed : nullptr});
-      out.steps = counts.steps;
-      out.rejected = counts.rejected;
-      out.evaluations = counts.evaluations;
-    });
-  });
+  RunSummary& out = run.out;
+  run.run([&] { return std::move(y); },  // gathered again when needed
+          [&] {
+            arena.execute([&] {
+              const TightCounts counts = run_tight_coupling(
+                  {d, local, o, exchange, run, par.executor == Executor::barrier, &clock, resumed ? &*resumed : nullptr});
+              out.steps = counts.steps;
+              out.rejected = counts.rejected;
+              out.evaluations = counts.evaluations;
+            });
+          });
   phase_done(o, sink ? "steps, and the results written" : "steps", RunPhase::steps);
   // The stage vectors go before the final state is gathered, which then takes their place
   // rather than adding to the peak (a million bodies' state is 104 MB).
@@ -191,7 +142,7 @@ RunSummary run_partitioned(std::shared_ptr<const Model> shared, const Decomposit
     stats->busy_seconds = clock.total();
     stats->wait_fraction = std::max(0.0, 1.0 - stats->busy_seconds / (out.wall_seconds * threads));
   }
-  return out;
+  return std::move(out);
 }
 
 }  // namespace mbsflow

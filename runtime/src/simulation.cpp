@@ -10,6 +10,7 @@
 #include "mbsflow/graph/stable_step.hpp"
 #include "mbsflow/methods/stepper.hpp"
 #include "mbsflow/runtime/divergence.hpp"
+#include "run_loop.hpp"
 #include "sink_runner.hpp"
 #include "multibody_stepper.hpp"
 
@@ -18,60 +19,48 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-void check(const MultibodySystem& sys, const Eigen::VectorXd& y, double t, const RunOptions& o) {
-  check_diverged(sys, y, t, o);
-  check_stop(o, t);
-}
+// A whole model's stepper as an advancer: one step each, then the snapshots that fall due
+// (a fixed-step method every output_steps(o) steps and at the end; an adaptive one on the
+// uniform grid from its dense output, then at the end). `next` is where it goes on: the
+// index of the next fixed step, or of the next output time on the grid; a checkpoint
+// keeps it with the stepper's state.
+class StepperAdvancer final : public Advancer {
+ public:
+  StepperAdvancer(const MultibodySystem& sys, Stepper& stepper, const RunOptions& o, long next)
+      : stepper_(stepper), o_(o), adaptive_(stepper_entry(o.method).adaptive), every_(output_steps(o)), next_(next),
+        dense_(adaptive_ ? sys.dimension() : 0) {}
 
-// Checkpoints of the loop: between two steps, `next` is the index of the next fixed step
-// or of the next output on the grid, then the stepper's state.
-void save_point(const Checkpointing& c, ResultSink* sink, const Stepper& stepper, Method method, long next,
-                const RunSummary& out) {
-  StateWriter w = checkpoint_head("simulation", method, sink, out);
-  w.integer(next);
-  stepper.save(w);
-  c.write(w.take());
-}
-
-// Restores the stepper and `out` from a state save_point wrote; returns `next`.
-long restore_point(const Checkpointing& c, ResultSink* sink, const MultibodySystem& sys, Stepper& stepper, Method method,
-                   RunSummary& out) {
-  StateReader in(c.resume, c.resume_from);
-  const std::string results = read_checkpoint_head(in, "simulation", method, out);
-  const long next = in.integer(1, INT64_MAX);
-  stepper.restore(in);
-  out.resumed_at = stepper.t();
-  resume_results(in, c, sink, sys, results, out);
-  return next;
-}
-
-// The loop over a whole model's stepper: after every step the snapshots that fall due (a
-// fixed-step method every output_steps(o) steps and at the end; an adaptive one on the
-// uniform grid from its dense output, then at the end), the guards, progress and
-// checkpoints. `next` is where the loop goes on: the index of the next fixed step, or of
-// the next output time on the grid.
-void run_steps(MultibodySystem& sys, Stepper& stepper, bool adaptive, const RunOptions& o, ResultSink* sink,
-               RunSummary& out, long next) {
-  const int every = output_steps(o);
-  Eigen::VectorXd dense(adaptive ? sys.dimension() : 0);
-  CheckpointTimer checkpoint(o.checkpoint);
-  while (!stepper.done()) {
-    stepper.step();
-    const double t = stepper.t();
-    if (adaptive && sink)
-      next = dense_outputs(o, next, t, [&](long, double t_out) {
-        stepper.dense(t_out, dense);
-        sys.after_step(t_out, dense);
-        emit(sys, sink, t_out, dense, out);
+  bool done() const override { return stepper_.done(); }
+  void advance(RunObserver& to) override {
+    stepper_.step();
+    const double t = stepper_.t();
+    if (adaptive_ && to.wants_dense())
+      next_ = dense_outputs(o_, next_, t, [&](long k, double t_out) {
+        stepper_.dense(t_out, dense_);
+        to.dense(k, t_out, dense_);
       });
-    check(sys, stepper.y(), t, o);
-    const long steps = adaptive ? stepper.stats().accepted : next++;
-    if (!adaptive && sink && (steps % every == 0 || stepper.done())) emit(sys, sink, t, stepper.y(), out);
-    if (o.progress && (steps & 15) == 0) o.progress(t, steps);
-    if (!stepper.done() && checkpoint.due()) save_point(*o.checkpoint, sink, stepper, o.method, next, out);
+    const long steps = adaptive_ ? stepper_.stats().accepted : next_++;
+    const bool snapshot = stepper_.done() || (!adaptive_ && steps % every_ == 0);
+    to.step_done(steps, t, snapshot ? steps : -1);
   }
-  if (adaptive && sink) emit(sys, sink, stepper.t(), stepper.y(), out);
-}
+  void save(StateWriter& w) override {
+    w.integer(next_);
+    stepper_.save(w);
+  }
+  double restore(StateReader& in) {
+    next_ = in.integer(1, INT64_MAX);
+    stepper_.restore(in);
+    return stepper_.t();
+  }
+
+ private:
+  Stepper& stepper_;
+  const RunOptions& o_;
+  bool adaptive_;
+  int every_;
+  long next_;
+  Eigen::VectorXd dense_;
+};
 
 }  // namespace
 
@@ -124,7 +113,6 @@ RunOptions options_from_model(const Model& model, std::optional<double> stable_s
 RunSummary run_simulation(MultibodySystem& sys, const RunOptions& o, ResultSink* sink) {
   check_options(o);
   const StepperEntry& entry = stepper_entry(o.method);
-  RunSummary out;
   Eigen::VectorXd y = sys.initial_state();
   const StepperSystem system = stepper_system(sys, o.jacobian);
   std::unique_ptr<Stepper> stepper = entry.make(system, stepper_settings(o));
@@ -132,15 +120,17 @@ RunSummary run_simulation(MultibodySystem& sys, const RunOptions& o, ResultSink*
   phase_done(o, "set up the method");
   // Like run_partitioned's, the clock starts once the stepper and its workspace are set up.
   const auto start = Clock::now();
-  const bool resume = o.checkpoint && !o.checkpoint->resume.empty();
-  const long next = resume ? restore_point(*o.checkpoint, sink, sys, *stepper, o.method, out) : 1;
-  if (sink && !resume) sink->begin(sys);
-  if (sink) phase_done(o, "start the results file");
-  run_with_sink(sink, out, [&] {
-    if (sink && !resume) emit(sys, sink, o.t_start, y, out);
-    run_steps(sys, *stepper, entry.adaptive, o, sink, out, next);
-  });
+  StepperAdvancer advancer(sys, *stepper, o, 1);
+  LocalRun::Hooks hooks;
+  hooks.check = [&](double t) { check_diverged(sys, stepper->y(), t, o); };
+  hooks.state = [&](Eigen::VectorXd& x) { x = stepper->y(); };
+  hooks.restore = [&](StateReader& in) { return advancer.restore(in); };
+  hooks.progress_every = 16;
+  LocalRun run("simulation", o, &sys, sink, std::move(hooks));
+  run.begin();
+  run.run([&] { return y; }, [&] { drive(advancer, run); });
   phase_done(o, sink ? "steps, and the results written" : "steps", RunPhase::steps);
+  RunSummary& out = run.out;
   out.steps = stepper->stats().accepted;
   out.rejected = stepper->stats().rejected;
   out.evaluations = stepper->stats().evaluations;
@@ -148,7 +138,7 @@ RunSummary run_simulation(MultibodySystem& sys, const RunOptions& o, ResultSink*
   out.factorizations = stepper->stats().factorizations;
   out.wall_seconds = std::chrono::duration<double>(Clock::now() - start).count();
   out.final_state = stepper->y();
-  return out;
+  return std::move(out);
 }
 
 }  // namespace mbsflow

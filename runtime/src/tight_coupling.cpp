@@ -8,6 +8,7 @@
 #include "mbsflow/error.hpp"
 #include "mbsflow/methods/dopri5.hpp"
 #include "mbsflow/methods/step_grid.hpp"
+#include "run_loop.hpp"
 #include "schedules.hpp"
 #include "sink_runner.hpp"
 
@@ -44,127 +45,149 @@ std::optional<RemoteInputs> proxies(const TightRun& r, std::function<std::option
   return in;
 }
 
-TightCounts run_rk4(const TightRun& r) {
-  const RunOptions& o = r.o;
-  const StepGrid grid = step_grid(o.t_start, o.t_end, o.step);
-  const int every = output_steps(o), chunk = chunk_length(every);
-  long first = 0;
-  const auto remote = proxies(r, [&](int c, int) { return std::optional<long>(first + c); });
-  Scheduler schedule(
-      r.d, chunk, 4,
-      [&](std::size_t p, int s, int c, Half half) {
-        guarded(r, [&] {
-          const long n = first + c;
-          Part& part = *r.parts[p];
-          if (half == Half::inner) {  // needs no ghost values: runs while they travel
-            partitioned::rk4_inner_stage(part, s, grid.time(n), grid.time(n + 1));
-            return;
-          }
-          r.exchange.take(p, n, s);
-          if (half == Half::whole)
-            partitioned::rk4_stage(part, s, grid.time(n), grid.time(n + 1));
-          else
-            partitioned::rk4_edge_stage(part, s, grid.time(n), grid.time(n + 1));
-          // The values this stage made: stage input s+1, or after the last stage the next step's state.
-          const long n_next = s == 3 ? n + 1 : n;
-          if (n_next < grid.steps) r.exchange.offer(p, n_next, (s + 1) % 4);
-        });
-      },
-      r.barriers, remote ? &*remote : nullptr);
-  step_in_chunks(
-      grid, chunk, r.start ? r.start->steps : 0,
-      [&](long from, int steps) {
-        first = from;
-        schedule.run(steps);
-        r.exchange.check();
-      },
-      [&](long done) {
-        r.output.step_done(done, grid.time(done), done % every == 0 || done == grid.steps ? done : -1);
-        if (done < grid.steps && r.output.checkpoint_due()) {
-          TightPoint point;
-          point.steps = done;
-          point.t = grid.time(done);
-          r.output.checkpoint(point);
-        }
-      });
-  return {grid.steps, 0, grid.steps * 4};
-}
+// RK4 in chunks of steps: a chunk's stages run through the flow graph, its snapshot (if
+// one falls due) and checkpoint opportunity come after it.
+class TightRk4 final : public Advancer {
+ public:
+  explicit TightRk4(const TightRun& r)
+      : r_(r), grid_(step_grid(r.o.t_start, r.o.t_end, r.o.step)), every_(output_steps(r.o)), chunk_(chunk_length(every_)),
+        done_(r.start ? r.start->steps : 0), remote_(proxies(r, [this](int c, int) { return std::optional<long>(first_ + c); })),
+        schedule_(r.d, chunk_, 4, [this](std::size_t p, int s, int c, Half half) { stage(p, s, c, half); }, r.barriers,
+                  remote_ ? &*remote_ : nullptr) {}
 
-// The loop of run_simulation's DOPRI5 with the stages spread over submodels. Every
-// process makes the same decisions: it sees the same error norm.
-TightCounts run_dopri5(const TightRun& r) {
-  const RunOptions& o = r.o;
-  Dopri5Settings settings;
-  settings.rtol = o.rtol;
-  settings.atol = o.atol;
-  dopri5::Controller control(settings);
-  const StateLayout global = r.d.layout();
-  Eigen::VectorXd squares = Eigen::VectorXd::Zero(global.size()), dense(global.size());
-  double t = o.t_start, h = o.step;
-  bool need_k0 = true;
-  long attempt = 0;  // the exchange's step: attempts are numbered alike everywhere
-  TightCounts counts;
-  long next_out = 1;
-  if (const TightPoint* p = r.start) {
-    t = p->t;
-    h = p->h;
-    counts = {p->steps, p->rejected, p->evaluations};
-    next_out = p->next_out;
-    StateReader in(p->controller, "the DOPRI5 controller's state");
-    control.restore(in);
+  bool done() const override { return done_ >= grid_.steps; }
+  void advance(RunObserver& to) override {
+    const int steps = static_cast<int>(std::min<long>(chunk_, grid_.steps - done_));
+    first_ = done_;
+    schedule_.run(steps);
+    r_.exchange.check();
+    done_ += steps;
+    to.step_done(done_, grid_.time(done_), done_ % every_ == 0 || done_ == grid_.steps ? done_ : -1);
   }
-  const auto remote = proxies(r, [&](int, int s) {
-    return s > 0 || need_k0 ? std::optional<long>(attempt) : std::nullopt;
-  });
-  Scheduler schedule(
-      r.d, 1, 7,
-      [&](std::size_t p, int s, int, Half half) {
-        guarded(r, [&] {
-          if (half == Half::inner) return;  // DOPRI5 stages are not split: the edge half does all
-          if (s > 0 || need_k0) r.exchange.take(p, attempt, s);
-          partitioned::dopri5_stage(*r.parts[p], s, t, h, need_k0, o.atol, o.rtol, squares);
-          if (s < 6) r.exchange.offer(p, attempt, s + 1);
-        });
-      },
-      r.barriers, remote ? &*remote : nullptr);
-  while (t < o.t_end) {
-    h = std::min(h, o.t_end - t);
-    double taken = 0.0;
-    // The schedule's stages read h: the step of the attempt.
-    const bool ok = control.accepted_step(t, h, taken, counts.rejected, [&] {
-      schedule.run(1);
-      r.exchange.check();
-      counts.evaluations += need_k0 ? 7 : 6;
-      need_k0 = false;
-      const double sum = r.exchange.error_sum(attempt, squares);
-      ++attempt;
-      return std::sqrt(sum / static_cast<double>(squares.size()));
-    });
-    if (!ok) throw RunError(step_collapsed_message(h, t, o.rtol));
-    const double t_new = landed_time(t, taken, o.t_end);
-    for (std::size_t p = 0; p < r.parts.size(); ++p)
-      if (Part* part = r.parts[p]) {
-        partitioned::dopri5_accept(*part, taken, t_new);  // element-wise, cheap
-        if (t_new < o.t_end) r.exchange.offer(p, attempt, 0);
+  void save(StateWriter& w) override {
+    TightPoint point;
+    point.steps = done_;
+    point.t = grid_.time(done_);
+    save_tight_point(w, point);
+  }
+  TightCounts counts() const { return {grid_.steps, 0, grid_.steps * 4}; }
+
+ private:
+  void stage(std::size_t p, int s, int c, Half half) {
+    guarded(r_, [&] {
+      const long n = first_ + c;
+      Part& part = *r_.parts[p];
+      if (half == Half::inner) {  // needs no ghost values: runs while they travel
+        partitioned::rk4_inner_stage(part, s, grid_.time(n), grid_.time(n + 1));
+        return;
       }
-    if (r.output.wants_dense())
-      next_out = dense_outputs(o, next_out, t_new, [&](long k, double t_out) {
-        for (const Part* part : r.parts)
-          if (part) partitioned::dopri5_dense(*part, (t_out - t) / taken, dense);
-        r.output.dense(k, t_out, dense);
-      });
-    ++counts.steps;
-    t = t_new;
-    need_k0 = true;
-    r.output.step_done(counts.steps, t, t < o.t_end ? -1 : next_out);
-    if (t < o.t_end && r.output.checkpoint_due()) {
-      StateWriter w;
-      control.save(w);
-      r.output.checkpoint({counts.steps, counts.rejected, counts.evaluations, t, h, next_out, w.take()});
+      r_.exchange.take(p, n, s);
+      if (half == Half::whole)
+        partitioned::rk4_stage(part, s, grid_.time(n), grid_.time(n + 1));
+      else
+        partitioned::rk4_edge_stage(part, s, grid_.time(n), grid_.time(n + 1));
+      // The values this stage made: stage input s+1, or after the last stage the next step's state.
+      const long n_next = s == 3 ? n + 1 : n;
+      if (n_next < grid_.steps) r_.exchange.offer(p, n_next, (s + 1) % 4);
+    });
+  }
+
+  const TightRun& r_;
+  StepGrid grid_;
+  int every_, chunk_;
+  long done_, first_ = 0;  // steps done; the first step of the chunk running
+  std::optional<RemoteInputs> remote_;
+  Scheduler schedule_;
+};
+
+// run_simulation's DOPRI5 with the stages spread over submodels, one accepted step per
+// advance: the controller is the stepper's (dopri5::Controller). Every process makes the
+// same decisions: it sees the same error norm.
+class TightDopri5 final : public Advancer {
+ public:
+  explicit TightDopri5(const TightRun& r)
+      : r_(r), o_(r.o), control_(settings(r.o)), squares_(Eigen::VectorXd::Zero(r.d.layout().size())),
+        dense_(r.d.layout().size()), t_(o_.t_start), h_(o_.step),
+        remote_(proxies(r, [this](int, int s) { return s > 0 || need_k0_ ? std::optional<long>(attempt_) : std::nullopt; })),
+        schedule_(r.d, 1, 7, [this](std::size_t p, int s, int, Half half) { stage(p, s, half); }, r.barriers,
+                  remote_ ? &*remote_ : nullptr) {
+    if (const TightPoint* p = r.start) {
+      t_ = p->t;
+      h_ = p->h;
+      counts_ = {p->steps, p->rejected, p->evaluations};
+      next_out_ = p->next_out;
+      StateReader in(p->controller, "the DOPRI5 controller's state");
+      control_.restore(in);
     }
   }
-  return counts;
-}
+
+  bool done() const override { return !(t_ < o_.t_end); }
+  void advance(RunObserver& to) override {
+    h_ = std::min(h_, o_.t_end - t_);
+    double taken = 0.0;
+    // The schedule's stages read h: the step of the attempt.
+    const bool ok = control_.accepted_step(t_, h_, taken, counts_.rejected, [&] {
+      schedule_.run(1);
+      r_.exchange.check();
+      counts_.evaluations += need_k0_ ? 7 : 6;
+      need_k0_ = false;
+      const double sum = r_.exchange.error_sum(attempt_, squares_);
+      ++attempt_;
+      return std::sqrt(sum / static_cast<double>(squares_.size()));
+    });
+    if (!ok) throw RunError(step_collapsed_message(h_, t_, o_.rtol));
+    const double t_new = landed_time(t_, taken, o_.t_end);
+    for (std::size_t p = 0; p < r_.parts.size(); ++p)
+      if (Part* part = r_.parts[p]) {
+        partitioned::dopri5_accept(*part, taken, t_new);  // element-wise, cheap
+        if (t_new < o_.t_end) r_.exchange.offer(p, attempt_, 0);
+      }
+    if (to.wants_dense())
+      next_out_ = dense_outputs(o_, next_out_, t_new, [&](long k, double t_out) {
+        for (const Part* part : r_.parts)
+          if (part) partitioned::dopri5_dense(*part, (t_out - t_) / taken, dense_);
+        to.dense(k, t_out, dense_);
+      });
+    ++counts_.steps;
+    t_ = t_new;
+    need_k0_ = true;
+    to.step_done(counts_.steps, t_, t_ < o_.t_end ? -1 : next_out_);
+  }
+  void save(StateWriter& w) override {
+    StateWriter c;
+    control_.save(c);
+    save_tight_point(w, {counts_.steps, counts_.rejected, counts_.evaluations, t_, h_, next_out_, c.take()});
+  }
+  TightCounts counts() const { return counts_; }
+
+ private:
+  static Dopri5Settings settings(const RunOptions& o) {
+    Dopri5Settings s;
+    s.rtol = o.rtol;
+    s.atol = o.atol;
+    return s;
+  }
+  void stage(std::size_t p, int s, Half half) {
+    guarded(r_, [&] {
+      if (half == Half::inner) return;  // DOPRI5 stages are not split: the edge half does all
+      if (s > 0 || need_k0_) r_.exchange.take(p, attempt_, s);
+      partitioned::dopri5_stage(*r_.parts[p], s, t_, h_, need_k0_, o_.atol, o_.rtol, squares_);
+      if (s < 6) r_.exchange.offer(p, attempt_, s + 1);
+    });
+  }
+
+  const TightRun& r_;
+  const RunOptions& o_;
+  dopri5::Controller control_;
+  Eigen::VectorXd squares_, dense_;
+  double t_, h_;
+  bool need_k0_ = true;
+  long attempt_ = 0;  // the exchange's step: attempts are numbered alike everywhere
+  TightCounts counts_;
+  long next_out_ = 1;
+  std::optional<RemoteInputs> remote_;
+  Scheduler schedule_;
+};
 
 }  // namespace
 
@@ -183,7 +206,7 @@ int tight_stages(Method m) {
                    "loosely coupled run: give {coupling=loose}, or " + settings + ", or run it in one process on threads");
 }
 
-void save_tight_point(StateWriter& w, const TightPoint& p, const Eigen::VectorXd& y) {
+void save_tight_point(StateWriter& w, const TightPoint& p) {
   w.integer(p.steps);
   w.integer(p.rejected);
   w.integer(p.evaluations);
@@ -191,6 +214,10 @@ void save_tight_point(StateWriter& w, const TightPoint& p, const Eigen::VectorXd
   w.real(p.h);
   w.integer(p.next_out);
   w.bytes(p.controller);
+}
+
+void save_tight_point(StateWriter& w, const TightPoint& p, const Eigen::VectorXd& y) {
+  save_tight_point(w, p);
   w.vector(y);
 }
 
@@ -208,7 +235,14 @@ TightPoint read_tight_point(StateReader& in, Eigen::Index size, Eigen::VectorXd&
 }
 
 TightCounts run_tight_coupling(const TightRun& run) {
-  return tight_stages(run.o.method) == 4 ? run_rk4(run) : run_dopri5(run);
+  if (tight_stages(run.o.method) == 4) {
+    TightRk4 rk4(run);
+    drive(rk4, run.output);
+    return rk4.counts();
+  }
+  TightDopri5 dopri5(run);
+  drive(dopri5, run.output);
+  return dopri5.counts();
 }
 
 }  // namespace mbsflow

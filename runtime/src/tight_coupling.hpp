@@ -3,7 +3,7 @@
 // (run_partitioned) or some run in other workers (worker_tight.cpp): RK4 with ghost values
 // exchanged at every stage, or DOPRI5 with them exchanged at every stage of an attempt and
 // the error norm the one global reduction per attempt. Where the values come from is the
-// BoundaryExchange's business, where the results go the TightOutput's.
+// BoundaryExchange's business, where the results go the RunObserver's (run_loop.hpp).
 #include <oneapi/tbb/enumerable_thread_specific.h>
 
 #include <chrono>
@@ -15,6 +15,7 @@
 #include "mbsflow/methods/state_archive.hpp"
 #include "mbsflow/graph/decomposition.hpp"
 #include "mbsflow/runtime/simulation.hpp"
+#include "run_loop.hpp"
 
 namespace mbsflow {
 
@@ -44,37 +45,19 @@ struct TightPoint {
   std::vector<std::uint8_t> controller;
 };
 
-// A tightly coupled run's part of a checkpoint: the point and the global state y (run in
+// A tightly coupled run's part of a checkpoint: the point, then the global state y (run in
 // one process or on workers, it is the same).
+void save_tight_point(StateWriter& w, const TightPoint& p);
 void save_tight_point(StateWriter& w, const TightPoint& p, const Eigen::VectorXd& y);
 // Reads them back; y must be of `size` numbers.
 TightPoint read_tight_point(StateReader& in, Eigen::Index size, Eigen::VectorXd& y);
-
-// Where a tightly coupled run's results go: a sink in this process, or the coordinator.
-class TightOutput {
- public:
-  virtual ~TightOutput() = default;
-  // After `steps` steps, at t: throws to stop the run (diverged, interrupted, stopped
-  // elsewhere); reports progress, and with snapshot >= 0 the local submodels' states
-  // (own bodies of x[0]) as snapshot number `snapshot`.
-  virtual void step_done(long steps, double t, long snapshot) = 0;
-  // Dense output at t, snapshot number `index`: the local submodels' own entries of y
-  // (global layout) are set, drivers not yet imposed.
-  virtual void dense(long index, double t, Eigen::VectorXd& y) = 0;
-  // False: the run writes no snapshots between steps (no dense output to compute).
-  virtual bool wants_dense() const { return true; }
-  // Checkpoints: whether one is due now (asked between steps), and taking it; the local
-  // submodels' x[0] hold the state at point.t.
-  virtual bool checkpoint_due() { return false; }
-  virtual void checkpoint(const TightPoint& point) { (void)point; }
-};
 
 struct TightRun {
   const Decomposition& d;
   std::vector<partitioned::Part*> parts;  // null where the submodel runs elsewhere
   const RunOptions& o;
   BoundaryExchange& exchange;
-  TightOutput& output;
+  RunObserver& output;  // the snapshots: the state in the local parts' x[0], dense output of their own entries
   bool barriers = false;       // a barrier after every stage (the seed's scheme)
   BusyClock* clock = nullptr;  // times the stage work
   const TightPoint* start = nullptr;  // go on from here (the parts' x[0] set); null: from t_start

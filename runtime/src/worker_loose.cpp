@@ -7,6 +7,7 @@
 
 #include "loose_part.hpp"
 #include "mbsflow/error.hpp"
+#include "loose_advancer.hpp"
 #include "loose_rounds.hpp"
 #include "mbsflow/methods/step_grid.hpp"
 #include "worker_part.hpp"
@@ -31,6 +32,47 @@ bool exchange_past(WorkerPart& w, std::vector<std::unique_ptr<LoosePart>>& lp, i
   return !w.exchange.aborted();
 }
 
+// The results to the coordinator: the coupling records and snapshots at each macro-step
+// end, its progress on the tight grid, checkpoints with the time first (the coordinator
+// checks that every worker sent the same). A stop is thrown.
+class LooseCoordinatorOutput final : public RunObserver {
+ public:
+  LooseCoordinatorOutput(WorkerPart& w, loose::LooseRounds& rounds, const loose::MacroGrid& grid)
+      : w_(w), rounds_(rounds), grid_(grid), tight_(step_grid(w.s.o.t_start, w.s.o.t_end, w.s.o.step)) {}
+  void reached(double t) override {
+    if (const std::string why = w_.check(t); !why.empty()) throw RunError(why);
+    t_ = t;
+    report_coupling();
+  }
+  void dense(long index, double t, Eigen::VectorXd& y, bool projected) override {
+    w_.report_dense(grid_.output_step(index), t, index, y, !projected);
+  }
+  void step_done(long m, double, long) override {
+    const long step = grid_.tight_step(m);
+    w_.report_state(step, tight_.time(step), -1);
+  }
+  bool checkpoint_due() override { return w_.checkpoint_due(); }
+  void checkpoint(const std::function<void(StateWriter&)>& save) override {
+    StateWriter out;
+    out.real(t_);
+    save(out);
+    w_.send_checkpoint(out.take());
+  }
+  // The records since the last report.
+  void report_coupling() {
+    loose::CouplingLog batch;
+    rounds_.drain(batch);
+    w_.report_coupling(batch.records());
+  }
+
+ private:
+  WorkerPart& w_;
+  loose::LooseRounds& rounds_;
+  const loose::MacroGrid& grid_;
+  StepGrid tight_;  // the coordinator's snapshot times
+  double t_ = 0.0;
+};
+
 }  // namespace
 
 Outcome run_loose_part(Session& s, WorkerTransport& transport, const nlohmann::json& start, int threads,
@@ -44,9 +86,7 @@ Outcome run_loose_part(Session& s, WorkerTransport& transport, const nlohmann::j
   for (std::size_t q = 0; q < k; ++q)
     if (s.worker_of[q] == s.me) parts[q] = &(lp[q] = loose::make_part(s.model, s.d.submodels[q], s.o, lo, q))->part;
   WorkerPart w(s, transport, start, parts, 4, stop);
-  const bool adaptive = lo.coupling_tol > 0.0;
-  loose::MacroGrid grid(s.o, adaptive ? 0.0 : lo.macro_step);
-  const StepGrid tight = step_grid(s.o.t_start, s.o.t_end, s.o.step);  // the coordinator's snapshot times
+  loose::MacroGrid grid(s.o, lo.coupling_tol > 0.0 ? 0.0 : lo.macro_step);
   loose::RemoteSamples remote;
   remote.wait = [&](long index, int q, int p) { w.exchange.wait(index, 0, q, p); };
   remote.take = [&](int p, int q, long cap, const std::function<void(long, const double*)>& take) {
@@ -56,15 +96,15 @@ Outcome run_loose_part(Session& s, WorkerTransport& transport, const nlohmann::j
   remote.stopped = [&] { return w.exchange.aborted(); };
   remote.abort = [&](const std::string& why) { w.exchange.abort(why); };
   loose::LooseRounds rounds(s.model, s.d, s.o, lo, lp, grid, grid.steps_per_run(), &remote);
-  // The coupling records since the last report, to the coordinator.
-  auto report_coupling = [&] {
-    loose::CouplingLog batch;
-    rounds.drain(batch);
-    w.report_coupling(batch.records());
-  };
+  LooseStats st;
+  const StateLayout global = s.d.layout();
+  // Every worker takes the same adaptive macro steps: the largest error over all decides.
+  loose::LooseAdvancer advancer(s.o, lo, lp, rounds, grid, st, global, Eigen::VectorXd::Zero(global.size()),
+                                {[&](long attempt, double e) { return w.exchange.max_over_workers(attempt, e); },
+                                 [&](long index) { w.exchange.rewind(0, index); }});
+  LooseCoordinatorOutput output(w, rounds, grid);
 
   std::string failure;
-  loose::LoosePosition at{0, 1, loose::adaptive_start(s.o, lo)};
   if (!s.resume.empty()) {
     // The coordinator's checkpoint: this worker's position and submodels. The ends they
     // published that a remote neighbour may not have taken yet go out again (a neighbour
@@ -72,8 +112,7 @@ Outcome run_loose_part(Session& s, WorkerTransport& transport, const nlohmann::j
     try {
       StateReader in(s.resume, "the coordinator's checkpoint");
       (void)in.real();  // its time, for the coordinator
-      loose::restore_position(in, at, grid);
-      for (int p : w.mine) lp[static_cast<std::size_t>(p)]->restore(in);
+      advancer.restore(in);
       if (!in.at_end()) in.fail("it holds more than this worker's state");
     } catch (const std::exception& e) {
       failure = error_text(e);
@@ -87,59 +126,18 @@ Outcome run_loose_part(Session& s, WorkerTransport& transport, const nlohmann::j
       if (!exchange_past(w, lp, j)) failure = w.exchange.why();
     for (int p : w.mine) lp[static_cast<std::size_t>(p)]->start(s.o.t_start, lo.macro_step);
   }
-  long& done = at.done;  // macro steps
-  const StateLayout global = s.d.layout();
-  Eigen::VectorXd y = Eigen::VectorXd::Zero(global.size());
-  // At macro-step end m: the coupling records, the snapshots the local submodels kept
-  // (projected already), the progress, a checkpoint the coordinator asked for.
-  auto at_end = [&](long m) {
-    done = m;
-    report_coupling();
-    for (long& k = at.next_output; k <= grid.outputs() && loose::at_or_before(grid.output_time(k), grid.end(done)); ++k) {
-      for (int p : w.mine) lp[static_cast<std::size_t>(p)]->take_snapshot(k, global, y);
-      w.report_dense(grid.output_step(k), grid.output_time(k), k, y, false);
-    }
-    const long step = grid.tight_step(done);
-    w.report_state(step, tight.time(step), -1);
-    if (grid.end(done) < s.o.t_end && w.checkpoint_due()) {
-      StateWriter out;
-      out.real(grid.end(done));
-      loose::save_position(out, at, grid);
-      for (int p : w.mine) lp[static_cast<std::size_t>(p)]->save(out);
-      w.send_checkpoint(out.take());
-    }
-  };
-  if (failure.empty() && adaptive) {
-    // Every worker takes the same macro steps: the largest error over all decides.
-    LooseStats st;
+  if (failure.empty()) {
     try {
-      loose::adaptive_macro_steps(
-          s.o, lo, lp, rounds, grid, st, at.walk,
-          [&](long m) {
-            if (const std::string why = w.check(grid.end(m)); !why.empty()) throw RunError(why);
-            at_end(m);
-          },
-          [&](long attempt, double e) { return w.exchange.max_over_workers(attempt, e); },
-          [&](long index) { w.exchange.rewind(0, index); });
+      drive(advancer, output);
     } catch (const std::exception& e) {
       failure = error_text(e);
     }
-  } else if (failure.empty()) {
-    loose::for_each_run(
-        grid, loose::ends_kept(lo),
-        [&](long m, int n) {
-          failure = rounds.run(m, n);
-          if (failure.empty()) failure = w.check(grid.end(m + n));
-          if (!failure.empty()) return false;
-          at_end(m + n);
-          return true;
-        },
-        done);
   }
+  const long done = advancer.at.done;
   if (failure.empty()) {
     rounds.catch_up(done);  // the coupling errors of the last macro steps
     failure = w.check(grid.end(done));
-    report_coupling();
+    output.report_coupling();
   }
   double evaluations = 0.0;
   for (int p : w.mine) evaluations += static_cast<double>(lp[static_cast<std::size_t>(p)]->evaluations);

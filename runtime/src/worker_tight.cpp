@@ -18,23 +18,26 @@ namespace {
 using partitioned::Part;
 
 // Results to the coordinator; a stop (aborted, diverged, interrupted) is thrown.
-class CoordinatorOutput final : public TightOutput {
+class TightCoordinatorOutput final : public RunObserver {
  public:
-  explicit CoordinatorOutput(WorkerPart& w) : w_(w) {}
+  explicit TightCoordinatorOutput(WorkerPart& w) : w_(w) {}
   void step_done(long steps, double t, long snapshot) override {
     steps_ = steps;
     t_ = t;
     if (std::string failure = w_.check(t); !failure.empty()) throw RunError(failure);
     w_.report_state(steps, t, snapshot);
   }
-  void dense(long index, double t, Eigen::VectorXd& y) override { w_.report_dense(steps_, t, index, y); }
+  void dense(long index, double t, Eigen::VectorXd& y, bool projected) override {
+    w_.report_dense(steps_, t, index, y, !projected);
+  }
   bool checkpoint_due() override { return w_.checkpoint_due(); }
   // The point and the own bodies (the coordinator puts the global state together).
-  void checkpoint(const TightPoint& point) override {
+  void checkpoint(const std::function<void(StateWriter&)>& save) override {
     std::vector<double> own;
     w_.pack_own(own);
     StateWriter out;
-    save_tight_point(out, point, Eigen::Map<const Eigen::VectorXd>(own.data(), static_cast<Eigen::Index>(own.size())));
+    save(out);
+    out.vector(Eigen::Map<const Eigen::VectorXd>(own.data(), static_cast<Eigen::Index>(own.size())));
     w_.send_checkpoint(out.take());
   }
   long steps() const { return steps_; }
@@ -65,7 +68,7 @@ Outcome run_tight(Session& s, WorkerTransport& transport, const nlohmann::json& 
   std::vector<Part*> parts;
   for (const auto& p : s.tight_parts) parts.push_back(p.get());
   WorkerPart w(s, transport, start, parts, stages, stop);
-  CoordinatorOutput output(w);
+  TightCoordinatorOutput output(w);
   std::string failure;
   TightCounts counts;
   std::optional<TightPoint> resumed;

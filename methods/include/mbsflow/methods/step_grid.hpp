@@ -48,16 +48,4 @@ inline int chunk_length(int output_every) {
   return 1;
 }
 
-// Walks the grid from step `first` in chunks of at most `chunk` steps: run(steps) takes
-// them, then after(first) sees the steps done so far.
-template <class Run, class After>
-void step_in_chunks(const StepGrid& g, int chunk, long first, Run run, After after) {
-  while (first < g.steps) {
-    const int steps = static_cast<int>(std::min<long>(chunk, g.steps - first));
-    run(first, steps);
-    first += steps;
-    after(first);
-  }
-}
-
 }  // namespace mbsflow
