@@ -10,7 +10,8 @@ stepping with a controller in the loop (`Simulation`), and scipy's `solve_ivp` s
 mbsflow's methods (`solve_ivp`). Errors are `mbsflow.Error`: `InputError` (also a
 ValueError) and `RunError` (also a RuntimeError). See docs/python.md.
 """
-from ._core import Error, InputError, ModelError, RunError, Model, Simulation, generate, __version__
+from ._core import Error, InputError, ModelError, RunError, Model, generate, __version__
+from .simulation import Simulation
 from .results import Results
 from .runner import run
 from .ivp import solve_ivp, OdeResult, OdeSolution, CompiledRhs

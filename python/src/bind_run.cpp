@@ -20,84 +20,6 @@
 namespace mbsflow::python {
 namespace {
 
-// The setting of Python's keyword `keyword`, or null.
-const RunSetting* python_setting(const std::string& keyword) {
-  for (const RunSetting& s : run_settings())
-    if ((s.places & in_python) && keyword == s.keyword()) return &s;
-  return nullptr;
-}
-
-// A request from mbsflow.run's keywords, each checked as its declaration says: its type,
-// range or choices (InputError naming it and its value).
-RunRequest request_of(const py::dict& settings) {
-  RunRequest r;
-  for (const auto& [key, value] : settings) {
-    const std::string keyword = key.cast<std::string>();
-    const RunSetting* s = python_setting(keyword);
-    if (!s) throw InputError("mbsflow.run: no setting " + keyword);
-    // A list is shown as the message's list, "a,b" (rendered [a, b]).
-    std::string shown;
-    if (py::isinstance<py::list>(value) || py::isinstance<py::tuple>(value))
-      for (const py::handle item : value) shown += (shown.empty() ? "" : ",") + py::str(item).cast<std::string>();
-    else
-      shown = py::str(value).cast<std::string>();
-    auto fail = [&](const std::string& what) { throw InputError("{" + std::string(s->name) + "=" + shown + "}: " + what); };
-    if (value.is_none()) continue;  // the default, as not given
-    // Python's partition is a count or a partition file.
-    if (std::string(s->name) == "partitions" && (py::isinstance<py::str>(value) || py::hasattr(value, "__fspath__"))) {
-      r.partition_file = py::module_::import("os").attr("fspath")(value).cast<std::string>();
-      continue;
-    }
-    struct Read {
-      const RunSetting& s;
-      const py::handle value;
-      std::function<void(const std::string&)> fail;
-      bool flag() const {
-        if (!py::isinstance<py::bool_>(value)) fail("must be True or False");
-        return value.cast<bool>();
-      }
-      double number() const {
-        const bool ok = !py::isinstance<py::bool_>(value) &&
-                        (py::isinstance<py::int_>(value) || (!s.is_integer() && py::isinstance<py::float_>(value)));
-        if (!ok) fail(s.is_integer() ? "must be an integer" : "must be a number");
-        return value.cast<double>();
-      }
-      std::string text() const {
-        std::string t;
-        if (s.list && (py::isinstance<py::list>(value) || py::isinstance<py::tuple>(value))) {
-          for (const py::handle item : value) {
-            if (!py::isinstance<py::str>(item)) fail("must be a list of names");
-            t += (t.empty() ? "" : ",") + item.cast<std::string>();
-          }
-        } else if (!py::isinstance<py::str>(value)) {
-          fail("must be a string");
-        } else {
-          t = value.cast<std::string>();
-        }
-        return t;
-      }
-    };
-    set_setting(*s, r, Read{*s, value, fail});
-  }
-  return r;
-}
-
-// Python's default of a setting: None where it has none.
-py::object python_default(const RunSetting& s) {
-  const RunRequest r;
-  return std::visit(
-      [&](auto member) -> py::object {
-        const auto& v = r.*member;
-        using V = std::decay_t<decltype(v)>;
-        if constexpr (std::is_same_v<V, bool> || std::is_same_v<V, int> || std::is_same_v<V, double> ||
-                      std::is_same_v<V, std::string>)
-          return py::cast(v);
-        else
-          return py::none();
-      },
-      s.field);
-}
-
 py::dict run_model(const Model& model, const std::string& output, const RunRequest& request, const py::object& progress) {
   Model m = model;
   apply_overrides(m, request);
@@ -160,7 +82,7 @@ py::dict run_model(const Model& model, const std::string& output, const RunReque
 
 py::dict run_model_with(const Model& model, const std::string& output, const py::dict& settings,
                         const py::object& progress) {
-  return run_model(model, output, request_of(settings), progress);
+  return run_model(model, output, request_of(settings, in_python, "mbsflow.run"), progress);
 }
 
 }  // namespace
@@ -169,14 +91,13 @@ void bind_run(py::module_& m) {
   m.def("_run", &run_model_with, py::arg("model"), py::arg("output"), py::arg("settings"), py::arg("progress"));
   m.def(
       "_run_settings",
-      [] {
-        py::list out;
-        for (const RunSetting& s : run_settings())
-          if (s.places & in_python)
-            out.append(py::make_tuple(s.keyword(), python_default(s), render(s.help, keyword_for)));
-        return out;
+      [](const std::string& of) {
+        if (of != "run" && of != "simulation") throw InputError("_run_settings: of run or simulation, not " + of);
+        return settings_of(of == "run" ? in_python : in_simulation);
       },
-      "The settings mbsflow.run takes: (keyword, default, help) each, in the order of run_settings().");
+      py::arg("of") = "run",
+      "The settings mbsflow.run (or mbsflow.Simulation) takes: (keyword, default, help) each, in the order of "
+      "run_settings().");
 }
 
 }  // namespace mbsflow::python

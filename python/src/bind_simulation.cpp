@@ -7,21 +7,23 @@
 #include "mbsflow/graph/stable_step.hpp"
 #include "mbsflow/methods/stepper.hpp"
 #include "mbsflow/runtime/run_request.hpp"
+#include "mbsflow/runtime/run_settings.hpp"
 #include "mbsflow/runtime/simulation.hpp"
 #include "stop_guard.hpp"
 
 namespace mbsflow::python {
 namespace {
 
-std::unique_ptr<Simulation> make_simulation(const Model& model, const RunRequest& overrides, int threads,
-                                            const std::string& linear_solver, const std::string& jacobian) {
+// mbsflow.Simulation's keywords (the settings declared in_simulation) on a model.
+std::unique_ptr<Simulation> make_simulation(const Model& model, const py::dict& settings) {
+  const RunRequest r = request_of(settings, in_simulation, "mbsflow.Simulation");
   Model m = model;
-  apply_overrides(m, overrides);
+  apply_overrides(m, r);
   RunOptions o = options_from_model(m, estimate_stable_step(m).step);
   if (!std::isfinite(o.step)) throw InputError(m.name + ": no joints to estimate a step from; give {step}");
-  o.threads = threads;
-  o.linear_solver = linear_solver;
-  o.jacobian = jacobian;
+  o.threads = r.threads;
+  o.linear_solver = r.linear_solver;
+  o.jacobian = r.jacobian;
   return std::make_unique<Simulation>(m, o);
 }
 
@@ -59,22 +61,8 @@ py::array_t<double> block(py::object self, Eigen::Index (StateLayout::*at)(Eigen
 
 void bind_simulation(py::module_& m) {
   py::class_<Simulation>(m, "Simulation")
-      .def(py::init([](const Model& model, std::optional<std::string> method, std::optional<double> step,
-                       std::optional<double> rtol, std::optional<double> atol, std::optional<double> t_end,
-                       std::optional<std::string> variant, int threads, const std::string& linear_solver,
-                       const std::string& jacobian) {
-             RunRequest ov;
-             ov.t_end = t_end;
-             ov.step = step;
-             ov.rtol = rtol;
-             ov.atol = atol;
-             ov.method = method;
-             ov.variant = variant;
-             return make_simulation(model, ov, threads, linear_solver, jacobian);
-           }),
-           py::arg("model"), py::arg("method") = py::none(), py::arg("step") = py::none(), py::arg("rtol") = py::none(),
-           py::arg("atol") = py::none(), py::arg("t_end") = py::none(), py::arg("variant") = py::none(),
-           py::arg("threads") = 1, py::arg("linear_solver") = "auto", py::arg("jacobian") = "auto")
+      // mbsflow.Simulation (python/mbsflow/simulation.py) reads its keywords into `settings`.
+      .def(py::init(&make_simulation), py::arg("model"), py::arg("settings"))
       .def_property_readonly("t", &Simulation::time)
       .def("step",
            [](Simulation& s, std::optional<double> dt) {

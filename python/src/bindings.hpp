@@ -9,6 +9,10 @@
 #include <string>
 #include <vector>
 
+namespace mbsflow {
+struct RunRequest;
+}
+
 namespace mbsflow::python {
 
 namespace py = pybind11;
@@ -17,6 +21,13 @@ void bind_errors(py::module_& m);
 // A setting named in a library message ({name} or {name=value}) as the Python keyword.
 std::string keyword_for(const std::string& setting, const std::string* value);
 void bind_model(py::module_& m);
+// A request from the keywords given at `place` (SettingPlace: in_python for mbsflow.run,
+// in_simulation for mbsflow.Simulation), each checked as its declaration says: its type,
+// range or choices (InputError naming it and its value, or `caller` and an unknown one).
+// None is the default, as not given.
+RunRequest request_of(const py::dict& settings, unsigned place, const char* caller);
+// The settings given at `place`: (keyword, default, help) each, in declaration order.
+py::list settings_of(unsigned place);
 void bind_results(py::module_& m);
 void bind_run(py::module_& m);
 void bind_simulation(py::module_& m);

@@ -13,6 +13,7 @@ namespace {
 using R = RunRequest;
 constexpr unsigned everywhere = in_cli | in_python | in_model;
 constexpr unsigned front_ends = in_cli | in_python;
+constexpr unsigned stepped = everywhere | in_simulation;  // also mbsflow.Simulation's
 
 std::vector<std::string> method_names() {
   std::vector<std::string> out;
@@ -44,15 +45,15 @@ std::vector<RunSetting> declare() {
   std::vector<RunSetting> s;
   // The model's simulation block.
   s.push_back({"t_start", "", in_model, &R::t_start, "Start time in s (default 0)"});
-  s.push_back({"t_end", "--t-end", everywhere, &R::t_end, "End time in s (default 1); must be after the model's t_start"});
-  s.push_back(positive({"step", "--step", everywhere, &R::step,
+  s.push_back({"t_end", "--t-end", stepped, &R::t_end, "End time in s (default 1); must be after the model's t_start"});
+  s.push_back(positive({"step", "--step", stepped, &R::step,
                         "Step in s; RK4 default: the stability estimate from the stiffest joint; the adaptive methods' "
                         "first step"}));
-  RunSetting method{"method", "--method", everywhere, &R::method,
+  RunSetting method{"method", "--method", stepped, &R::method,
                     "Integration method (default: rk4 where a joint gives it a stable step, tirk for beams, else dopri5)"};
   method.choices_of = method_names;
   s.push_back(method);
-  s.push_back({"variant", "--variant", everywhere, &R::variant,
+  s.push_back({"variant", "--variant", stepped, &R::variant,
                "tirk: tableau and/or iteration, e.g. radau5 or radau3,newton-triangular (default radau3,newton); "
                "colloc: m,s[,order]; another {method} than the model's drops the model's variant"});
   RunSetting every = range({"output_every", "--every", everywhere, &R::output_every,
@@ -62,19 +63,19 @@ std::vector<RunSetting> declare() {
   s.push_back(every);
   s.push_back(positive({"output_interval", "--output-interval", everywhere, &R::output_interval,
                         "Write every S s of model time, whatever the method's steps (replaces {output_every})"}));
-  s.push_back(positive({"rtol", "--rtol", everywhere, &R::rtol,
+  s.push_back(positive({"rtol", "--rtol", stepped, &R::rtol,
                         "Adaptive methods (dopri5, colloc, tirk): relative tolerance (default 1e-06)"}));
-  s.push_back(positive({"atol", "--atol", everywhere, &R::atol,
+  s.push_back(positive({"atol", "--atol", stepped, &R::atol,
                         "Adaptive methods (dopri5, colloc, tirk): absolute tolerance (default 1e-08)"}));
   s.push_back({"assemble", "--assemble", everywhere, &R::assemble,
                "Move the bodies onto rigid joints that their initial positions violate (reported); without it such a "
                "model is refused with the joint and its violation"});
   // The implicit methods' linear algebra.
-  s.push_back(one_of({"linear_solver", "--linear-solver", front_ends, &R::linear_solver,
+  s.push_back(one_of({"linear_solver", "--linear-solver", front_ends | in_simulation, &R::linear_solver,
                       "colloc, tirk: the Newton matrices' LU: auto (dense up to 100 equations, banded when narrow, else "
                       "klu), dense, banded, klu (SuiteSparse) or sparselu (Eigen)"},
                      {"auto", "dense", "banded", "klu", "sparselu"}));
-  s.push_back(one_of({"jacobian", "--jacobian", front_ends, &R::jacobian,
+  s.push_back(one_of({"jacobian", "--jacobian", front_ends | in_simulation, &R::jacobian,
                       "colloc, tirk: auto (analytic when every force comes from bushings, springs, compliant joints, "
                       "loads and gravity; else differences grouped by the pattern's colouring) or differences"},
                      {"auto", "differences"}));
@@ -91,7 +92,7 @@ std::vector<RunSetting> declare() {
   s.push_back({"timings", "--timings", in_cli, &R::timings,
                "Print each set-up phase's time and the memory held after it (resident, peak, bytes per body)"});
   // Threads and submodels.
-  s.push_back(range({"threads", "--threads", front_ends, &R::threads, "Threads (0: all cores)"}, 0, 4096));
+  s.push_back(range({"threads", "--threads", front_ends | in_simulation, &R::threads, "Threads (0: all cores)"}, 0, 4096));
   RunSetting partitions = range({"partitions", "--partitions", front_ends, &R::partitions,
                                  "Submodels (default: one per thread, fewer for small models); results are the same "
                                  "bit for bit. Python's partition also takes a partition file"},
@@ -321,7 +322,9 @@ std::string run_settings_table() {
       values = "text";
     }
     const std::string flag = *s.flag ? "`" + std::string(s.flag) + "`" : "";
-    const std::string py = s.places & in_python ? "`" + std::string(s.keyword()) + "`" : "";
+    const std::string py = s.places & in_python ? "`" + std::string(s.keyword()) + "`" +
+                                                      (s.places & in_simulation ? ", Simulation" : "")
+                                                : "";
     const std::string model = s.places & in_model ? "`simulation." + std::string(s.name) + "`" : "";
     std::string also;
     if (*s.excludes) {

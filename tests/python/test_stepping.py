@@ -105,3 +105,32 @@ def test_ctrl_c_stops_stepping_and_solve_ivp():
     p = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=300, env=dict(os.environ))
     assert p.returncode == 0, p.stderr
     assert p.stdout.split("\n")[:2] == ["advance_to interrupted True True", "solve_ivp interrupted"]
+
+
+def test_the_keywords_are_the_declared_settings_of_a_simulation_each_checked_as_declared(tmp_path):
+    import inspect
+    declared = [k for k, _, _ in mbsflow._core._run_settings("simulation")]
+    assert set(declared) <= {k for k, _, _ in mbsflow._core._run_settings()}  # mbsflow.run's names
+    params = inspect.signature(mbsflow.Simulation).parameters
+    assert set(params) == set(declared) | {"model"}
+    assert params["threads"].default == 1 and params["linear_solver"].default == "auto" and params["step"].default is None
+    assert "rtol" in mbsflow.Simulation.__doc__
+    model = mbsflow.Model.from_dict(PENDULUM)
+    with pytest.raises(mbsflow.InputError, match=r"rtol=-1: must be > 0"):
+        mbsflow.Simulation(model, rtol=-1)
+    with pytest.raises(mbsflow.InputError, match=r"linear_solver=lu: unknown linear solver"):
+        mbsflow.Simulation(model, linear_solver="lu")
+    with pytest.raises(mbsflow.InputError, match=r"threads=1.5: must be an integer"):
+        mbsflow.Simulation(model, threads=1.5)
+    with pytest.raises(TypeError):
+        mbsflow.Simulation(model, coupling="loose")  # a setting of runs, not of a stepped model
+    # Positional as before, None the default, a model file as mbsflow.run takes it.
+    a = mbsflow.Simulation(model, "rk4", 1e-4, None, None, 0.01)
+    path = tmp_path / "pendulum.json"
+    model.save(str(path))
+    b = mbsflow.Simulation(path, method="rk4", step=1e-4, t_end=0.01, threads=None)
+    while a.step():
+        pass
+    while b.step():
+        pass
+    assert a.t == b.t == 0.01 and np.array_equal(a.state, b.state)

@@ -1,6 +1,6 @@
 #pragma once
 // Every setting of a run, declared once: its name, type, default, range and help. The
-// CLI's flags (mbsflow run), Python's keywords (mbsflow.run), the fields of a model's
+// CLI's flags (mbsflow run), Python's keywords (mbsflow.run, mbsflow.Simulation), the fields of a model's
 // simulation block, the names that messages give as {name} and docs/run-settings.md's
 // table are all read from run_settings(); a setting is added there and in RunRequest.
 #include <limits>
@@ -51,8 +51,9 @@ struct RunRequest {
   std::string checkpoint;
 };
 
-// Where a setting can be given.
-enum SettingPlace : unsigned { in_cli = 1, in_python = 2, in_model = 4 };
+// Where a setting can be given; in_simulation: a keyword of mbsflow.Simulation too (a model
+// stepped by the program), under its Python name.
+enum SettingPlace : unsigned { in_cli = 1, in_python = 2, in_model = 4, in_simulation = 8 };
 
 struct RunSetting {
   using Field = std::variant<std::optional<double> RunRequest::*, double RunRequest::*, std::optional<int> RunRequest::*,
