@@ -6,7 +6,7 @@
 #include <map>
 #include <optional>
 
-#include "cluster_wire.hpp"
+#include "coordinator_transport.hpp"
 #include "mbsflow/error.hpp"
 #include "mbsflow/runtime/cluster.hpp"
 #include "coupling_log.hpp"
@@ -15,8 +15,8 @@
 #include "partitioned_state.hpp"
 #include "sink_runner.hpp"
 #include "mbsflow/methods/step_grid.hpp"
+#include "random_id.hpp"
 #include "tight_coupling.hpp"
-#include "zap_guard.hpp"
 
 namespace mbsflow {
 namespace {
@@ -31,7 +31,6 @@ bool known_kind(wire::ResultKind k) {
 
 struct Peer {
   const ClusterWorker* config;
-  zmq::socket_t control;  // DEALER connected to the worker's --listen endpoint
   Clock::time_point heard;
   std::string data_address;
   partitioned::StateShare share;  // its own bodies and modes, in the order it sends them
@@ -44,23 +43,13 @@ struct Peer {
 
 class Coordinator {
  public:
-  Coordinator(const ClusterConfig& c, const RunOptions& o, const StateLayout& state)
-      : c_(c), o_(o), results_(wire::make_socket(ctx_, zmq::socket_type::pull, wire::max_data_bytes(state))) {
+  Coordinator(const ClusterConfig& c, const RunOptions& o, const StateLayout& state) : c_(c), o_(o) {
     if (c.keys) {
       security_ = wire::Security{*c.keys, c.coordinator_key, {}};
       for (const ClusterWorker& w : c.workers) security_->workers.push_back(w.public_key);
-      zap_.emplace(ctx_, [](const std::string& line) { std::fprintf(stderr, "mbsflow coordinator: %s\n", line.c_str()); });
-      for (const ClusterWorker& w : c.workers) zap_->allow("results", w.public_key);
     }
-    wire::curve_server(results_, security(), "results");
-    wire::bind(results_, c.results_bind, "the coordinator's results inbox");
-    results_address_ = wire::reachable_address(results_, c.results_address, "the coordinator's results inbox " + c.results_bind);
-    for (const ClusterWorker& w : c.workers) {
-      Peer p{&w, wire::make_socket(ctx_, zmq::socket_type::dealer), Clock::now(), {}, {}, {}, 0.0, 0, o.t_start, false, false};
-      wire::curve_client(p.control, security(), w.public_key);
-      wire::connect(p.control, w.address, "worker " + w.name);
-      peers_.push_back(std::move(p));
-    }
+    net_ = make_zmq_coordinator_transport(c, state, security(), run_);
+    for (const ClusterWorker& w : c.workers) peers_.push_back({&w, Clock::now(), {}, {}, {}, 0.0, 0, o.t_start, false, false});
   }
 
   std::string who(std::size_t w) const {
@@ -72,7 +61,7 @@ class Coordinator {
     // A full queue means the worker has not taken anything for a long time; the heartbeat
     // check reports it.
     j["run"] = id_text(run_);
-    (void)wire::send_json(peers_[w].control, j);
+    (void)net_->send(w, j);
   }
   // The set-up's model after the set-up message, as "model_part" messages of a header and
   // up to wire::model_part_bytes of text, heartbeats going out between them. The parts
@@ -82,9 +71,7 @@ class Coordinator {
     const json head = {{"type", "model_part"}, {"run", id_text(run_)}};
     for (std::size_t at = 0; at < text.size(); at += wire::model_part_bytes) {
       const std::size_t n = std::min(wire::model_part_bytes, text.size() - at);
-      zmq::message_t part(const_cast<char*>(text.data() + at), n, nullptr);  // no free: not ours
-      if (!wire::send_json(peers_[w].control, head, zmq::send_flags::sndmore | zmq::send_flags::dontwait) ||
-          !wire::send(peers_[w].control, part, zmq::send_flags::dontwait))
+      if (!net_->send_with(w, head, text.substr(at, n)))
         return;  // the worker has taken nothing for long: the heartbeat check reports it
       beat_if_due();
     }
@@ -145,41 +132,27 @@ class Coordinator {
   // One round of waiting (at most a heartbeat interval, or max_wait_s): control messages
   // to on_control, results to on_result; sends heartbeats when due.
   void pump(const std::function<void(std::size_t, const json&)>& on_control,
-            const std::function<void(const wire::ResultHeader&, zmq::message_t&)>& on_result,
+            const std::function<void(const wire::ResultHeader&, std::string_view)>& on_result,
             double max_wait_s = std::numeric_limits<double>::infinity()) {
-    std::vector<zmq::pollitem_t> items;
-    for (Peer& p : peers_) items.push_back({p.control.handle(), 0, ZMQ_POLLIN, 0});
-    items.push_back({results_.handle(), 0, ZMQ_POLLIN, 0});
     const double wait = std::min(max_wait_s, std::max(0.0, c_.timeouts.heartbeat_s - wire::seconds_since(beat_)) + 0.001);
-    wire::poll(items.data(), items.size(), wait);
-    for (std::size_t w = 0; w < peers_.size(); ++w) {
-      if (!(items[w].revents & ZMQ_POLLIN)) continue;
-      zmq::message_t m;
-      while (wire::recv(peers_[w].control, m, zmq::recv_flags::dontwait)) {
-        // A worker's error before it knew the run (a refused hello) carries no run id.
-        auto j = wire::parse_control(m);
-        if (!j || (wire::text(*j, "run") != id_text(run_) && wire::text(*j, "type") != "error")) continue;
-        peers_[w].heard = Clock::now();
-        if (wire::text(*j, "type") == "heartbeat")
-          peers_[w].stalled_s = wire::number(*j, "stalled_s", 0.0, 1e12).value_or(0.0);
-        else
-          on_control(w, *j);
-      }
-    }
-    if (items.back().revents & ZMQ_POLLIN) {
-      zmq::message_t header, payload;
-      while (wire::recv(results_, header, zmq::recv_flags::dontwait)) {
-        payload = zmq::message_t();
-        if (header.more()) (void)wire::recv(results_, payload);
-        wire::skip_rest(results_, payload);
-        // Anything but a result of this run from one of its workers is dropped: a stray or
-        // forged frame can neither end nor stop the run.
-        const auto h = wire::read_header<wire::ResultHeader>(header, run_);
-        if (!h || h->worker < 0 || h->worker >= static_cast<int>(peers_.size()) || !known_kind(h->kind)) continue;
-        peers_[static_cast<std::size_t>(h->worker)].heard = Clock::now();
-        if (on_result) on_result(*h, payload);
-      }
-    }
+    net_->poll(
+        wait,
+        [&](std::size_t w, const json& j) {
+          // A worker's error before it knew the run (a refused hello) carries no run id.
+          if (wire::text(j, "run") != id_text(run_) && wire::text(j, "type") != "error") return;
+          peers_[w].heard = Clock::now();
+          if (wire::text(j, "type") == "heartbeat")
+            peers_[w].stalled_s = wire::number(j, "stalled_s", 0.0, 1e12).value_or(0.0);
+          else
+            on_control(w, j);
+        },
+        [&](const wire::ResultHeader& h, std::string_view payload) {
+          // A result of this run from one of its workers only: a stray or forged frame can
+          // neither end nor stop the run.
+          if (h.worker < 0 || h.worker >= static_cast<int>(peers_.size()) || !known_kind(h.kind)) return;
+          peers_[static_cast<std::size_t>(h.worker)].heard = Clock::now();
+          if (on_result) on_result(h, payload);
+        });
     beat_if_due();
   }
 
@@ -214,24 +187,21 @@ class Coordinator {
   // out; a lost worker's socket closes at once.
   void abort(const std::string& reason) {
     send_all({{"type", "abort"}, {"reason", reason}});
-    for (Peer& p : peers_)
-      if (wire::seconds_since(p.heard) < c_.timeouts.lost_s) p.control.set(zmq::sockopt::linger, 1000);
+    for (std::size_t w = 0; w < peers_.size(); ++w)
+      if (wire::seconds_since(peers_[w].heard) < c_.timeouts.lost_s) net_->linger(w, 1.0);
   }
 
   std::vector<Peer>& peers() { return peers_; }
-  const std::string& results_address() const { return results_address_; }
+  const std::string& results_address() const { return net_->results_address(); }
 
  private:
   const ClusterConfig& c_;
   const RunOptions& o_;
-  zmq::context_t ctx_;
-  std::optional<ZapGuard> zap_;  // before the sockets: it outlives them
+  std::uint64_t run_ = random_id();
   std::optional<wire::Security> security_;
-  zmq::socket_t results_;
-  std::string results_address_;
+  std::unique_ptr<CoordinatorTransport> net_;
   std::vector<Peer> peers_;
   Clock::time_point beat_ = Clock::now();
-  std::uint64_t run_ = random_id();
 };
 
 json setup_message(std::size_t model_bytes, const Decomposition& d, const std::vector<int>& worker_of, std::size_t w,
@@ -278,13 +248,13 @@ class ClusterCheckpoints {
     if (at_ < 0 && timer_.due()) ask(co, seen_ + 2);
   }
   // A checkpoint result of worker w; writes the checkpoint when it completes one.
-  void take(Coordinator& co, std::size_t w, const wire::ResultHeader& h, const zmq::message_t& payload,
+  void take(Coordinator& co, std::size_t w, const wire::ResultHeader& h, std::string_view payload,
             ResultSink* sink, const RunSummary& out, const MultibodySystem& whole) {
     seen_ = std::max(seen_, static_cast<long>(h.index));
     if (h.step != at_) return;  // an answer to an earlier request
     if (payload.size() == 0) return ask(co, seen_ + 2);  // the worker was past it
     if (states_[w].empty()) ++got_;
-    const auto* bytes = static_cast<const std::uint8_t*>(payload.data());
+    const auto* bytes = reinterpret_cast<const std::uint8_t*>(payload.data());
     states_[w].assign(bytes, bytes + payload.size());
     if (got_ < states_.size()) return;
     if (loose_) return write_loose(co, sink, out);
@@ -468,12 +438,12 @@ RunSummary run_cluster(std::shared_ptr<const Model> shared, const std::string& m
       std::map<long, Pending> pending;  // snapshots still missing some workers' bodies
       double reached = o.t_start;       // the model time every worker has reached
       const StateLayout& layout = whole.layout();
-      auto on_result = [&](const wire::ResultHeader& h, zmq::message_t& payload) {
+      auto on_result = [&](const wire::ResultHeader& h, std::string_view payload) {
         const auto w = static_cast<std::size_t>(h.worker);
         Peer& p = peers[w];
         switch (h.kind) {
           case wire::ResultKind::failed:
-            throw RunError(co.who(w) + ": " + payload.to_string());
+            throw RunError(co.who(w) + ": " + std::string(payload));
           case wire::ResultKind::done: {
             if (payload.size() != wire::done_counts * sizeof(double))
               throw RunError(co.who(w) + " sent counts of the wrong size");

@@ -1,13 +1,15 @@
 """The transport seam (docs/architecture.md): a worker's run loops reach ZeroMQ only through
-runtime/src/worker_transport.hpp. Follows the project's own includes ("...") of each loop
-file and fails if <zmq.hpp> or a ZeroMQ transport header is reached."""
+runtime/src/worker_transport.hpp, the coordinator only through coordinator_transport.hpp.
+Follows the project's own includes ("...") of each file and fails if <zmq.hpp> or a ZeroMQ
+transport header is reached."""
 import pathlib
 import re
 import sys
 
 root = pathlib.Path(sys.argv[1])
 loops = ["runtime/src/worker_part.hpp", "runtime/src/worker_part.cpp", "runtime/src/worker_tight.cpp",
-         "runtime/src/worker_loose.cpp", "runtime/src/worker_transport.hpp", "runtime/src/wire_format.hpp"]
+         "runtime/src/worker_loose.cpp", "runtime/src/worker_transport.hpp", "runtime/src/wire_format.hpp",
+         "runtime/src/coordinator.cpp", "runtime/src/coordinator_transport.hpp"]
 transport = {"cluster_wire.hpp", "remote_exchange.hpp", "worker_io.hpp", "zap_guard.hpp"}
 search = [root / "base/internal"] + sorted(root.glob("*/include")) + sorted(root.glob("*/src"))
 include = re.compile(r'^\s*#\s*include\s*([<"])([^">]+)[">]', re.M)
