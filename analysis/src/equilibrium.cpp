@@ -187,7 +187,9 @@ Equilibrium find_equilibrium(MultibodySystem& sys, double t, const Eigen::Vector
     Eigen::VectorXd next, f_next;
     double e_next = 0.0;
     bool taken = false;
+    Eigen::VectorXd applied;  // the step tried last: the one taken
     for (int half = 0; half < 3 && !taken; ++half, dx *= 0.5) {
+      applied = dx;
       next = y;
       apply_tangent_step(l, coords, dx, next);
       settle_on_joints(sys, t, *lm, factor, next);
@@ -203,8 +205,17 @@ Equilibrium find_equilibrium(MultibodySystem& sys, double t, const Eigen::Vector
       continue;
     }
     // A step that lowered the energy (or the residual) lets the next one be longer: h
-    // grows, fastest where the residual falls, and the step becomes Newton's.
-    h *= std::clamp(std::sqrt(worst(f) / std::max(worst(f_next), 1e-300)), 2.0, 8.0);
+    // grows, fastest where the residual falls, and the step becomes Newton's. Unless the
+    // potential fell by far less than the step's quadratic model f.dx - dx.K.dx / 2 said
+    // and the residual did not halve: then K + M / h^2 is near singular or indefinite along
+    // the step (a part on a spherical pivot released exactly level has no stiffness in two
+    // directions there), its solution is mostly that direction, cut to the turn limit, and
+    // a longer h would only make it more so: h shrinks instead (a trust region's rule).
+    const double predicted = f.dot(applied) - 0.5 * applied.dot(lm->K * applied);
+    if (energy - e_next < 0.25 * std::max(predicted, 0.0) && worst(f_next) > 0.5 * worst(f))
+      h *= 0.5;
+    else
+      h *= std::clamp(std::sqrt(worst(f) / std::max(worst(f_next), 1e-300)), 2.0, 8.0);
     y = next;
     f = f_next;
     energy = e_next;

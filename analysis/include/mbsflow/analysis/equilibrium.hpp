@@ -5,8 +5,9 @@
 // continuation: each step solves (K + M / h^2) dx = F on the joints' allowed motions
 // (augmented with their rows), and h grows as the residual falls, so that far from
 // equilibrium a step follows the forces like a damped motion (a pendulum released level,
-// a chain hanging down) and near it the step is Newton's. A step that raises the
-// potential energy (gravity and elastic) is taken again with a smaller h.
+// a chain hanging down) and near it the step is Newton's; h shrinks where the potential
+// fell far less than the step's quadratic model said. A step that raises the potential
+// energy (gravity and elastic) is taken again with a smaller h.
 #include <Eigen/Core>
 #include <string>
 
