@@ -12,7 +12,7 @@ namespace mbsflow::loose {
 LooseAdvancer::LooseAdvancer(const RunOptions& o, const LooseOptions& lo, std::vector<std::unique_ptr<LoosePart>>& parts,
                              LooseRounds& rounds, MacroGrid& grid, LooseStats& st, const StateLayout& global,
                              Eigen::VectorXd y, AcrossWorkers across)
-    : at{0, 1, adaptive_start(o, lo)}, o_(o), lo_(lo), parts_(parts), rounds_(rounds), grid_(grid), st_(st), global_(global),
+    : at{0, 1, adaptive_start(o, lo)}, lo_(lo), parts_(parts), rounds_(rounds), grid_(grid), st_(st), global_(global),
       across_(std::move(across)), y_(std::move(y)) {}
 
 void LooseAdvancer::advance(RunObserver& to) {

@@ -44,7 +44,6 @@ class LooseAdvancer final : public Advancer {
   void adaptive_step();
   void reach(long m, RunObserver& to);
 
-  const RunOptions& o_;
   const LooseOptions& lo_;
   std::vector<std::unique_ptr<LoosePart>>& parts_;
   LooseRounds& rounds_;

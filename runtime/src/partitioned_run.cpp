@@ -108,8 +108,9 @@ RunSummary run_partitioned(std::shared_ptr<const Model> shared, const Decomposit
                    return resumed->t;
                  },
                  .save_state = [&](StateWriter& w) {  // the state whatever the partition: the global state
-                   partitioned::gather(parts, whole->layout(), y);
-                   w.vector(y);
+                   Eigen::VectorXd x;  // for this checkpoint only: not held through the run
+                   partitioned::gather(parts, whole->layout(), x);
+                   w.vector(x);
                  }});
   run.begin();
   std::vector<Part*> local;

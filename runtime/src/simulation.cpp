@@ -26,8 +26,8 @@ using Clock = std::chrono::steady_clock;
 // keeps it with the stepper's state.
 class StepperAdvancer final : public Advancer {
  public:
-  StepperAdvancer(const MultibodySystem& sys, Stepper& stepper, const RunOptions& o, long next)
-      : stepper_(stepper), o_(o), adaptive_(stepper_entry(o.method).adaptive), every_(output_steps(o)), next_(next),
+  StepperAdvancer(const MultibodySystem& sys, Stepper& stepper, const RunOptions& o)
+      : stepper_(stepper), o_(o), adaptive_(stepper_entry(o.method).adaptive), every_(output_steps(o)),
         dense_(adaptive_ ? sys.dimension() : 0) {}
 
   bool done() const override { return stepper_.done(); }
@@ -58,7 +58,7 @@ class StepperAdvancer final : public Advancer {
   const RunOptions& o_;
   bool adaptive_;
   int every_;
-  long next_;
+  long next_ = 1;
   Eigen::VectorXd dense_;
 };
 
@@ -120,7 +120,7 @@ RunSummary run_simulation(MultibodySystem& sys, const RunOptions& o, ResultSink*
   phase_done(o, "set up the method");
   // Like run_partitioned's, the clock starts once the stepper and its workspace are set up.
   const auto start = Clock::now();
-  StepperAdvancer advancer(sys, *stepper, o, 1);
+  StepperAdvancer advancer(sys, *stepper, o);
   LocalRun::Hooks hooks;
   hooks.check = [&](double t) { check_diverged(sys, stepper->y(), t, o); };
   hooks.state = [&](Eigen::VectorXd& x) { x = stepper->y(); };
