@@ -68,8 +68,8 @@ class ShiftedSolver {
 
  private:
   LinearSolverKind kind_ = LinearSolverKind::dense;
-  Eigen::PartialPivLU<Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>> dense_;
-  BandedLU<Scalar> band_;
+  Eigen::PartialPivLU<Eigen::MatrixXd> dense_;  // dense kind in real arithmetic
+  BandedLU<Scalar> band_;  // banded kind; dense in complex arithmetic: a band as wide as the matrix
   Eigen::SparseMatrix<Scalar> matrix_;  // I - gamma J or its Schur complement, all kinds but banded
   std::vector<int> j_outer_, j_inner_;   // the pattern of the last J (note_pattern)
   std::optional<LinearSolverKind> chosen_;  // the automatic kind for that pattern, once asked for
