@@ -10,6 +10,9 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <map>
+#include <mutex>
+#include <tuple>
 
 #include "mbsflow/methods/rk_tableau.hpp"
 
@@ -214,8 +217,9 @@ BlockMethodSpec step_control_partner(const BlockMethodSpec& s) {
   return {s.m, s.s + 1, s.order > 0 ? s.order + 1 : 0, s.nodes};
 }
 
-BlockCoefficients generate_block_method(const BlockMethodSpec& spec) {
-  check_spec(spec);
+namespace {
+
+BlockCoefficients make_block_method(const BlockMethodSpec& spec) {
   if (spec.nodes == BlockNodes::radau) return radau_block(spec);
   BlockCoefficients c;
   c.spec = spec;
@@ -239,6 +243,21 @@ BlockCoefficients generate_block_method(const BlockMethodSpec& spec) {
   for (const Rational& r : rows.d) c.d_exact.push_back(text(r));
   for (const Rational& r : rows.g) c.g_exact.push_back(text(r));
   return c;
+}
+
+}  // namespace
+
+BlockCoefficients generate_block_method(const BlockMethodSpec& spec) {
+  check_spec(spec);
+  // Made once per method: the exact rational rows and their decimal texts cost more than
+  // a small problem's whole solve, and every colloc solve asks for two or three methods.
+  static std::mutex made;
+  static std::map<std::tuple<int, int, int, BlockNodes>, BlockCoefficients> methods;
+  const std::lock_guard<std::mutex> lock(made);
+  const auto key = std::make_tuple(spec.m, spec.s, spec.order, spec.nodes);
+  auto it = methods.find(key);
+  if (it == methods.end()) it = methods.emplace(key, make_block_method(spec)).first;
+  return it->second;
 }
 
 DenseWeights dense_output_weights(const BlockCoefficients& method, double theta) {
