@@ -103,6 +103,7 @@ TEST_CASE("cli bench ivp: work-precision against CVODE on Robertson and eq. 11, 
   CHECK(r.out.find("robertson: reference Test Set for IVP Solvers, problem ROBER") != std::string::npos);
   CHECK(r.out.find("b1: exact solution") != std::string::npos);
   CHECK(r.out.find("time / CVODE's time at equal correct digits") != std::string::npos);
+  CHECK(r.out.find("compared   median     best    worst") != std::string::npos);
   std::istringstream csv(read_text(fs::path(dir) / "ivp.csv"));
   std::string line;
   std::getline(csv, line);
