@@ -403,7 +403,7 @@ bool BlockIntegrator::Driver::advance() {
     // starting blocks from the last block's polynomial, as Radau5 does, were measured with
     // bench ivp and are worse here: the extrapolated start failed on Van der Pol mu = 1e6
     // at two tolerances and took 318 blocks on Robertson at rtol 1e-6 where this takes 107.)
-    if (newton() && (small_.iterations > 2 || large_.iterations > 2)) jacobian_stale_ = true;
+    if (newton() && (small_.iterations > 3 || large_.iterations > 3)) jacobian_stale_ = true;
     double tau_new = tau * fac;
     if (newton() && s_.refactor_ratio == 0 && fac >= 1 && fac <= 1.2) tau_new = tau;  // keep the factorisations
     if (m() > 1) tau_new = std::min(tau_new, tau * double(taken + m() - 1) / double(m() - 1));
