@@ -8,11 +8,12 @@
 //
 // ParaView's default reader (Xdmf3) does not read XDMF hyperslabs (it skips their arrays
 // and shows 0 points), so the sidecar does not select rows of the T x N x k series itself:
-// the results file gets a group /xdmf of views, one per snapshot and quantity
-// (/xdmf/<row>/<name>), each showing one row of a series, which every HDF5 reader sees as
-// a plain N x k array. For a series of at most xdmf_copy_limit_bytes the views are copies
-// of its rows (compact datasets where they fit); for larger ones, HDF5 virtual datasets,
-// which hold no data of their own but cost about five times as much to make.
+// each snapshot and quantity gets a view of one row of a series: a view of a few values is
+// written into the sidecar as text; the others are datasets of the results file's group
+// /xdmf (/xdmf/<row>/<name>), which every HDF5 reader sees as plain N x k arrays. For a
+// series of at most xdmf_copy_limit_bytes those are copies of its rows (compact datasets
+// where they fit); for larger ones, HDF5 virtual datasets, which hold no data of their own
+// but cost about five times as much to make.
 #include <hdf5.h>
 
 #include <ostream>

@@ -87,7 +87,11 @@ TEST_CASE("results: info, CSV export, a consistent XDMF sidecar and a plot", "[a
   CHECK(run("export grid.h5 --csv csv --bodies nobody", dir).code == 2);
   const std::string python = MBSFLOW_PYTHON;
   const std::string check_xdmf = python + " '" + MBSFLOW_TESTS + "/io/check_xdmf.py' '" + dir;
-  CHECK(std::system((check_xdmf + "/grid.xdmf' --position-views compact").c_str()) == 0);  // 12 bodies: copies
+  CHECK(std::system((check_xdmf + "/grid.xdmf' --position-views text").c_str()) == 0);  // 12 bodies: the values in the sidecar
+  // 30 bodies: 90 values a view, past the limit for text; copies of the rows.
+  REQUIRE(run("generate grid --rows 5 --cols 6 -o mid.json", dir).code == 0);
+  REQUIRE(run("run mid.json --t-end 0.1 --output-interval 0.01 -o mid.h5", dir).code == 0);
+  CHECK(std::system((check_xdmf + "/mid.xdmf' --position-views compact").c_str()) == 0);
   // 100 bodies and 501 snapshots: 1.2 MB of positions, past the limit for copies.
   REQUIRE(run("generate grid --rows 10 --cols 10 -o big.json", dir).code == 0);
   REQUIRE(run("run big.json --t-end 0.5 --output-interval 0.001 -o big.h5", dir).code == 0);

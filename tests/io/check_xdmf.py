@@ -1,12 +1,14 @@
 #!/usr/bin/python3
 """Checks an XDMF sidecar against its HDF5 file, with h5py only: every dataset the XML
-names exists with as many values as the XML says, every time step's view holds the
-values of its row of the series it shows, and the time steps match /time.
+names exists with as many values as the XML says, every time step's view (a dataset, or a
+few values written into the sidecar as text) holds the values of its row of the series it
+shows, bit for bit, and the time steps match /time.
 
-usage: check_xdmf.py FILE.xdmf [--position-views compact|virtual]   (exit 0 when consistent)
+usage: check_xdmf.py FILE.xdmf [--position-views text|compact|virtual]   (exit 0 when consistent)
 
---position-views also checks how the views of /bodies/position are stored: copies of their
-rows in the dataset's header (a small series) or HDF5 virtual datasets (a large one).
+--position-views also checks how the views of /bodies/position are stored: as text in the
+sidecar (a few bodies), copies of their rows in the dataset's header (a small series) or
+HDF5 virtual datasets (a large one).
 """
 import math
 import os
@@ -47,6 +49,8 @@ def main():
     xdmf = sys.argv[1]
     want_layout = sys.argv[3] if len(sys.argv) > 3 and sys.argv[2] == "--position-views" else None
     root = ET.parse(xdmf).getroot()
+    parents = {child: parent for parent in root.iter() for child in parent}
+    h5_name = os.path.splitext(os.path.basename(xdmf))[0] + ".h5"  # side by side, as the sidecar names it
     folder = os.path.dirname(os.path.abspath(xdmf))
     steps = root.findall("./Domain/Grid/Grid")
     if not steps:
@@ -56,13 +60,28 @@ def main():
         times.append(float(step.find("Time").get("Value")))
         rows.append(int(step.get("Name")[1:]))  # t<row>
         for item in step.iter("DataItem"):
+            dims = [int(x) for x in item.get("Dimensions").split()]
+            if item.get("Format") == "XML":  # a view's values as text
+                holder = parents[item]
+                if holder.tag == "Geometry":
+                    name = "attachment" if parents[holder].get("Name") == "joints" else "position"
+                else:
+                    name = {"energy_kinetic_gravity_elastic": "energy"}.get(holder.get("Name"), holder.get("Name"))
+                values = np.array([float(x) for x in item.text.split()])
+                h5 = files.setdefault(h5_name, h5py.File(os.path.join(folder, h5_name), "r"))
+                expected = np.asarray(source_row(h5, name, rows[-1]), dtype=float).ravel()
+                if math.prod(dims) != values.size or not np.array_equal(values, expected):
+                    fail(f"the text of {name} at row {rows[-1]} differs from its row of the series")
+                if want_layout and name == "position" and want_layout != "text":
+                    fail(f"{name} at row {rows[-1]} is text, not {want_layout}")
+                checked += 1
+                continue
             if item.get("Format") != "HDF":
-                fail("a DataItem that is not a plain HDF reference (ParaView's Xdmf3 reader reads no others)")
+                fail("a DataItem that is neither an HDF reference nor XML text (ParaView's Xdmf3 reader reads no others)")
             name, path = item.text.strip().split(":", 1)
             h5 = files.setdefault(name, h5py.File(os.path.join(folder, name), "r"))
             if path not in h5:
                 fail(f"{path} is not in {name}")
-            dims = [int(x) for x in item.get("Dimensions").split()]
             if math.prod(dims) != h5[path].size:
                 fail(f"{path}: XDMF says {dims}, the file has {h5[path].shape}")
             parts = path.strip("/").split("/")
