@@ -17,8 +17,8 @@ constexpr const char* views_group = "/xdmf";
 constexpr std::size_t compact_limit_bytes = 32768;  // a compact dataset's data: within HDF5's 64 KiB header
 // A view of at most this many values is written into the sidecar as text (17 digits, which
 // ParaView reads back bit for bit) instead of as a dataset: making and closing a dataset
-// costs about 20 us, and a small model's 1000 snapshots of five quantities spent 0.12 s of a
-// 0.25 s run on them (IFToMM A05, 4 bodies).
+// costs about 20 us, and a small model's 1000 snapshots of five quantities spent 0.12-0.14 s
+// of a 0.33-0.41 s run on them (IFToMM A05, 4 bodies; docs/results.md).
 constexpr hsize_t inline_view_values = 64;
 
 // Row `row` of a source that was read (T x item), columns [column, column + columns) of its
