@@ -398,11 +398,13 @@ bool BlockIntegrator::Driver::advance() {
     if (after_rejection_) fac = std::min(fac, 1.0);
     fac = controller_.limit_growth(fac);
     after_rejection_ = false;
-    // A Newton iteration that needed more than two corrections: a fresh Jacobian for the
-    // next block. (Renewing only when the contraction rate grows, as tirk does, and
-    // starting blocks from the last block's polynomial, as Radau5 does, were measured with
-    // bench ivp and are worse here: the extrapolated start failed on Van der Pol mu = 1e6
-    // at two tolerances and took 318 blocks on Robertson at rtol 1e-6 where this takes 107.)
+    // A Newton iteration that needed more than three corrections: a fresh Jacobian for the
+    // next block (blocks start from u_0 and take 4-5 even on a fresh one; after more than
+    // two, J was renewed on nearly every block). (Renewing only when the contraction rate
+    // grows, as tirk does, and starting blocks from the last block's polynomial, as Radau5
+    // does, were measured with bench ivp against the rule at two and are worse here: the
+    // extrapolated start failed on Van der Pol mu = 1e6 at two tolerances and took 318
+    // blocks on Robertson at rtol 1e-6 where that rule took 107.)
     if (newton() && (small_.iterations > 3 || large_.iterations > 3)) jacobian_stale_ = true;
     double tau_new = tau * fac;
     if (newton() && s_.refactor_ratio == 0 && fac >= 1 && fac <= 1.2) tau_new = tau;  // keep the factorisations
