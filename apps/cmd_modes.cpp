@@ -284,7 +284,8 @@ Action add_modes(CLI::App& app) {
       ->check(CLI::Range(1, 100000))->capture_default_str();
   sub->add_flag("--undamped", a->undamped, "Modes of M and K only (real shapes), not the damped complex ones");
   sub->add_option("--solver", a->solver, "auto (dense up to 1200 free coordinates, else sparse), dense, or sparse "
-                                         "(Spectra's shift-invert Arnoldi on a KLU factorisation)")
+                                         "(Spectra on a KLU factorisation: shift-invert Arnoldi, or Lanczos "
+                                         "for --undamped)")
       ->check(CLI::IsMember({"auto", "dense", "sparse"}))->capture_default_str();
   sub->add_option("-o,--output", a->output, "HDF5 file for the modes, their shapes and the working point")
       ->each([a](const std::string&) { a->output_given = true; });

@@ -1,0 +1,49 @@
+#pragma once
+// What the eigensolvers of modes.cpp share: a mode as found, the scale against which an
+// eigenvalue counts as zero, the dense solve of a model projected on a basis, and the two
+// sparse solvers (Lanczos for the undamped modes, the Arnoldi on the first-order pencil
+// for the damped ones and where the Lanczos does not converge).
+#include <Eigen/Dense>
+#include <complex>
+#include <optional>
+#include <vector>
+
+#include "mbsflow/analysis/linearization.hpp"
+
+namespace mbsflow {
+
+// A mode found by a solver: its eigenvalue and its coordinates x.
+struct FoundMode {
+  std::complex<double> lambda;
+  Eigen::VectorXcd x;
+  bool rigid = false;
+};
+
+// An eigenvalue below this fraction of modal_rate_scale counts as zero (a rigid-body
+// motion): a zero eigenvalue is a Jordan pair of the first-order pencil, which rounding
+// splits by about sqrt(machine epsilon) of the scale, and a 100 000-link chain's lowest
+// vibration lies at 2e-6 of it.
+constexpr double zero_rate = 1e-7;
+
+// The speed of the model's fastest motions (rad/s): the scale against which an
+// eigenvalue counts as zero.
+double modal_rate_scale(const LinearModel& m);
+
+// Rigid-body motions first, then ascending |lambda|: the order modes are reported in.
+bool reported_before(const FoundMode& a, const FoundMode& b);
+
+// The modes of the model projected on the columns of basis (which satisfy C x = 0): a
+// dense eigenproblem of the basis's size. The eigenvalues of a damped model are those of
+// lambda^2 Mr + lambda Dr + Kr; undamped, of the symmetric part of Kr against Mr.
+std::vector<FoundMode> projected_dense_modes(const LinearModel& m, const Eigen::MatrixXd& basis, bool damped);
+
+// The lowest undamped modes (K's symmetric part against M) by symmetric shift-invert
+// Lanczos on n numbers per vector; nothing where it does not converge or finds a
+// rigid-body motion (the Arnoldi then serves).
+std::optional<std::vector<FoundMode>> undamped_modes(const LinearModel& m, int count);
+
+// The lowest modes by shift-invert Arnoldi on the first-order pencil (2n numbers per
+// vector). RunError where it does not converge.
+std::vector<FoundMode> first_order_modes(const LinearModel& m, int count, bool damped);
+
+}  // namespace mbsflow
