@@ -11,10 +11,15 @@
 
 namespace mbsflow {
 
+// Without rows, P itself (taken by value: a temporary moves in, and a large model's P,
+// tens of millions of entries, is not copied through triplets at every call).
 template <class Scalar>
-Eigen::SparseMatrix<Scalar> augmented(const Eigen::SparseMatrix<Scalar>& p, const Eigen::SparseMatrix<double>& c,
-                                      Scalar d = Scalar(0)) {
+Eigen::SparseMatrix<Scalar> augmented(Eigen::SparseMatrix<Scalar> p, const Eigen::SparseMatrix<double>& c, Scalar d = Scalar(0)) {
   const Eigen::Index n = p.rows(), r = c.rows();
+  if (r == 0) {
+    p.makeCompressed();
+    return p;
+  }
   std::vector<Eigen::Triplet<Scalar>> e;
   e.reserve(static_cast<std::size_t>(p.nonZeros() + 2 * c.nonZeros() + r));
   for (Eigen::Index col = 0; col < p.outerSize(); ++col)
