@@ -1,8 +1,8 @@
 #pragma once
-// What the eigensolvers of modes.cpp share: a mode as found, the scale against which an
-// eigenvalue counts as zero, the dense solve of a model projected on a basis, and the two
-// sparse solvers (Lanczos for the undamped modes, the Arnoldi on the first-order pencil
-// for the damped ones and where the Lanczos does not converge).
+// What modes.cpp and its sparse eigensolvers share: a mode as found, the scale against
+// which an eigenvalue counts as zero, and the two solvers (Lanczos for the undamped
+// modes, the Arnoldi on the first-order pencil for the damped ones and where the Lanczos
+// does not serve).
 #include <Eigen/Dense>
 #include <complex>
 #include <optional>
@@ -28,14 +28,6 @@ constexpr double zero_rate = 1e-7;
 // The speed of the model's fastest motions (rad/s): the scale against which an
 // eigenvalue counts as zero.
 double modal_rate_scale(const LinearModel& m);
-
-// Rigid-body motions first, then ascending |lambda|: the order modes are reported in.
-bool reported_before(const FoundMode& a, const FoundMode& b);
-
-// The modes of the model projected on the columns of basis (which satisfy C x = 0): a
-// dense eigenproblem of the basis's size. The eigenvalues of a damped model are those of
-// lambda^2 Mr + lambda Dr + Kr; undamped, of the symmetric part of Kr against Mr.
-std::vector<FoundMode> projected_dense_modes(const LinearModel& m, const Eigen::MatrixXd& basis, bool damped);
 
 // The lowest undamped modes (K's symmetric part against M) by symmetric shift-invert
 // Lanczos on n numbers per vector; nothing where it does not converge or finds a

@@ -12,6 +12,16 @@
 #include "mbsflow/methods/real_eigen.hpp"
 
 namespace mbsflow {
+
+double modal_rate_scale(const LinearModel& m) {
+  double fastest = 0.0;
+  for (Eigen::Index i = 0; i < m.M.rows(); ++i) {
+    const double mi = m.M.coeff(i, i), ki = std::abs(m.K.coeff(i, i));
+    if (mi > 0.0) fastest = std::max(fastest, std::sqrt(ki / mi));
+  }
+  return fastest > 0.0 ? fastest : 1.0;
+}
+
 namespace {
 
 using Sparse = Eigen::SparseMatrix<double>;
@@ -25,22 +35,14 @@ double norm_of(const Sparse& a) {
   return rows.size() ? rows.maxCoeff() : 0.0;
 }
 
-}  // namespace
-
-double modal_rate_scale(const LinearModel& m) {
-  double fastest = 0.0;
-  for (Eigen::Index i = 0; i < m.M.rows(); ++i) {
-    const double mi = m.M.coeff(i, i), ki = std::abs(m.K.coeff(i, i));
-    if (mi > 0.0) fastest = std::max(fastest, std::sqrt(ki / mi));
-  }
-  return fastest > 0.0 ? fastest : 1.0;
-}
-
+// Rigid-body motions first, then ascending |lambda|: the order modes are reported in.
 bool reported_before(const FoundMode& a, const FoundMode& b) {
   if (a.rigid != b.rigid) return a.rigid;
   return std::abs(a.lambda) < std::abs(b.lambda);
 }
 
+// The modes of the model on the columns of basis (which satisfy C x = 0): those of
+// lambda^2 Mr + lambda Dr + Kr damped; undamped, of the symmetric part of Kr against Mr.
 std::vector<FoundMode> projected_dense_modes(const LinearModel& m, const Eigen::MatrixXd& basis, bool damped) {
   const Eigen::Index free = basis.cols();
   if (free == 0) return {};
@@ -80,6 +82,8 @@ std::vector<FoundMode> projected_dense_modes(const LinearModel& m, const Eigen::
   }
   return out;
 }
+
+}  // namespace
 
 Modes compute_modes(const LinearModel& m, const ModeOptions& o) {
   if (o.count < 1) throw InputError("modes: the count must be >= 1");
