@@ -1,13 +1,17 @@
 #pragma once
 // The rigid joints' rows C in the linear algebra of a linearised model: the augmented
-// matrix of the sparse solves, and an orthonormal null-space basis for the dense ones.
+// matrix of the sparse solves (and its factors, as a solve on the allowed motions), and
+// an orthonormal null-space basis for the dense ones.
 //
 // The augmented matrix [P C^T; C d I] of a linearised model: P on the bodies' coordinates,
 // the rigid joints' rows C holding their motions, d on the multipliers' diagonal (a tiny
 // negative d keeps a matrix with redundant rows regular; 0 puts the entry in the pattern).
 #include <Eigen/QR>
 #include <Eigen/SparseCore>
+#include <utility>
 #include <vector>
+
+#include "mbsflow/methods/klu_lu.hpp"
 
 namespace mbsflow {
 
@@ -35,6 +39,28 @@ Eigen::SparseMatrix<Scalar> augmented(Eigen::SparseMatrix<Scalar> p, const Eigen
   a.makeCompressed();
   return a;
 }
+
+// P^-1 on the motions C x = 0 allows: x of [P C^T; C 0] [x; mu] = [b; 0], the augmented
+// matrix factored once by KLU (the sparse eigensolvers' shifted inverses).
+class ConstrainedSolve {
+ public:
+  void factor(Eigen::SparseMatrix<double> p, const Eigen::SparseMatrix<double>& c) {
+    rows_ = c.rows();
+    const Eigen::SparseMatrix<double> a = augmented<double>(std::move(p), c);
+    lu_.analyze(a);
+    lu_.factorize(a);
+  }
+  Eigen::VectorXd operator()(const Eigen::Ref<const Eigen::VectorXd>& b) const {
+    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(b.size() + rows_);
+    rhs.head(b.size()) = b;
+    lu_.solve(rhs);
+    return rhs.head(b.size());
+  }
+
+ private:
+  KluLu<double> lu_;
+  Eigen::Index rows_ = 0;
+};
 
 // Orthonormal basis of the null space of C (dense Householder QR of C^T), n x (n - rank);
 // the identity without rows.

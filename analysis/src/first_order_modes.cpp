@@ -1,11 +1,11 @@
-// The lowest modes by shift-invert Arnoldi on the first-order pencil of the damped
-// problem: 2n numbers per vector, any damping. The fallback of subspace_modes.
+// The lowest modes by shift-invert Arnoldi on the first-order pencil: 2n numbers per
+// vector, any damping. The damped modes of a large model, and the undamped ones where the
+// Lanczos of undamped_modes.cpp does not serve.
 #include <Spectra/GenEigsRealShiftSolver.h>
 #include <cmath>
 
 #include "constrained.hpp"
 #include "mbsflow/error.hpp"
-#include "mbsflow/methods/klu_lu.hpp"
 #include "mode_solvers.hpp"
 
 namespace mbsflow {
@@ -24,18 +24,13 @@ class ShiftSolve {
   Eigen::Index cols() const { return 2 * m_.size(); }
   void set_shift(double sigma) {
     sigma_ = sigma;
-    const Sparse aug = augmented<double>(m_.K + sigma * d_ + (sigma * sigma) * m_.M, m_.C);
-    lu_.analyze(aug);
-    lu_.factorize(aug);
+    solve_.factor(m_.K + sigma * d_ + (sigma * sigma) * m_.M, m_.C);
   }
   void perform_op(const double* in, double* out) const {
     const Eigen::Index n = m_.size();
     const Eigen::Map<const Eigen::VectorXd> c(in, n), d(in + n, n);
-    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(n + m_.C.rows());
-    rhs.head(n) = -(m_.M * d) - d_ * c - sigma_ * (m_.M * c);
-    lu_.solve(rhs);
     Eigen::Map<Eigen::VectorXd> a(out, n), b(out + n, n);
-    a = rhs.head(n);
+    a = solve_(-(m_.M * d) - d_ * c - sigma_ * (m_.M * c));
     b = c + sigma_ * a;
   }
 
@@ -43,7 +38,7 @@ class ShiftSolve {
   const LinearModel& m_;
   Sparse d_;
   double sigma_ = 0.0;
-  KluLu<double> lu_;
+  ConstrainedSolve solve_;
 };
 
 }  // namespace

@@ -6,7 +6,6 @@
 #include <cmath>
 
 #include "constrained.hpp"
-#include "mbsflow/methods/klu_lu.hpp"
 #include "mode_solvers.hpp"
 
 namespace mbsflow {
@@ -22,23 +21,16 @@ class ConstrainedInverse {
   ConstrainedInverse(const LinearModel& m, const Sparse& ks) : m_(m), ks_(ks) {}
   Eigen::Index rows() const { return m_.size(); }
   Eigen::Index cols() const { return m_.size(); }
-  void set_shift(double sigma) {
-    const Sparse aug = augmented<double>(ks_ - sigma * m_.M, m_.C);
-    lu_.analyze(aug);
-    lu_.factorize(aug);
-  }
+  void set_shift(double sigma) { solve_.factor(ks_ - sigma * m_.M, m_.C); }
   void perform_op(const double* in, double* out) const {
     const Eigen::Index n = m_.size();
-    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(n + m_.C.rows());
-    rhs.head(n) = Eigen::Map<const Eigen::VectorXd>(in, n);
-    lu_.solve(rhs);
-    Eigen::Map<Eigen::VectorXd>(out, n) = rhs.head(n);
+    Eigen::Map<Eigen::VectorXd>(out, n) = solve_(Eigen::Map<const Eigen::VectorXd>(in, n));
   }
 
  private:
   const LinearModel& m_;
   const Sparse& ks_;
-  KluLu<double> lu_;
+  ConstrainedSolve solve_;
 };
 
 // M v: the Lanczos's inner product.
@@ -56,8 +48,8 @@ struct MassProduct {
 
 std::optional<std::vector<FoundMode>> undamped_modes(const LinearModel& m, int count) {
   const Eigen::Index n = m.size(), free = n - m.C.rows();
-  // Rigid-body motions and a few more: a zero eigenvalue's copies, and room for the
-  // restarts to sort the lowest from their neighbours.
+  // A few more than asked: room for the restarts to sort the lowest from their neighbours
+  // (and for a rigid-body motion to show itself, which sends the model to the Arnoldi).
   const Eigen::Index nev = std::min<Eigen::Index>(count + 4, free - 1);
   const Eigen::Index ncv = std::min<Eigen::Index>(free, std::max<Eigen::Index>(2 * nev + 1, 20));
   // A Krylov space nearly as wide as the allowed motions breaks down before it restarts.

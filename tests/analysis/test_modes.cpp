@@ -184,18 +184,28 @@ TEST_CASE("a free body has six rigid-body modes, reported as such", "[analysis][
   }
 }
 
-// A hanging chain of n bodies on damped bushings.
-std::string bushing_chain(int n) {
+// A chain of n links of 1 kg along x with the given inertia, each joined to the one before
+// by `joint` (JSON fields after the name and bodies), the first to the ground unless
+// `floating`; no gravity where floating.
+std::string link_chain(int n, const std::string& inertia, const std::string& joint, bool floating) {
   std::string bodies, joints;
   for (int i = 0; i < n; ++i) {
     bodies += std::string(i ? "," : "") + R"({"name": "l)" + std::to_string(i) +
-              R"(", "mass": 1.0, "inertia": [0.01, 0.02, 0.02], "position": [)" + std::to_string(0.5 * i) + ", 0, 0]}";
-    joints += std::string(i ? "," : "") + R"({"name": "j)" + std::to_string(i) + R"(", "type": "bushing", "body1": ")" +
+              R"(", "mass": 1.0, "inertia": )" + inertia + R"(, "position": [)" + std::to_string(0.5 * i) + ", 0, 0]}";
+    if (floating && i == 0) continue;
+    joints += std::string(joints.empty() ? "" : ",") + R"({"name": "j)" + std::to_string(i) + R"(", "body1": ")" +
               (i ? "l" + std::to_string(i - 1) : std::string("ground")) + R"(", "body2": "l)" + std::to_string(i) +
-              R"(", "point1": [)" + (i ? "0.25" : "-0.25") + R"(, 0, 0], "point2": [-0.25, 0, 0], "stiffness": [4e4, 3e4, 3e4, 50, 80, 80], "damping": [5, 5, 5, 0.01, 0.01, 0.01]})";
+              R"(", "point1": [)" + (i ? "0.25" : "-0.25") + R"(, 0, 0], "point2": [-0.25, 0, 0], )" + joint + "}";
   }
-  return R"({"name": "chain", "gravity": [0, -9.81, 0], "bodies": [)" + bodies + R"(], "joints": [)" + joints + "]}";
+  return R"({"name": "chain", "gravity": [0, )" + std::string(floating ? "0" : "-9.81") + R"(, 0], "bodies": [)" + bodies +
+         R"(], "joints": [)" + joints + "]}";
 }
+
+const std::string damped_bushing =
+    R"("type": "bushing", "stiffness": [4e4, 3e4, 3e4, 50, 80, 80], "damping": [5, 5, 5, 0.01, 0.01, 0.01])";
+
+// A hanging chain of n bodies on damped bushings.
+std::string bushing_chain(int n) { return link_chain(n, "[0.01, 0.02, 0.02]", damped_bushing, false); }
 
 TEST_CASE("the stiffness is minus the static residual's derivative at the equilibrium, and K alone where no damping is asked",
           "[analysis][modes]") {
@@ -235,25 +245,8 @@ TEST_CASE("the sparse shift-invert solver finds the dense solver's lowest modes 
   }
 }
 
-// A chain of n links along x, each joined to the one before by `joint` (JSON fields
-// after the type), the first to the ground unless `floating`; no gravity where floating.
-std::string link_chain(int n, const std::string& joint, bool floating) {
-  std::string bodies, joints;
-  for (int i = 0; i < n; ++i) {
-    bodies += std::string(i ? "," : "") + R"({"name": "l)" + std::to_string(i) +
-              R"(", "mass": 1.0, "inertia": [0.01, 0.02, 0.03], "position": [)" + std::to_string(0.5 * i) + ", 0, 0]}";
-    if (floating && i == 0) continue;
-    joints += std::string(joints.empty() ? "" : ",") + R"({"name": "j)" + std::to_string(i) + R"(", "body1": ")" +
-              (i ? "l" + std::to_string(i - 1) : std::string("ground")) + R"(", "body2": "l)" + std::to_string(i) +
-              R"(", "point1": [)" + (i ? "0.25" : "-0.25") + R"(, 0, 0], "point2": [-0.25, 0, 0], )" + joint + "}";
-  }
-  return R"({"name": "links", "gravity": [0, )" + std::string(floating ? "0" : "-9.81") + R"(, 0], "bodies": [)" + bodies +
-         R"(], "joints": [)" + joints + "]}";
-}
-
 TEST_CASE("the sparse undamped modes are the dense solver's: Lanczos on bushings and rigid joints, Arnoldi with rigid-body motions",
           "[analysis][modes]") {
-  const std::string bushing = R"("type": "bushing", "stiffness": [4e4, 3e4, 3e4, 50, 80, 80], "damping": [5, 5, 5, 0.01, 0.01, 0.01])";
   struct Case {
     const char* name;
     std::string json;
@@ -264,10 +257,10 @@ TEST_CASE("the sparse undamped modes are the dense solver's: Lanczos on bushings
   const std::vector<Case> cases = {
       {"a hanging chain of 60 bushings", bushing_chain(60), 8, 0, "Lanczos", 1e-8},
       {"a hanging chain of 60 links on revolute joints (augmented matrix)",
-       link_chain(60, R"("type": "revolute", "axis1": [0, 0, 1])", false), 4, 0, "Lanczos", 1e-8},
+       link_chain(60, "[0.01, 0.02, 0.03]", R"("type": "revolute", "axis1": [0, 0, 1])", false), 4, 0, "Lanczos", 1e-8},
       // The Arnoldi's rounding at the rigid-body motions' images (1 / |sigma|) leaves the
       // vibrations a few times 1e-8 off.
-      {"a floating chain of 20 bushed links (six rigid-body motions)", link_chain(20, bushing, true), 10, 6, "Arnoldi", 1e-7},
+      {"a floating chain of 20 bushed links (six rigid-body motions)", link_chain(20, "[0.01, 0.02, 0.03]", damped_bushing, true), 10, 6, "Arnoldi", 1e-7},
   };
   for (const Case& c : cases) {
     INFO(c.name);
