@@ -207,7 +207,9 @@ Equilibrium find_equilibrium(MultibodySystem& sys, double t, const Eigen::Vector
       e_next = potential(sys, t, next);
       const bool lower = e_next <= energy + 1e-12 * (std::abs(energy) + scale * std::max(extent, 1.0));
       // A step the joints could not follow (a long turn of a chain on revolute joints) left
-      // them open: its energy is not the model's, and the step is no step.
+      // them open: its energy is not the model's, and the step is no step. after_step's
+      // projection closes them to 1e-10 (m or rad) wherever it converges, so the bound
+      // only catches where it did not.
       const bool closed = joint_gap(sys, t, *lm, next) <= 1e-9 * std::max(extent, 1.0);
       taken = (lower || worst(f_next) < worst(f)) && f_next.allFinite() && closed;
       if (taken && half > 0) h *= 0.5;  // a shorter step fitted: the next starts from there
