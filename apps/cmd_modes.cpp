@@ -283,7 +283,7 @@ Action add_modes(CLI::App& app) {
   sub->add_option("-n,--count", a->count, "The lowest modes to find (all there are where fewer)")
       ->check(CLI::Range(1, 100000))->capture_default_str();
   sub->add_flag("--undamped", a->undamped, "Modes of M and K only (real shapes), not the damped complex ones");
-  sub->add_option("--solver", a->solver, "auto (dense up to 1200 free coordinates, else sparse), dense, or sparse "
+  sub->add_option("--solver", a->solver, "auto (dense up to 200 free coordinates or where -n asks for a quarter of them, else sparse), dense, or sparse "
                                          "(Spectra on a KLU factorisation: shift-invert Arnoldi, or Lanczos "
                                          "for --undamped)")
       ->check(CLI::IsMember({"auto", "dense", "sparse"}))->capture_default_str();

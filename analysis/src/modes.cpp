@@ -88,8 +88,10 @@ std::vector<FoundMode> projected_dense_modes(const LinearModel& m, const Eigen::
 Modes compute_modes(const LinearModel& m, const ModeOptions& o) {
   if (o.count < 1) throw InputError("modes: the count must be >= 1");
   const Eigen::Index n = m.size();
+  const Eigen::Index free = n - m.C.rows();
   const bool dense = o.solver == ModeSolver::dense ||
-                     (o.solver == ModeSolver::automatic && n - m.C.rows() <= ModeOptions::dense_limit) || 2 * n < 2 * o.count + 8;
+                     (o.solver == ModeSolver::automatic && (free <= ModeOptions::dense_limit || 4 * o.count + 8 > free)) ||
+                     2 * n < 2 * o.count + 8;
   Modes out;
   std::vector<FoundMode> found;
   if (dense) {
