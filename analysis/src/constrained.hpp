@@ -51,15 +51,23 @@ class ConstrainedSolve {
     lu_.factorize(a);
   }
   Eigen::VectorXd operator()(const Eigen::Ref<const Eigen::VectorXd>& b) const {
-    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(b.size() + rows_);
-    rhs.head(b.size()) = b;
-    lu_.solve(rhs);
-    return rhs.head(b.size());
+    Eigen::VectorXd x(b.size());
+    solve_into(b, x);
+    return x;
+  }
+  // The same into x, through a buffer kept from call to call (not for concurrent calls).
+  void solve_into(const Eigen::Ref<const Eigen::VectorXd>& b, Eigen::Ref<Eigen::VectorXd> x) const {
+    rhs_.resize(b.size() + rows_);
+    rhs_.head(b.size()) = b;
+    rhs_.tail(rows_).setZero();
+    lu_.solve(rhs_);
+    x = rhs_.head(b.size());
   }
 
  private:
   KluLu<double> lu_;
   Eigen::Index rows_ = 0;
+  mutable Eigen::VectorXd rhs_;
 };
 
 // Orthonormal basis of the null space of C (dense Householder QR of C^T), n x (n - rank);
