@@ -53,6 +53,7 @@ struct Loaded {
   Eigen::VectorXd state;
   std::string where;
   double t = 0.0;
+  Eigen::SparseMatrix<double> jacobian;  // the equilibrium's, refilled by linearize (empty: none yet)
 };
 
 // The model, its system and the state to linearise about.
@@ -112,9 +113,10 @@ Loaded working_point(const WorkingPoint& w) {
     eo.progress = [](int iteration, double residual) {
       std::fprintf(stderr, "\rmbsflow: static equilibrium: iteration %d, residual %.3g N or N m   ", iteration, residual);
     };
-  const Equilibrium e = find_equilibrium(*out.sys, out.t, out.state, eo);
+  Equilibrium e = find_equilibrium(*out.sys, out.t, out.state, eo);
   if (terminal) std::fprintf(stderr, "\r%80s\r", "");
   out.state = e.state;
+  out.jacobian = std::move(e.jacobian);
   out.where = "static equilibrium";
   if (!w.quiet)
     std::fprintf(stderr, "mbsflow: static equilibrium in %s (%.3g s): residual %.3g N or N m, from %.3g at the start\n",
@@ -180,7 +182,7 @@ int modes(const ModesArgs& a) {
   if (a.output_given || !a.output.empty()) check_output_path(a.output, {{a.at.model, a.at.at}, a.force});
   Loaded w = working_point(a.at);
   const auto start = std::chrono::steady_clock::now();
-  const LinearModel lm = linearize(*w.sys, w.t, w.state);
+  const LinearModel lm = linearize(*w.sys, w.t, w.state, w.jacobian.size() ? &w.jacobian : nullptr);
   ModeOptions o;
   o.count = a.count;
   o.damped = !a.undamped;
@@ -235,7 +237,7 @@ int frf(const FrfArgs& a) {
   std::vector<Channel> in, out;
   for (const std::string& s : a.inputs) in.push_back(parse_channel(model, s, true));
   for (const std::string& s : a.outputs) out.push_back(parse_channel(model, s, false));
-  const LinearModel lm = linearize(*w.sys, w.t, w.state);
+  const LinearModel lm = linearize(*w.sys, w.t, w.state, w.jacobian.size() ? &w.jacobian : nullptr);
   std::vector<double> hz;
   for (int i = 0; i < a.points; ++i) {
     const double s = a.points == 1 ? 0.0 : static_cast<double>(i) / (a.points - 1);

@@ -274,6 +274,7 @@ Equilibrium find_equilibrium(MultibodySystem& sys, double t, const Eigen::Vector
     if (o.progress) o.progress(iteration, worst(f));
   }
   out.state = y;
+  out.jacobian = std::move(jacobian);
   out.iterations = iteration;
   out.residual = worst(f);
   return out;

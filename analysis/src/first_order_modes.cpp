@@ -53,7 +53,7 @@ class ShiftSolve {
 
 }  // namespace
 
-std::vector<FoundMode> first_order_modes(const LinearModel& m, int count, bool damped) {
+std::vector<FoundMode> first_order_modes(const LinearModel& m, int count, bool damped, bool* restarted) {
   ShiftSolve op(m, damped);
   const Eigen::Index n2 = op.rows();
   // Each vibration is a conjugate pair of the first-order pencil; rigid-body motions a
@@ -79,7 +79,9 @@ std::vector<FoundMode> first_order_modes(const LinearModel& m, int count, bool d
   o.rows = m.size();
   op.set_shift(sigma);
   const auto apply = [&op](const double* in, double* out) { op.perform_op(in, out); };
-  if (const std::optional<ArnoldiPairs> pairs = arnoldi_largest(apply, n2, o)) {
+  const std::optional<ArnoldiPairs> pairs = arnoldi_largest(apply, n2, o);
+  *restarted = !pairs;
+  if (pairs) {
     values = pairs->values.unaryExpr([sigma](std::complex<double> nu) { return sigma + 1.0 / nu; });
     vectors = pairs->vectors;
   } else {

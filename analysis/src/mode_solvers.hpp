@@ -35,7 +35,8 @@ double modal_rate_scale(const LinearModel& m);
 std::optional<std::vector<FoundMode>> undamped_modes(const LinearModel& m, int count);
 
 // The lowest modes by shift-invert Arnoldi on the first-order pencil (2n numbers per
-// vector). RunError where it does not converge.
-std::vector<FoundMode> first_order_modes(const LinearModel& m, int count, bool damped);
+// vector): ours without restarts, or Spectra's restarted one where that does not converge
+// (*restarted then true). RunError where neither converges.
+std::vector<FoundMode> first_order_modes(const LinearModel& m, int count, bool damped, bool* restarted);
 
 }  // namespace mbsflow

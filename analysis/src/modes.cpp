@@ -107,8 +107,10 @@ Modes compute_modes(const LinearModel& m, const ModeOptions& o) {
       found = std::move(*lanczos);
       out.solver = "sparse shift-invert (Spectra, symmetric Lanczos) on a KLU factorisation, rigid joints through the augmented matrix";
     } else {
-      found = first_order_modes(m, o.count, o.damped);
-      out.solver = "sparse shift-invert (Spectra, Arnoldi on the first-order pencil) on a KLU factorisation, "
+      bool restarted = false;
+      found = first_order_modes(m, o.count, o.damped, &restarted);
+      out.solver = std::string("sparse shift-invert (") + (restarted ? "Spectra, restarted Arnoldi" : "Arnoldi") +
+                   " on the first-order pencil) on a KLU factorisation, "
                    "rigid joints through the augmented pencil";
     }
   }
