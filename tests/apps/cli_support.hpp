@@ -12,6 +12,8 @@
 #include <string>
 #include <vector>
 
+#include "process_folder.hpp"
+
 namespace fs = std::filesystem;
 
 namespace mbsflow::test {
@@ -65,7 +67,7 @@ inline std::string trim(std::string s) {
 }
 
 inline fs::path scratch(const char* name) {
-  const fs::path d = fs::temp_directory_path() / ("mbsflow_test_" + std::to_string(::getpid())) / name;
+  const fs::path d = process_folder("mbsflow_test_") / name;
   fs::create_directories(d);
   return d;
 }

@@ -10,17 +10,14 @@
 
 #include "mbsflow/error.hpp"
 #include "mbsflow/io/fe_input.hpp"
+#include "process_folder.hpp"
 
 using namespace mbsflow;
 namespace fs = std::filesystem;
 
 namespace {
 
-fs::path folder() {
-  const fs::path d = fs::temp_directory_path() / ("mbsflow_fe_input_" + std::to_string(::getpid()));
-  fs::create_directories(d);
-  return d;
-}
+fs::path folder() { return test::process_folder("mbsflow_fe_input_"); }
 
 fs::path write(const std::string& name, const std::string& text) {
   const fs::path p = folder() / name;

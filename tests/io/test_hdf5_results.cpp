@@ -20,17 +20,14 @@
 #include "mbsflow/runtime/async_sink.hpp"
 #include "mbsflow/runtime/simulation.hpp"
 #include "memory_sink.hpp"
+#include "process_folder.hpp"
 
 using namespace mbsflow;
 namespace fs = std::filesystem;
 
 namespace {
 
-fs::path temp_file(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("mbsflow_io_" + std::to_string(::getpid()));
-  fs::create_directories(d);
-  return d / name;
-}
+fs::path temp_file(const std::string& name) { return test::process_folder("mbsflow_io_") / name; }
 
 Model small_train() {
   TrainParams p;
