@@ -1,7 +1,7 @@
 // The lowest modes by shift-invert Arnoldi on the first-order pencil: 2n numbers per
 // vector, any damping. The damped modes of a large model, and the undamped ones where the
 // Lanczos of undamped_modes.cpp does not serve. The Arnoldi is ours, without restarts
-// (arnoldi.cpp); Spectra's restarted one takes over where its basis would outgrow memory.
+// (arnoldi.cpp); Spectra's restarted one takes over where that does not converge.
 #include <Spectra/GenEigsRealShiftSolver.h>
 #include <algorithm>
 #include <cmath>
@@ -71,11 +71,12 @@ std::vector<FoundMode> first_order_modes(const LinearModel& m, int count, bool d
   Eigen::MatrixXcd vectors;  // the coordinates: the first n numbers of each
   // The basis without restarts up to 1.5 GB (156 vectors of a 100 000-body model, which
   // converges its 24 wanted at 69) and 400 vectors (the dense eigensolver of the Ritz
-  // values, at each test, grows as the cube of the basis).
+  // values, at each test, grows as the cube of the basis), or as many as Spectra's would
+  // hold where -n asks for more.
   ArnoldiOptions o;
   o.wanted = nev;
   o.first = ncv;
-  o.largest = std::clamp<Eigen::Index>(static_cast<Eigen::Index>(1.5e9 / (8.0 * static_cast<double>(n2))), ncv, 400);
+  o.largest = std::max(ncv, std::min<Eigen::Index>(400, static_cast<Eigen::Index>(1.5e9 / (8.0 * static_cast<double>(n2)))));
   o.rows = m.size();
   op.set_shift(sigma);
   const auto apply = [&op](const double* in, double* out) { op.perform_op(in, out); };
