@@ -53,7 +53,7 @@ struct Loaded {
   Eigen::VectorXd state;
   std::string where;
   double t = 0.0;
-  Eigen::SparseMatrix<double> jacobian;  // the equilibrium's, refilled by linearize (empty: none yet)
+  Eigen::SparseMatrix<double> jacobian;  // the equilibrium's, refilled by linearize (which makes it where empty)
 };
 
 // The model, its system and the state to linearise about.
@@ -182,7 +182,7 @@ int modes(const ModesArgs& a) {
   if (a.output_given || !a.output.empty()) check_output_path(a.output, {{a.at.model, a.at.at}, a.force});
   Loaded w = working_point(a.at);
   const auto start = std::chrono::steady_clock::now();
-  const LinearModel lm = linearize(*w.sys, w.t, w.state, w.jacobian.size() ? &w.jacobian : nullptr);
+  const LinearModel lm = linearize(*w.sys, w.t, w.state, &w.jacobian);
   ModeOptions o;
   o.count = a.count;
   o.damped = !a.undamped;
@@ -237,7 +237,7 @@ int frf(const FrfArgs& a) {
   std::vector<Channel> in, out;
   for (const std::string& s : a.inputs) in.push_back(parse_channel(model, s, true));
   for (const std::string& s : a.outputs) out.push_back(parse_channel(model, s, false));
-  const LinearModel lm = linearize(*w.sys, w.t, w.state, w.jacobian.size() ? &w.jacobian : nullptr);
+  const LinearModel lm = linearize(*w.sys, w.t, w.state, &w.jacobian);
   std::vector<double> hz;
   for (int i = 0; i < a.points; ++i) {
     const double s = a.points == 1 ? 0.0 : static_cast<double>(i) / (a.points - 1);
@@ -286,8 +286,8 @@ Action add_modes(CLI::App& app) {
       ->check(CLI::Range(1, 100000))->capture_default_str();
   sub->add_flag("--undamped", a->undamped, "Modes of M and K only (real shapes), not the damped complex ones");
   sub->add_option("--solver", a->solver, "auto (dense up to 200 free coordinates or where -n asks for a quarter of them, else sparse), dense, or sparse "
-                                         "(Spectra on a KLU factorisation: shift-invert Arnoldi, or Lanczos "
-                                         "for --undamped)")
+                                         "(shift-invert on a KLU factorisation: Arnoldi, Spectra's where it does not "
+                                         "converge, or Spectra's Lanczos for --undamped)")
       ->check(CLI::IsMember({"auto", "dense", "sparse"}))->capture_default_str();
   sub->add_option("-o,--output", a->output, "HDF5 file for the modes, their shapes and the working point")
       ->each([a](const std::string&) { a->output_given = true; });

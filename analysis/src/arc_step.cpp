@@ -18,8 +18,7 @@ Eigen::Vector3d turn_remainder(const Eigen::Vector3d& phi, const Eigen::Quaterni
 }  // namespace
 
 ArcStep::ArcStep(const Model& model, const FreeCoordinates& coords) : coords_(coords) {
-  std::vector<int> free_of(model.bodies.size(), -1);
-  for (std::size_t k = 0; k < coords.bodies.size(); ++k) free_of[static_cast<std::size_t>(coords.bodies[k])] = static_cast<int>(k);
+  const std::vector<int> free_of = coords.free_index(model.bodies.size());
   const auto side = [&](int body) { return body < 0 ? -1 : free_of[static_cast<std::size_t>(body)]; };
   for (const Joint& j : model.joints) {
     const Vec6& k = j.stiffness;

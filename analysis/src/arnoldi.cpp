@@ -84,14 +84,14 @@ std::optional<ArnoldiPairs> arnoldi_largest(const std::function<void(const doubl
   for (Eigen::Index j = 0; j < largest; ++j) {
     op(v.col(j).data(), w.data());
     ++operations;
+    const Eigen::Index m = j + 1;
     const double size = w.norm();
     sizes[j] = size;
-    const double beta = orthogonalise(v, j + 1, w.data(), h.col(j).data());
-    h(j + 1, j) = beta;
-    const Eigen::Index m = j + 1;
+    const double beta = orthogonalise(v, m, w.data(), h.col(j).data());
+    h(m, j) = beta;
     // The basis spans an invariant subspace when the new direction is rounding: its Ritz
     // pairs are exact. Otherwise the test at the planned sizes.
-    const bool invariant = !(beta > 1e3 * std::numeric_limits<double>::epsilon() * size);
+    const bool invariant = !(beta > 1e3 * eps * size);
     if (invariant || m == next_test || m == largest) {
       const Ritz r = ritz_pairs(h.topLeftCorner(m, m));
       bool converged = static_cast<Eigen::Index>(r.order.size()) >= wanted;
@@ -134,10 +134,10 @@ std::optional<ArnoldiPairs> arnoldi_largest(const std::function<void(const doubl
       Eigen::VectorXd ignored(m);
       const double fresh = orthogonalise(v, m, w.data(), ignored.data());
       if (!(fresh > 0.0)) break;
-      h(j + 1, j) = 0.0;
-      v.col(j + 1) = w / fresh;
+      h(m, j) = 0.0;
+      v.col(m) = w / fresh;
     } else {
-      v.col(j + 1) = w / beta;
+      v.col(m) = w / beta;
     }
   }
   return std::nullopt;

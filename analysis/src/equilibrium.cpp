@@ -164,7 +164,7 @@ Equilibrium find_equilibrium(MultibodySystem& sys, double t, const Eigen::Vector
   const bool has_potential = residual_has_potential(m, l, y);
   Factor factor;
   std::optional<LinearModel> lm;
-  Sparse jacobian = sys.has_analytic_jacobian() ? sys.jacobian_pattern() : Sparse();  // reused by every linearisation
+  Sparse jacobian;  // the analytic Jacobian's pattern, made by the first linearisation, reused by every one
   // Stiff elements (a steel beam's axial stiffness, 1e8 N/m and more) leave a residual of
   // their stiffness times the positions' rounding, which may exceed `enough`: a residual
   // below 1e-6 of the scale that four iterations in a row have not halved is converged.
@@ -192,7 +192,7 @@ Equilibrium find_equilibrium(MultibodySystem& sys, double t, const Eigen::Vector
                      " (is it held against gravity and its loads? --at-initial linearises where it is)");
     }
     // A rejected step leaves y where it was: its linearisation serves the next try.
-    if (!lm) lm = linearize(sys, t, y, jacobian.size() ? &jacobian : nullptr, false);  // no damping: at rest
+    if (!lm) lm = linearize(sys, t, y, &jacobian, false);  // no damping: at rest
     Eigen::VectorXd dx;
     try {
       dx = step(*lm, f, h, factor);

@@ -190,12 +190,12 @@ Eigen::VectorXd at_rest_rates(const StateLayout& l, int frame, Eigen::Index eta,
 // D are written in place, column body by column body on all cores (a pair's 36 entries by
 // one thread: the same numbers whatever the thread count); d == nullptr: K alone (the
 // equilibrium needs no damping).
-void rate_blocks(const StateLayout& l, const std::vector<int>& bodies, const Eigen::VectorXd& y,
+void rate_blocks(const StateLayout& l, const FreeCoordinates& fc, const Eigen::VectorXd& y,
                  const Eigen::SparseMatrix<double>& jac, const std::vector<Eigen::Matrix<double, 6, 6>>& mass,
                  Eigen::SparseMatrix<double>& k, Eigen::SparseMatrix<double>* d) {
   const Eigen::Index nb = l.bodies;
-  std::vector<int> index_of(static_cast<std::size_t>(nb), -1);  // system body -> free index
-  for (std::size_t i = 0; i < bodies.size(); ++i) index_of[static_cast<std::size_t>(bodies[i])] = static_cast<int>(i);
+  const std::vector<int>& bodies = fc.bodies;
+  const std::vector<int> index_of = fc.free_index(static_cast<std::size_t>(nb));
   using Left = Eigen::Matrix<double, 6, 10>;
   using Right = Eigen::Matrix<double, 13, 12>;
   std::vector<Left> left(bodies.size());
@@ -309,6 +309,12 @@ void rate_blocks(const StateLayout& l, const std::vector<int>& bodies, const Eig
 
 std::size_t FreeCoordinates::body_of(Eigen::Index i) const {
   return static_cast<std::size_t>(std::upper_bound(start.begin(), start.end() - 1, i) - start.begin() - 1);
+}
+
+std::vector<int> FreeCoordinates::free_index(std::size_t system_bodies) const {
+  std::vector<int> out(system_bodies, -1);
+  for (std::size_t k = 0; k < bodies.size(); ++k) out[static_cast<std::size_t>(bodies[k])] = static_cast<int>(k);
+  return out;
 }
 
 FreeCoordinates free_coordinates(const MultibodySystem& sys) {
@@ -473,13 +479,13 @@ LinearModel linearize(MultibodySystem& sys, double t, const Eigen::VectorXd& y, 
   out.D.resize(n, n);
   const bool analytic = sys.has_analytic_jacobian();
   Eigen::SparseMatrix<double> own;
+  Eigen::SparseMatrix<double>& jac = jacobian ? *jacobian : own;
   if (analytic) {
-    if (!jacobian) own = sys.jacobian_pattern();
-    sys.jacobian(t, y, jacobian ? *jacobian : own);
+    if (jac.size() == 0) jac = sys.jacobian_pattern();
+    sys.jacobian(t, y, jac);
   }
-  const Eigen::SparseMatrix<double>& jac = jacobian ? *jacobian : own;
   if (analytic && model.flexible.empty()) {  // rate_blocks: 6 coordinates per body
-    rate_blocks(l, bodies, y, jac, mass, out.K, with_damping ? &out.D : nullptr);
+    rate_blocks(l, fc, y, jac, mass, out.K, with_damping ? &out.D : nullptr);
   } else {
     // The rate rows of A = T+ (J T), J T exact or by central differences in the tangent
     // directions: K = -M A_vx, D = -M A_vv.

@@ -27,6 +27,7 @@ struct Point {
   std::unique_ptr<MultibodySystem> sys;
   Eigen::VectorXd y;
   double t = 0.0;
+  Eigen::SparseMatrix<double> jacobian;  // the equilibrium's, refilled by linearize (which makes it where empty)
 };
 
 Point working_point(const Model& model, const std::string& at) {
@@ -37,7 +38,9 @@ Point working_point(const Model& model, const std::string& at) {
   p.y = p.sys->initial_state();
   if (at == "equilibrium") {
     py::gil_scoped_release release;
-    p.y = find_equilibrium(*p.sys, p.t, p.y).state;
+    Equilibrium e = find_equilibrium(*p.sys, p.t, p.y);
+    p.y = std::move(e.state);
+    p.jacobian = std::move(e.jacobian);
   }
   return p;
 }
@@ -61,14 +64,14 @@ void bind_analysis(py::module_& m) {
       "_linearize",
       [](const Model& model, const std::string& at) {
         Point p = working_point(model, at);
-        return linear_model(linearize(*p.sys, p.t, p.y));
+        return linear_model(linearize(*p.sys, p.t, p.y, &p.jacobian));
       },
       py::arg("model"), py::arg("at"));
   m.def(
       "_modes",
       [](const Model& model, int n, const std::string& at, bool damped, const std::string& solver) {
         Point p = working_point(model, at);
-        const LinearModel lm = linearize(*p.sys, p.t, p.y);
+        const LinearModel lm = linearize(*p.sys, p.t, p.y, &p.jacobian);
         ModeOptions o;
         o.count = n;
         o.damped = damped;
@@ -114,7 +117,7 @@ void bind_analysis(py::module_& m) {
       [](const Model& model, const std::vector<std::string>& inputs, const std::vector<std::string>& outputs,
          const std::vector<double>& hz, const std::string& at) {
         Point p = working_point(model, at);
-        const LinearModel lm = linearize(*p.sys, p.t, p.y);
+        const LinearModel lm = linearize(*p.sys, p.t, p.y, &p.jacobian);
         std::vector<Channel> in, out;
         for (const std::string& s : inputs) in.push_back(parse_channel(model, s, true));
         for (const std::string& s : outputs) out.push_back(parse_channel(model, s, false));

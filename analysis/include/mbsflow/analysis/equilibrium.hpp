@@ -29,9 +29,8 @@ struct Equilibrium {
   double residual = 0.0;  // largest force (N) or torque (N m) left on a free body
   double initial_residual = 0.0;
   // The right-hand side's Jacobian as the iterations last filled it (empty where the model
-  // has no analytic one): handed to linearize() at the equilibrium, which then fills it in
-  // place. A fresh pattern and its first fill cost about an iteration (1.3 s at 100 000
-  // bodies).
+  // has no analytic one): for linearize() at the equilibrium, which then fills it in place.
+  // A fresh pattern and its first fill cost about an iteration (1.3 s at 100 000 bodies).
   Eigen::SparseMatrix<double> jacobian;
 };
 

@@ -37,6 +37,8 @@ struct FreeCoordinates {
   int flexible_of(std::size_t k) const { return flexible.empty() ? -1 : flexible[k]; }
   // The free body whose coordinates hold coordinate i.
   std::size_t body_of(Eigen::Index i) const;
+  // Per system body (of system_bodies) its index in `bodies`, -1 where it is held.
+  std::vector<int> free_index(std::size_t system_bodies) const;
 };
 
 struct LinearModel {
@@ -54,10 +56,11 @@ struct LinearModel {
 
 // The linearisation of sys about (t, y). Uses the analytic Jacobian where the model has
 // one (MultibodySystem::has_analytic_jacobian), else central differences.
-// jacobian: where the analytic Jacobian is evaluated, sys.jacobian_pattern() at the first
-// call, kept by a caller that linearises again and again (the equilibrium): the pattern
-// costs about as much as the Jacobian, and a large model's (600 MB at 100 000 bodies)
-// would be allocated and its pages zeroed afresh at every call.
+// jacobian: where the analytic Jacobian is evaluated, kept by a caller that linearises
+// again and again (the equilibrium, then the modes at its end); an empty matrix gets
+// sys.jacobian_pattern(). The pattern and its first fill cost about as much as an
+// iteration, and a large model's (600 MB at 100 000 bodies) would be allocated and its
+// pages zeroed afresh at every call.
 // with_damping = false: D is left empty (n x n, no entries), for a caller that needs M and
 // K only (the equilibrium's steps).
 LinearModel linearize(MultibodySystem& sys, double t, const Eigen::VectorXd& y,
