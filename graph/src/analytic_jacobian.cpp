@@ -112,7 +112,7 @@ bool MultibodySystem::has_analytic_jacobian(std::string* why) const {
   return true;
 }
 
-void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::SparseMatrix<double>& jac) {
+void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::SparseMatrix<double>& jac, const ParallelFor& parallel) {
   if (std::string why; !has_analytic_jacobian(&why)) throw InputError("MultibodySystem::jacobian: no analytic Jacobian: " + why);
   // The rates themselves where rigid clusters need them (their accelerations, multipliers
   // and factors, cluster_jacobian.cpp); the kinematics and joint forces in any case (the
@@ -173,20 +173,27 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
   auto joint_derivatives = [&](std::size_t k) {
     return Eigen::Map<JointDerivatives>(jacobian_scratch_.data() + k * JointDerivatives::SizeAtCompileTime);
   };
-  for (std::size_t k = 0; k < compiled_->joints.size(); ++k) {
-    const CompiledJoint& j = compiled_->joints[k];
-    const BodyFrameT<Dual> a = free(j.a) ? seeded_frame(numbers(j.a), 0) : constant_frame(j.a);
-    const BodyFrameT<Dual> b = free(j.b) ? seeded_frame(numbers(j.b), body_states) : constant_frame(j.b);
-    Eigen::Matrix<Dual, 9, 1> out;
-    if (j.kinematic >= 0) {  // compliant, or the limit stops and effort motor of a rigid one
-      out.setZero();
-      if (j.applies_force) kinematic_joint_wrench<Dual>(law_of(j), j.rigid, geometry_of(j), motion(a), motion(b), t, out, nullptr);
-    } else {
-      compliant_joint_wrench<Dual>(law_of(j), tables_of(j), a, b, out);
+  // Each joint reads the kinematics and writes its own derivatives: the loop may be split.
+  const auto differentiate_joints = [&](std::size_t begin, std::size_t end) {
+    for (std::size_t k = begin; k < end; ++k) {
+      const CompiledJoint& j = compiled_->joints[k];
+      const BodyFrameT<Dual> a = free(j.a) ? seeded_frame(numbers(j.a), 0) : constant_frame(j.a);
+      const BodyFrameT<Dual> b = free(j.b) ? seeded_frame(numbers(j.b), body_states) : constant_frame(j.b);
+      Eigen::Matrix<Dual, 9, 1> out;
+      if (j.kinematic >= 0) {  // compliant, or the limit stops and effort motor of a rigid one
+        out.setZero();
+        if (j.applies_force) kinematic_joint_wrench<Dual>(law_of(j), j.rigid, geometry_of(j), motion(a), motion(b), t, out, nullptr);
+      } else {
+        compliant_joint_wrench<Dual>(law_of(j), tables_of(j), a, b, out);
+      }
+      auto d = joint_derivatives(k);
+      for (int r = 0; r < 9; ++r) d.row(r) = out[r].derivatives().transpose();
     }
-    auto d = joint_derivatives(k);
-    for (int r = 0; r < 9; ++r) d.row(r) = out[r].derivatives().transpose();
-  }
+  };
+  if (parallel)
+    parallel(compiled_->joints.size(), differentiate_joints);
+  else
+    differentiate_joints(0, compiled_->joints.size());
 
   SlotWriter slots(jac, jacobian_slots_.outer, jacobian_slots_.slots);
   std::vector<std::pair<int, Block6>> blocks;  // per body read: d (force, torque) / d (its state)

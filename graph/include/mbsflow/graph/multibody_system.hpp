@@ -159,7 +159,11 @@ class MultibodySystem {
   // element's force law and of the rigid joints' constraint rows, assembled body by body
   // along the body graph, and through each rigid cluster's reactions), written into jac,
   // a matrix of jacobian_pattern()'s pattern. Throws std::logic_error without one.
-  void jacobian(double t, const Eigen::VectorXd& y, Eigen::SparseMatrix<double>& jac);
+  // parallel: runs body(begin, end) over [0, count) split as it likes (a caller with a
+  // thread pool passes its parallel loop); the joints' derivatives, each written to its
+  // own place, go through it, so the matrix is the same whatever the split. Empty: serial.
+  using ParallelFor = std::function<void(std::size_t count, const std::function<void(std::size_t begin, std::size_t end)>& body)>;
+  void jacobian(double t, const Eigen::VectorXd& y, Eigen::SparseMatrix<double>& jac, const ParallelFor& parallel = nullptr);
 
   // Bytes this system holds: what the model compiles to (shared by its copies) and its own
   // workspace (the kinematics and joint outputs of an evaluation, constraint scratch),
