@@ -3,31 +3,15 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
+#include <stdexcept>
 
 #include "mbsflow/error.hpp"
-#include "tsan_annotations.hpp"
+#include "parallel_over.hpp"
 
 namespace mbsflow {
 namespace {
 
 using Triplets = std::vector<Eigen::Triplet<double>>;
-
-// body(begin, end) over [0, count) on all cores, with the orderings tbb::parallel_for
-// guarantees stated to ThreadSanitizer (Debian's libtbb is not instrumented): the tasks see
-// what the caller wrote before, the caller what the tasks wrote.
-template <class F>
-void parallel_over(std::size_t count, F body) {
-  int token = 0;
-  happens_before(&token);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& range) {
-    happens_after(&token);
-    const ReleaseOnExit release{&token};
-    body(range.begin(), range.end());
-  });
-  happens_after(&token);
-}
 
 Eigen::Matrix3d rotation(const Eigen::VectorXd& y, const StateLayout& l, int b) {
   const auto q = y.segment<4>(l.orientation(b));
@@ -237,11 +221,14 @@ void rate_blocks(const StateLayout& l, const FreeCoordinates& fc, const Eigen::V
   const auto coupled = [&](std::size_t c, Coupled& out, bool with_blocks) {
     out.rows.clear();
     const int b = bodies[c];
+    // jacobian_pattern gives each of a body's 13 columns the rates of every body that
+    // reads it: the first column alone names them all, where only they are counted.
+    const int count = with_blocks ? 13 : 1;
     const Eigen::Index columns[13] = {l.position(b),        l.position(b) + 1,    l.position(b) + 2,    l.orientation(b),
                                       l.orientation(b) + 1, l.orientation(b) + 2, l.orientation(b) + 3, l.velocity(b),
                                       l.velocity(b) + 1,    l.velocity(b) + 2,    l.angular_velocity(b),
                                       l.angular_velocity(b) + 1, l.angular_velocity(b) + 2};
-    for (int j = 0; j < 13; ++j)
+    for (int j = 0; j < count; ++j)
       for (Eigen::SparseMatrix<double>::InnerIterator it(jac, columns[j]); it; ++it) {
         Eigen::Index body = 0;
         const int row = locate_row(it.row(), body);
@@ -281,14 +268,18 @@ void rate_blocks(const StateLayout& l, const FreeCoordinates& fc, const Eigen::V
     Coupled scratch;
     for (std::size_t c = begin; c != end; ++c) {
       coupled(c, scratch, true);
+      if (static_cast<int>(scratch.rows.size()) != pairs[c + 1] - pairs[c])
+        throw std::logic_error("linearize: a Jacobian not of jacobian_pattern()'s pattern");
       for (std::size_t i = 0; i < scratch.rows.size(); ++i) {
         const auto r = static_cast<std::size_t>(scratch.rows[i]);
         // Its place in the columns: the rows ascend, so after every coupled body below it.
         const auto place = std::count_if(scratch.rows.begin(), scratch.rows.end(), [&](int other) { return other < scratch.rows[i]; });
-        const Eigen::Matrix<double, 6, 13> lj = left[r] * scratch.blocks[i];
+        // Coefficient by coefficient: Eigen's blocked product (packing, kernels) at these
+        // sizes took half of this loop.
+        const Eigen::Matrix<double, 6, 13> lj = left[r].lazyProduct(scratch.blocks[i]);
         Eigen::Matrix<double, 6, 12> a;
-        a.leftCols<6>() = -mass[r] * (lj * right[c].leftCols<6>());
-        if (d) a.rightCols<6>() = -mass[r] * (lj * right[c].rightCols<6>());
+        a.leftCols<6>() = -mass[r].lazyProduct(Eigen::Matrix<double, 6, 6>(lj.lazyProduct(right[c].leftCols<6>())));
+        if (d) a.rightCols<6>() = -mass[r].lazyProduct(Eigen::Matrix<double, 6, 6>(lj.lazyProduct(right[c].rightCols<6>())));
         for (int col = 0; col < 6; ++col) {
           const Eigen::Index at = k.outerIndexPtr()[6 * c + static_cast<std::size_t>(col)] + 6 * place;
           for (int row = 0; row < 6; ++row) {
@@ -482,7 +473,7 @@ LinearModel linearize(MultibodySystem& sys, double t, const Eigen::VectorXd& y, 
   Eigen::SparseMatrix<double>& jac = jacobian ? *jacobian : own;
   if (analytic) {
     if (jac.size() == 0) jac = sys.jacobian_pattern();
-    sys.jacobian(t, y, jac);
+    sys.jacobian(t, y, jac, all_cores());
   }
   if (analytic && model.flexible.empty()) {  // rate_blocks: 6 coordinates per body
     rate_blocks(l, fc, y, jac, mass, out.K, with_damping ? &out.D : nullptr);
