@@ -171,11 +171,15 @@ Equilibrium find_equilibrium(MultibodySystem& sys, double t, const Eigen::Vector
   double best = worst(f);
   int stalled = 0;
   while (worst(f) > enough && !(stalled >= 4 && worst(f) <= 1e-6 * scale)) {
+    // Counted only below that level: a long chain released level raises its residual a
+    // hundredfold while it falls, which is no stall.
     if (worst(f) < 0.5 * best) {
       best = worst(f);
       stalled = 0;
-    } else {
+    } else if (worst(f) <= 1e-6 * scale) {
       ++stalled;
+    } else {
+      stalled = 0;
     }
     if (++iteration > o.max_iterations) {
       Eigen::Index at = 0;
