@@ -187,6 +187,7 @@ int modes(const ModesArgs& a) {
   o.count = a.count;
   o.damped = !a.undamped;
   o.solver = a.solver == "dense" ? ModeSolver::dense : a.solver == "sparse" ? ModeSolver::sparse : ModeSolver::automatic;
+  if (!a.at.quiet) o.notice = [](const std::string& what) { std::fprintf(stderr, "mbsflow: %s\n", what.c_str()); };
   const Modes m = compute_modes(lm, o);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const Model& model = *w.model;

@@ -53,7 +53,8 @@ class ShiftSolve {
 
 }  // namespace
 
-std::vector<FoundMode> first_order_modes(const LinearModel& m, int count, bool damped, bool* restarted) {
+std::vector<FoundMode> first_order_modes(const LinearModel& m, int count, bool damped, bool* restarted,
+                                         const std::function<void(const std::string&)>& notice) {
   ShiftSolve op(m, damped);
   const Eigen::Index n2 = op.rows();
   // Each vibration is a conjugate pair of the first-order pencil; rigid-body motions a
@@ -86,6 +87,9 @@ std::vector<FoundMode> first_order_modes(const LinearModel& m, int count, bool d
     values = pairs->values.unaryExpr([sigma](std::complex<double> nu) { return sigma + 1.0 / nu; });
     vectors = pairs->vectors;
   } else {
+    if (notice)
+      notice("the Arnoldi without restarts did not converge: Spectra's restarted Arnoldi takes over (up to 300 restarts; "
+             "minutes on a large model with many modes clustered near zero)");
     Spectra::GenEigsRealShiftSolver<ShiftSolve> eigs(op, nev, ncv, sigma);
     eigs.init();
     eigs.compute(Spectra::SortRule::LargestMagn, 300, 1e-10);  // restarts: clustered near-zero modes may not converge

@@ -5,7 +5,9 @@
 // does not serve).
 #include <Eigen/Dense>
 #include <complex>
+#include <functional>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "mbsflow/analysis/linearization.hpp"
@@ -36,7 +38,9 @@ std::optional<std::vector<FoundMode>> undamped_modes(const LinearModel& m, int c
 
 // The lowest modes by shift-invert Arnoldi on the first-order pencil (2n numbers per
 // vector): ours without restarts, or Spectra's restarted one where that does not converge
-// (*restarted then true). RunError where neither converges.
-std::vector<FoundMode> first_order_modes(const LinearModel& m, int count, bool damped, bool* restarted);
+// (*restarted then true, and notice, where set, told before it starts). RunError where
+// neither converges.
+std::vector<FoundMode> first_order_modes(const LinearModel& m, int count, bool damped, bool* restarted,
+                                         const std::function<void(const std::string&)>& notice = nullptr);
 
 }  // namespace mbsflow

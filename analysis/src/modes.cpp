@@ -108,7 +108,7 @@ Modes compute_modes(const LinearModel& m, const ModeOptions& o) {
       out.solver = "sparse shift-invert (Spectra, symmetric Lanczos) on a KLU factorisation, rigid joints through the augmented matrix";
     } else {
       bool restarted = false;
-      found = first_order_modes(m, o.count, o.damped, &restarted);
+      found = first_order_modes(m, o.count, o.damped, &restarted, o.notice);
       out.solver = std::string("sparse shift-invert (") + (restarted ? "Spectra, restarted Arnoldi" : "Arnoldi") +
                    " on the first-order pencil) on a KLU factorisation, "
                    "rigid joints through the augmented pencil";

@@ -86,6 +86,20 @@ TEST_CASE("modes: a run's snapshot as the working point, and refusals that name 
   fs::remove_all(d.parent_path());
 }
 
+TEST_CASE("modes: the sparse solver says so before it turns to Spectra's restarts", "[apps][modes]") {
+  // The flyball governor's augmented pencil leaves values under the rounding of the
+  // Arnoldi relation (analysis/src/arnoldi.cpp): the restarted solver takes over.
+  const std::string model = std::string(MBSFLOW_SOURCE) + "/examples/models/iftomm_a05_flyball_governor.json";
+  const Result r = run("modes '" + model + "' --solver sparse -n 2", ".", true);
+  INFO(r.err);
+  CHECK(r.code == 0);
+  CHECK(r.err.find("Spectra's restarted Arnoldi takes over") != std::string::npos);
+  CHECK(r.out.find("Spectra, restarted Arnoldi") != std::string::npos);
+  CHECK(r.out.find("0.569219") != std::string::npos);  // the governor's swing, as the dense solver finds it
+  const Result quiet = run("modes '" + model + "' --solver sparse -n 2 -q");
+  CHECK(quiet.err.find("takes over") == std::string::npos);
+}
+
 TEST_CASE("frf: a damped oscillator's magnitude and phase in CSV, and its state-space matrices", "[apps][frf]") {
   const fs::path d = scratch("frf");
   const std::string dir = d.string();

@@ -8,6 +8,7 @@
 // shows up as a mode.
 #include <Eigen/Dense>
 #include <complex>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -25,6 +26,9 @@ struct ModeOptions {
   // at 300 free coordinates (11.7 s at 600, 194 s at 1200); the sparse one takes 0.1 s there.
   ModeSolver solver = ModeSolver::automatic;
   static constexpr Eigen::Index dense_limit = 200;
+  // Told where the sparse solver turns to a slower path (Spectra's restarts, minutes on a
+  // large model): a command line says so before the wait.
+  std::function<void(const std::string&)> notice;
 };
 
 struct Modes {
