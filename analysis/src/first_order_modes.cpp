@@ -71,7 +71,7 @@ std::vector<FoundMode> first_order_modes(const LinearModel& m, int count, bool d
   Eigen::VectorXcd values;
   Eigen::MatrixXcd vectors;  // the coordinates: the first n numbers of each
   // The basis without restarts up to 1.5 GB (156 vectors of a 100 000-body model, which
-  // converges its 24 wanted at 69) and 400 vectors (the dense eigensolver of the Ritz
+  // converges its 24 wanted at 58) and 400 vectors (the dense eigensolver of the Ritz
   // values, at each test, grows as the cube of the basis), or as many as Spectra's would
   // hold where -n asks for more.
   ArnoldiOptions o;
