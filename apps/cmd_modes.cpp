@@ -116,7 +116,7 @@ Loaded working_point(const WorkingPoint& w) {
   Equilibrium e = find_equilibrium(*out.sys, out.t, out.state, eo);
   if (terminal) std::fprintf(stderr, "\r%80s\r", "");
   out.state = e.state;
-  out.jacobian = std::move(e.jacobian);
+  out.jacobian.swap(e.jacobian);  // Eigen 3.4's SparseMatrix has no move: a "move" copies
   out.where = "static equilibrium";
   if (!w.quiet)
     std::fprintf(stderr, "mbsflow: static equilibrium in %s (%.3g s): residual %.3g N or N m, from %.3g at the start\n",

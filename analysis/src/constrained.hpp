@@ -15,15 +15,14 @@
 
 namespace mbsflow {
 
-// Without rows, P itself (taken by value: a temporary moves in, and a large model's P,
-// tens of millions of entries, is not copied through triplets at every call).
+// P made the augmented matrix in place: without rows, P itself (compressed). In place
+// because Eigen 3.4's SparseMatrix has no move constructor: a matrix returned from a
+// by-value parameter, or "moved", is copied, tens of millions of entries on a large model.
 template <class Scalar>
-Eigen::SparseMatrix<Scalar> augmented(Eigen::SparseMatrix<Scalar> p, const Eigen::SparseMatrix<double>& c, Scalar d = Scalar(0)) {
+void augment(Eigen::SparseMatrix<Scalar>& p, const Eigen::SparseMatrix<double>& c, Scalar d = Scalar(0)) {
   const Eigen::Index n = p.rows(), r = c.rows();
-  if (r == 0) {
-    p.makeCompressed();
-    return p;
-  }
+  p.makeCompressed();
+  if (r == 0) return;
   std::vector<Eigen::Triplet<Scalar>> e;
   e.reserve(static_cast<std::size_t>(p.nonZeros() + 2 * c.nonZeros() + r));
   for (Eigen::Index col = 0; col < p.outerSize(); ++col)
@@ -34,10 +33,9 @@ Eigen::SparseMatrix<Scalar> augmented(Eigen::SparseMatrix<Scalar> p, const Eigen
       e.emplace_back(it.col(), n + it.row(), Scalar(it.value()));
     }
   for (Eigen::Index i = 0; i < r; ++i) e.emplace_back(n + i, n + i, d);
-  Eigen::SparseMatrix<Scalar> a(n + r, n + r);
-  a.setFromTriplets(e.begin(), e.end());
-  a.makeCompressed();
-  return a;
+  p.resize(n + r, n + r);
+  p.setFromTriplets(e.begin(), e.end());
+  p.makeCompressed();
 }
 
 // P^-1 on the motions C x = 0 allows: x of [P C^T; C 0] [x; mu] = [b; 0], the augmented
@@ -46,9 +44,9 @@ class ConstrainedSolve {
  public:
   void factor(Eigen::SparseMatrix<double> p, const Eigen::SparseMatrix<double>& c) {
     rows_ = c.rows();
-    const Eigen::SparseMatrix<double> a = augmented<double>(std::move(p), c);
-    lu_.analyze(a);
-    lu_.factorize(a);
+    augment(p, c);
+    lu_.analyze(p);
+    lu_.factorize(p);
   }
   Eigen::VectorXd operator()(const Eigen::Ref<const Eigen::VectorXd>& b) const {
     Eigen::VectorXd x(b.size());

@@ -5,7 +5,6 @@
 #include <cstdio>
 #include <Eigen/Geometry>
 #include <limits>
-#include <optional>
 
 #include "arc_step.hpp"
 #include "constrained.hpp"
@@ -40,7 +39,8 @@ Eigen::VectorXd step(const LinearModel& lm, const Eigen::VectorXd& f, double h, 
   // Redundant rows (a planar loop in 3D) make the augmented matrix singular: a tiny
   // negative diagonal on the multipliers keeps it regular and leaves dx as it is.
   const double eps = 1e-12 * (lm.M.coeffs().size() ? lm.M.coeffs().cwiseAbs().maxCoeff() : 1.0) / (h * h);
-  const Sparse a = augmented<double>(lm.K + (1.0 / (h * h)) * lm.M, lm.C, -eps);
+  Sparse a = lm.K + (1.0 / (h * h)) * lm.M;
+  augment(a, lm.C, -eps);
   // Compared in place: a copy of the pattern at every iteration would cost as much as the
   // comparison (tens of MB for 100 000 bodies).
   const auto outer = a.outerIndexPtr(), inner = a.innerIndexPtr();
@@ -163,7 +163,8 @@ Equilibrium find_equilibrium(MultibodySystem& sys, double t, const Eigen::Vector
   const ArcStep arcs(m, coords);
   const bool has_potential = residual_has_potential(m, l, y);
   Factor factor;
-  std::optional<LinearModel> lm;
+  LinearModel lm;
+  bool linearized = false;  // lm is y's
   Sparse jacobian;  // the analytic Jacobian's pattern, made by the first linearisation, reused by every one
   // Stiff elements (a steel beam's axial stiffness, 1e8 N/m and more) leave a residual of
   // their stiffness times the positions' rounding, which may exceed `enough`: a residual
@@ -196,10 +197,11 @@ Equilibrium find_equilibrium(MultibodySystem& sys, double t, const Eigen::Vector
                      " (is it held against gravity and its loads? --at-initial linearises where it is)");
     }
     // A rejected step leaves y where it was: its linearisation serves the next try.
-    if (!lm) lm = linearize(sys, t, y, &jacobian, false);  // no damping: at rest
+    if (!linearized) linearize_into(lm, sys, t, y, &jacobian, false);  // no damping: at rest
+    linearized = true;
     Eigen::VectorXd dx;
     try {
-      dx = step(*lm, f, h, factor);
+      dx = step(lm, f, h, factor);
     } catch (const RunError&) {  // singular: a smaller pseudo-time step adds more mass
       h *= 0.25;
       continue;
@@ -232,7 +234,7 @@ Equilibrium find_equilibrium(MultibodySystem& sys, double t, const Eigen::Vector
       applied = dx;
       next = y;
       arcs.apply(l, dx, next);  // each body turned about where its bushings hold it
-      settle_on_joints(sys, t, *lm, factor, next);
+      settle_on_joints(sys, t, lm, factor, next);
       sys.after_step(t, next);
       f_next = static_residual(sys, t, next, coords);
       e_next = potential(sys, t, next);
@@ -241,7 +243,7 @@ Equilibrium find_equilibrium(MultibodySystem& sys, double t, const Eigen::Vector
       // them open: its energy is not the model's, and the step is no step. after_step's
       // projection closes them to 1e-10 (m or rad) wherever it converges, so the bound
       // only catches where it did not.
-      const bool closed = joint_gap(sys, t, *lm, next) <= 1e-9 * std::max(extent, 1.0);
+      const bool closed = joint_gap(sys, t, lm, next) <= 1e-9 * std::max(extent, 1.0);
       taken = (lower || worst(f_next) < worst(f)) && f_next.allFinite() && closed;
       if (taken && half > 0) h *= 0.5;  // a shorter step fitted: the next starts from there
     }
@@ -267,7 +269,7 @@ Equilibrium find_equilibrium(MultibodySystem& sys, double t, const Eigen::Vector
     // step's direction more the mass term's and less Newton's: 21 iterations in place of
     // 17 on a 100 000-link chain released level, 17 in place of 15 at 10 000 links, the
     // same or one more on the test suite's models.
-    const double predicted = f.dot(applied) - 0.5 * applied.dot(lm->K * applied);
+    const double predicted = f.dot(applied) - 0.5 * applied.dot(lm.K * applied);
     if (energy - e_next < 0.25 * std::max(predicted, 0.0) && worst(f_next) > 0.5 * worst(f)) {
       h *= 0.5;
     } else if (cut < 1.0) {
@@ -278,11 +280,11 @@ Equilibrium find_equilibrium(MultibodySystem& sys, double t, const Eigen::Vector
     y = next;
     f = f_next;
     energy = e_next;
-    lm.reset();
+    linearized = false;
     if (o.progress) o.progress(iteration, worst(f));
   }
   out.state = y;
-  out.jacobian = std::move(jacobian);
+  out.jacobian.swap(jacobian);  // Eigen 3.4's SparseMatrix has no move: a "move" copies
   out.iterations = iteration;
   out.residual = worst(f);
   return out;

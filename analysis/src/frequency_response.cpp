@@ -81,16 +81,13 @@ FrequencyResponse frequency_response(const LinearModel& m, const std::vector<Cha
   FrequencyResponse out;
   out.frequency = hz;
   // The augmented matrix's pattern: K, D, M and the joints' rows, the same at every frequency.
-  auto dynamic_stiffness = [&](double omega) {
-    const Eigen::SparseMatrix<Complex> p =
-        m.K.cast<Complex>() + Complex(0.0, omega) * m.D.cast<Complex>() + Complex(-omega * omega, 0.0) * m.M.cast<Complex>();
-    return augmented<Complex>(p, m.C);
-  };
   KluLu<Complex> lu;
   bool analysed = false;
   for (double f : hz) {
     const double omega = 2.0 * std::numbers::pi * f;
-    const Eigen::SparseMatrix<Complex> a = dynamic_stiffness(omega);
+    Eigen::SparseMatrix<Complex> a =
+        m.K.cast<Complex>() + Complex(0.0, omega) * m.D.cast<Complex>() + Complex(-omega * omega, 0.0) * m.M.cast<Complex>();
+    augment(a, m.C);
     if (!analysed) lu.analyze(a);
     analysed = true;
     try {

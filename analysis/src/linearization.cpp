@@ -173,9 +173,10 @@ Eigen::VectorXd at_rest_rates(const StateLayout& l, int frame, Eigen::Index eta,
 // models); every entry of a coupled pair is kept, so the pattern follows J's alone. K and
 // D are written in place, column body by column body on all cores (a pair's 36 entries by
 // one thread: the same numbers whatever the thread count); d == nullptr: K alone (the
-// equilibrium needs no damping).
+// equilibrium needs no damping), which at rest reads J's position and orientation columns
+// alone (the velocities' enter K through omega only).
 void rate_blocks(const StateLayout& l, const FreeCoordinates& fc, const Eigen::VectorXd& y,
-                 const Eigen::SparseMatrix<double>& jac, const std::vector<Eigen::Matrix<double, 6, 6>>& mass,
+                 const Eigen::SparseMatrix<double>& jac, const std::vector<Eigen::Matrix<double, 6, 6>>& mass, bool at_rest,
                  Eigen::SparseMatrix<double>& k, Eigen::SparseMatrix<double>* d) {
   const Eigen::Index nb = l.bodies;
   const std::vector<int>& bodies = fc.bodies;
@@ -223,7 +224,7 @@ void rate_blocks(const StateLayout& l, const FreeCoordinates& fc, const Eigen::V
     const int b = bodies[c];
     // jacobian_pattern gives each of a body's 13 columns the rates of every body that
     // reads it: the first column alone names them all, where only they are counted.
-    const int count = with_blocks ? 13 : 1;
+    const int count = !with_blocks ? 1 : d || !at_rest ? 13 : 7;
     const Eigen::Index columns[13] = {l.position(b),        l.position(b) + 1,    l.position(b) + 2,    l.orientation(b),
                                       l.orientation(b) + 1, l.orientation(b) + 2, l.orientation(b) + 3, l.velocity(b),
                                       l.velocity(b) + 1,    l.velocity(b) + 2,    l.angular_velocity(b),
@@ -431,9 +432,17 @@ Eigen::SparseMatrix<double> body_motion(const LinearModel& lm) {
 
 LinearModel linearize(MultibodySystem& sys, double t, const Eigen::VectorXd& y, Eigen::SparseMatrix<double>* jacobian,
                       bool with_damping) {
+  LinearModel out;
+  linearize_into(out, sys, t, y, jacobian, with_damping);
+  return out;
+}
+
+void linearize_into(LinearModel& out, MultibodySystem& sys, double t, const Eigen::VectorXd& y, Eigen::SparseMatrix<double>* jacobian,
+                    bool with_damping) {
   const StateLayout& l = sys.layout();
   const Model& model = sys.model();
-  LinearModel out;
+  out.constraint_joint.clear();
+  out.constraint_row.clear();
   out.model = &model;
   out.t = t;
   out.state = y;
@@ -468,15 +477,19 @@ LinearModel linearize(MultibodySystem& sys, double t, const Eigen::VectorXd& y, 
   out.M.setFromTriplets(masses.begin(), masses.end());
   out.K.resize(n, n);
   out.D.resize(n, n);
+  const bool at_rest = fastest <= 1e-12;
   const bool analytic = sys.has_analytic_jacobian();
   Eigen::SparseMatrix<double> own;
   Eigen::SparseMatrix<double>& jac = jacobian ? *jacobian : own;
   if (analytic) {
-    if (jac.size() == 0) jac = sys.jacobian_pattern();
-    sys.jacobian(t, y, jac, all_cores());
+    if (jac.size() == 0) {
+      Eigen::SparseMatrix<double> pattern = sys.jacobian_pattern();
+      jac.swap(pattern);  // Eigen 3.4's SparseMatrix has no move: an assignment copies
+    }
+    sys.jacobian(t, y, jac, all_cores(), with_damping || !at_rest);
   }
   if (analytic && model.flexible.empty()) {  // rate_blocks: 6 coordinates per body
-    rate_blocks(l, fc, y, jac, mass, out.K, with_damping ? &out.D : nullptr);
+    rate_blocks(l, fc, y, jac, mass, at_rest, out.K, with_damping ? &out.D : nullptr);
   } else {
     // The rate rows of A = T+ (J T), J T exact or by central differences in the tangent
     // directions: K = -M A_vx, D = -M A_vv.
@@ -495,7 +508,7 @@ LinearModel linearize(MultibodySystem& sys, double t, const Eigen::VectorXd& y, 
     out.K = -(out.M * dadx);
     if (with_damping) out.D = -(out.M * dadv);
   }
-  out.at_rest = fastest <= 1e-12;
+  out.at_rest = at_rest;
   // The rigid joints' rows on the free bodies' coordinates (a driven body's are held).
   std::vector<int> joint_of_row;
   const Eigen::SparseMatrix<double> c = sys.constraint_jacobian(t, y, &joint_of_row);
@@ -535,7 +548,6 @@ LinearModel linearize(MultibodySystem& sys, double t, const Eigen::VectorXd& y, 
   } else {
     out.C.resize(0, n);
   }
-  return out;
 }
 
 }  // namespace mbsflow

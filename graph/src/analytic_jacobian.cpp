@@ -12,6 +12,7 @@
 // is spent on differences.
 #include <algorithm>
 #include <stdexcept>
+#include <type_traits>
 
 #include "flexible_jacobian.hpp"
 #include "flexible_state.hpp"
@@ -112,7 +113,8 @@ bool MultibodySystem::has_analytic_jacobian(std::string* why) const {
   return true;
 }
 
-void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::SparseMatrix<double>& jac, const ParallelFor& parallel) {
+void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::SparseMatrix<double>& jac, const ParallelFor& parallel,
+                               bool velocity_columns) {
   if (std::string why; !has_analytic_jacobian(&why)) throw InputError("MultibodySystem::jacobian: no analytic Jacobian: " + why);
   // The rates themselves where rigid clusters need them (their accelerations, multipliers
   // and factors, cluster_jacobian.cpp); the kinematics and joint forces in any case (the
@@ -135,13 +137,13 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
   const std::vector<FlexibleBody>& flexible = model().flexible;
   // A kinematics index whose state is a variable: not ground (index n), not driven.
   auto free = [&](int k) { return k < n && compiled_->driver_of_body[static_cast<std::size_t>(k)] < 0; };
-  auto constant_frame = [&](int k) {
-    BodyFrameT<Dual> f;
-    f.rot = rot_[static_cast<std::size_t>(k)].cast<Dual>();
-    f.pos = pos_.col(k).cast<Dual>();
-    f.vel = vel_.col(k).cast<Dual>();
-    f.omega = omega_.col(k).cast<Dual>();
-    f.quat = quat_.col(k).cast<Dual>();
+  auto constant_frame = [&]<class D>(std::type_identity<D>, int k) {
+    BodyFrameT<D> f;
+    f.rot = rot_[static_cast<std::size_t>(k)].cast<D>();
+    f.pos = pos_.col(k).cast<D>();
+    f.vel = vel_.col(k).cast<D>();
+    f.omega = omega_.col(k).cast<D>();
+    f.quat = quat_.col(k).cast<D>();
     return f;
   };
   // A flexible body's node (follows_frame) and its slot k there. Its numbers are those it
@@ -174,26 +176,49 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
     return Eigen::Map<JointDerivatives>(jacobian_scratch_.data() + k * JointDerivatives::SizeAtCompileTime);
   };
   // Each joint reads the kinematics and writes its own derivatives: the loop may be split.
-  const auto differentiate_joints = [&](std::size_t begin, std::size_t end) {
+  // D: Dual (every state number of its two bodies a variable) or PositionDual (their
+  // positions and orientations alone, the velocity columns zero).
+  const auto differentiate_joints = [&]<class D>(std::type_identity<D> type, std::size_t begin, std::size_t end) {
+    constexpr int per_body = D::DerType::SizeAtCompileTime / 2;
+    const auto seeded = [](const BodyNumbers& s, int first) {
+      if constexpr (per_body == body_states)
+        return seeded_frame<D>(s, first);
+      else
+        return seeded_positions(s, first);
+    };
     for (std::size_t k = begin; k < end; ++k) {
       const CompiledJoint& j = compiled_->joints[k];
-      const BodyFrameT<Dual> a = free(j.a) ? seeded_frame(numbers(j.a), 0) : constant_frame(j.a);
-      const BodyFrameT<Dual> b = free(j.b) ? seeded_frame(numbers(j.b), body_states) : constant_frame(j.b);
-      Eigen::Matrix<Dual, 9, 1> out;
+      const BodyFrameT<D> a = free(j.a) ? seeded(numbers(j.a), 0) : constant_frame(type, j.a);
+      const BodyFrameT<D> b = free(j.b) ? seeded(numbers(j.b), per_body) : constant_frame(type, j.b);
+      Eigen::Matrix<D, 9, 1> out;
       if (j.kinematic >= 0) {  // compliant, or the limit stops and effort motor of a rigid one
         out.setZero();
-        if (j.applies_force) kinematic_joint_wrench<Dual>(law_of(j), j.rigid, geometry_of(j), motion(a), motion(b), t, out, nullptr);
+        if (j.applies_force) kinematic_joint_wrench<D>(law_of(j), j.rigid, geometry_of(j), motion(a), motion(b), t, out, nullptr);
       } else {
-        compliant_joint_wrench<Dual>(law_of(j), tables_of(j), a, b, out);
+        compliant_joint_wrench<D>(law_of(j), tables_of(j), a, b, out);
       }
       auto d = joint_derivatives(k);
-      for (int r = 0; r < 9; ++r) d.row(r) = out[r].derivatives().transpose();
+      if constexpr (per_body == body_states) {
+        for (int r = 0; r < 9; ++r) d.row(r) = out[r].derivatives().transpose();
+      } else {
+        d.setZero();
+        for (int r = 0; r < 9; ++r) {
+          d.row(r).template head<per_body>() = out[r].derivatives().template head<per_body>().transpose();
+          d.row(r).template segment<per_body>(body_states) = out[r].derivatives().template tail<per_body>().transpose();
+        }
+      }
     }
   };
+  const auto differentiate = [&](std::size_t begin, std::size_t end) {
+    if (velocity_columns)
+      differentiate_joints(std::type_identity<Dual>{}, begin, end);
+    else
+      differentiate_joints(std::type_identity<PositionDual>{}, begin, end);
+  };
   if (parallel)
-    parallel(compiled_->joints.size(), differentiate_joints);
+    parallel(compiled_->joints.size(), differentiate);
   else
-    differentiate_joints(0, compiled_->joints.size());
+    differentiate(0, compiled_->joints.size());
 
   SlotWriter slots(jac, jacobian_slots_.outer, jacobian_slots_.slots);
   std::vector<std::pair<int, Block6>> blocks;  // per body read: d (force, torque) / d (its state)

@@ -87,11 +87,19 @@ Eigen::SparseMatrix<double> MultibodySystem::jacobian_pattern() const {
   const Eigen::Index size = layout_.size();
   Eigen::SparseMatrix<double> p(size, size);
   p.makeCompressed();
-  std::vector<int> inner;
-  std::vector<int> outer{0};
-  outer.reserve(static_cast<std::size_t>(size) + 1);
+  // Two passes over the columns: the first counts each column's rows (the column starts),
+  // the second writes them straight into the matrix, whose arrays (hundreds of MB on a
+  // large model) are then made once and never copied.
+  int* inner = nullptr;  // null while counting
+  Eigen::Index at = 0, column = 0;
   auto push_rows = [&](Eigen::Index first, int count) {
-    for (int c = 0; c < count; ++c) inner.push_back(static_cast<int>(first + c));
+    if (inner)
+      for (int c = 0; c < count; ++c) inner[at + c] = static_cast<int>(first + c);
+    at += count;
+  };
+  auto end_column = [&] {
+    ++column;
+    if (!inner) p.outerIndexPtr()[column] = static_cast<int>(at);
   };
   // A node's position and orientation rates follow its frame's orientation, velocity and
   // angular velocity and the modes (the dense output's node motion): those columns get the
@@ -99,53 +107,57 @@ Eigen::SparseMatrix<double> MultibodySystem::jacobian_pattern() const {
   std::vector<int> frame_of(m.flexible.empty() ? 0 : static_cast<std::size_t>(n), -1);
   for (std::size_t fl = 0; fl < m.flexible.size(); ++fl) frame_of[static_cast<std::size_t>(m.flexible[fl].frame)] = static_cast<int>(fl);
   auto push_node_rows = [&](std::size_t fl) {
-    const auto first = static_cast<std::ptrdiff_t>(outer.back());
     for (int node : m.flexible[fl].nodes) {
       push_rows(layout_.position(node), 3);
       push_rows(layout_.orientation(node), 4);
     }
-    std::sort(inner.begin() + first, inner.end());
+    if (inner) std::sort(inner + p.outerIndexPtr()[column], inner + at);
   };
   enum Field { position, orientation, velocity, angular_velocity };
-  for (Field f : {position, orientation, velocity, angular_velocity}) {
-    const int width = f == orientation ? 4 : 3;
-    for (Eigen::Index b = 0; b < n; ++b)
-      for (int k = 0; k < width; ++k) {
-        if (f == velocity) push_rows(layout_.position(b), 3);  // r' = v
-        if (f == orientation || f == angular_velocity) push_rows(layout_.orientation(b), 4);  // q' = q (x) (0, w) / 2
-        for (const int i : readers[static_cast<std::size_t>(b)]) push_rows(layout_.velocity(i), 3);
-        for (const int i : readers[static_cast<std::size_t>(b)]) push_rows(layout_.angular_velocity(i), 3);
-        for (std::size_t fl = 0; fl < m.flexible.size(); ++fl)  // the modes' accelerations
-          if (std::binary_search(group_reads[fl].begin(), group_reads[fl].end(), static_cast<int>(b)))
-            push_rows(layout_.tail(compiled_->flexible_tail[fl]) + m.flexible[fl].data->modes(), m.flexible[fl].data->modes());
-        if (f != position && !frame_of.empty() && frame_of[static_cast<std::size_t>(b)] >= 0)
-          push_node_rows(static_cast<std::size_t>(frame_of[static_cast<std::size_t>(b)]));
-        outer.push_back(static_cast<int>(inner.size()));
-      }
+  for (int pass = 0; pass < 2; ++pass) {
+    if (pass == 1) {
+      p.resizeNonZeros(at);
+      inner = p.innerIndexPtr();
+    }
+    at = 0;
+    column = 0;
+    for (Field f : {position, orientation, velocity, angular_velocity}) {
+      const int width = f == orientation ? 4 : 3;
+      for (Eigen::Index b = 0; b < n; ++b)
+        for (int k = 0; k < width; ++k) {
+          if (f == velocity) push_rows(layout_.position(b), 3);  // r' = v
+          if (f == orientation || f == angular_velocity) push_rows(layout_.orientation(b), 4);  // q' = q (x) (0, w) / 2
+          for (const int i : readers[static_cast<std::size_t>(b)]) push_rows(layout_.velocity(i), 3);
+          for (const int i : readers[static_cast<std::size_t>(b)]) push_rows(layout_.angular_velocity(i), 3);
+          for (std::size_t fl = 0; fl < m.flexible.size(); ++fl)  // the modes' accelerations
+            if (std::binary_search(group_reads[fl].begin(), group_reads[fl].end(), static_cast<int>(b)))
+              push_rows(layout_.tail(compiled_->flexible_tail[fl]) + m.flexible[fl].data->modes(), m.flexible[fl].data->modes());
+          if (f != position && !frame_of.empty() && frame_of[static_cast<std::size_t>(b)] >= 0)
+            push_node_rows(static_cast<std::size_t>(frame_of[static_cast<std::size_t>(b)]));
+          end_column();
+        }
+    }
+    // The modal coordinates' and rates' columns: the rates of every body that reads the
+    // flexible body, and the modes' own.
+    for (std::size_t fl = 0; fl < m.flexible.size(); ++fl) {
+      const int ne = m.flexible[fl].data->modes();
+      const Eigen::Index tail = layout_.tail(compiled_->flexible_tail[fl]);
+      for (int rate = 0; rate < 2; ++rate)
+        for (int k = 0; k < ne; ++k) {
+          for (Eigen::Index i = 0; i < n; ++i)
+            if (reads_modes[fl][static_cast<std::size_t>(i)]) push_rows(layout_.velocity(i), 3);
+          for (Eigen::Index i = 0; i < n; ++i)
+            if (reads_modes[fl][static_cast<std::size_t>(i)]) push_rows(layout_.angular_velocity(i), 3);
+          if (rate) push_rows(tail + k, 1);  // eta' = eta rate
+          for (std::size_t g = 0; g < m.flexible.size(); ++g)  // the modal accelerations that read these modes
+            if (reads_modes[fl][static_cast<std::size_t>(m.flexible[g].frame)])
+              push_rows(layout_.tail(compiled_->flexible_tail[g]) + m.flexible[g].data->modes(), m.flexible[g].data->modes());
+          push_node_rows(fl);  // sorts the column's rows
+          end_column();
+        }
+    }
   }
-  // The modal coordinates' and rates' columns: the rates of every body that reads the
-  // flexible body, and the modes' own.
-  for (std::size_t fl = 0; fl < m.flexible.size(); ++fl) {
-    const int ne = m.flexible[fl].data->modes();
-    const Eigen::Index tail = layout_.tail(compiled_->flexible_tail[fl]);
-    for (int rate = 0; rate < 2; ++rate)
-      for (int k = 0; k < ne; ++k) {
-        for (Eigen::Index i = 0; i < n; ++i)
-          if (reads_modes[fl][static_cast<std::size_t>(i)]) push_rows(layout_.velocity(i), 3);
-        for (Eigen::Index i = 0; i < n; ++i)
-          if (reads_modes[fl][static_cast<std::size_t>(i)]) push_rows(layout_.angular_velocity(i), 3);
-        if (rate) push_rows(tail + k, 1);  // eta' = eta rate
-        for (std::size_t g = 0; g < m.flexible.size(); ++g)  // the modal accelerations that read these modes
-          if (reads_modes[fl][static_cast<std::size_t>(m.flexible[g].frame)])
-            push_rows(layout_.tail(compiled_->flexible_tail[g]) + m.flexible[g].data->modes(), m.flexible[g].data->modes());
-        push_node_rows(fl);  // sorts the column's rows
-        outer.push_back(static_cast<int>(inner.size()));
-      }
-  }
-  p.resizeNonZeros(static_cast<Eigen::Index>(inner.size()));
-  std::copy(outer.begin(), outer.end(), p.outerIndexPtr());
-  std::copy(inner.begin(), inner.end(), p.innerIndexPtr());
-  std::fill_n(p.valuePtr(), inner.size(), 1.0);
+  std::fill_n(p.valuePtr(), p.nonZeros(), 1.0);
   return p;
 }
 

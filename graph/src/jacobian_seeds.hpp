@@ -72,17 +72,34 @@ template <class D>
 SeededState<D> seeded_state(const Eigen::VectorXd& y, const StateLayout& l, Eigen::Index i, int first) {
   return seeded_state<D>(body_numbers(y, l, i), first);
 }
-inline BodyFrameT<Dual> seeded_frame(const BodyNumbers& s, int first) {
-  const SeededState<Dual> seeded = seeded_state<Dual>(s, first);
-  return body_frame<Dual>(seeded.r, seeded.q, seeded.v, seeded.w);
+template <class D = Dual>
+BodyFrameT<D> seeded_frame(const BodyNumbers& s, int first) {
+  const SeededState<D> seeded = seeded_state<D>(s, first);
+  return body_frame<D>(seeded.r, seeded.q, seeded.v, seeded.w);
+}
+
+// The same with the position and orientation alone as variables (7 a body), the velocities
+// constants: a joint's stiffness at rest in half of Dual's work.
+constexpr int body_positions = 7;
+using PositionDual = Eigen::AutoDiffScalar<Eigen::Matrix<double, 2 * body_positions, 1>>;
+inline BodyFrameT<PositionDual> seeded_positions(const BodyNumbers& s, int first) {
+  SeededState<PositionDual> seeded;
+  for (int k = 0; k < 3; ++k) {
+    seeded.r[k] = PositionDual(s[k], 2 * body_positions, first + k);
+    seeded.v[k] = PositionDual(s[7 + k]);
+    seeded.w[k] = PositionDual(s[10 + k]);
+  }
+  for (int k = 0; k < 4; ++k) seeded.q[k] = PositionDual(s[3 + k], 2 * body_positions, first + 3 + k);
+  return body_frame<PositionDual>(seeded.r, seeded.q, seeded.v, seeded.w);
 }
 inline BodyFrameT<Dual> seeded_frame(const Eigen::VectorXd& y, const StateLayout& l, Eigen::Index i, int first) {
   return seeded_frame(body_numbers(y, l, i), first);
 }
 
 // The kinematic joints' view of a body's frame.
-inline BodyMotionT<Dual> motion(const BodyFrameT<Dual>& f) {
-  BodyMotionT<Dual> m;
+template <class D>
+BodyMotionT<D> motion(const BodyFrameT<D>& f) {
+  BodyMotionT<D> m;
   m.r = f.pos;
   m.R = f.rot;
   m.v = f.vel;

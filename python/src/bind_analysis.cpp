@@ -40,7 +40,7 @@ Point working_point(const Model& model, const std::string& at) {
     py::gil_scoped_release release;
     Equilibrium e = find_equilibrium(*p.sys, p.t, p.y);
     p.y = std::move(e.state);
-    p.jacobian = std::move(e.jacobian);
+    p.jacobian.swap(e.jacobian);  // Eigen 3.4's SparseMatrix has no move: a "move" copies
   }
   return p;
 }

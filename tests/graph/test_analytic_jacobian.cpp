@@ -318,3 +318,22 @@ TEST_CASE("the analytic Jacobian fills matrices of another pattern right after t
   sys.jacobian(0.2, y, again);
   CHECK((Eigen::MatrixXd(again) - expected).cwiseAbs().maxCoeff() == 0.0);
 }
+
+TEST_CASE("the analytic Jacobian without velocity columns keeps the positions' columns exactly", "[graph][jacobian]") {
+  // velocity_columns = false differentiates the joints by their bodies' positions and
+  // orientations alone (the equilibrium's stiffness): those columns, the first 7 per body,
+  // must be the full Jacobian's to the last bit, at rest and moving.
+  for (Model m : {jacobian_model(), compliant_joints_model()}) {
+    MultibodySystem sys(m);
+    const Eigen::Index positions = 7 * sys.layout().bodies;
+    for (unsigned seed : {5u, 6u}) {
+      const Eigen::VectorXd y = shaken_state(sys, seed);
+      Eigen::SparseMatrix<double> full = sys.jacobian_pattern(), stiffness = sys.jacobian_pattern();
+      sys.jacobian(0.3, y, full);
+      sys.jacobian(0.3, y, stiffness, nullptr, false);
+      const Eigen::MatrixXd a = Eigen::MatrixXd(full).leftCols(positions), b = Eigen::MatrixXd(stiffness).leftCols(positions);
+      REQUIRE(a.cwiseAbs().maxCoeff() > 1e3);
+      CHECK((a - b).cwiseAbs().maxCoeff() == 0.0);
+    }
+  }
+}

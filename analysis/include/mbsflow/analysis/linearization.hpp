@@ -65,6 +65,11 @@ struct LinearModel {
 // K only (the equilibrium's steps).
 LinearModel linearize(MultibodySystem& sys, double t, const Eigen::VectorXd& y,
                       Eigen::SparseMatrix<double>* jacobian = nullptr, bool with_damping = true);
+// The same into out, whose matrices' storage is reused where the sizes allow: for a caller
+// that linearises again and again (Eigen 3.4's SparseMatrix has no move constructor, so a
+// returned LinearModel moved into place is copied, K alone 130 MB at 100 000 bodies).
+void linearize_into(LinearModel& out, MultibodySystem& sys, double t, const Eigen::VectorXd& y,
+                    Eigen::SparseMatrix<double>* jacobian = nullptr, bool with_damping = true);
 
 // The generalised force on each free body at (t, y) with the velocities taken as zero:
 // M times the accelerations (force, torque; world frame; the modal forces), the rigid
