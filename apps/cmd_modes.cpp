@@ -183,6 +183,7 @@ int modes(const ModesArgs& a) {
   Loaded w = working_point(a.at);
   const auto start = std::chrono::steady_clock::now();
   const LinearModel lm = linearize(*w.sys, w.t, w.state, &w.jacobian);
+  Eigen::SparseMatrix<double>().swap(w.jacobian);  // its 600 MB (100 000 bodies) free for the eigensolver
   ModeOptions o;
   o.count = a.count;
   o.damped = !a.undamped;

@@ -121,7 +121,8 @@ Modes compute_modes(const LinearModel& m, const ModeOptions& o) {
   out.shape.resize(n, k);
   out.kinetic_share = Eigen::MatrixXd::Zero(bodies, k);
   out.strain_share = Eigen::MatrixXd::Zero(bodies, k);
-  const Sparse d = o.damped ? m.D : Sparse(n, n);
+  const Sparse none(n, n);
+  const Sparse& d = o.damped ? m.D : none;  // not a copy of D
   const double nm = norm_of(m.M), nd = norm_of(d), nk = norm_of(m.K);
   // The residual is taken on the motions the joints allow: its part along C^T (the
   // joints' reactions) is removed.
