@@ -11,6 +11,7 @@
 // Exact up to rounding, so Newton converges at its own rate, and no right-hand-side call
 // is spent on differences.
 #include <algorithm>
+#include <atomic>
 #include <stdexcept>
 #include <type_traits>
 
@@ -64,6 +65,18 @@ class SlotWriter {
   ~SlotWriter() {
     if (broken_ || !jac_.isCompressed() || (replay_ && next_ != slots_.size())) slots_.clear();
   }
+  // Whether the places kept are being taken in order (not found by search).
+  bool replaying() const { return replay_; }
+  // How many writes are behind: the next write's index among the places kept.
+  std::size_t position() const { return replay_ ? next_ : slots_.size(); }
+  // The writes up to `position` made elsewhere (by SlotCursors, over the same places).
+  void skip_to(std::size_t position) { next_ = position; }
+  // From the start again, every place found by search and kept afresh.
+  void restart() {
+    slots_.clear();
+    replay_ = broken_ = false;
+    next_ = 0;
+  }
   // The values at rows row..row+count-1 of column col.
   double* at(Eigen::Index row, Eigen::Index col, int count = 1) {
     if (replay_) {
@@ -88,6 +101,36 @@ class SlotWriter {
   std::vector<int>& slots_;
   bool replay_ = false, broken_ = false;
   std::size_t next_ = 0;
+};
+
+// SlotWriter's kept places replayed from one of them on, by one thread: a body's writes,
+// its first place kept with the places. A write whose rows do not match marks the cursor
+// failed and lands in a scratch buffer (the caller then writes everything afresh).
+class SlotCursor {
+ public:
+  SlotCursor(Eigen::SparseMatrix<double>& jac, const std::vector<int>& slots, std::size_t from)
+      : values_(jac.valuePtr()), rows_(jac.innerIndexPtr()), slots_(slots), next_(from) {}
+  double* at(Eigen::Index row, Eigen::Index, int count = 1) {
+    if (next_ < slots_.size() && count <= static_cast<int>(sizeof scratch_ / sizeof(double))) {
+      const int k = slots_[next_];
+      if (rows_[k] == row && rows_[k + count - 1] == row + count - 1) {
+        ++next_;
+        return values_ + k;
+      }
+    }
+    failed_ = true;
+    return scratch_;
+  }
+  std::size_t position() const { return next_; }
+  bool failed() const { return failed_; }
+
+ private:
+  double* values_;
+  const int* rows_;
+  const std::vector<int>& slots_;
+  std::size_t next_;
+  bool failed_ = false;
+  double scratch_[16];
 };
 
 }  // namespace
@@ -221,25 +264,30 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
     differentiate(0, compiled_->joints.size());
 
   SlotWriter slots(jac, jacobian_slots_.outer, jacobian_slots_.slots);
-  std::vector<std::pair<int, Block6>> blocks;  // per body read: d (force, torque) / d (its state)
-  auto block_of = [&](int body) -> Block6& {
-    for (auto& [b, m] : blocks)
-      if (b == body) return m;
-    return blocks.emplace_back(body, Block6::Zero()).second;
+  // A body's wrench derivatives, one per thread: per body read, d (force, torque) / d (its
+  // state); per flexible body read through one of its nodes, d (force, torque) / d (eta, eta').
+  struct Scratch {
+    std::vector<std::pair<int, Block6>> blocks;
+    std::vector<std::pair<int, Eigen::Matrix<double, 6, Eigen::Dynamic>>> tails;
   };
-  // Per flexible body read through one of its nodes: d (force, torque) / d (eta, eta').
-  std::vector<std::pair<int, Eigen::Matrix<double, 6, Eigen::Dynamic>>> tails;
-  auto tail_of = [&](int f) -> Eigen::Matrix<double, 6, Eigen::Dynamic>& {
-    for (auto& [g, m] : tails)
+  Scratch serial;
+  auto block_of = [](Scratch& s, int body) -> Block6& {
+    for (auto& [b, m] : s.blocks)
+      if (b == body) return m;
+    return s.blocks.emplace_back(body, Block6::Zero()).second;
+  };
+  auto tail_of = [&](Scratch& s, int f) -> Eigen::Matrix<double, 6, Eigen::Dynamic>& {
+    for (auto& [g, m] : s.tails)
       if (g == f) return m;
-    return tails.emplace_back(f, Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, 2 * flexible[static_cast<std::size_t>(f)].data->modes())).second;
+    return s.tails.emplace_back(f, Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, 2 * flexible[static_cast<std::size_t>(f)].data->modes())).second;
   };
   // d (force, torque on body i, world) / d (the states it reads) into blocks and tails: its
   // loads (through its own numbers, returned) and its joints, a node's read through its
   // frame and modes.
-  auto wrench_blocks = [&](Eigen::Index i) {
+  auto wrench_blocks = [&](Scratch& s, Eigen::Index i) {
+    auto& blocks = s.blocks;
     blocks.clear();
-    tails.clear();
+    s.tails.clear();
     const auto bi = static_cast<std::size_t>(i);
     const SeededState<BodyDual> own = seeded_state<BodyDual>(numbers(static_cast<int>(i)), 0);
     const Matrix3T<BodyDual> rot = rotation_matrix<BodyDual>(own.q);
@@ -249,7 +297,7 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
       const Load& l = model().loads[static_cast<std::size_t>(compiled_->load_index[static_cast<std::size_t>(p)])];
       add_load<BodyDual>(l, evaluate(l.function, t).value, rot, own.v, own.w, load_force, load_torque);
     }
-    Block6& self = block_of(static_cast<int>(i));
+    Block6& self = block_of(s, static_cast<int>(i));
     self.topRows<3>() = derivatives<3>(load_force, 0);
     self.bottomRows<3>() = derivatives<3>(load_torque, 0);
     // Joints: body1 gets minus the force and the torque rows 3-5, body2 the force and rows 6-8.
@@ -261,7 +309,7 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
       for (int side = 0; side < 2; ++side) {
         const int other = side == 0 ? j.a : j.b;
         if (!free(other)) continue;
-        Block6& m = block_of(other);
+        Block6& m = block_of(s, other);
         const auto cols = d.middleCols<body_states>(side * body_states);
         if (body2)
           m.topRows<3>() += cols.topRows<3>();
@@ -276,15 +324,15 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
       const int f = compiled_->flexible_of_body[static_cast<std::size_t>(b)], k = node_slot[static_cast<std::size_t>(b)];
       const Eigen::Matrix<double, 6, Eigen::Dynamic> through = blocks[p].second * node_maps[static_cast<std::size_t>(f)][static_cast<std::size_t>(k)];
       blocks[p].first = -1;
-      block_of(flexible[static_cast<std::size_t>(f)].frame) += through.leftCols<body_states>();
-      tail_of(f) += through.rightCols(through.cols() - body_states);
+      block_of(s, flexible[static_cast<std::size_t>(f)].frame) += through.leftCols<body_states>();
+      tail_of(s, f) += through.rightCols(through.cols() - body_states);
     }
     std::erase_if(blocks, [](const auto& e) { return e.first < 0; });
     return own;
   };
   auto tail_column = [&](int f, Eigen::Index c) { return layout_.tail(compiled_->flexible_tail[static_cast<std::size_t>(f)]) + c; };
   // q' = q (x) (0, w) / 2 and r' = v of body i, its numbers seeded in own.
-  auto kinematic_rows = [&](Eigen::Index i, const SeededState<BodyDual>& own) {
+  auto kinematic_rows = [&](auto& slots, Eigen::Index i, const SeededState<BodyDual>& own) {
     const Eigen::Matrix<double, 4, body_states> q_rate = derivatives<4>(quaternion_rate<BodyDual>(own.q, own.w), 0);
     for (int c = 0; c < 4; ++c) std::copy_n(q_rate.col(3 + c).data(), 4, slots.at(layout_.orientation(i), layout_.orientation(i) + c, 4));
     for (int c = 0; c < 3; ++c) std::copy_n(q_rate.col(10 + c).data(), 4, slots.at(layout_.orientation(i), layout_.angular_velocity(i) + c, 4));
@@ -297,16 +345,17 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
   for (const FlexibleBody& fb : flexible)
     if (const int c = n_clusters > 0 ? cluster_of(fb.frame) : -1; c >= 0) generalised[static_cast<std::size_t>(c)] = 1;
 
-  for (Eigen::Index i = 0; i < n; ++i) {
+  // Body i's rate rows: through `slots`, a SlotWriter or (split over threads) a SlotCursor.
+  const auto body_rows = [&](auto& slots, Scratch& scratch, Eigen::Index i) {
     const auto bi = static_cast<std::size_t>(i);
-    if (!free(static_cast<int>(i))) continue;  // a driven body's rates do not depend on the state
-    if (!compiled_->flexible_of_body.empty() && compiled_->flexible_of_body[bi] >= 0) continue;  // flexible_rows below
+    if (!free(static_cast<int>(i))) return;  // a driven body's rates do not depend on the state
+    if (!compiled_->flexible_of_body.empty() && compiled_->flexible_of_body[bi] >= 0) return;  // flexible_rows below
     const int cluster = n_clusters > 0 ? cluster_of(static_cast<int>(i)) : -1;
     if (cluster >= 0 && generalised[static_cast<std::size_t>(cluster)]) {  // its rates come with its cluster's, below
-      kinematic_rows(i, seeded_state<BodyDual>(numbers(static_cast<int>(i)), 0));
-      continue;
+      kinematic_rows(slots, i, seeded_state<BodyDual>(numbers(static_cast<int>(i)), 0));
+      return;
     }
-    const SeededState<BodyDual> own = wrench_blocks(i);
+    const SeededState<BodyDual> own = wrench_blocks(scratch, i);
     const Matrix3T<BodyDual> rot = rotation_matrix<BodyDual>(own.q);
     // w' = J^-1 (R^T T - w x J w): the torque's derivatives through J^-1 R^T; R(q) and the
     // gyroscopic term through the body's own quaternion and angular velocity.
@@ -316,11 +365,11 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
     const Eigen::Matrix3d to_w = law.inv_inertia * rot_[bi].transpose();
     const Vector3T<BodyDual> w_rate = angular_acceleration<BodyDual>(rot, own.w, Vector3T<BodyDual>(torque.cast<BodyDual>()),
                                                                      law.inertia, law.inv_inertia);
-    if (cluster >= 0 && !tails.empty()) generalised[static_cast<std::size_t>(cluster)] = 1;
-    for (const auto& [b, m] : blocks) {
+    if (cluster >= 0 && !scratch.tails.empty()) generalised[static_cast<std::size_t>(cluster)] = 1;
+    for (const auto& [b, m] : scratch.blocks) {
       Block6 rows;
-      rows.topRows<3>() = law.inv_mass * m.topRows<3>();
-      rows.bottomRows<3>() = to_w * m.bottomRows<3>();
+      rows.topRows<3>() = law.inv_mass * m.template topRows<3>();
+      rows.bottomRows<3>() = to_w * m.template bottomRows<3>();
       if (b == i) rows.bottomRows<3>() += derivatives<3>(w_rate, 0);
       if (cluster >= 0) {  // written with the cluster's reactions below
         const std::vector<int>& members = cluster_bodies(cluster);
@@ -339,23 +388,56 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
       }
     }
     if (cluster < 0)
-      for (const auto& [f, m] : tails)
+      for (const auto& [f, m] : scratch.tails)
         for (Eigen::Index c = 0; c < m.cols(); ++c) {
-          const Eigen::Vector3d v_col = law.inv_mass * m.col(c).head<3>(), w_col = to_w * m.col(c).tail<3>();
+          const Eigen::Vector3d v_col = law.inv_mass * m.col(c).template head<3>(), w_col = to_w * m.col(c).template tail<3>();
           std::copy_n(v_col.data(), 3, slots.at(layout_.velocity(i), tail_column(f, c), 3));
           std::copy_n(w_col.data(), 3, slots.at(layout_.angular_velocity(i), tail_column(f, c), 3));
         }
-    kinematic_rows(i, own);
+    kinematic_rows(slots, i, own);
+  };
+  // Split over threads where the places of every body's writes are known from an earlier
+  // call (each body replays its own, from its first) and nothing is shared: no rigid
+  // clusters (their reactions gather their bodies' rows), no flexible bodies. The values
+  // are the serial loop's, whatever the split.
+  std::vector<int>& marks = jacobian_slots_.body_marks;
+  bool split = parallel && n_clusters == 0 && flexible.empty() && slots.replaying() && slots.position() == 0 &&
+               marks.size() == static_cast<std::size_t>(n) + 1;
+  if (split) {
+    std::atomic<bool> failed = false;
+    parallel(static_cast<std::size_t>(n), [&](std::size_t begin, std::size_t end) {
+      Scratch scratch;
+      for (std::size_t i = begin; i < end && !failed; ++i) {
+        SlotCursor cursor(jac, jacobian_slots_.slots, static_cast<std::size_t>(marks[i]));
+        body_rows(cursor, scratch, static_cast<Eigen::Index>(i));
+        if (cursor.failed() || cursor.position() != static_cast<std::size_t>(marks[i + 1])) failed = true;
+      }
+    });
+    if (failed) {  // the places kept do not fit: written afresh, by search
+      std::fill_n(jac.valuePtr(), jac.nonZeros(), 0.0);
+      slots.restart();
+      split = false;
+    } else {
+      slots.skip_to(static_cast<std::size_t>(marks.back()));
+    }
+  }
+  if (!split) {
+    marks.assign(static_cast<std::size_t>(n) + 1, 0);
+    for (Eigen::Index i = 0; i < n; ++i) {
+      marks[static_cast<std::size_t>(i)] = static_cast<int>(slots.position());
+      body_rows(slots, serial, i);
+    }
+    marks.back() = static_cast<int>(slots.position());
   }
 
   // The applied wrench on body b (world force, torque) and its derivatives by the state
   // numbers it reads, a node's read through its frame and modes.
   auto wrench_of = [&](int b, Eigen::Matrix<double, 6, 1>& value, WrenchParts& parts) {
-    wrench_blocks(b);
+    wrench_blocks(serial, b);
     parts.clear();
-    for (const auto& [r, m] : blocks)
+    for (const auto& [r, m] : serial.blocks)
       for (int c = 0; c < body_states; ++c) parts.emplace_back(state_index(layout_, r, c), m.col(c));
-    for (const auto& [g, m] : tails)
+    for (const auto& [g, m] : serial.tails)
       for (Eigen::Index c = 0; c < m.cols(); ++c) parts.emplace_back(tail_column(g, c), m.col(c));
     Eigen::Vector3d force, torque;
     applied_wrench(b, t, y, force, torque);
@@ -370,7 +452,7 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
     const FlexibleBody& fb = flexible[f];
     const int i = fb.frame, ne = fb.data->modes();
     const Eigen::Index tail = tail_column(static_cast<int>(f), 0);
-    kinematic_rows(i, seeded_state<BodyDual>(numbers(i), 0));
+    kinematic_rows(slots, i, seeded_state<BodyDual>(numbers(i), 0));
     if (n_clusters == 0 || cluster_of(i) < 0) {
       Variables vars;  // the frame's numbers, eta, eta', then what the wrenches read
       for (int c = 0; c < body_states; ++c) vars.of(state_index(layout_, i, c));

@@ -268,25 +268,12 @@ TEST_CASE("models without an analytic Jacobian say which item stands in the way"
   }
 }
 
-TEST_CASE("the analytic Jacobian fills matrices of another pattern right after the first", "[graph][jacobian]") {
-  // jacobian() keeps where its writes landed in the first matrix and checks them in every
-  // later one: a matrix with extra entries (the diagonal added), then the pattern again,
-  // must get the same numbers where the pattern has entries and zeros elsewhere.
-  MultibodySystem sys(jacobian_model());
-  const Eigen::VectorXd y = shaken_state(sys, 4);
-  Eigen::SparseMatrix<double> first = sys.jacobian_pattern();
-  sys.jacobian(0.2, y, first);
-  Eigen::SparseMatrix<double> identity(first.rows(), first.cols());
-  identity.setIdentity();
-  Eigen::SparseMatrix<double> wider = first + identity;  // the pattern's entries and the diagonal
-  wider.makeCompressed();
-  REQUIRE(wider.nonZeros() > first.nonZeros());
-  sys.jacobian(0.2, y, wider);
-  const Eigen::MatrixXd expected(first);
-  CHECK((Eigen::MatrixXd(wider) - expected).cwiseAbs().maxCoeff() == 0.0);
-  // The same column starts as `wider`, but one column's extra entry moved from the
-  // diagonal to another row on the far side of some of the pattern's rows: the places kept
-  // from `wider` are off by one there, and the checks must notice.
+namespace {
+
+// A matrix of the same column starts as `wider` (`first`'s pattern and the diagonal), but
+// one column's extra entry moved from the diagonal to another row on the far side of some
+// of the pattern's rows: places kept from `wider` are off by one there.
+Eigen::SparseMatrix<double> shifted_pattern(const Eigen::SparseMatrix<double>& first, const Eigen::SparseMatrix<double>& wider) {
   Eigen::Index column = -1, moved_to = -1;
   for (Eigen::Index c = 0; c < first.cols() && column < 0; ++c) {
     if (first.coeff(c, c) != 0 || Eigen::SparseMatrix<double>(first.col(c)).nonZeros() == 0) continue;
@@ -312,6 +299,29 @@ TEST_CASE("the analytic Jacobian fills matrices of another pattern right after t
   shifted.setFromTriplets(entries.begin(), entries.end());
   shifted.makeCompressed();
   REQUIRE(std::equal(shifted.outerIndexPtr(), shifted.outerIndexPtr() + shifted.cols() + 1, wider.outerIndexPtr()));
+  return shifted;
+}
+
+}  // namespace
+
+TEST_CASE("the analytic Jacobian fills matrices of another pattern right after the first", "[graph][jacobian]") {
+  // jacobian() keeps where its writes landed in the first matrix and checks them in every
+  // later one: a matrix with extra entries (the diagonal added), then the pattern again,
+  // must get the same numbers where the pattern has entries and zeros elsewhere.
+  MultibodySystem sys(jacobian_model());
+  const Eigen::VectorXd y = shaken_state(sys, 4);
+  Eigen::SparseMatrix<double> first = sys.jacobian_pattern();
+  sys.jacobian(0.2, y, first);
+  Eigen::SparseMatrix<double> identity(first.rows(), first.cols());
+  identity.setIdentity();
+  Eigen::SparseMatrix<double> wider = first + identity;  // the pattern's entries and the diagonal
+  wider.makeCompressed();
+  REQUIRE(wider.nonZeros() > first.nonZeros());
+  sys.jacobian(0.2, y, wider);
+  const Eigen::MatrixXd expected(first);
+  CHECK((Eigen::MatrixXd(wider) - expected).cwiseAbs().maxCoeff() == 0.0);
+  // The same column starts as `wider`, but one entry moved: the checks must notice.
+  Eigen::SparseMatrix<double> shifted = shifted_pattern(first, wider);
   sys.jacobian(0.2, y, shifted);
   CHECK((Eigen::MatrixXd(shifted) - expected).cwiseAbs().maxCoeff() == 0.0);
   Eigen::SparseMatrix<double> again = sys.jacobian_pattern();
@@ -336,4 +346,36 @@ TEST_CASE("the analytic Jacobian without velocity columns keeps the positions' c
       CHECK((a - b).cwiseAbs().maxCoeff() == 0.0);
     }
   }
+}
+
+TEST_CASE("the analytic Jacobian split over threads is the serial one to the last bit", "[graph][jacobian]") {
+  // With a parallel loop, the joints' derivatives and (once a first call has kept where
+  // each body's writes land) the bodies' rows are split: here one item at a time, in
+  // reverse order. Every split must give the serial numbers, also where the kept places do
+  // not fit a matrix of the same column starts (the rows are then written afresh).
+  const MultibodySystem::ParallelFor reversed = [](std::size_t count, const std::function<void(std::size_t, std::size_t)>& body) {
+    for (std::size_t b = count; b-- > 0;) body(b, b + 1);
+  };
+  MultibodySystem sys(jacobian_model());
+  const Eigen::VectorXd y = shaken_state(sys, 7);
+  Eigen::SparseMatrix<double> first = sys.jacobian_pattern();
+  sys.jacobian(0.2, y, first);
+  const Eigen::MatrixXd expected(first);
+  for (int call = 0; call < 2; ++call) {  // the first keeps the places, the second replays them split
+    Eigen::SparseMatrix<double> split = sys.jacobian_pattern();
+    sys.jacobian(0.2, y, split, reversed);
+    CHECK((Eigen::MatrixXd(split) - expected).cwiseAbs().maxCoeff() == 0.0);
+  }
+  Eigen::SparseMatrix<double> identity(first.rows(), first.cols());
+  identity.setIdentity();
+  Eigen::SparseMatrix<double> wider = first + identity;
+  wider.makeCompressed();
+  sys.jacobian(0.2, y, wider, reversed);  // new column starts: serial, keeping the places
+  CHECK((Eigen::MatrixXd(wider) - expected).cwiseAbs().maxCoeff() == 0.0);
+  Eigen::SparseMatrix<double> shifted = shifted_pattern(first, wider);
+  sys.jacobian(0.2, y, shifted, reversed);  // the same column starts: split, and a place does not fit
+  CHECK((Eigen::MatrixXd(shifted) - expected).cwiseAbs().maxCoeff() == 0.0);
+  Eigen::SparseMatrix<double> again = sys.jacobian_pattern();
+  sys.jacobian(0.2, y, again, reversed);
+  CHECK((Eigen::MatrixXd(again) - expected).cwiseAbs().maxCoeff() == 0.0);
 }

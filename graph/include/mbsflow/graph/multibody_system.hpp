@@ -160,8 +160,10 @@ class MultibodySystem {
   // along the body graph, and through each rigid cluster's reactions), written into jac,
   // a matrix of jacobian_pattern()'s pattern. Throws std::logic_error without one.
   // parallel: runs body(begin, end) over [0, count) split as it likes (a caller with a
-  // thread pool passes its parallel loop); the joints' derivatives, each written to its
-  // own place, go through it, so the matrix is the same whatever the split. Empty: serial.
+  // thread pool passes its parallel loop); the joints' derivatives, and from the second
+  // call on the bodies' rows where the model has no rigid clusters or flexible bodies, go
+  // through it, each written to its own place, so the matrix is the same whatever the
+  // split. Empty: serial.
   // velocity_columns = false: the columns of the velocities and angular velocities are
   // not computed (they hold zeros or some of their terms), for a caller at rest that needs
   // the stiffness alone: the joints' derivatives in about half the work.
@@ -386,9 +388,11 @@ class MultibodySystem {
   std::vector<double> jacobian_scratch_;  // jacobian(): each joint's wrench derivatives, kept between calls
   // jacobian(): where its writes land in the matrix's values, in the order it writes them,
   // found by search on the first call and reused while the matrix has the same column
-  // starts and every write still lands on its rows (each is checked).
+  // starts and every write still lands on its rows (each is checked). body_marks: where
+  // each body's writes start among them (and their end), so that bodies may replay theirs
+  // on several threads.
   struct JacobianSlots {
-    std::vector<int> outer, slots;
+    std::vector<int> outer, slots, body_marks;
   };
   JacobianSlots jacobian_slots_;
   Eigen::VectorXd motor_effort_;
