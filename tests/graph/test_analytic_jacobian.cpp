@@ -184,12 +184,13 @@ TEST_CASE("the analytic Jacobian covers compliant joints of every kind with thei
   check_against_differences(sys);
 }
 
-TEST_CASE("the analytic Jacobian covers rigid joints of every kind through their cluster's reactions",
-          "[graph][jacobian]") {
-  // The compliant model's joints made rigid: one cluster of nine bodies hanging from
-  // ground, with a position motor, a velocity motor, an effort motor and limit stops; a
-  // stiff bushing from ground to its fifth body (the applied forces' part), and a spring
-  // to a free body outside (a column the cluster reads from outside).
+namespace {
+
+// The compliant model's joints made rigid: one cluster of nine bodies hanging from
+// ground, with a position motor, a velocity motor, an effort motor and limit stops; a
+// stiff bushing from ground to its fifth body (the applied forces' part), and a spring
+// to a free body outside (a column the cluster reads from outside).
+Model rigid_joints_model() {
   Model m = compliant_joints_model();
   for (Joint& j : m.joints) j.rigid = true;
   m.simulation.assemble = true;  // the joints' points as the compliant model has them: assembled
@@ -206,7 +207,14 @@ TEST_CASE("the analytic Jacobian covers rigid joints of every kind through their
   spring.damping = {20, 0, 0, 0, 0, 0};
   spring.rest_length = 0.5;
   m.joints.push_back(spring);
-  MultibodySystem sys(m);
+  return m;
+}
+
+}  // namespace
+
+TEST_CASE("the analytic Jacobian covers rigid joints of every kind through their cluster's reactions",
+          "[graph][jacobian]") {
+  MultibodySystem sys(rigid_joints_model());
   REQUIRE(sys.clusters() == 1);
   REQUIRE(sys.cluster_bodies(0).size() == 9);
   check_against_differences(sys, 1e-5);
@@ -332,8 +340,9 @@ TEST_CASE("the analytic Jacobian fills matrices of another pattern right after t
 TEST_CASE("the analytic Jacobian without velocity columns keeps the positions' columns exactly", "[graph][jacobian]") {
   // velocity_columns = false differentiates the joints by their bodies' positions and
   // orientations alone (the equilibrium's stiffness): those columns, the first 7 per body,
-  // must be the full Jacobian's to the last bit, at rest and moving.
-  for (Model m : {jacobian_model(), compliant_joints_model()}) {
+  // must be the full Jacobian's to the last bit, at rest and moving, through a rigid
+  // cluster's reactions too.
+  for (Model m : {jacobian_model(), compliant_joints_model(), rigid_joints_model()}) {
     MultibodySystem sys(m);
     const Eigen::Index positions = 7 * sys.layout().bodies;
     for (unsigned seed : {5u, 6u}) {
