@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <cstddef>
+#include <cstdio>
 #include <cstdint>
 #include <fstream>
 #include <string>
@@ -20,14 +21,20 @@ const mbsflow::Model& chain() {
   }();
   return m;
 }
+
+// A file of this process, removed when it exits.
+struct ProcessFile {
+  std::string path = "/tmp/mbsflow_fuzz_partition_" + std::to_string(::getpid()) + ".json";
+  ~ProcessFile() { std::remove(path.c_str()); }
+};
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   // The reader takes a path: the input goes to a file of this process.
-  static const std::string path = "/tmp/mbsflow_fuzz_partition_" + std::to_string(::getpid()) + ".json";
-  std::ofstream(path, std::ios::binary | std::ios::trunc).write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(size));
+  static const ProcessFile file;
+  std::ofstream(file.path, std::ios::binary | std::ios::trunc).write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(size));
   try {
-    (void)mbsflow::read_partition_file(chain(), path);
+    (void)mbsflow::read_partition_file(chain(), file.path);
   } catch (const mbsflow::Error&) {
   }
   return 0;
