@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <limits>
 #include <numeric>
+#include <vector>
 
 #include "blas_product.hpp"
 #include "mbsflow/methods/real_eigen.hpp"
@@ -118,17 +119,24 @@ std::optional<ArnoldiPairs> arnoldi_largest(const std::function<void(const doubl
         ArnoldiPairs out;
         out.operations = operations;
         const Eigen::Index rows = o.rows < 0 ? n : std::min(o.rows, n);
-        Eigen::MatrixXd re(m, wanted), im(m, wanted);
-        out.values.resize(wanted);
-        for (Eigen::Index k = 0; k < wanted; ++k) {
-          const Eigen::Index i = r.order[static_cast<std::size_t>(k)];
+        std::vector<Eigen::Index> kept;
+        for (Eigen::Index k = 0; k < wanted; ++k)
+          if (const Eigen::Index i = r.order[static_cast<std::size_t>(k)]; !o.returned || o.returned(r.values[i])) kept.push_back(i);
+        const auto count = static_cast<Eigen::Index>(kept.size());
+        // One product for the real and imaginary parts, then the complex vectors: the
+        // fewest arrays of the basis's length made.
+        Eigen::MatrixXd parts(m, 2 * count);
+        out.values.resize(count);
+        for (Eigen::Index k = 0; k < count; ++k) {
+          const Eigen::Index i = kept[static_cast<std::size_t>(k)];
           out.values[k] = r.values[i];
-          re.col(k) = r.vectors.col(i).real();
-          im.col(k) = r.vectors.col(i).imag();
+          parts.col(k) = r.vectors.col(i).real();
+          parts.col(count + k) = r.vectors.col(i).imag();
         }
-        const Columns basis(v.topLeftCorner(rows, m));
-        out.vectors = product(basis, re).cast<std::complex<double>>() +
-                      std::complex<double>(0.0, 1.0) * product(basis, im).cast<std::complex<double>>();
+        const Eigen::MatrixXd x = product(Columns(v.topLeftCorner(rows, m)), parts);
+        out.vectors.resize(rows, count);
+        for (Eigen::Index k = 0; k < count; ++k)
+          for (Eigen::Index row = 0; row < rows; ++row) out.vectors(row, k) = {x(row, k), x(row, count + k)};
         return out;
       }
       next_test = std::min(largest, m + std::max<Eigen::Index>(5, m / 5));

@@ -53,6 +53,9 @@ class ShiftSolve {
   mutable Eigen::VectorXd rhs_, moved_;
 };
 
+// The member of a conjugate pair of eigenvalues that is dropped (its mode is the other's).
+bool is_lower_of_pair(Complex lambda) { return lambda.imag() < -1e-12 * std::abs(lambda); }
+
 }  // namespace
 
 std::vector<FoundMode> first_order_modes(const LinearModel& m, int count, bool damped, bool* restarted,
@@ -81,6 +84,9 @@ std::vector<FoundMode> first_order_modes(const LinearModel& m, int count, bool d
   o.first = ncv;
   o.largest = std::max(ncv, std::min<Eigen::Index>(400, static_cast<Eigen::Index>(1.5e9 / (8.0 * static_cast<double>(n2)))));
   o.rows = m.size();
+  // Of a conjugate pair, the value of positive imaginary part alone is kept below: the
+  // other's vector is not formed.
+  o.returned = [sigma](Complex nu) { return !is_lower_of_pair(sigma + 1.0 / nu); };
   op.set_shift(sigma);
   const auto apply = [&op](const double* in, double* out) { op.perform_op(in, out); };
   std::optional<ArnoldiPairs> pairs = arnoldi_largest(apply, n2, o);
@@ -122,7 +128,7 @@ std::vector<FoundMode> first_order_modes(const LinearModel& m, int count, bool d
       out.push_back({0.0, x, true});
       continue;
     }
-    if (lambda.imag() < -1e-12 * std::abs(lambda)) continue;
+    if (is_lower_of_pair(lambda)) continue;
     out.push_back({lambda.imag() < 0.0 ? std::conj(lambda) : lambda, x});
   }
   return out;

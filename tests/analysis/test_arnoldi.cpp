@@ -64,6 +64,31 @@ TEST_CASE("arnoldi: the largest eigenvalues of a matrix with known spectrum, rea
   CHECK(pairs->operations < 150);
 }
 
+TEST_CASE("arnoldi: only the values a caller keeps come back with their vectors") {
+  // One of each conjugate pair, as first_order_modes keeps them: the converged set is the
+  // same, the pairs' other members are left out, and the vectors still fit their values.
+  std::vector<std::complex<double>> values;
+  values.emplace_back(2.0, 1.5);
+  values.emplace_back(-1.8, 0.0);
+  values.emplace_back(0.5, -1.2);
+  for (int k = 1; k <= 300; ++k) values.emplace_back(1.0 / (k + 1.0), 0.0);
+  const Eigen::MatrixXd a = with_spectrum(values, 3);
+  mbsflow::ArnoldiOptions o;
+  o.wanted = 8;
+  o.returned = [](std::complex<double> v) { return v.imag() >= 0.0; };
+  const auto pairs = mbsflow::arnoldi_largest(product_with(a), a.rows(), o);
+  REQUIRE(pairs);
+  const std::vector<std::complex<double>> expected{{2.0, 1.5}, {-1.8, 0.0}, {0.5, 1.2}, {0.5, 0.0}, {1.0 / 3.0, 0.0}, {0.25, 0.0}};
+  REQUIRE(pairs->values.size() == static_cast<Eigen::Index>(expected.size()));
+  REQUIRE(pairs->vectors.cols() == pairs->values.size());
+  for (std::size_t i = 0; i < expected.size(); ++i) {
+    CHECK(std::abs(pairs->values[static_cast<Eigen::Index>(i)] - expected[i]) < 1e-10);
+    const Eigen::VectorXcd x = pairs->vectors.col(static_cast<Eigen::Index>(i));
+    const Eigen::VectorXcd r = a.cast<std::complex<double>>() * x - expected[i] * x;
+    CHECK(r.norm() < 1e-8 * x.norm());
+  }
+}
+
 TEST_CASE("arnoldi: a basis that closes on an invariant subspace gives its pairs") {
   // Rank 5: the Krylov space closes after five vectors, whose Ritz pairs are exact.
   Eigen::MatrixXd a = Eigen::MatrixXd::Zero(60, 60);
