@@ -85,8 +85,13 @@ std::vector<FoundMode> first_order_modes(const LinearModel& m, int count, bool d
   o.largest = std::max(ncv, std::min<Eigen::Index>(400, static_cast<Eigen::Index>(1.5e9 / (8.0 * static_cast<double>(n2)))));
   o.rows = m.size();
   // Of a conjugate pair, the value of positive imaginary part alone is kept below: the
-  // other's vector is not formed.
-  o.returned = [sigma](Complex nu) { return !is_lower_of_pair(sigma + 1.0 / nu); };
+  // other's vector is not formed. Near zero both are (a rigid-body motion's Jordan block
+  // may come back as such a pair, whose two vectors hold two motions).
+  const double zero = zero_rate * scale;
+  o.returned = [sigma, zero](Complex nu) {
+    const Complex lambda = sigma + 1.0 / nu;
+    return std::abs(lambda) < zero || !is_lower_of_pair(lambda);
+  };
   op.set_shift(sigma);
   const auto apply = [&op](const double* in, double* out) { op.perform_op(in, out); };
   std::optional<ArnoldiPairs> pairs = arnoldi_largest(apply, n2, o);
@@ -107,7 +112,6 @@ std::vector<FoundMode> first_order_modes(const LinearModel& m, int count, bool d
     values = eigs.eigenvalues();
     vectors = eigs.eigenvectors().topRows(m.size());
   }
-  const double zero = zero_rate * scale;
   std::vector<FoundMode> out;
   Eigen::MatrixXcd rigid(m.size(), 0);  // rigid-body motions found so far, M-orthonormal
   for (Eigen::Index i = 0; i < values.size(); ++i) {
