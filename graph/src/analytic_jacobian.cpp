@@ -127,16 +127,10 @@ void MultibodySystem::jacobian(double t, const Eigen::VectorXd& y, Eigen::Sparse
   // positions and orientations alone, the velocity columns zero).
   const auto differentiate_joints = [&]<class D>(std::type_identity<D> type, std::size_t begin, std::size_t end) {
     constexpr int per_body = D::DerType::SizeAtCompileTime / 2;
-    const auto seeded = [](const BodyNumbers& s, int first) {
-      if constexpr (per_body == body_states)
-        return seeded_frame<D>(s, first);
-      else
-        return seeded_positions(s, first);
-    };
     for (std::size_t k = begin; k < end; ++k) {
       const CompiledJoint& j = compiled_->joints[k];
-      const BodyFrameT<D> a = free(j.a) ? seeded(numbers(j.a), 0) : constant_frame(type, j.a);
-      const BodyFrameT<D> b = free(j.b) ? seeded(numbers(j.b), per_body) : constant_frame(type, j.b);
+      const BodyFrameT<D> a = free(j.a) ? seeded_frame<D>(numbers(j.a), 0) : constant_frame(type, j.a);
+      const BodyFrameT<D> b = free(j.b) ? seeded_frame<D>(numbers(j.b), per_body) : constant_frame(type, j.b);
       Eigen::Matrix<D, 9, 1> out;
       if (j.kinematic >= 0) {  // compliant, or the limit stops and effort motor of a rigid one
         out.setZero();

@@ -3,6 +3,7 @@
 // a body's 13 state numbers seeded as variables, and the views of them that the force
 // laws and the constraint rows take.
 #include <Eigen/Core>
+#include <type_traits>
 #include <unordered_map>
 #include <unsupported/Eigen/AutoDiff>
 #include <vector>
@@ -35,14 +36,16 @@ struct SeededState {
   Vector3T<D> r, v, w;
   Vector4T<D> q;
 };
-// (A dual number of run-time size takes the variables' count.)
+// (A dual number of run-time size takes the variables' count.) velocities = false: the
+// position and orientation alone as variables first..first+6, the velocities constants.
 template <class D>
-SeededState<D> seeded_state(const BodyNumbers& s, int first, int variables = D::DerType::SizeAtCompileTime) {
+SeededState<D> seeded_state(const BodyNumbers& s, int first, int variables = D::DerType::SizeAtCompileTime,
+                            bool velocities = true) {
   SeededState<D> out;
   for (int k = 0; k < 3; ++k) {
     out.r[k] = D(s[k], variables, first + k);
-    out.v[k] = D(s[7 + k], variables, first + 7 + k);
-    out.w[k] = D(s[10 + k], variables, first + 10 + k);
+    out.v[k] = velocities ? D(s[7 + k], variables, first + 7 + k) : D(s[7 + k]);
+    out.w[k] = velocities ? D(s[10 + k], variables, first + 10 + k) : D(s[10 + k]);
   }
   for (int k = 0; k < 4; ++k) out.q[k] = D(s[3 + k], variables, first + 3 + k);
   return out;
@@ -72,25 +75,16 @@ template <class D>
 SeededState<D> seeded_state(const Eigen::VectorXd& y, const StateLayout& l, Eigen::Index i, int first) {
   return seeded_state<D>(body_numbers(y, l, i), first);
 }
-template <class D = Dual>
-BodyFrameT<D> seeded_frame(const BodyNumbers& s, int first) {
-  const SeededState<D> seeded = seeded_state<D>(s, first);
-  return body_frame<D>(seeded.r, seeded.q, seeded.v, seeded.w);
-}
-
-// The same with the position and orientation alone as variables (7 a body), the velocities
-// constants: a joint's stiffness at rest in half of Dual's work.
+// A joint's dual numbers over the position and orientation alone of its two bodies (7
+// each), the velocities constants: its stiffness at rest in about half of Dual's work.
 constexpr int body_positions = 7;
 using PositionDual = Eigen::AutoDiffScalar<Eigen::Matrix<double, 2 * body_positions, 1>>;
-inline BodyFrameT<PositionDual> seeded_positions(const BodyNumbers& s, int first) {
-  SeededState<PositionDual> seeded;
-  for (int k = 0; k < 3; ++k) {
-    seeded.r[k] = PositionDual(s[k], 2 * body_positions, first + k);
-    seeded.v[k] = PositionDual(s[7 + k]);
-    seeded.w[k] = PositionDual(s[10 + k]);
-  }
-  for (int k = 0; k < 4; ++k) seeded.q[k] = PositionDual(s[3 + k], 2 * body_positions, first + 3 + k);
-  return body_frame<PositionDual>(seeded.r, seeded.q, seeded.v, seeded.w);
+// A body's frame with its numbers as variables from first on: all 13 in Dual, the
+// position and orientation alone in PositionDual.
+template <class D = Dual>
+BodyFrameT<D> seeded_frame(const BodyNumbers& s, int first) {
+  const SeededState<D> seeded = seeded_state<D>(s, first, D::DerType::SizeAtCompileTime, !std::is_same_v<D, PositionDual>);
+  return body_frame<D>(seeded.r, seeded.q, seeded.v, seeded.w);
 }
 inline BodyFrameT<Dual> seeded_frame(const Eigen::VectorXd& y, const StateLayout& l, Eigen::Index i, int first) {
   return seeded_frame(body_numbers(y, l, i), first);
