@@ -59,7 +59,7 @@ bool is_lower_of_pair(Complex lambda) { return lambda.imag() < -1e-12 * std::abs
 }  // namespace
 
 std::vector<FoundMode> first_order_modes(const LinearModel& m, int count, bool damped, bool* restarted,
-                                         const std::function<void(const std::string&)>& notice) {
+                                         const ModeOptions::Notice& notice) {
   ShiftSolve op(m, damped);
   const Eigen::Index n2 = op.rows();
   // Each vibration is a conjugate pair of the first-order pencil; rigid-body motions a
@@ -88,8 +88,9 @@ std::vector<FoundMode> first_order_modes(const LinearModel& m, int count, bool d
   // other's vector is not formed. Near zero both are (a rigid-body motion's Jordan block
   // may come back as such a pair, whose two vectors hold two motions).
   const double zero = zero_rate * scale;
-  o.returned = [sigma, zero](Complex nu) {
-    const Complex lambda = sigma + 1.0 / nu;
+  const auto eigenvalue = [sigma](Complex nu) { return sigma + 1.0 / nu; };  // of the shifted inverse's nu
+  o.returned = [eigenvalue, zero](Complex nu) {
+    const Complex lambda = eigenvalue(nu);
     return std::abs(lambda) < zero || !is_lower_of_pair(lambda);
   };
   op.set_shift(sigma);
@@ -97,7 +98,7 @@ std::vector<FoundMode> first_order_modes(const LinearModel& m, int count, bool d
   std::optional<ArnoldiPairs> pairs = arnoldi_largest(apply, n2, o);
   *restarted = !pairs;
   if (pairs) {
-    values = pairs->values.unaryExpr([sigma](std::complex<double> nu) { return sigma + 1.0 / nu; });
+    values = pairs->values.unaryExpr(eigenvalue);
     vectors = std::move(pairs->vectors);
   } else {
     if (notice)

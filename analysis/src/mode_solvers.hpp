@@ -5,12 +5,11 @@
 // does not serve).
 #include <Eigen/Dense>
 #include <complex>
-#include <functional>
 #include <optional>
-#include <string>
 #include <vector>
 
 #include "mbsflow/analysis/linearization.hpp"
+#include "mbsflow/analysis/modes.hpp"
 
 namespace mbsflow {
 
@@ -41,6 +40,6 @@ std::optional<std::vector<FoundMode>> undamped_modes(const LinearModel& m, int c
 // (*restarted then true, and notice, where set, told before it starts). RunError where
 // neither converges.
 std::vector<FoundMode> first_order_modes(const LinearModel& m, int count, bool damped, bool* restarted,
-                                         const std::function<void(const std::string&)>& notice = nullptr);
+                                         const ModeOptions::Notice& notice = nullptr);
 
 }  // namespace mbsflow

@@ -28,7 +28,8 @@ struct ModeOptions {
   static constexpr Eigen::Index dense_limit = 200;
   // Told where the sparse solver turns to a slower path (Spectra's restarts, minutes on a
   // large model): a command line says so before the wait.
-  std::function<void(const std::string&)> notice;
+  using Notice = std::function<void(const std::string&)>;
+  Notice notice;
 };
 
 struct Modes {
