@@ -26,8 +26,7 @@ void AsyncSink::resume(const MultibodySystem& system, long snapshots, const std:
 }
 
 void AsyncSink::start_writer(const MultibodySystem& system) {
-  const SnapshotContent want = inner_->content();
-  if (want.energy || want.joint_wrench) system_ = std::make_unique<MultibodySystem>(system);
+  system_ = std::make_unique<MultibodySystem>(system);  // its workspace is made only if used
   const std::size_t bytes = static_cast<std::size_t>(system.dimension()) * sizeof(double) + 64;
   capacity_ = std::max<std::size_t>(1, capacity_bytes_ / bytes);
   writer_ = std::thread([this] { run(); });
@@ -147,6 +146,8 @@ void AsyncSink::run() {
     try {
       const auto start = std::chrono::steady_clock::now();
       const SnapshotContent want = inner_->content();
+      if (s.unprojected) system_->after_step(s.t, s.state);
+      s.unprojected = false;
       if (want.energy) s.energy = system_->energy(s.t, s.state);
       if (want.joint_wrench) {
         system_->joint_wrenches(s.t, s.state, s.joint_wrench);

@@ -53,8 +53,7 @@ void LocalRun::step_done(long steps, double t, long snapshot) {
 }
 
 void LocalRun::dense(long, double t, Eigen::VectorXd& y, bool projected) {
-  if (!projected) whole_->after_step(t, y);
-  emit(*whole_, sink_, t, y, out);
+  emit(*whole_, sink_, t, y, out, projected);
 }
 
 void LocalRun::checkpoint(const std::function<void(StateWriter&)>& save) {

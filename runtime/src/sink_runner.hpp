@@ -15,12 +15,16 @@ namespace mbsflow {
 
 // A snapshot of state y at t to the sink, with what the sink asked for. y is moved into
 // the snapshot: a run that gathers its state afresh for each snapshot holds no copy of a
-// million bodies' state beside the queued ones.
-inline void emit(MultibodySystem& sys, ResultSink* sink, double t, Eigen::VectorXd&& y, RunSummary& out) {
+// million bodies' state beside the queued ones. A dense output's state (projected: false)
+// is projected here unless the sink projects it.
+inline void emit(MultibodySystem& sys, ResultSink* sink, double t, Eigen::VectorXd&& y, RunSummary& out,
+                 bool projected = true) {
   const SnapshotContent want = sink->content();
   Snapshot s;
   s.t = t;
   s.state = std::move(y);
+  if (!projected && !want.projects) sys.after_step(t, s.state);
+  s.unprojected = !projected && want.projects;
   if (want.joint_wrench) {
     sys.joint_wrenches(t, s.state, s.joint_wrench);
     s.motor_effort = sys.motor_efforts();
@@ -31,9 +35,10 @@ inline void emit(MultibodySystem& sys, ResultSink* sink, double t, Eigen::Vector
   out.t_last_snapshot = t;
 }
 
-inline void emit(MultibodySystem& sys, ResultSink* sink, double t, const Eigen::VectorXd& y, RunSummary& out) {
+inline void emit(MultibodySystem& sys, ResultSink* sink, double t, const Eigen::VectorXd& y, RunSummary& out,
+                 bool projected = true) {
   sink->make_room();  // before the copy
-  emit(sys, sink, t, Eigen::VectorXd(y), out);
+  emit(sys, sink, t, Eigen::VectorXd(y), out, projected);
 }
 
 // "; results keep N snapshots up to t = T s", after what a stop dropped unwritten.

@@ -3,7 +3,8 @@
 // Runs another sink on its own thread behind a bounded queue, so that writing results
 // never holds the computation back unless the queue is full. What the inner sink wants
 // besides the state (energies, joint wrenches) is computed on the writer thread too,
-// from the writer's own copy of the system.
+// from the writer's own copy of the system, and so is the projection of a dense output's
+// state onto the constraints (a rigid cluster's factorisations per snapshot).
 #include <condition_variable>
 #include <cstddef>
 #include <deque>
@@ -31,7 +32,11 @@ class AsyncSink : public ResultSink {
   explicit AsyncSink(std::unique_ptr<ResultSink> inner, std::size_t capacity_bytes = std::size_t{128} << 20);
   ~AsyncSink() override;
 
-  SnapshotContent content() const override { return {}; }  // the writer computes the rest
+  SnapshotContent content() const override {  // the writer computes the rest
+    SnapshotContent c;
+    c.projects = true;
+    return c;
+  }
   void begin(const MultibodySystem& system) override;
   void write(Snapshot&& snapshot) override;
   void make_room() override;  // waits until write() would not
@@ -56,7 +61,7 @@ class AsyncSink : public ResultSink {
   bool stopping() const;
 
   std::unique_ptr<ResultSink> inner_;
-  std::unique_ptr<MultibodySystem> system_;  // the writer's copy, for energies and joint wrenches
+  std::unique_ptr<MultibodySystem> system_;  // the writer's copy, for projections, energies and joint wrenches
   std::size_t capacity_bytes_;
   std::size_t capacity_ = 1;  // snapshots queued and being written
   mutable std::mutex mutex_;

@@ -16,12 +16,18 @@ struct Snapshot {
   Eigen::VectorXd joint_wrench;  // 6 per joint (see MultibodySystem::joint_wrenches); empty unless asked for
   Eigen::VectorXd motor_effort;  // 1 per joint (MultibodySystem::motor_efforts), with joint_wrench
   std::optional<Energy> energy;  // only if asked for
+  // A dense output's state, not yet made consistent (MultibodySystem::after_step): only
+  // for a sink whose content() says it projects.
+  bool unprojected = false;
 };
 
 // What a sink wants in each snapshot beyond the state (each costs about one evaluation).
 struct SnapshotContent {
   bool joint_wrench = false;
   bool energy = false;
+  // The sink projects a dense output's state itself (AsyncSink: on its writer thread, off
+  // the run's), so the run hands it over unprojected.
+  bool projects = false;
 };
 
 // One macro step of a loosely coupled run (loose_coupling.hpp), over all submodels: the
