@@ -1,5 +1,6 @@
 #include "xdmf_writer.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -67,6 +68,51 @@ std::string dims_text(std::size_t a, std::size_t b) { return std::to_string(a) +
 
 }  // namespace
 
+Source::Source(hid_t file, const char* p, bool whole_rows) : path(p) {
+  set = h5::Handle(H5Dopen2(file, p, H5P_DEFAULT), H5Dclose, std::string("open ") + p);
+  space = h5::Handle(H5Dget_space(set.get()), H5Sclose, std::string("get the space of ") + p);
+  extent.resize(static_cast<std::size_t>(H5Sget_simple_extent_ndims(space.get())));
+  H5Sget_simple_extent_dims(space.get(), extent.data(), nullptr);
+  const h5::Handle dcpl(H5Dget_create_plist(set.get()), H5Pclose, std::string("get the properties of ") + p);
+  const h5::Handle type(H5Dget_type(set.get()), H5Tclose, std::string("get the type of ") + p);
+  std::vector<hsize_t> chunk(extent.size());
+  if (!extent.empty() && H5Pget_layout(dcpl.get()) == H5D_CHUNKED && H5Pget_nfilters(dcpl.get()) == 0 &&
+      H5Tequal(type.get(), H5T_IEEE_F64LE) > 0 &&
+      H5Pget_chunk(dcpl.get(), static_cast<int>(chunk.size()), chunk.data()) == static_cast<int>(chunk.size()) &&
+      std::equal(chunk.begin() + 1, chunk.end(), extent.begin() + 1)) {
+    const h5::Handle fcpl(H5Fget_create_plist(file), H5Pclose, "get the file's properties");
+    h5::check(H5Pget_userblock(fcpl.get(), &base_), "get the file's user block");
+    chunk_rows_ = chunk[0];
+  }
+  hsize_t count = 1;
+  for (hsize_t e : extent) count *= e;
+  if (count == 0 || count * sizeof(double) > xdmf_copy_limit_bytes) return;
+  if (whole_rows && chunk_rows_ > 0 && count / extent[0] > inline_view_values) return;  // views read in place
+  values.resize(count);
+  h5::check(H5Dread(set.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()), std::string("read ") + p);
+}
+
+std::optional<hsize_t> Source::row_offset(hsize_t row) const {
+  if (chunk_rows_ == 0 || row >= extent[0]) return std::nullopt;
+  hsize_t row_bytes = sizeof(double);
+  for (std::size_t d = 1; d < extent.size(); ++d) row_bytes *= extent[d];
+  const hsize_t first = row - row % chunk_rows_;
+  if (!chunk_address_ || chunk_at_ != first) {  // the sidecar's rows come in order: one lookup per chunk
+    std::vector<hsize_t> at(extent.size(), 0);
+    at[0] = first;
+    unsigned filters = 0;
+    haddr_t address = HADDR_UNDEF;
+    hsize_t size = 0;
+    if (H5Dget_chunk_info_by_coord(set.get(), at.data(), &filters, &address, &size) < 0 || filters != 0 ||
+        size != chunk_rows_ * row_bytes)
+      address = HADDR_UNDEF;
+    chunk_at_ = first;
+    chunk_address_ = address;
+  }
+  if (*chunk_address_ == HADDR_UNDEF) return std::nullopt;
+  return base_ + *chunk_address_ + (row % chunk_rows_) * row_bytes;
+}
+
 // A view `name` in `group`, of shape `dims`, of row `row` of `source` (T x item), columns
 // [column, column + columns) of its last dimension: a copy where the source was read, else
 // a virtual dataset.
@@ -106,11 +152,24 @@ void attribute_around(std::ostream& o, const char* name, const char* type, const
   o << "     </Attribute>\n";
 }
 
-// The views of one snapshot: the small ones as text in the sidecar, the others as datasets
-// in the snapshot's group /xdmf/<row>/, made with the first of them.
+// The results file's name as the binary DataItems of the `index`-th of `count` snapshots
+// of the sidecar give it: "./" or ".//" for each bit of the index, then the name, so that
+// no two snapshots name the file alike. ParaView's legacy XDMF reader keeps an array read
+// from a binary file while the name stays the same from one time step to the next, whatever
+// the Seek (it showed the first step's positions at every step); its default reader does not.
+std::string binary_file_name(std::size_t index, std::size_t count, const std::string& name) {
+  std::string out;
+  for (std::size_t bit = 1; bit < count; bit <<= 1) out += (index & bit) ? ".//" : "./";
+  return out + name;
+}
+
+// The views of one snapshot: the small ones as text in the sidecar; whole rows stored as
+// they are in the results file as binary DataItems that read them where they lie; the
+// others as datasets in the snapshot's group /xdmf/<row>/, made with the first of them.
 class StepViews {
  public:
-  StepViews(hid_t file, std::string step) : file_(file), step_(std::move(step)) {}
+  StepViews(hid_t file, std::string step, std::string binary_file)
+      : file_(file), step_(std::move(step)), binary_file_(std::move(binary_file)) {}
   hid_t group() {
     if (!group_) group_ = h5::Handle(H5Gcreate2(file_, step_.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose, "create " + step_);
     return group_->get();
@@ -119,13 +178,18 @@ class StepViews {
   void add(const char* name, const std::vector<hsize_t>& dims, const Source& source, hsize_t row, hsize_t column, hsize_t columns) {
     hsize_t size = 1;
     for (hsize_t d : dims) size *= d;
-    if (!source.values.empty() && size <= inline_view_values)
-      text_.emplace(name, row_values(source, row, column, columns));
-    else
-      make_view(group(), name, dims, source, row, column, columns);
+    if (!source.values.empty() && size <= inline_view_values) return (void)text_.emplace(name, row_values(source, row, column, columns));
+    if (column == 0 && columns == source.extent.back())
+      if (const std::optional<hsize_t> at = source.row_offset(row)) return (void)binary_.emplace(name, *at);
+    make_view(group(), name, dims, source, row, column, columns);
   }
   // The DataItem of view `name`, and an Attribute holding it.
   void item(std::ostream& o, const std::string& file, const std::string& name, const std::string& dims, const char* indent) const {
+    if (const auto at = binary_.find(name); at != binary_.end()) {
+      o << indent << "<DataItem Dimensions=\"" << dims << "\" NumberType=\"Float\" Precision=\"8\" Format=\"Binary\" Endian=\"Little\" Seek=\""
+        << at->second << "\">" << binary_file_ << "</DataItem>\n";
+      return;
+    }
     const auto it = text_.find(name);
     if (it == text_.end()) return xdmf_item(o, file, step_ + name, dims, false, indent);
     o << indent << "<DataItem Dimensions=\"" << dims << "\" NumberType=\"Float\" Precision=\"8\" Format=\"XML\">";
@@ -143,9 +207,10 @@ class StepViews {
 
  private:
   hid_t file_;
-  std::string step_;
+  std::string step_, binary_file_;
   std::optional<h5::Handle> group_;
   std::map<std::string, std::vector<double>> text_;
+  std::map<std::string, hsize_t> binary_;  // a view's byte offset in the results file
 };
 
 }  // namespace
@@ -179,11 +244,11 @@ void write_xdmf(hid_t file, const std::string& xdmf_path, const std::string& h5_
     write_ints(file, group + "/beam_joint", {segments}, c.beam_joint);
   }
   std::vector<Source> body_sources;  // in the order of c.body_fields
-  for (const BodyField* f : c.body_fields) body_sources.emplace_back(file, f->dataset);
+  for (const BodyField* f : c.body_fields) body_sources.emplace_back(file, f->dataset, true);
   std::optional<Source> energy, body_energy, ends, wrench;
   if (c.energy) energy.emplace(file, energy_dataset);
   if (c.body_energy) body_energy.emplace(file, body_energy_dataset);
-  if (lines) ends.emplace(file, joint_attachment_dataset);
+  if (lines) ends.emplace(file, joint_attachment_dataset, true);
   if (lines && c.joint_force) wrench.emplace(file, joint_force_dataset);
   std::optional<Source> section;
   if (segments > 0 && c.beam_section_force) section.emplace(file, beam_section_force_dataset);
@@ -197,9 +262,10 @@ void write_xdmf(hid_t file, const std::string& xdmf_path, const std::string& h5_
     << "  <Grid Name=\"run\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
   char time[32];
   const std::string n3 = dims_text(c.bodies, 3), j3 = dims_text(c.joints, 3);
-  for (const std::size_t t : rows) {
+  for (std::size_t index = 0; index < rows.size(); ++index) {
+    const std::size_t t = rows[index];
     const std::string step = group + '/' + std::to_string(t) + '/';
-    StepViews views(file, step);
+    StepViews views(file, step, binary_file_name(index, rows.size(), file_name));
     for (std::size_t i = 0; i < body_sources.size(); ++i) {
       const BodyField* f = c.body_fields[i];
       views.add(f->name, {c.bodies, static_cast<hsize_t>(f->components)}, body_sources[i], t, 0, f->components);

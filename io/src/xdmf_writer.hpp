@@ -9,13 +9,21 @@
 // ParaView's default reader (Xdmf3) does not read XDMF hyperslabs (it skips their arrays
 // and shows 0 points), so the sidecar does not select rows of the T x N x k series itself:
 // each snapshot and quantity gets a view of one row of a series: a view of a few values is
-// written into the sidecar as text; the others are datasets of the results file's group
-// /xdmf (/xdmf/<row>/<name>), which every HDF5 reader sees as plain N x k arrays. For a
-// series of at most xdmf_copy_limit_bytes those are copies of its rows (compact datasets
-// where they fit); for larger ones, HDF5 virtual datasets, which hold no data of their own
-// but cost about five times as much to make.
+// written into the sidecar as text; a whole row that lies in one piece in the results file
+// (a series of up to 256 bodies or joints: its chunks hold whole rows, unfiltered) is a
+// binary DataItem that reads those bytes where they lie (Seek), which costs nothing to make;
+// the others (columns of a series, or rows of a larger model) are datasets of the results
+// file's group /xdmf (/xdmf/<row>/<name>), which every HDF5 reader sees as plain N x k
+// arrays. A dataset costs about 20 us to make, whatever its kind: 1000 snapshots of seven
+// quantities took more than a second's run's 5 %. For a series of at most
+// xdmf_copy_limit_bytes those are copies of its rows (compact datasets where they fit); for
+// larger ones, HDF5 virtual datasets, which hold no data of their own but cost about five
+// times as much to make. A binary item is only as good as the results file stays as it is:
+// a tool that rewrites the file (h5repack) moves the rows; `mbsflow run` writes the sidecar
+// anew when it resumes.
 #include <hdf5.h>
 
+#include <optional>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -57,20 +65,22 @@ struct XdmfContent {
 // series is at most xdmf_copy_limit_bytes, its values (its views are then copies).
 struct Source {
   const char* path;
-  h5::Handle space;
+  h5::Handle set, space;
   std::vector<hsize_t> extent;
-  std::vector<double> values;  // row-major T x item, when its views are copies
-  Source(hid_t file, const char* p) : path(p) {
-    const h5::Handle set(H5Dopen2(file, p, H5P_DEFAULT), H5Dclose, std::string("open ") + p);
-    space = h5::Handle(H5Dget_space(set.get()), H5Sclose, std::string("get the space of ") + p);
-    extent.resize(static_cast<std::size_t>(H5Sget_simple_extent_ndims(space.get())));
-    H5Sget_simple_extent_dims(space.get(), extent.data(), nullptr);
-    hsize_t count = 1;
-    for (hsize_t e : extent) count *= e;
-    if (count == 0 || count * sizeof(double) > xdmf_copy_limit_bytes) return;
-    values.resize(count);
-    h5::check(H5Dread(set.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()), std::string("read ") + p);
-  }
+  std::vector<double> values;  // row-major T x item, when its views are copies or text
+  // whole_rows: every view of it is a whole row, so its values are read only where a row
+  // is text (inline_view_values) or cannot be read where it lies (row_offset).
+  Source(hid_t file, const char* p, bool whole_rows = false);
+  // Where row `row` lies in the file as raw little-endian doubles, when its rows are whole
+  // in the series' chunks (up to 256 bodies or joints: hdf5_sink.cpp) and those are stored
+  // as they are (no filter), which is how the sink writes them; else nothing.
+  std::optional<hsize_t> row_offset(hsize_t row) const;
+
+ private:
+  hsize_t chunk_rows_ = 0;  // time rows per chunk where rows are whole in chunks, else 0
+  hsize_t base_ = 0;        // the file's user block: chunk addresses count from its end
+  mutable hsize_t chunk_at_ = 0;  // the last chunk looked up (its first row), and where it lies
+  mutable std::optional<haddr_t> chunk_address_;
 };
 
 // A view `name` in `group`, of shape `dims`, of row `row` of `source` (T x item), columns

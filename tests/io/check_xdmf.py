@@ -1,14 +1,16 @@
 #!/usr/bin/python3
 """Checks an XDMF sidecar against its HDF5 file, with h5py only: every dataset the XML
-names exists with as many values as the XML says, every time step's view (a dataset, or a
-few values written into the sidecar as text) holds the values of its row of the series it
-shows, bit for bit, and the time steps match /time.
+names exists with as many values as the XML says, every time step's view (a dataset, a
+few values written into the sidecar as text, or a binary DataItem that reads a row where it
+lies in the results file) holds the values of its row of the series it shows, bit for bit,
+no two time steps name the file of their binary items alike, and the time steps match /time.
 
-usage: check_xdmf.py FILE.xdmf [--position-views text|compact|virtual]   (exit 0 when consistent)
+usage: check_xdmf.py FILE.xdmf [--position-views text|binary|compact|virtual]   (exit 0 when consistent)
 
 --position-views also checks how the views of /bodies/position are stored: as text in the
-sidecar (a few bodies), copies of their rows in the dataset's header (a small series) or
-HDF5 virtual datasets (a large one).
+sidecar (a few bodies), read in place from the series' chunks (up to 256 bodies), copies of
+their rows in the dataset's header (a small series of more bodies) or HDF5 virtual datasets
+(a large one).
 """
 import math
 import os
@@ -45,6 +47,14 @@ LAYOUTS = {h5py.h5d.COMPACT: "compact", h5py.h5d.CONTIGUOUS: "contiguous", h5py.
            h5py.h5d.VIRTUAL: "virtual"}
 
 
+def view_name(item, parents):
+    """Which view a DataItem of the sidecar's own (text or binary) shows, from what holds it."""
+    holder = parents[item]
+    if holder.tag == "Geometry":
+        return "attachment" if parents[holder].get("Name") == "joints" else "position"
+    return {"energy_kinetic_gravity_elastic": "energy"}.get(holder.get("Name"), holder.get("Name"))
+
+
 def main():
     xdmf = sys.argv[1]
     want_layout = sys.argv[3] if len(sys.argv) > 3 and sys.argv[2] == "--position-views" else None
@@ -56,17 +66,33 @@ def main():
     if not steps:
         fail("no time steps")
     files, times, rows, checked = {}, [], [], 0
+    binary_names = {}  # the file name of a step's binary items -> that step's row
     for step in steps:
         times.append(float(step.find("Time").get("Value")))
         rows.append(int(step.get("Name")[1:]))  # t<row>
         for item in step.iter("DataItem"):
             dims = [int(x) for x in item.get("Dimensions").split()]
+            if item.get("Format") == "Binary":  # a row read where it lies in the results file
+                name, written = view_name(item, parents), item.text.strip()
+                if binary_names.setdefault(written, rows[-1]) != rows[-1]:
+                    fail(f"rows {binary_names[written]} and {rows[-1]} name their binary file alike, '{written}'")
+                if item.get("Endian") != "Little" or item.get("NumberType") != "Float" or item.get("Precision") != "8":
+                    fail(f"{name} at row {rows[-1]}: a binary item that is not little-endian float64")
+                path = os.path.normpath(os.path.join(folder, written))
+                if path != os.path.join(folder, h5_name):
+                    fail(f"{name} at row {rows[-1]} reads {written}, not the results file")
+                with open(path, "rb") as raw:
+                    raw.seek(int(item.get("Seek")))
+                    values = np.frombuffer(raw.read(8 * math.prod(dims)), dtype="<f8")
+                h5 = files.setdefault(h5_name, h5py.File(os.path.join(folder, h5_name), "r"))
+                if not np.array_equal(values, np.asarray(source_row(h5, name, rows[-1]), dtype=float).ravel()):
+                    fail(f"the binary item of {name} at row {rows[-1]} differs from its row of the series")
+                if want_layout and name == "position" and want_layout != "binary":
+                    fail(f"{name} at row {rows[-1]} is binary, not {want_layout}")
+                checked += 1
+                continue
             if item.get("Format") == "XML":  # a view's values as text
-                holder = parents[item]
-                if holder.tag == "Geometry":
-                    name = "attachment" if parents[holder].get("Name") == "joints" else "position"
-                else:
-                    name = {"energy_kinetic_gravity_elastic": "energy"}.get(holder.get("Name"), holder.get("Name"))
+                name = view_name(item, parents)
                 values = np.array([float(x) for x in item.text.split()])
                 h5 = files.setdefault(h5_name, h5py.File(os.path.join(folder, h5_name), "r"))
                 expected = np.asarray(source_row(h5, name, rows[-1]), dtype=float).ravel()
@@ -77,7 +103,7 @@ def main():
                 checked += 1
                 continue
             if item.get("Format") != "HDF":
-                fail("a DataItem that is neither an HDF reference nor XML text (ParaView's Xdmf3 reader reads no others)")
+                fail("a DataItem that is neither an HDF reference, XML text nor binary")
             name, path = item.text.strip().split(":", 1)
             h5 = files.setdefault(name, h5py.File(os.path.join(folder, name), "r"))
             if path not in h5:
