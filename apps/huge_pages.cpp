@@ -12,6 +12,7 @@ namespace mbsflow::cli {
 namespace {
 
 constexpr const char* tunable = "glibc.malloc.hugetlb";
+constexpr const char* blas_timeout = "OPENBLAS_THREAD_TIMEOUT";  // 2^value cycles of spinning (huge_pages.hpp)
 
 std::string environment(const char* name) {
   const char* v = std::getenv(name);
@@ -44,8 +45,11 @@ void restart_with_huge_pages(char** argv) {
   const std::string after = (before.empty() ? "" : before + ":") + tunable +
                             "=1:glibc.malloc.mmap_threshold=4294967295:glibc.malloc.trim_threshold=268435456";
   if (::setenv("GLIBC_TUNABLES", after.c_str(), 1) != 0) return;
+  const bool set_blas_timeout = std::getenv(blas_timeout) == nullptr;
+  if (set_blas_timeout) ::setenv(blas_timeout, "22", 1);
   ::execv("/proc/self/exe", argv);
   // exec failed (no /proc): go on as we are, without the tunable in the environment
+  if (set_blas_timeout) ::unsetenv(blas_timeout);
   if (before.empty())
     ::unsetenv("GLIBC_TUNABLES");
   else

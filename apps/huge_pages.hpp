@@ -16,6 +16,15 @@
 // process starts, so mbsflow starts itself once more with them set. MBSFLOW_HUGE_PAGES=0
 // turns this off; nothing happens where the kernel never gives huge pages, where
 // GLIBC_TUNABLES already names glibc.malloc.hugetlb, or under valgrind.
+//
+// The same restart sets OPENBLAS_THREAD_TIMEOUT=22 unless it is set: OpenBLAS (loaded for
+// the modes' and the reductions' dense products) starts its threads as it is loaded, and
+// each spins for 2^28 cycles (about 0.1 s) before it sleeps, in every mbsflow process,
+// whether it calls BLAS or not. On the 2-core VM that spinner took a core from the run and
+// its results writer: 5 % of the CPU samples of IFToMM A02 with a results file (`perf
+// record mbsflow run examples/models/iftomm_a02_n_four_bar.json -o a02.h5`), none with
+// 2^22 cycles (about 1.4 ms), which still keeps the threads awake between the calls of a
+// product.
 
 namespace mbsflow::cli {
 
