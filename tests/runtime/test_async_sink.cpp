@@ -182,3 +182,40 @@ TEST_CASE("with room for one snapshot a run may gather the next only once the wr
   sink.end();
   CHECK(seen->times.size() == 1);
 }
+
+TEST_CASE("the writer thread projects dense output onto the rigid joints as the run's thread would, bit for bit", "[runtime][rigid]") {
+  // A double pendulum of rigid rods (a spherical pivot, a revolute elbow) through DOPRI5
+  // with an output grid: every snapshot but the first lies between steps.
+  Model m;
+  m.gravity = {0, -9.81, 0};
+  m.bodies.push_back(test::make_body("upper", 1.0, {1e-3, 1.0 / 12, 1.0 / 12, 0, 0, 0}, {0.5, 0, 0}));
+  m.bodies.push_back(test::make_body("lower", 1.0, {1e-3, 1.0 / 12, 1.0 / 12, 0, 0, 0}, {1.5, 0, 0}));
+  m.bodies[1].velocity = {0, 0, 0.3};
+  m.joints.push_back(test::make_joint(JointType::spherical, ground, 0, {0, 0, 0}, {-0.5, 0, 0}));
+  m.joints.push_back(test::make_joint(JointType::revolute, 0, 1, {0.5, 0, 0}, {-0.5, 0, 0}));
+  for (Joint& j : m.joints) j.frame2 = rest_frame2(m, j);
+  RunOptions o;
+  o.method = Method::dopri5;
+  o.t_end = 0.5;
+  o.rtol = o.atol = 1e-4;
+  o.output_interval = 0.01;
+  auto run_into = [&](ResultSink& sink) {
+    MultibodySystem sys(m);
+    run_simulation(sys, o, &sink);
+  };
+  test::MemorySink direct;  // projects nothing itself: the run projects
+  REQUIRE_FALSE(direct.content().projects);
+  run_into(direct);
+  auto inner = std::make_unique<test::MemorySink>();
+  test::MemorySink* seen = inner.get();
+  AsyncSink async(std::move(inner));
+  REQUIRE(async.content().projects);
+  run_into(async);
+  REQUIRE(direct.times.size() == 51);
+  CHECK(test::same_snapshots(direct, *seen));
+  MultibodySystem sys(m);
+  for (std::size_t k = 0; k < seen->states.size(); ++k) {
+    CHECK_FALSE(seen->snapshots[k].unprojected);
+    CHECK(sys.constraint_violation(seen->times[k], seen->states[k]) < 1e-9);
+  }
+}
