@@ -1,6 +1,7 @@
 #include "huge_pages.hpp"
 
 #include <malloc.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cstdlib>
@@ -26,6 +27,29 @@ bool kernel_gives_huge_pages() {
   return modes.find("[always]") != std::string::npos || modes.find("[madvise]") != std::string::npos;
 }
 
+// Whether the command can gain from huge pages (huge_pages.hpp): it makes models of a size
+// its options give (generate, bench) or gets one over the network (worker), or it names a
+// file of at least restart_file_bytes (a model of some 35 000 bodies or more, or a large
+// checkpoint or results file), as an argument or an option's "=value".
+bool worth_restarting(char** argv) {
+  constexpr off_t restart_file_bytes = off_t{16} << 20;
+  bool command_seen = false;
+  for (char** a = argv + 1; *a; ++a) {
+    const std::string arg = *a;
+    if (!command_seen && !arg.empty() && arg[0] != '-') {
+      command_seen = true;
+      if (arg == "generate" || arg == "bench" || arg == "worker") return true;
+    }
+    const std::size_t equals = arg.find('=');
+    for (const std::string& path : {arg, equals == std::string::npos ? std::string() : arg.substr(equals + 1)}) {
+      struct stat st {};
+      if (!path.empty() && ::stat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode) && st.st_size >= restart_file_bytes)
+        return true;
+    }
+  }
+  return false;
+}
+
 }  // namespace
 
 bool huge_pages_on() {
@@ -39,8 +63,9 @@ void restart_with_huge_pages(char** argv) {
   const std::string before = environment("GLIBC_TUNABLES");
   // Under valgrind, /proc/self/exe is valgrind's tool, which will not run by itself.
   const bool valgrind = environment("LD_PRELOAD").find("vgpreload") != std::string::npos;
-  if (environment("MBSFLOW_HUGE_PAGES") == "0" || before.find(tunable) != std::string::npos || !kernel_gives_huge_pages() ||
-      valgrind)
+  const std::string wanted = environment("MBSFLOW_HUGE_PAGES");
+  if (wanted == "0" || (wanted != "1" && !worth_restarting(argv)) || before.find(tunable) != std::string::npos ||
+      !kernel_gives_huge_pages() || valgrind)
     return;
   const std::string after = (before.empty() ? "" : before + ":") + tunable +
                             "=1:glibc.malloc.mmap_threshold=4294967295:glibc.malloc.trim_threshold=268435456";

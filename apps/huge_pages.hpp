@@ -13,9 +13,17 @@
 // took 0.285-0.293 s on 2 threads and 0.187-0.247 s on 1 with it, 0.201-0.205 s and
 // 0.185-0.187 s without; CVODE in the same runs 0.207-0.214 s either way (`bench stiff
 // --problems chain --frequencies 1e4 --tolerances 1e-3`, alternated four times). Tunables are read only when a
-// process starts, so mbsflow starts itself once more with them set. MBSFLOW_HUGE_PAGES=0
-// turns this off; nothing happens where the kernel never gives huge pages, where
-// GLIBC_TUNABLES already names glibc.malloc.hugetlb, or under valgrind.
+// process starts, so mbsflow starts itself once more with them set.
+//
+// That second start costs 16-18 ms (`mbsflow --version` 33-36 ms against 17-19 ms; IFToMM
+// A05 with tirk at 1e-4, the whole process 115-127 ms against 104-108 ms), and small models gain
+// nothing from huge pages (a 2000-link chain's run within noise; the 10 000-link chain's 10
+// modes 2.2-2.4 s with them, 1.9 s without). So mbsflow restarts only for commands that make
+// or receive models of unknown size (generate, bench, worker) and for a command line that
+// names a file of at least 16 MiB (a model of some 35 000 bodies or more).
+// MBSFLOW_HUGE_PAGES=1 restarts always, =0 never; nothing happens where the kernel never
+// gives huge pages, where GLIBC_TUNABLES already names glibc.malloc.hugetlb, or under
+// valgrind.
 //
 // The same restart sets OPENBLAS_THREAD_TIMEOUT=22 unless it is set: OpenBLAS (loaded for
 // the modes' and the reductions' dense products) starts its threads as it is loaded, and
@@ -28,8 +36,8 @@
 
 namespace mbsflow::cli {
 
-// Replaces the process by itself with the tunable set, or returns (when off, already
-// set, or exec failed).
+// Replaces the process by itself with the tunable set, or returns (when off, not worth it
+// for this command line, already set, or exec failed).
 void restart_with_huge_pages(char** argv);
 
 // Whether this process's malloc was started with glibc.malloc.hugetlb set to 1 or 2.

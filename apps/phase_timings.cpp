@@ -27,7 +27,8 @@ PhaseTimings::PhaseTimings(bool enabled) : enabled_(enabled), start_(Clock::now(
   if (!enabled_) return;
   std::fprintf(stderr, "mbsflow: malloc with transparent huge pages: %s\n",
                huge_pages_on() ? "on"
-                               : "off (MBSFLOW_HUGE_PAGES=0, the caller's GLIBC_TUNABLES, valgrind, or none from the kernel)");
+                               : "off (a model file under 16 MiB: MBSFLOW_HUGE_PAGES=1 turns them on; or "
+                                 "MBSFLOW_HUGE_PAGES=0, the caller's GLIBC_TUNABLES, valgrind, none from the kernel)");
   std::fprintf(stderr, "mbsflow: %-34s %9s %9s %11s %11s %10s\n", "phase", "s", "total s", "resident MB", "peak MB", "B/body");
 }
 
