@@ -80,7 +80,8 @@ Source::Source(hid_t file, const char* p, bool whole_rows) : path(p) {
       H5Tequal(type.get(), H5T_IEEE_F64LE) > 0 &&
       H5Pget_chunk(dcpl.get(), static_cast<int>(chunk.size()), chunk.data()) == static_cast<int>(chunk.size()) &&
       std::equal(chunk.begin() + 1, chunk.end(), extent.begin() + 1)) {
-    const h5::Handle fcpl(H5Fget_create_plist(file), H5Pclose, "get the file's properties");
+    const h5::Handle holder(H5Iget_file_id(set.get()), H5Fclose, std::string("get the file of ") + p);  // `file` may be a group
+    const h5::Handle fcpl(H5Fget_create_plist(holder.get()), H5Pclose, "get the file's properties");
     h5::check(H5Pget_userblock(fcpl.get(), &base_), "get the file's user block");
     chunk_rows_ = chunk[0];
   }
