@@ -28,6 +28,7 @@ int constraint_rows(const JointGeometry& g) {
     case JointType::planar: n = 3; break;
     case JointType::fixed: n = 6; break;
     case JointType::distance: n = 1; break;
+    case JointType::screw: n = 5; break;
     default: return 0;
   }
   return n + (has_motor_row(g) ? 1 : 0);

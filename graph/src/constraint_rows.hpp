@@ -49,7 +49,7 @@ struct JointGeometry {
   JointType type = JointType::spherical;
   Eigen::Vector3d pa = Eigen::Vector3d::Zero(), pb = Eigen::Vector3d::Zero();
   Eigen::Matrix3d fa = Eigen::Matrix3d::Identity(), fb = Eigen::Matrix3d::Identity();
-  double length = 0.0;
+  double length = 0.0;  // distance: the rod's; screw: the lead per turn
   JointMotor motor;
   JointLimits limits;
 };
@@ -140,18 +140,38 @@ ConstraintRowT<S> angle(const BodyMotionT<S>& a, const BodyMotionT<S>& b, const 
   return r;
 }
 
+// phi into (-period/2, period/2]: a shift by whole turns, which leaves the derivatives.
+template <class S>
+void whole_turns_off(S& phi, double period) {
+  if constexpr (std::is_same_v<S, double>)
+    phi = std::remainder(phi, period);
+  else
+    phi.value() = std::remainder(phi.value(), period);
+}
+
+// A screw's coupling: point b advances along z_a by `lead` per turn of x_b about z_a,
+// phi = advance - lead angle / (2 pi). The angle jumps by 2 pi at +-pi; phi is taken
+// modulo one lead so that the row holds over any number of turns.
+template <class S>
+ConstraintRowT<S> screw(const Pair<S>& p, const BodyMotionT<S>& a, const BodyMotionT<S>& b, const Vector3T<S>& xa,
+                        const Vector3T<S>& za, const Vector3T<S>& xb, double lead) {
+  const double c = lead / (2.0 * std::numbers::pi);
+  ConstraintRowT<S> r = along<S>(p, a, za, 2);
+  const ConstraintRowT<S> turn = angle<S>(a, b, xa, za, xb);
+  r.phi -= c * turn.phi;
+  whole_turns_off(r.phi, lead);
+  r.j -= c * turn.j;
+  r.bias -= c * turn.bias;
+  return r;
+}
+
 // A motor's time function subtracted from its coordinate row.
 template <class S>
 void prescribe(ConstraintRowT<S>& r, const JointMotor& m, double t, bool periodic) {
   const FunctionValue f = evaluate(m.function, t);
   if (m.kind == JointMotor::Kind::position) {
     r.phi -= f.value;
-    if (periodic) {  // into (-pi, pi]: a shift by whole turns, which leaves the derivatives
-      if constexpr (std::is_same_v<S, double>)
-        r.phi = std::remainder(r.phi, 2.0 * std::numbers::pi);
-      else
-        r.phi.value() = std::remainder(r.phi.value(), 2.0 * std::numbers::pi);
-    }
+    if (periodic) whole_turns_off(r.phi, 2.0 * std::numbers::pi);
     r.rate -= f.rate;
     r.bias -= f.accel;
   } else {  // velocity: a row on the rate only
@@ -219,6 +239,11 @@ void evaluate_constraint(const JointGeometry& g, const BodyMotionT<S>& a, const 
       rows[n++] = perpendicular<S>(a, b, xa, yb, 5);
       break;
     case JointType::distance: rows[n++] = distance<S>(p, g.length); break;
+    case JointType::screw:
+      on_axis();
+      keep_axis();
+      rows[n++] = screw<S>(p, a, b, xa, za, fb.col(0), g.length);
+      break;
     default: return;
   }
   if (has_motor_row(g)) {

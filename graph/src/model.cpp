@@ -62,6 +62,7 @@ const char* joint_type_name(JointType t) {
     case JointType::planar: return "planar";
     case JointType::fixed: return "fixed";
     case JointType::distance: return "distance";
+    case JointType::screw: return "screw";
   }
   return "?";
 }

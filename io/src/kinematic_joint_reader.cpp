@@ -101,13 +101,18 @@ void limits(const JsonNode& n, Joint& j) {
 
 void read_kinematic_joint(const JsonNode& n, const Model& m, Joint& j) {
   n.allow_only({"name", "type", "body1", "body2", "point1", "point2", "frame1", "frame2", "axis1", "axis2", "rigid",
-                "frequency", "damping_ratio", "stiffness", "damping", "motor", "limits", "length"});
+                "frequency", "damping_ratio", "stiffness", "damping", "motor", "limits", "length", "pitch"});
   const std::string type = joint_type_name(j.type);
   if (auto r = n.find("rigid")) {
     j.rigid = r->boolean();
   }
   frames(n, m, j);
   if (n.has("length") && j.type != JointType::distance) n["length"].fail_at_key("only a distance joint has a length");
+  if (n.has("pitch") && j.type != JointType::screw) n["pitch"].fail_at_key("only a screw joint has a pitch");
+  if (j.type == JointType::screw) {
+    j.rest_length = n["pitch"].number();
+    if (j.rest_length == 0.0) n["pitch"].fail("must be nonzero: the advance per turn (m; negative for a left-hand thread)");
+  }
   if (j.type == JointType::distance) {
     if (auto l = n.find("length")) {
       j.rest_length = l->positive();

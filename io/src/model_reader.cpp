@@ -129,7 +129,8 @@ ForceTable force_table(const JsonNode& n) {
 
 std::optional<JointType> kinematic_type(const std::string& name) {
   for (JointType t : {JointType::revolute, JointType::spherical, JointType::prismatic, JointType::cylindrical,
-                      JointType::universal, JointType::planar, JointType::fixed, JointType::distance})
+                      JointType::universal, JointType::planar, JointType::fixed, JointType::distance,
+                      JointType::screw})
     if (name == joint_type_name(t)) return t;
   return std::nullopt;
 }
@@ -434,7 +435,7 @@ class Reader {
       j.type = *k;
     } else {
       type.fail("must be one of bushing, spring, revolute, spherical, prismatic, cylindrical, universal, planar, fixed, "
-                "distance (got '" + t + "')");
+                "distance, screw (got '" + t + "')");
     }
     j.name = n.find("name") ? n["name"].string() : "j" + std::to_string(index);
     enter_name(j.name, n);

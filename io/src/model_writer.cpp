@@ -95,6 +95,7 @@ void write_body(std::string& out, const Body& b, SharedText& shared) {
 void kinematic_fields(const Joint& jt, Object& o) {
   o("frame2", jt.frame2.get());
   if (jt.type == JointType::distance) o("length", jt.rest_length);
+  if (jt.type == JointType::screw) o("pitch", jt.rest_length);
   if (!jt.rigid) o("rigid", false)("stiffness", jt.stiffness.get())("damping", jt.damping.get());
   if (jt.motor->kind != JointMotor::Kind::none) {
     const char* kind = jt.motor->kind == JointMotor::Kind::position ? "position"

@@ -140,14 +140,14 @@ TEST_CASE("the analytic multibody Jacobian holds at rest, where the rotation log
 
 namespace {
 
-// Nine bodies in a row joined by a compliant joint of every kinematic type (each row's
+// Ten bodies in a row joined by a compliant joint of every kinematic type (each row's
 // reaction -(k phi + c phi')): revolute with a position motor, spherical, prismatic with a
 // velocity motor and narrow limits, cylindrical, universal, planar, fixed, a distance rod,
-// and a revolute joint with an effort motor and limits.
+// a revolute joint with an effort motor and limits, and a screw.
 Model compliant_joints_model() {
   Model m;
   m.gravity = {0.2, -9.81, 0.3};
-  for (int i = 0; i < 9; ++i) {
+  for (int i = 0; i < 10; ++i) {
     Body b = test::make_body("c", 1.0 + 0.2 * i, {0.03 + 0.01 * i, 0.04, 0.05 - 0.003 * i, 0.001, -0.002, 0.001},
                              {0.6 * i, 0.02 * i, 0.0});
     b.name += std::to_string(i);
@@ -155,8 +155,9 @@ Model compliant_joints_model() {
   }
   const JointType types[] = {JointType::revolute, JointType::spherical, JointType::prismatic,
                              JointType::cylindrical, JointType::universal, JointType::planar,
-                             JointType::fixed,    JointType::distance,  JointType::revolute};
-  for (int k = 0; k < 9; ++k) {
+                             JointType::fixed,    JointType::distance,  JointType::revolute,
+                             JointType::screw};
+  for (int k = 0; k < 10; ++k) {
     Joint j = test::make_joint(types[k], k - 1, k, {k == 0 ? -0.3 : 0.3, k == 0 ? 0.0 : 0.01, 0}, {-0.3, -0.01, 0});
     if (k == 0) j.body1 = ground;
     j.name += "_" + std::to_string(k);
@@ -186,7 +187,7 @@ TEST_CASE("the analytic Jacobian covers compliant joints of every kind with thei
 
 namespace {
 
-// The compliant model's joints made rigid: one cluster of nine bodies hanging from
+// The compliant model's joints made rigid: one cluster of ten bodies hanging from
 // ground, with a position motor, a velocity motor, an effort motor and limit stops; a
 // stiff bushing from ground to its fifth body (the applied forces' part), and a spring
 // to a free body outside (a column the cluster reads from outside).
@@ -202,7 +203,7 @@ Model rigid_joints_model() {
   m.joints.push_back(test::make_bushing(ground, 4, {2.4, 0.3, 0}, {0, 0.3, 0}, {5e4, 4e4, 3e4, 90, 80, 70}, {3, 2, 1, 0.1, 0.1, 0.1}));
   Body outside = test::make_body("outside", 2.0, {0.05, 0.06, 0.07, 0, 0, 0}, {3.0, -1.0, 0.2});
   m.bodies.push_back(outside);
-  Joint spring = test::make_joint(JointType::spring, 6, 9, {0.1, 0, 0}, {0, 0.1, 0});
+  Joint spring = test::make_joint(JointType::spring, 6, 10, {0.1, 0, 0}, {0, 0.1, 0});
   spring.stiffness = {3e4, 0, 0, 0, 0, 0};
   spring.damping = {20, 0, 0, 0, 0, 0};
   spring.rest_length = 0.5;
@@ -216,7 +217,7 @@ TEST_CASE("the analytic Jacobian covers rigid joints of every kind through their
           "[graph][jacobian]") {
   MultibodySystem sys(rigid_joints_model());
   REQUIRE(sys.clusters() == 1);
-  REQUIRE(sys.cluster_bodies(0).size() == 9);
+  REQUIRE(sys.cluster_bodies(0).size() == 10);
   check_against_differences(sys, 1e-5);
 }
 

@@ -118,7 +118,8 @@ TEST_CASE("a limit stop holds a driven joint at its limit plus effort over stiff
 
 TEST_CASE("every joint type conserves energy and keeps its constraints in a swinging chain", "[joints]") {
   for (JointType type : {JointType::spherical, JointType::revolute, JointType::prismatic, JointType::cylindrical,
-                         JointType::universal, JointType::planar, JointType::fixed, JointType::distance}) {
+                         JointType::universal, JointType::planar, JointType::fixed, JointType::distance,
+                         JointType::screw}) {
     CAPTURE(joint_type_name(type));
     Model m;
     m.gravity = {0, -g, 0};
@@ -154,6 +155,37 @@ TEST_CASE("every joint type conserves energy and keeps its constraints in a swin
     CHECK(worst_violation < 1e-10);
     CHECK(worst_energy < 1e-6 * std::max(1.0, std::abs(e0)));
   }
+}
+
+TEST_CASE("a nut on a vertical screw falls at g c^2 m / (m c^2 + I) over whole turns", "[joints]") {
+  // One coordinate: the turn theta about z, the advance z = c theta with c = pitch / (2 pi).
+  // (m c^2 + I_zz) theta'' = -m g c: the nut falls with constant acceleration and turns
+  // five times in 2 s.
+  const double mass = 1.0, izz = 1e-3, pitch = 0.01, c = pitch / (2.0 * std::numbers::pi);
+  Model m;
+  m.gravity = {0, 0, -g};
+  m.bodies.push_back(make_body("nut", mass, {2e-3, 2e-3, izz, 0, 0, 0}));
+  Joint screw = test::make_joint(JointType::screw, ground, 0, {0, 0, 0}, {0, 0, 0});
+  screw.rest_length = pitch;
+  m.joints.push_back(screw);
+  MultibodySystem sys(m);
+  const double e0 = sys.energy(0, sys.initial_state()).total();
+  double worst_violation = 0.0, worst_energy = 0.0;
+  const double t_end = 2.0;
+  const Eigen::VectorXd y = test::integrate_rk4(sys, t_end, 4000, [&](double t, const Eigen::VectorXd& s) {
+    worst_violation = std::max(worst_violation, sys.constraint_violation(t, s));
+    worst_energy = std::max(worst_energy, std::abs(sys.energy(t, s).total() - e0));
+  });
+  const double fall = 0.5 * g * mass * c * c / (mass * c * c + izz) * t_end * t_end;
+  const Eigen::Vector3d r = y.segment<3>(sys.layout().position(0));
+  CHECK(r[2] == Approx(-fall).epsilon(1e-9));
+  CHECK(std::hypot(r[0], r[1]) < 1e-12);
+  const Eigen::Vector4d q = y.segment<4>(sys.layout().orientation(0));
+  const double turned = 2.0 * std::atan2(q[3], q[0]);  // about z
+  CHECK(fall / c > 4 * 2.0 * std::numbers::pi);  // past +-pi several times
+  CHECK(std::remainder(turned + fall / c, 2.0 * std::numbers::pi) == Approx(0.0).margin(1e-7));
+  CHECK(worst_violation < 1e-10);
+  CHECK(worst_energy < 1e-9);
 }
 
 TEST_CASE("a compliant joint in the seed's form conserves energy and approaches the rigid one", "[joints]") {

@@ -59,7 +59,8 @@ TEST_CASE("models written and read back are the same model", "[io]") {
   set_bushing_from_frequency(compliant, compliant.joints[1], 300.0, 0.1);
   for (const Model& m : {read_model_file(examples + "/features.json"), with_interval, make_grid(gp), make_train(tp),
                          read_model_file(examples + "/slider_crank.json"), compliant,
-                         read_model_file(examples + "/iftomm_a01_pendulum.json")}) {
+                         read_model_file(examples + "/iftomm_a01_pendulum.json"),
+                         read_model_file(examples + "/lead_screw.json")}) {
     const std::string once = model_to_json(m);
     const Model back = read_model_text(once, m.name);
     CHECK(model_to_json(back) == once);

@@ -412,7 +412,7 @@ TEST_CASE("the Newton matrices of multibody models eliminate positions and quate
   TrainParams train;
   train.wagons = 6;
   std::vector<std::pair<std::string, Model>> models{{"chain", make_chain(chain)}, {"train", make_train(train)}};
-  for (const char* file : {"slider_crank.json", "iftomm_a05_flyball_governor.json", "features.json"})
+  for (const char* file : {"slider_crank.json", "iftomm_a05_flyball_governor.json", "features.json", "lead_screw.json"})
     models.emplace_back(file, read_model_file(std::string(MBSFLOW_EXAMPLES) + "/" + file));
   for (const auto& [name, m] : models) {
     INFO(name);
@@ -429,5 +429,26 @@ TEST_CASE("the Newton matrices of multibody models eliminate positions and quate
     full.solve(b);
     reduced.solve(x);
     CHECK((x - b).cwiseAbs().maxCoeff() <= 1e-10 * b.cwiseAbs().maxCoeff());
+  }
+}
+
+TEST_CASE("the lead screw example moves its carriage by the pitch per turn, explicitly and implicitly", "[runtime][implicit]") {
+  // The shaft turns once a second; the carriage, held from turning, goes -5 mm per turn.
+  const Model m = read_model_file(std::string(MBSFLOW_EXAMPLES) + "/lead_screw.json");
+  for (Method method : {Method::rk4, Method::dopri5, Method::tirk}) {
+    INFO(method_name(method));
+    RunOptions o = options_from_model(m);
+    o.method = method;
+    o.rtol = o.atol = 1e-8;
+    MultibodySystem sys(m);
+    test::MemorySink sink;
+    const RunSummary s = run_simulation(sys, o, &sink);
+    REQUIRE(sink.states.size() == 201);
+    for (std::size_t k = 0; k < sink.states.size(); ++k) {
+      const double t = sink.times[k];
+      CHECK(sink.states[k][sys.layout().position(1)] == Approx(-0.005 * t).margin(1e-11));
+      CHECK(sys.constraint_violation(t, sink.states[k]) < 1e-10);
+    }
+    CHECK(s.final_state[sys.layout().angular_velocity(0)] == Approx(2.0 * M_PI).epsilon(1e-9));
   }
 }

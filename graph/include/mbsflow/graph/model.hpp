@@ -39,7 +39,7 @@ struct Body {
   Vec3 angular_velocity{};             // body frame
 };
 
-enum class JointType { bushing, spring, revolute, spherical, prismatic, cylindrical, universal, planar, fixed, distance };
+enum class JointType { bushing, spring, revolute, spherical, prismatic, cylindrical, universal, planar, fixed, distance, screw };
 
 // The kinematic joints (revolute ... distance) constrain the relative motion of their
 // two frames; the others are force elements.
@@ -90,7 +90,7 @@ struct Joint {
   Defaulted<Vec6, zeros6> damping;    // bushing: per axis; spring: damping[0]
   AxisTables tables;                  // nonlinear force(deflection) per axis; empty = linear
   Defaulted<Vec6, zeros6> preload;    // force/torque on body2 at zero deflection, joint frame
-  double rest_length = 0.0;           // spring: rest length; distance: the rod's length
+  double rest_length = 0.0;           // spring: rest length; distance: the rod's length; screw: the lead (m per turn)
   // Revolute and prismatic only; few joints have them, so each is behind a pointer.
   RareValue<JointMotor> motor;
   RareValue<JointLimits> limits;
