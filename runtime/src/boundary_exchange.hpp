@@ -24,6 +24,8 @@ class BoundaryExchange {
   // The ghost values of stage input s of step n into local submodel p, once they are in.
   virtual void take(std::size_t p, long n, int s) = 0;
   // Local submodel p's values of stage input s of step n, for the neighbours that need them.
+  // Every value a take reads was offered first, the state a run starts from included
+  // (run_tight_coupling offers it): an exchange may copy the values when offered.
   virtual void offer(std::size_t p, long n, int s) = 0;
   // The sum over every submodel's own entries of `squares`, in global element order, for
   // attempt n. On entry the local submodels' entries are set; on return all are.

@@ -121,7 +121,7 @@ bool RemoteExchange::read_inbox(int ms) {
 }
 
 void RemoteExchange::wait(long n, int s, int q, int p) {
-  if (n <= start_step_ && s == 0) return;  // the initial state: every process has it
+  if (n <= start_step_ && s == 0) return;
   std::unique_lock lock(mutex_);
   // Messages of a slot arrive in step order; taken ones may be gone from the queue.
   auto here = [&] {

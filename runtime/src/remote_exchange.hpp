@@ -136,7 +136,7 @@ class RemoteExchange final : public WorkerExchange {
   bool transmit(zmq::socket_t& socket, const wire::ExchangeHeader& h, zmq::message_t& payload);
   void open_sender(zmq::socket_t& s, std::size_t worker);  // timeout, CURVE, connect to its inbox
   std::atomic<std::int64_t>* progress_clock_ = nullptr;
-  long start_step_ = 0;
+  long start_step_ = -1;  // see start_at
   std::uint64_t run_;  // the run id of every message sent and taken
   const wire::Security* security_;  // CURVE client keys for the other workers' inboxes, or null
   double delay_s_ = 0.0;

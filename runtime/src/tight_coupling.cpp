@@ -235,7 +235,15 @@ TightPoint read_tight_point(StateReader& in, Eigen::Index size, Eigen::VectorXd&
 }
 
 TightCounts run_tight_coupling(const TightRun& run) {
-  if (tight_stages(run.o.method) == 4) {
+  // The state it starts from, for the neighbours' first stage: a ghost's own copy of it is
+  // the model's, which its owner may have changed (a rigid cluster's initial velocities
+  // projected onto its joints). A fixed-step run numbers steps from where it resumes; an
+  // adaptive one its attempts from 0.
+  const bool rk4 = tight_stages(run.o.method) == 4;
+  const long first = rk4 && run.start ? run.start->steps : 0;
+  for (std::size_t p = 0; p < run.parts.size(); ++p)
+    if (run.parts[p]) run.exchange.offer(p, first, 0);
+  if (rk4) {
     TightRk4 rk4(run);
     drive(rk4, run.output);
     return rk4.counts();

@@ -86,6 +86,7 @@ Outcome run_loose_part(Session& s, WorkerTransport& transport, const nlohmann::j
   for (std::size_t q = 0; q < k; ++q)
     if (s.worker_of[q] == s.me) parts[q] = &(lp[q] = loose::make_part(s.model, s.d.submodels[q], s.o, lo, q))->part;
   WorkerPart w(s, transport, start, parts, 4, stop);
+  w.exchange.start_at(0);
   loose::MacroGrid grid(s.o, lo.coupling_tol > 0.0 ? 0.0 : lo.macro_step);
   loose::RemoteSamples remote;
   remote.wait = [&](long index, int q, int p) { w.exchange.wait(index, 0, q, p); };

@@ -79,8 +79,6 @@ Outcome run_tight(Session& s, WorkerTransport& transport, const nlohmann::json& 
     resumed = read_tight_point(in, global.size(), y);
     for (Part* p : parts)
       if (p) partitioned::scatter(y, global, *p);
-    // A fixed-step scheme's exchange counts steps; an adaptive one numbers its attempts from 0 again.
-    if (!stepper_entry(s.o.method).adaptive) w.exchange.start_at(resumed->steps);
   }
   // A proxy waits on its thread (see RemoteInputs): one thread per local submodel at least.
   tbb::task_arena arena(std::max(threads > 0 ? threads : tbb::info::default_concurrency(), static_cast<int>(w.mine.size())));

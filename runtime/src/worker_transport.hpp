@@ -27,8 +27,9 @@ struct Session;  // worker_part.hpp
 // rollback, and the reductions over all workers.
 class WorkerExchange : public BoundaryExchange {
  public:
-  // A run resumed from a checkpoint at step n: every process has the state of step n
-  // (stage input 0), as it has the initial state otherwise.
+  // Stage input 0 of steps up to n is not exchanged: every process holds it (a loose run's
+  // macro-step end 0). A tight run offers the state it starts from instead (its ghosts'
+  // own copies are the model's, which the owner may have projected onto rigid joints).
   virtual void start_at(long n) = 0;
   // From local p's stage: its remote ghosts of stage input s of step n, from their slots.
   virtual void receive(int p, long n, int s) = 0;
