@@ -1,6 +1,8 @@
 #include "xdmf_writer.hpp"
 
 #include <algorithm>
+#include <array>
+#include <charconv>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -16,8 +18,8 @@ namespace {
 
 constexpr const char* views_group = "/xdmf";
 constexpr std::size_t compact_limit_bytes = 32768;  // a compact dataset's data: within HDF5's 64 KiB header
-// A view of at most this many values is written into the sidecar as text (17 digits, which
-// ParaView reads back bit for bit) instead of as a dataset: making and closing a dataset
+// A view of at most this many values is written into the sidecar as text (shortest
+// round-trip digits, which ParaView reads back bit for bit) instead of as a dataset: making and closing a dataset
 // costs about 20 us, and a small model's 1000 snapshots of five quantities spent 0.12-0.14 s
 // of a 0.33-0.41 s run on them (IFToMM A05, 4 bodies; docs/results.md).
 constexpr hsize_t inline_view_values = 64;
@@ -66,6 +68,15 @@ void write_ints(hid_t file, const std::string& path, const std::vector<hsize_t>&
 
 std::string dims_text(std::size_t a, std::size_t b) { return std::to_string(a) + ' ' + std::to_string(b); }
 
+// The file's user block, from whose end HDF5's addresses count. `file` may be a group.
+hsize_t user_block(hid_t file) {
+  const h5::Handle holder(H5Iget_file_id(file), H5Fclose, "get the results file");
+  const h5::Handle fcpl(H5Fget_create_plist(holder.get()), H5Pclose, "get the file's properties");
+  hsize_t base = 0;
+  h5::check(H5Pget_userblock(fcpl.get(), &base), "get the file's user block");
+  return base;
+}
+
 }  // namespace
 
 Source::Source(hid_t file, const char* p, bool whole_rows) : path(p) {
@@ -80,9 +91,7 @@ Source::Source(hid_t file, const char* p, bool whole_rows) : path(p) {
       H5Tequal(type.get(), H5T_IEEE_F64LE) > 0 &&
       H5Pget_chunk(dcpl.get(), static_cast<int>(chunk.size()), chunk.data()) == static_cast<int>(chunk.size()) &&
       std::equal(chunk.begin() + 1, chunk.end(), extent.begin() + 1)) {
-    const h5::Handle holder(H5Iget_file_id(set.get()), H5Fclose, std::string("get the file of ") + p);  // `file` may be a group
-    const h5::Handle fcpl(H5Fget_create_plist(holder.get()), H5Pclose, "get the file's properties");
-    h5::check(H5Pget_userblock(fcpl.get(), &base_), "get the file's user block");
+    base_ = user_block(set.get());  // of the dataset's file: `file` may be a group
     chunk_rows_ = chunk[0];
   }
   hsize_t count = 1;
@@ -145,6 +154,78 @@ void xdmf_item(std::ostream& o, const std::string& file, const std::string& path
 
 namespace {
 
+// Views of columns of a series (the bodies' kinetic energies of /bodies/energy, the
+// joints' forces of /joints/force) lie nowhere in one piece. Each such quantity is gathered
+// once, at the sidecar's rows, into one contiguous dataset /xdmf/columns/<name>, row after
+// row, whose rows the sidecar reads in place as binary items: one dataset for the run
+// instead of one per snapshot (a copy costs about 20 us to make, a virtual view about 70).
+class ColumnTables {
+ public:
+  struct Column {
+    const char* name;
+    hsize_t column, columns;  // of the series' last dimension
+  };
+  // Tables of `columns` of `source` at `rows` (the sidecar's, in its order), each where its
+  // views would not be text (StepViews::add) and it fits xdmf_column_limit_bytes.
+  void gather(hid_t file, const Source& source, const std::vector<std::size_t>& rows, std::initializer_list<Column> columns) {
+    hsize_t items = 1;  // per row, before the last dimension
+    for (std::size_t d = 1; d + 1 < source.extent.size(); ++d) items *= source.extent[d];
+    const hsize_t last = source.extent.back();
+    std::vector<Column> wanted;
+    for (const Column& c : columns)
+      if ((items * c.columns > inline_view_values || source.values.empty()) && rows.size() * items * c.columns * sizeof(double) <= xdmf_column_limit_bytes)
+        wanted.push_back(c);
+    if (wanted.empty() || rows.empty()) return;
+    std::vector<std::vector<double>> tables(wanted.size());
+    for (std::size_t k = 0; k < wanted.size(); ++k) tables[k].reserve(rows.size() * items * wanted[k].columns);
+    const hsize_t row_size = items * last;
+    std::vector<double> read(source.values.empty() ? row_size : 0);  // a row read from the file, where not held
+    std::vector<hsize_t> start(source.extent.size(), 0), count = source.extent;
+    count[0] = 1;
+    const h5::Handle memory(H5Screate_simple(1, &row_size, nullptr), H5Sclose, "create a row's space");
+    for (const std::size_t t : rows) {
+      const double* row = read.data();
+      if (!source.values.empty()) {
+        row = source.values.data() + t * row_size;
+      } else {
+        start[0] = t;
+        h5::check(H5Sselect_hyperslab(source.space.get(), H5S_SELECT_SET, start.data(), nullptr, count.data(), nullptr),
+                  std::string("select a row of ") + source.path);
+        h5::check(H5Dread(source.set.get(), H5T_NATIVE_DOUBLE, memory.get(), source.space.get(), H5P_DEFAULT, read.data()),
+                  std::string("read a row of ") + source.path);
+      }
+      for (std::size_t k = 0; k < wanted.size(); ++k)
+        for (hsize_t i = 0; i < items; ++i)
+          tables[k].insert(tables[k].end(), row + i * last + wanted[k].column, row + i * last + wanted[k].column + wanted[k].columns);
+    }
+    const hsize_t base = user_block(file);
+    const h5::Handle lcpl(H5Pcreate(H5P_LINK_CREATE), H5Pclose, "create a link property list");
+    h5::check(H5Pset_create_intermediate_group(lcpl.get(), 1), "allow intermediate groups");
+    const h5::Handle dcpl(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, "create a dataset property list");
+    h5::check(H5Pset_layout(dcpl.get(), H5D_CONTIGUOUS), "make a column table contiguous");
+    for (std::size_t k = 0; k < wanted.size(); ++k) {
+      const std::string path = std::string(columns_group) + wanted[k].name;
+      const std::array<hsize_t, 2> dims{rows.size(), items * wanted[k].columns};
+      const h5::Handle space(H5Screate_simple(2, dims.data(), nullptr), H5Sclose, "create a space");
+      const h5::Handle set(H5Dcreate2(file, path.c_str(), H5T_IEEE_F64LE, space.get(), lcpl.get(), dcpl.get(), H5P_DEFAULT),
+                           H5Dclose, "create " + path);
+      h5::check(H5Dwrite(set.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, tables[k].data()), "write " + path);
+      const haddr_t at = H5Dget_offset(set.get());
+      if (at != HADDR_UNDEF) at_[wanted[k].name] = {base + at, dims[1] * sizeof(double)};
+    }
+  }
+  // Where the view `name` of the sidecar's index-th snapshot lies in the file, if gathered.
+  std::optional<hsize_t> offset(const std::string& name, std::size_t index) const {
+    const auto it = at_.find(name);
+    if (it == at_.end()) return std::nullopt;
+    return it->second.first + index * it->second.second;
+  }
+
+ private:
+  static constexpr const char* columns_group = "/xdmf/columns/";
+  std::map<std::string, std::pair<hsize_t, hsize_t>> at_;  // the first row's offset, and a row's bytes
+};
+
 // An Attribute around the DataItem that item() writes.
 template <class Item>
 void attribute_around(std::ostream& o, const char* name, const char* type, const char* center, Item item) {
@@ -165,12 +246,13 @@ std::string binary_file_name(std::size_t index, std::size_t count, const std::st
 }
 
 // The views of one snapshot: the small ones as text in the sidecar; whole rows stored as
-// they are in the results file as binary DataItems that read them where they lie; the
-// others as datasets in the snapshot's group /xdmf/<row>/, made with the first of them.
+// they are in the results file, and columns gathered into tables, as binary DataItems that
+// read them where they lie; the others as datasets in the snapshot's group /xdmf/<row>/,
+// made with the first of them.
 class StepViews {
  public:
-  StepViews(hid_t file, std::string step, std::string binary_file)
-      : file_(file), step_(std::move(step)), binary_file_(std::move(binary_file)) {}
+  StepViews(hid_t file, std::string step, std::string binary_file, const ColumnTables& tables, std::size_t index)
+      : file_(file), step_(std::move(step)), binary_file_(std::move(binary_file)), tables_(tables), index_(index) {}
   hid_t group() {
     if (!group_) group_ = h5::Handle(H5Gcreate2(file_, step_.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose, "create " + step_);
     return group_->get();
@@ -180,6 +262,7 @@ class StepViews {
     hsize_t size = 1;
     for (hsize_t d : dims) size *= d;
     if (!source.values.empty() && size <= inline_view_values) return (void)text_.emplace(name, row_values(source, row, column, columns));
+    if (const std::optional<hsize_t> at = tables_.offset(name, index_)) return (void)binary_.emplace(name, *at);
     if (column == 0 && columns == source.extent.back())
       if (const std::optional<hsize_t> at = source.row_offset(row)) return (void)binary_.emplace(name, *at);
     make_view(group(), name, dims, source, row, column, columns);
@@ -194,11 +277,19 @@ class StepViews {
     const auto it = text_.find(name);
     if (it == text_.end()) return xdmf_item(o, file, step_ + name, dims, false, indent);
     o << indent << "<DataItem Dimensions=\"" << dims << "\" NumberType=\"Float\" Precision=\"8\" Format=\"XML\">";
-    char number[32];
+    // Shortest round-trip digits (std::to_chars): read back bit for bit as %.17g's were, at
+    // less cost (a small model's 1000 snapshots hold about 10^5 numbers).
+    char number[32 * 8];
+    std::size_t used = 0;
     for (std::size_t k = 0; k < it->second.size(); ++k) {
-      std::snprintf(number, sizeof number, "%.17g", it->second[k]);
-      o << (k ? " " : "") << number;
+      if (used + 32 > sizeof number) {
+        o.write(number, static_cast<std::streamsize>(used));
+        used = 0;
+      }
+      if (k) number[used++] = ' ';
+      used = static_cast<std::size_t>(std::to_chars(number + used, number + sizeof number, it->second[k]).ptr - number);
     }
+    o.write(number, static_cast<std::streamsize>(used));
     o << "</DataItem>\n";
   }
   void attribute(std::ostream& o, const std::string& file, const char* name, const char* type, const char* center,
@@ -209,6 +300,8 @@ class StepViews {
  private:
   hid_t file_;
   std::string step_, binary_file_;
+  const ColumnTables& tables_;
+  std::size_t index_;  // the snapshot's place in the sidecar
   std::optional<h5::Handle> group_;
   std::map<std::string, std::vector<double>> text_;
   std::map<std::string, hsize_t> binary_;  // a view's byte offset in the results file
@@ -256,6 +349,10 @@ void write_xdmf(hid_t file, const std::string& xdmf_path, const std::string& h5_
   const std::vector<std::size_t> rows = evenly_spread_rows(times.size(), xdmf_max_steps);
   const bool surfaces = !c.surfaces.empty() && surfaces_fit(c.surfaces, rows.size());
   if (surfaces) write_surface_triangles(file, c.surfaces);
+  ColumnTables tables;
+  if (body_energy) tables.gather(file, *body_energy, rows, {{"kinetic_energy", 0, 1}, {"gravity_energy", 1, 1}});
+  if (wrench) tables.gather(file, *wrench, rows, {{"force", 0, 3}, {"torque", 3, 3}});
+  if (section) tables.gather(file, *section, rows, {{"section_force", 0, 3}, {"section_moment", 3, 3}});
 
   std::ofstream o(xdmf_path);
   if (!o) throw Error(xdmf_path + ": cannot write the XDMF sidecar");
@@ -266,7 +363,7 @@ void write_xdmf(hid_t file, const std::string& xdmf_path, const std::string& h5_
   for (std::size_t index = 0; index < rows.size(); ++index) {
     const std::size_t t = rows[index];
     const std::string step = group + '/' + std::to_string(t) + '/';
-    StepViews views(file, step, binary_file_name(index, rows.size(), file_name));
+    StepViews views(file, step, binary_file_name(index, rows.size(), file_name), tables, index);
     for (std::size_t i = 0; i < body_sources.size(); ++i) {
       const BodyField* f = c.body_fields[i];
       views.add(f->name, {c.bodies, static_cast<hsize_t>(f->components)}, body_sources[i], t, 0, f->components);

@@ -12,9 +12,11 @@
 // written into the sidecar as text; a whole row that lies in one piece in the results file
 // (a series of up to 256 bodies or joints: its chunks hold whole rows, unfiltered) is a
 // binary DataItem that reads those bytes where they lie (Seek), which costs nothing to make;
-// the others (columns of a series, or rows of a larger model) are datasets of the results
-// file's group /xdmf (/xdmf/<row>/<name>), which every HDF5 reader sees as plain N x k
-// arrays. A dataset costs about 20 us to make, whatever its kind: 1000 snapshots of seven
+// the columns of a series (per-body energies, joint forces) are gathered once into one
+// contiguous table per quantity (/xdmf/columns/<name>, a row per snapshot of the sidecar)
+// and read in place the same way; the others (rows of a larger model, columns beyond
+// xdmf_column_limit_bytes) are datasets of the results file's group /xdmf
+// (/xdmf/<row>/<name>), which every HDF5 reader sees as plain N x k arrays. A dataset costs about 20 us to make, whatever its kind: 1000 snapshots of seven
 // quantities took more than a second's run's 5 %. For a series of at most
 // xdmf_copy_limit_bytes those are copies of its rows (compact datasets where they fit); for
 // larger ones, HDF5 virtual datasets, which hold no data of their own but cost about five
@@ -44,6 +46,11 @@ inline constexpr std::size_t xdmf_max_steps = 1000;
 // x 3 values: 0.30-0.47 s and 0.06 s against 1.46-1.57 s and 0.22-0.35 s, HDF5 1.10), and
 // the file grows by at most the series' own size.
 inline constexpr std::size_t xdmf_copy_limit_bytes = std::size_t{1} << 20;
+
+// The size up to which the views of a column of a series (a body's energies, a joint's
+// force) are gathered, at the sidecar's rows, into one table the sidecar reads in place
+// (xdmf_writer.cpp's ColumnTables); a larger one's views are datasets per snapshot.
+inline constexpr std::size_t xdmf_column_limit_bytes = std::size_t{64} << 20;
 
 struct XdmfContent {
   std::size_t bodies = 0, joints = 0;

@@ -5,12 +5,15 @@ few values written into the sidecar as text, or a binary DataItem that reads a r
 lies in the results file) holds the values of its row of the series it shows, bit for bit,
 no two time steps name the file of their binary items alike, and the time steps match /time.
 
-usage: check_xdmf.py FILE.xdmf [--position-views text|binary|compact|virtual]   (exit 0 when consistent)
+usage: check_xdmf.py FILE.xdmf [--position-views KIND] [--column-views KIND]   (exit 0 when consistent)
+KIND: text|binary|compact|virtual
 
 --position-views also checks how the views of /bodies/position are stored: as text in the
 sidecar (a few bodies), read in place from the series' chunks (up to 256 bodies), copies of
 their rows in the dataset's header (a small series of more bodies) or HDF5 virtual datasets
-(a large one).
+(a large one). --column-views checks the same of the views of columns of a series (the
+per-body energies, joint forces and torques, beam section forces): text (a few bodies),
+binary (read in place from their tables in /xdmf/columns) or datasets.
 """
 import math
 import os
@@ -47,6 +50,14 @@ LAYOUTS = {h5py.h5d.COMPACT: "compact", h5py.h5d.CONTIGUOUS: "contiguous", h5py.
            h5py.h5d.VIRTUAL: "virtual"}
 
 
+COLUMN_VIEWS = ("kinetic_energy", "gravity_energy", "force", "torque", "section_force", "section_moment")
+
+
+def wanted_kind(name, want):
+    """The kind of view the command line asks `name`'s views to be, or None."""
+    return want.get("position") if name == "position" else want.get("column") if name in COLUMN_VIEWS else None
+
+
 def view_name(item, parents):
     """Which view a DataItem of the sidecar's own (text or binary) shows, from what holds it."""
     holder = parents[item]
@@ -57,7 +68,11 @@ def view_name(item, parents):
 
 def main():
     xdmf = sys.argv[1]
-    want_layout = sys.argv[3] if len(sys.argv) > 3 and sys.argv[2] == "--position-views" else None
+    want = {}
+    for k in range(2, len(sys.argv) - 1, 2):
+        if sys.argv[k] not in ("--position-views", "--column-views"):
+            fail(f"unknown option {sys.argv[k]}")
+        want[sys.argv[k][2:].split("-")[0]] = sys.argv[k + 1]
     root = ET.parse(xdmf).getroot()
     parents = {child: parent for parent in root.iter() for child in parent}
     h5_name = os.path.splitext(os.path.basename(xdmf))[0] + ".h5"  # side by side, as the sidecar names it
@@ -87,8 +102,8 @@ def main():
                 h5 = files.setdefault(h5_name, h5py.File(os.path.join(folder, h5_name), "r"))
                 if not np.array_equal(values, np.asarray(source_row(h5, name, rows[-1]), dtype=float).ravel()):
                     fail(f"the binary item of {name} at row {rows[-1]} differs from its row of the series")
-                if want_layout and name == "position" and want_layout != "binary":
-                    fail(f"{name} at row {rows[-1]} is binary, not {want_layout}")
+                if wanted_kind(name, want) not in (None, "binary"):
+                    fail(f"{name} at row {rows[-1]} is binary, not {wanted_kind(name, want)}")
                 checked += 1
                 continue
             if item.get("Format") == "XML":  # a view's values as text
@@ -98,8 +113,8 @@ def main():
                 expected = np.asarray(source_row(h5, name, rows[-1]), dtype=float).ravel()
                 if math.prod(dims) != values.size or not np.array_equal(values, expected):
                     fail(f"the text of {name} at row {rows[-1]} differs from its row of the series")
-                if want_layout and name == "position" and want_layout != "text":
-                    fail(f"{name} at row {rows[-1]} is text, not {want_layout}")
+                if wanted_kind(name, want) not in (None, "text"):
+                    fail(f"{name} at row {rows[-1]} is text, not {wanted_kind(name, want)}")
                 checked += 1
                 continue
             if item.get("Format") != "HDF":
@@ -116,8 +131,8 @@ def main():
                 if not np.array_equal(h5[path][()], expected):
                     fail(f"{path} differs from its row of the series")
                 layout = LAYOUTS.get(h5[path].id.get_create_plist().get_layout(), "?")
-                if want_layout and parts[2] == "position" and layout != want_layout:
-                    fail(f"{path} is {layout}, not {want_layout}")
+                if wanted_kind(parts[2], want) not in (None, layout):
+                    fail(f"{path} is {layout}, not {wanted_kind(parts[2], want)}")
             checked += 1
     for h5 in files.values():
         if [h5["time"][r] for r in rows] != times:
