@@ -19,23 +19,36 @@ namespace {
 constexpr const char* views_group = "/xdmf";
 constexpr std::size_t compact_limit_bytes = 32768;  // a compact dataset's data: within HDF5's 64 KiB header
 // A view of at most this many values is written into the sidecar as text (shortest
-// round-trip digits, which ParaView reads back bit for bit) instead of as a dataset: making and closing a dataset
-// costs about 20 us, and a small model's 1000 snapshots of five quantities spent 0.12-0.14 s
-// of a 0.33-0.41 s run on them (IFToMM A05, 4 bodies; docs/results.md).
+// round-trip digits, which ParaView reads back bit for bit) instead of as a dataset:
+// making and closing a dataset costs about 20 us, and a small model's 1000 snapshots of
+// five quantities spent 0.12-0.14 s of a 0.33-0.41 s run on them (IFToMM A05, 4 bodies;
+// docs/results.md).
 constexpr hsize_t inline_view_values = 64;
+
+// A source's items per time row (the dimensions between time and the last).
+hsize_t row_items(const Source& source) {
+  hsize_t items = 1;
+  for (std::size_t d = 1; d + 1 < source.extent.size(); ++d) items *= source.extent[d];
+  return items;
+}
+
+// Whether a view of `values` values of `source` is written into the sidecar as text.
+bool text_view(const Source& source, hsize_t values) { return !source.values.empty() && values <= inline_view_values; }
+
+// Appends columns [column, column + columns) of each item of one time row (`row`: items x
+// last, as the series stores it), in the order of the view's array.
+void append_columns(std::vector<double>& out, const double* row, hsize_t items, hsize_t last, hsize_t column,
+                    hsize_t columns) {
+  for (hsize_t k = 0; k < items; ++k) out.insert(out.end(), row + k * last + column, row + k * last + column + columns);
+}
 
 // Row `row` of a source that was read (T x item), columns [column, column + columns) of its
 // last dimension, in the order of the view's array.
 std::vector<double> row_values(const Source& source, hsize_t row, hsize_t column, hsize_t columns) {
-  const hsize_t last = source.extent.back();
-  hsize_t items = 1;  // per row, before the last dimension
-  for (std::size_t d = 1; d + 1 < source.extent.size(); ++d) items *= source.extent[d];
+  const hsize_t last = source.extent.back(), items = row_items(source);
   std::vector<double> out;
   out.reserve(items * columns);
-  for (hsize_t k = 0; k < items; ++k) {
-    const double* at = source.values.data() + (row * items + k) * last + column;
-    out.insert(out.end(), at, at + columns);
-  }
+  append_columns(out, source.values.data() + row * items * last, items, last, column, columns);
   return out;
 }
 
@@ -168,12 +181,10 @@ class ColumnTables {
   // Tables of `columns` of `source` at `rows` (the sidecar's, in its order), each where its
   // views would not be text (StepViews::add) and it fits xdmf_column_limit_bytes.
   void gather(hid_t file, const Source& source, const std::vector<std::size_t>& rows, std::initializer_list<Column> columns) {
-    hsize_t items = 1;  // per row, before the last dimension
-    for (std::size_t d = 1; d + 1 < source.extent.size(); ++d) items *= source.extent[d];
-    const hsize_t last = source.extent.back();
+    const hsize_t items = row_items(source), last = source.extent.back();
     std::vector<Column> wanted;
     for (const Column& c : columns)
-      if ((items * c.columns > inline_view_values || source.values.empty()) && rows.size() * items * c.columns * sizeof(double) <= xdmf_column_limit_bytes)
+      if (!text_view(source, items * c.columns) && rows.size() * items * c.columns * sizeof(double) <= xdmf_column_limit_bytes)
         wanted.push_back(c);
     if (wanted.empty() || rows.empty()) return;
     std::vector<std::vector<double>> tables(wanted.size());
@@ -194,9 +205,7 @@ class ColumnTables {
         h5::check(H5Dread(source.set.get(), H5T_NATIVE_DOUBLE, memory.get(), source.space.get(), H5P_DEFAULT, read.data()),
                   std::string("read a row of ") + source.path);
       }
-      for (std::size_t k = 0; k < wanted.size(); ++k)
-        for (hsize_t i = 0; i < items; ++i)
-          tables[k].insert(tables[k].end(), row + i * last + wanted[k].column, row + i * last + wanted[k].column + wanted[k].columns);
+      for (std::size_t k = 0; k < wanted.size(); ++k) append_columns(tables[k], row, items, last, wanted[k].column, wanted[k].columns);
     }
     const hsize_t base = user_block(file);
     const h5::Handle lcpl(H5Pcreate(H5P_LINK_CREATE), H5Pclose, "create a link property list");
@@ -261,7 +270,7 @@ class StepViews {
   void add(const char* name, const std::vector<hsize_t>& dims, const Source& source, hsize_t row, hsize_t column, hsize_t columns) {
     hsize_t size = 1;
     for (hsize_t d : dims) size *= d;
-    if (!source.values.empty() && size <= inline_view_values) return (void)text_.emplace(name, row_values(source, row, column, columns));
+    if (text_view(source, size)) return (void)text_.emplace(name, row_values(source, row, column, columns));
     if (const std::optional<hsize_t> at = tables_.offset(name, index_)) return (void)binary_.emplace(name, *at);
     if (column == 0 && columns == source.extent.back())
       if (const std::optional<hsize_t> at = source.row_offset(row)) return (void)binary_.emplace(name, *at);

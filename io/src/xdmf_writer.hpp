@@ -16,8 +16,9 @@
 // contiguous table per quantity (/xdmf/columns/<name>, a row per snapshot of the sidecar)
 // and read in place the same way; the others (rows of a larger model, columns beyond
 // xdmf_column_limit_bytes) are datasets of the results file's group /xdmf
-// (/xdmf/<row>/<name>), which every HDF5 reader sees as plain N x k arrays. A dataset costs about 20 us to make, whatever its kind: 1000 snapshots of seven
-// quantities took more than a second's run's 5 %. For a series of at most
+// (/xdmf/<row>/<name>), which every HDF5 reader sees as plain N x k arrays. A dataset
+// costs about 20 us to make, whatever its kind: 1000 snapshots of seven quantities took
+// more than a second's run's 5 %. For a series of at most
 // xdmf_copy_limit_bytes those are copies of its rows (compact datasets where they fit); for
 // larger ones, HDF5 virtual datasets, which hold no data of their own but cost about five
 // times as much to make. A binary item is only as good as the results file stays as it is:

@@ -69,7 +69,9 @@ def view_name(item, parents):
 def main():
     xdmf = sys.argv[1]
     want = {}
-    for k in range(2, len(sys.argv) - 1, 2):
+    if len(sys.argv) % 2:
+        fail(f"{sys.argv[-1]} needs a kind")
+    for k in range(2, len(sys.argv), 2):
         if sys.argv[k] not in ("--position-views", "--column-views"):
             fail(f"unknown option {sys.argv[k]}")
         want[sys.argv[k][2:].split("-")[0]] = sys.argv[k + 1]
