@@ -135,7 +135,10 @@ TEST_CASE("cli bench ivp: work-precision against CVODE on Robertson and eq. 11, 
 
 TEST_CASE("cli bench ivp --atol-ratio 1: silent wrong answers are counted, CVODE's too", "[cli][bench]") {
   // atol = rtol = 1e-4 on Robertson: the second component (< 3.7e-5) has no control, and
-  // tirk-newton and CVODE both end "ok" with y1 grown far below zero (no correct digit).
+  // CVODE ends "ok" with y1 grown far below zero (no correct digit) at every tolerance of
+  // its range; tirk-newton, whose Newton iteration runs to RADAU5's tighter test on a
+  // small system, ends with a correct digit at this one (with atol = 1e-4 and rtol 1e-3 or
+  // 1e-6 it does not, and warns as docs/methods.md, "Tolerances", says).
   const std::string dir = scratch("bench_ivp_scalar").string();
   const Result r = run("bench ivp --problems robertson --atol-ratio 1 --tolerances 1e-4 --methods tirk-newton,cvode-bdf --csv ivp.csv",
                        dir, true);
@@ -150,7 +153,10 @@ TEST_CASE("cli bench ivp --atol-ratio 1: silent wrong answers are counted, CVODE
     std::string problem, method, threads, ok, wrong;
     if (!(cells >> problem >> method >> threads >> ok >> wrong) || problem != "robertson" || ok.find('/') == std::string::npos) continue;
     INFO(line);
-    CHECK(std::stol(wrong) >= 1);  // the rtol 1e-4 run: ended without an error, not one digit right
+    if (method == "cvode-bdf")
+      CHECK(std::stol(wrong) >= 1);  // a run that ended without an error, not one digit right
+    else
+      CHECK(wrong == "0");
     ++wrong_rows;
   }
   CHECK(wrong_rows == 2);

@@ -5,6 +5,7 @@
 // integrated, not refused as a step size underflow.
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <limits>
 
 #include "mbsflow/methods/block_integrator.hpp"
 #include "mbsflow/methods/jacobian.hpp"
@@ -141,4 +142,21 @@ TEST_CASE("stiff problems: Van der Pol with mu = 1e6 through its initial layer a
   CHECK(t.t == p.t_end);
   CHECK(c.t == p.t_end);
   CHECK((t.y - c.y).cwiseAbs().maxCoeff() <= 1e-7 * c.y.cwiseAbs().maxCoeff());
+}
+
+TEST_CASE("tirk: the Newton iteration stops at RADAU5's test where Jacobians are cheap, 0.03 where they are dear", "[methods][problems]") {
+  const double eps = std::numeric_limits<double>::epsilon();
+  CHECK(newton_tolerance(1e-2, true) == 0.03);
+  CHECK(newton_tolerance(1e-6, true) == std::sqrt(1e-6));
+  CHECK(newton_tolerance(1e-13, true) == 10 * eps / 1e-13);
+  CHECK(newton_tolerance(1e-6, false) == 0.03);
+  CHECK(newton_tolerance(1e-15, false) == 10 * eps / 1e-15);
+  // Robertson (3 equations, a Jacobian costs three f evaluations) at rtol 1e-8: with the
+  // iteration stopped at 0.03 of the tolerance its error stayed the end's largest share,
+  // 0.035 tolerances (9.5 correct digits); carried to sqrt(rtol) = 1e-4 it ends below
+  // 1e-3 of them (11.9 digits), in fewer f evaluations (12610 against 13825).
+  const OdeProblem p = robertson_problem();
+  const TirkResult t = integrate_tirk(p, settings_for<TirkSettings>(p, 1e-8));
+  INFO("end error " << end_error_in_tolerances(p, t.y, 1e-8) << " tolerances, " << t.stats.rhs_evaluations << " f evaluations");
+  CHECK(end_error_in_tolerances(p, t.y, 1e-8) < 1e-2);
 }
