@@ -37,13 +37,15 @@ struct IvpInput {
 };
 
 // Values of a Python call that must be n doubles: a list or tuple of floats read directly
-// (the common `return [..., ...]`), anything else through numpy.
+// (the common `return [..., ...]`, whose items are numpy's float64 where the function
+// indexed its array: a subclass of float), anything else through numpy, which costs about
+// a microsecond more per call.
 void copy_values(const py::object& r, Eigen::Index n, double* out, const char* what) {
   if ((PyList_CheckExact(r.ptr()) || PyTuple_CheckExact(r.ptr())) && PySequence_Fast_GET_SIZE(r.ptr()) == n) {
     PyObject** items = PySequence_Fast_ITEMS(r.ptr());
     bool floats = true;
     for (Eigen::Index i = 0; i < n && floats; ++i) {
-      floats = PyFloat_CheckExact(items[i]);
+      floats = PyFloat_Check(items[i]);
       if (floats) out[i] = PyFloat_AS_DOUBLE(items[i]);
     }
     if (floats) return;
@@ -55,11 +57,17 @@ void copy_values(const py::object& r, Eigen::Index n, double* out, const char* w
   std::copy(a.data(), a.data() + n, out);
 }
 
-// A fresh array for each call, as scipy passes (a function may keep it).
-py::array_t<double> array_of(const Eigen::VectorXd& y) {
+// f(t, y) with a fresh array for y, as scipy passes (a function may keep it), through
+// the vectorcall protocol: no argument tuple, a few hundred ns less per call than
+// pybind11's call.
+py::object call_ty(const py::object& f, double t, const Eigen::VectorXd& y) {
   py::array_t<double> a(y.size());
   std::copy(y.data(), y.data() + y.size(), a.mutable_data());
-  return a;
+  const py::float_ time(t);
+  PyObject* args[2] = {time.ptr(), a.ptr()};
+  PyObject* r = PyObject_Vectorcall(f.ptr(), args, 2, nullptr);
+  if (!r) throw py::error_already_set();
+  return py::reinterpret_steal<py::object>(r);
 }
 
 // The pattern of a dense array or scipy sparse matrix (its nonzeros), n x n.
@@ -135,7 +143,7 @@ py::dict solve(IvpInput& in) {
   } else {
     sys.rhs = [&in, n, sign](double s, const Eigen::VectorXd& y, Eigen::VectorXd& dy) {
       py::gil_scoped_acquire gil;
-      copy_values(in.fun(sign * s, array_of(y)), n, dy.data(), "fun");
+      copy_values(call_ty(in.fun, sign * s, y), n, dy.data(), "fun");
       if (sign < 0) dy = -dy;
     };
   }
@@ -148,7 +156,7 @@ py::dict solve(IvpInput& in) {
     sys.sparsity = [pattern] { return pattern; };
     sys.jacobian = [&in, callable, sign](double s, const Eigen::VectorXd& y, Eigen::SparseMatrix<double>& jac) {
       py::gil_scoped_acquire gil;
-      fill_jacobian(callable ? in.jac(sign * s, array_of(y)) : in.jac, sign, jac);
+      fill_jacobian(callable ? call_ty(in.jac, sign * s, y) : in.jac, sign, jac);
     };
   } else {
     Eigen::SparseMatrix<double> pattern =
@@ -160,7 +168,7 @@ py::dict solve(IvpInput& in) {
     const auto [g, direction, terminal] = e.cast<std::tuple<py::object, int, bool>>();
     functions.push_back({"", [g, sign](double s, const Eigen::VectorXd& y) {
                            py::gil_scoped_acquire gil;
-                           return g(sign * s, array_of(y)).cast<double>();
+                           return call_ty(g, sign * s, y).cast<double>();
                          },
                          static_cast<int>(sign) * direction, terminal});
   }
