@@ -71,6 +71,11 @@ double newton_tolerance(double rtol, bool cheap_jacobian) {
 
 namespace {
 
+// Below this many equations a system is small: a graph node's work takes about what its
+// dispatch costs, and a Jacobian and its factorisation cost about as much as a few f
+// evaluations (notes/methods-measurements.md, "Small systems").
+constexpr Eigen::Index small_system = 1000;
+
 // The embedded formula's gamma: for the full Newton iteration a real eigenvalue of A, whose
 // system is factorised anyway; else (or without one) the largest pivot of the splitting.
 EmbeddedFormula embedded_for(const RkTableau& tableau, const TriangularSplitting& split, TirkIteration iteration) {
@@ -108,7 +113,7 @@ class TirkIntegrator::Driver {
     // "Small systems"), the graph's jobs run on this thread. Each node writes its own rows only,
     // so the numbers are the same either way. (colloc does so on one thread only: with more,
     // its two blocks of a step run side by side, each a whole iteration.)
-    here_ = arena_.max_concurrency() == 1 || p.size < 1000;
+    here_ = arena_.max_concurrency() == 1 || p.size < small_system;
     monitor_.tol = s.iteration_tol > 0 ? s.iteration_tol : newton_tolerance(s.rtol, cheap_newton());
     monitor_.predict_failure = full_newton();
     monitor_.max_iterations = s.max_iterations > 0 ? s.max_iterations : newton() ? 10 : 50;
@@ -170,9 +175,11 @@ class TirkIntegrator::Driver {
   }
   void keep_or_renew_jacobian(double h);
   bool dear_jacobian() const;
-  // The full Newton iteration where a Jacobian costs a few f evaluations: Radau5's rules
-  // for the iteration's tolerance and the Jacobian's renewal apply as they are.
-  bool cheap_newton() const { return full_newton() && !dear_jacobian(); }
+  // The full Newton iteration on a small system whose Jacobian costs a few f evaluations:
+  // Radau5's rules for the iteration's tolerance and the Jacobian's renewal apply as they
+  // are. (On a large one, heat with N = 1e5, its renewal rule took 11 Jacobians and 32
+  // factorisations where one and 22 did, for no gain in accuracy.)
+  bool cheap_newton() const { return full_newton() && !dear_jacobian() && p_.size < small_system; }
   void begin_step(double t, const Eigen::VectorXd& x, const Eigen::VectorXd& fx, double tau,
                   const std::vector<Eigen::VectorXd>* guess = nullptr);
   const std::vector<Eigen::VectorXd>* extrapolate(double t, double tau);

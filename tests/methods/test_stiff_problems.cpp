@@ -159,4 +159,11 @@ TEST_CASE("tirk: the Newton iteration stops at RADAU5's test where Jacobians are
   const TirkResult t = integrate_tirk(p, settings_for<TirkSettings>(p, 1e-8));
   INFO("end error " << end_error_in_tolerances(p, t.y, 1e-8) << " tolerances, " << t.stats.rhs_evaluations << " f evaluations");
   CHECK(end_error_in_tolerances(p, t.y, 1e-8) < 1e-2);
+  // A large system keeps 0.03 and one Jacobian as long as it serves: heat (linear, its
+  // Jacobian exact for good) with 2000 equations takes the one it starts with, where the
+  // renewal rule of the small systems took 11.
+  const OdeProblem heat = builtin_problem("heat", 2000);
+  const TirkResult h = integrate_tirk(heat, settings_for<TirkSettings>(heat, 1e-6));
+  CHECK(h.t == heat.t_end);
+  CHECK(h.stats.jacobians == 1);
 }
