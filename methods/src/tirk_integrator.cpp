@@ -342,7 +342,7 @@ bool TirkIntegrator::Driver::dear_jacobian() const { return jacobian_.colours() 
 // rate passed 0.1 took 27 factorisations in 59 steps). An iteration that fails with an old
 // Jacobian renews it, and then (in advance()) either it is renewed at every step for the
 // next 10, or, where Jacobians are dear (dear_jacobian()), the steps are kept shorter.
-// Where they are cheap (cheap_newton()), Radau5's rule instead: renew after any step that
+// On small systems whose Jacobians are cheap (cheap_newton()), Radau5's rule instead: renew after any step that
 // took more than two iterations at a rate above 1e-3 (Robertson at rtol 1e-8: 11.9 digits
 // against 9.5 with the rule above, in the same time; `mbsflow bench ivp`).
 void TirkIntegrator::Driver::keep_or_renew_jacobian(double h) {

@@ -43,10 +43,11 @@ Eigen::MatrixXd splitting_matrix(const TriangularSplitting& split, TirkIteration
 double contraction_constant(const Eigen::MatrixXd& a, const Eigen::MatrixXd& t);
 
 // The Newton iteration stops when its estimated error is this fraction of the tolerance.
-// With cheap Jacobians, Radau5's (and scipy's) max(10 eps / rtol, min(0.03, sqrt(rtol))):
-// the iteration is carried further at tight tolerances, which gains digits at the same
-// cost. Where a Jacobian costs many f evaluations (multibody models) max(10 eps / rtol, 0.03):
-// there the sqrt rule cost ~20 % more f evaluations at equal error on the 2000-body chain.
+// On a small system (below 1000 equations) whose Jacobian costs a few f evaluations
+// (cheap_jacobian), Radau5's (and scipy's) max(10 eps / rtol, min(0.03, sqrt(rtol))): the
+// iteration is carried further at tight tolerances, which gains digits at the same cost.
+// Elsewhere max(10 eps / rtol, 0.03): on the multibody models, whose Jacobians are dear,
+// the sqrt rule cost ~20 % more f evaluations at equal error (2000-body chain).
 double newton_tolerance(double rtol, bool cheap_jacobian);
 
 struct TirkSettings {
