@@ -320,6 +320,7 @@ int resume(const RunArgs& given, const CLI::App& sub) {
   std::error_code ec;
   std::filesystem::current_path(c.directory, ec);
   if (ec) throw InputError("--resume: cannot go to the folder the run was started in, " + c.directory + ": " + ec.message());
+  if (!a.output.empty()) mend_results_file_to_resume(a.output);  // before check_output_path() reads it
   return run(a, &c, path);
 }
 

@@ -14,6 +14,7 @@
 #include <Eigen/Geometry>
 
 #include "hdf5_handle.hpp"
+#include "killed_writer.hpp"
 #include "random_id.hpp"
 #include "writer_lock.hpp"
 #include "mbsflow/version.hpp"
@@ -419,6 +420,7 @@ void Hdf5Sink::resume(const MultibodySystem& system, long snapshots, const std::
     throw InputError("the results file " + path_ + " is gone: the checkpoint goes on from the snapshots it holds");
   auto f = std::make_unique<File>();
   f->lock = WriterLock(path_);  // refused while another run writes it
+  grow_to_stored_end(path_);    // a writer killed while closing the file: see killed_writer.hpp
   // A run killed while in SWMR mode leaves the file marked as open for writing, which
   // HDF5 refuses to open again for writing; the marks are cleared as `h5clear -s` does
   // (the library's own file access property for it).

@@ -8,6 +8,7 @@
 #include <fstream>
 
 #include "hdf5_handle.hpp"
+#include "killed_writer.hpp"
 #include "writer_lock.hpp"
 
 namespace mbsflow {
@@ -46,6 +47,12 @@ bool is_mbsflow_results_file(const std::string& path) {
   const bool ours = H5Aexists(file, "mbsflow_version") > 0;
   H5Fclose(file);
   return ours;
+}
+
+void mend_results_file_to_resume(const std::string& path) {
+  if (!std::filesystem::is_regular_file(path)) return;
+  const WriterLock lock(path);
+  grow_to_stored_end(path);
 }
 
 void check_output_path(const std::string& path, const OutputPathRules& r) {

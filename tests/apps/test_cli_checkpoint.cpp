@@ -6,6 +6,7 @@
 #include <thread>
 
 #include "process_support.hpp"
+#include "../io/superblock_edit.hpp"
 
 using namespace mbsflow::test;
 
@@ -85,6 +86,24 @@ TEST_CASE("kill -9 at random moments then resume: the results file is bit for bi
     }
   }
   CHECK(killed >= tries / 2);  // most runs were really killed half-way, not already done
+  fs::remove_all(d.parent_path());
+}
+
+TEST_CASE("a run killed as it closed its results file, before the file reached its recorded end, resumes", "[apps][checkpoint]") {
+  // What one kill in 65 left (a 1000-body chain, killed in the results file's last close):
+  // the superblock records an end 415 bytes past the file's, which HDF5 refuses to open.
+  const fs::path d = scratch("checkpoint_killed_in_close");
+  REQUIRE(run("generate chain --bodies 50 -o chain.json", d.string()).code == 0);
+  REQUIRE(run("run chain.json --t-end 0.2 -q -o ref.h5", d.string()).code == 0);
+  REQUIRE(run("run chain.json --t-end 0.2 -q -o a.h5 --checkpoint-every 1e-6", d.string()).code == 0);
+  const std::string a = (d / "a.h5").string();
+  rewrite_superblock(a, 1, fs::file_size(a) + 415);
+  CHECK(std::system(("h5ls '" + a + "' > /dev/null 2>&1").c_str()) != 0);  // HDF5 refuses it as it is
+  const Result resumed = run("run --resume a.h5.ckpt", d.string());
+  INFO(resumed.err);
+  CHECK(resumed.code == 0);
+  CHECK_THAT(resumed.err, Catch::Contains("went on from the checkpoint at t = "));
+  CHECK(h5diff(d / "ref.h5", d / "a.h5") == 0);
   fs::remove_all(d.parent_path());
 }
 

@@ -21,6 +21,7 @@
 #include "mbsflow/runtime/simulation.hpp"
 #include "memory_sink.hpp"
 #include "process_folder.hpp"
+#include "superblock_edit.hpp"
 
 using namespace mbsflow;
 namespace fs = std::filesystem;
@@ -28,6 +29,35 @@ namespace fs = std::filesystem;
 namespace {
 
 fs::path temp_file(const std::string& name) { return test::process_folder("mbsflow_io_") / name; }
+
+// The system at rest in its initial state at time t, with its energies.
+Snapshot resting_snapshot(const MultibodySystem& sys, double t) {
+  Snapshot s;
+  s.t = t;
+  s.state = sys.initial_state();
+  s.energy = Energy{};
+  return s;
+}
+
+Model chain_of(int bodies) {
+  ChainParams p;
+  p.bodies = bodies;
+  return make_chain(p);
+}
+
+const RunInfo resumable_info{"{}", "rk4", 0.1, 0.0, 1.0, 1, "test"};
+
+// A finished run's file: the system at rest at t = 0, 0.1, 0.2 and the coupling records
+// given. Returns its run id, which a checkpoint of the run would hold.
+std::string finished_run(const fs::path& file, const MultibodySystem& sys, const std::vector<CouplingRecord>& coupling = {}) {
+  fs::remove(file);
+  Hdf5Sink first(file.string(), FieldSet{}, resumable_info);
+  first.begin(sys);
+  for (double t : {0.0, 0.1, 0.2}) first.write(resting_snapshot(sys, t));
+  if (!coupling.empty()) first.write_coupling(coupling);
+  first.end();
+  return first.identity();
+}
 
 Model small_train() {
   TrainParams p;
@@ -309,37 +339,18 @@ TEST_CASE("a prepared results file holds the model's text before the run begins 
 TEST_CASE("a run resumed from a file whose run was killed as it closed writes its coupling records in their place", "[io]") {
   // A checkpointed run killed after end() wrote /coupling leaves it in the file; the
   // resumed run writes them again at its end.
-  ChainParams p;
-  p.bodies = 3;
-  const Model m = make_chain(p);
+  const Model m = chain_of(3);
   const MultibodySystem sys(m);
   const fs::path file = temp_file("coupling_resumed.h5");
-  fs::remove(file);
-  const RunInfo info{"{}", "rk4", 0.1, 0.0, 1.0, 1, "test"};
-  const auto snapshot = [&](double t) {
-    Snapshot s;
-    s.t = t;
-    s.state = sys.initial_state();
-    s.energy = Energy{};
-    return s;
-  };
   const auto records = [](long n) {
     std::vector<CouplingRecord> r(static_cast<std::size_t>(n));
     for (long i = 0; i < n; ++i) r[static_cast<std::size_t>(i)] = {i + 1, 0.1 * i, 0.1 * (i + 1), 1e-9, 1e-8, 0};
     return r;
   };
-  std::string identity;
-  {
-    Hdf5Sink first(file.string(), FieldSet{}, info);
-    first.begin(sys);
-    for (double t : {0.0, 0.1, 0.2}) first.write(snapshot(t));
-    first.write_coupling(records(2));
-    first.end();
-    identity = first.identity();
-  }
-  Hdf5Sink resumed(file.string(), FieldSet{}, info);
+  const std::string identity = finished_run(file, sys, records(2));
+  Hdf5Sink resumed(file.string(), FieldSet{}, resumable_info);
   resumed.resume(sys, 2, identity);
-  for (double t : {0.2, 0.3}) resumed.write(snapshot(t));
+  for (double t : {0.2, 0.3}) resumed.write(resting_snapshot(sys, t));
   resumed.write_coupling(records(3));
   REQUIRE_NOTHROW(resumed.end());
   const ResultsFile r(file.string());
@@ -384,5 +395,43 @@ TEST_CASE("a results file whose writer was killed while writing its end is still
   CHECK_NOTHROW(check_output_path(file.string(), {}));
   const ResultsFile r(file.string());
   CHECK(r.time().size() == 1);
+  fs::remove(file);
+}
+
+TEST_CASE("a results file whose writer was killed before it grew the file to its recorded end is mended to resume", "[io]") {
+  // Killed while closing in end(): the superblock records the file's new end, the file is
+  // still shorter, and HDF5 refuses it as cut short ("truncated file"); seen once in 65
+  // kill -9 and --resume cycles of a 1000-body chain, 415 bytes short.
+  const Model m = chain_of(3);
+  const MultibodySystem sys(m);
+  const fs::path file = temp_file("killed_before_grown.h5");
+  const std::string identity = finished_run(file, sys);
+  const auto size = fs::file_size(file);
+  REQUIRE(test::read_superblock(file.string()).end() == size);
+
+  // Closed cleanly and then cut short (a copy that ended early): left as it is.
+  test::rewrite_superblock(file.string(), 0, size + 415);
+  CHECK_NOTHROW(mend_results_file_to_resume(file.string()));
+  CHECK(fs::file_size(file) == size);
+  CHECK(!is_mbsflow_results_file(file.string()));
+
+  // The killed writer's: refused by HDF5 as it is, grown and resumed.
+  test::rewrite_superblock(file.string(), 1, size + 415);
+  CHECK(!is_mbsflow_results_file(file.string()));
+  mend_results_file_to_resume(file.string());
+  CHECK(fs::file_size(file) == size + 415);
+  CHECK(is_mbsflow_results_file(file.string()));
+  Hdf5Sink resumed(file.string(), FieldSet{}, resumable_info);
+  resumed.resume(sys, 2, identity);
+  for (double t : {0.2, 0.3}) resumed.write(resting_snapshot(sys, t));
+  REQUIRE_NOTHROW(resumed.end());
+  CHECK(ResultsFile(file.string()).time() == std::vector<double>{0.0, 0.1, 0.2, 0.3});
+
+  // The sink grows it too, for a library caller that resumes without the CLI's mending.
+  test::rewrite_superblock(file.string(), 1, fs::file_size(file) + 100);
+  Hdf5Sink again(file.string(), FieldSet{}, resumable_info);
+  REQUIRE_NOTHROW(again.resume(sys, 4, resumed.identity()));
+  REQUIRE_NOTHROW(again.end());
+  CHECK(ResultsFile(file.string()).time().size() == 4);
   fs::remove(file);
 }

@@ -21,4 +21,10 @@ void check_output_path(const std::string& path, const OutputPathRules& rules = {
 // attribute mbsflow_version). False for anything else, a missing file included.
 bool is_mbsflow_results_file(const std::string& path);
 
+// Before a run goes on writing its results file from a checkpoint: a file whose writer was
+// killed while closing it, which HDF5 would refuse as cut short, is grown to the end its
+// superblock records (io/src/killed_writer.hpp says why nothing kept is lost). Nothing
+// happens to a missing file; InputError where another run is writing it.
+void mend_results_file_to_resume(const std::string& path);
+
 }  // namespace mbsflow
